@@ -1,0 +1,268 @@
+//! Spectral complex refractive index n + iκ of conductors.
+//!
+//! Built-in metals carry measured tables (sources cited in `ior_data.rs`);
+//! values between samples are interpolated linearly in wavelength, and never
+//! extrapolated: outside the table the end value is held, and building a model
+//! checks that the wavelengths it will be asked about lie inside the table.
+
+use crate::error::BrdfError;
+use crate::ior_data;
+
+/// The metals with built-in measured n, κ tables.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Metal {
+    /// Copper (Johnson & Christy 1972).
+    Cu,
+    /// Gold (Johnson & Christy 1972).
+    Au,
+    /// Silver (Johnson & Christy 1972).
+    Ag,
+    /// Aluminium (Rakić 1995).
+    Al,
+    /// Iron (Johnson & Christy 1974).
+    Fe,
+    /// Chromium (Johnson & Christy 1974).
+    Cr,
+    /// Brass, 70 % Cu / 30 % Zn (Querry 1985).
+    BrassCu70Zn30,
+    /// Austenitic stainless steel (Karlsson & Ribbing 1982).
+    StainlessSteel,
+}
+
+impl Metal {
+    /// Every built-in metal.
+    pub const ALL: [Metal; 8] = [
+        Metal::Cu,
+        Metal::Au,
+        Metal::Ag,
+        Metal::Al,
+        Metal::Fe,
+        Metal::Cr,
+        Metal::BrassCu70Zn30,
+        Metal::StainlessSteel,
+    ];
+
+    /// The name used in scene and query files (`"cu"`, `"brass"`, …).
+    pub fn name(self) -> &'static str {
+        match self {
+            Metal::Cu => "cu",
+            Metal::Au => "au",
+            Metal::Ag => "ag",
+            Metal::Al => "al",
+            Metal::Fe => "fe",
+            Metal::Cr => "cr",
+            Metal::BrassCu70Zn30 => "brass",
+            Metal::StainlessSteel => "stainless_steel",
+        }
+    }
+
+    /// Looks a metal up by name, case-insensitively. Accepts the [`Metal::name`]
+    /// spellings plus common aliases (`copper`, `gold`, `steel`, `cu70zn30`, …).
+    pub fn from_name(name: &str) -> Option<Metal> {
+        let aliases: [(&str, Metal); 22] = [
+            ("cu", Metal::Cu),
+            ("copper", Metal::Cu),
+            ("au", Metal::Au),
+            ("gold", Metal::Au),
+            ("ag", Metal::Ag),
+            ("silver", Metal::Ag),
+            ("al", Metal::Al),
+            ("aluminium", Metal::Al),
+            ("aluminum", Metal::Al),
+            ("fe", Metal::Fe),
+            ("iron", Metal::Fe),
+            ("cr", Metal::Cr),
+            ("chromium", Metal::Cr),
+            ("brass", Metal::BrassCu70Zn30),
+            ("cu70zn30", Metal::BrassCu70Zn30),
+            ("brass_cu70zn30", Metal::BrassCu70Zn30),
+            ("stainless_steel", Metal::StainlessSteel),
+            ("stainless", Metal::StainlessSteel),
+            ("steel", Metal::StainlessSteel),
+            ("stainless_steel_austenitic", Metal::StainlessSteel),
+            ("ss", Metal::StainlessSteel),
+            ("inox", Metal::StainlessSteel),
+        ];
+        aliases
+            .iter()
+            .find(|(a, _)| a.eq_ignore_ascii_case(name))
+            .map(|&(_, m)| m)
+    }
+
+    /// The measured table: rows of `[λ nm, n, κ]`, λ strictly increasing.
+    pub fn table(self) -> &'static [[f64; 3]] {
+        match self {
+            Metal::Cu => &ior_data::CU,
+            Metal::Au => &ior_data::AU,
+            Metal::Ag => &ior_data::AG,
+            Metal::Al => &ior_data::AL,
+            Metal::Fe => &ior_data::FE,
+            Metal::Cr => &ior_data::CR,
+            Metal::BrassCu70Zn30 => &ior_data::BRASS,
+            Metal::StainlessSteel => &ior_data::STAINLESSSTEEL,
+        }
+    }
+}
+
+/// A complex refractive index as a function of wavelength.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Ior {
+    /// Wavelength-independent n + iκ.
+    Constant {
+        /// Real part.
+        n: f64,
+        /// Extinction coefficient.
+        k: f64,
+    },
+    /// A built-in measured metal.
+    Metal(Metal),
+    /// A user-supplied table of `[λ nm, n, κ]` rows.
+    #[cfg(feature = "alloc")]
+    Table(alloc::sync::Arc<[[f64; 3]]>),
+}
+
+impl Ior {
+    /// A built-in metal.
+    pub fn metal(metal: Metal) -> Ior {
+        Ior::Metal(metal)
+    }
+
+    /// A constant index; `n > 0`, `k ≥ 0`, both finite.
+    pub fn constant(n: f64, k: f64) -> Result<Ior, BrdfError> {
+        crate::error::check_range("n", n, 1e-6, 1e6, "0 < n ≤ 1e6")?;
+        crate::error::check_range("k", k, 0.0, 1e6, "0 ≤ k ≤ 1e6")?;
+        Ok(Ior::Constant { n, k })
+    }
+
+    /// A user-supplied table of `[λ nm, n, κ]` rows: at least two rows,
+    /// λ strictly increasing and positive, n > 0, κ ≥ 0, all finite.
+    #[cfg(feature = "alloc")]
+    pub fn table(rows: alloc::vec::Vec<[f64; 3]>) -> Result<Ior, BrdfError> {
+        if rows.len() < 2 {
+            return Err(BrdfError::InvalidTable {
+                reason: "an n,k table needs at least two rows (wavelength_nm, n, k)",
+                row: None,
+            });
+        }
+        for (i, r) in rows.iter().enumerate() {
+            if !(r.iter().all(|v| v.is_finite()) && r[0] > 0.0 && r[1] > 0.0 && r[2] >= 0.0) {
+                return Err(BrdfError::InvalidTable {
+                    reason: "each row needs finite wavelength_nm > 0, n > 0 and k ≥ 0",
+                    row: Some(i),
+                });
+            }
+            if i > 0 && r[0] <= rows[i - 1][0] {
+                return Err(BrdfError::InvalidTable {
+                    reason: "wavelengths must be strictly increasing",
+                    row: Some(i),
+                });
+            }
+        }
+        Ok(Ior::Table(rows.into()))
+    }
+
+    fn rows(&self) -> Option<&[[f64; 3]]> {
+        match self {
+            Ior::Constant { .. } => None,
+            Ior::Metal(m) => Some(m.table()),
+            #[cfg(feature = "alloc")]
+            Ior::Table(t) => Some(t),
+        }
+    }
+
+    /// Wavelength range `[min, max]` in nm covered by measured data
+    /// (infinite for a constant index).
+    pub fn range_nm(&self) -> (f64, f64) {
+        match self.rows() {
+            None => (0.0, f64::INFINITY),
+            Some(r) => (r[0][0], r[r.len() - 1][0]),
+        }
+    }
+
+    /// Checks that `[lo, hi]` nm lies within the data range.
+    pub fn check_covers(&self, lo_nm: f64, hi_nm: f64) -> Result<(), BrdfError> {
+        let (min_nm, max_nm) = self.range_nm();
+        for lambda_nm in [lo_nm, hi_nm] {
+            if !(lambda_nm >= min_nm && lambda_nm <= max_nm) {
+                return Err(BrdfError::WavelengthOutOfRange {
+                    lambda_nm,
+                    min_nm,
+                    max_nm,
+                });
+            }
+        }
+        Ok(())
+    }
+
+    /// (n, κ) at `lambda_nm`, linearly interpolated; held constant beyond the
+    /// ends of the table (never extrapolated). NaN input gives the first row.
+    pub fn at(&self, lambda_nm: f64) -> (f64, f64) {
+        let rows = match self {
+            Ior::Constant { n, k } => return (*n, *k),
+            _ => self.rows().unwrap_or(&[]),
+        };
+        let last = rows.len() - 1;
+        if lambda_nm.is_nan() || lambda_nm <= rows[0][0] {
+            return (rows[0][1], rows[0][2]);
+        }
+        if lambda_nm >= rows[last][0] {
+            return (rows[last][1], rows[last][2]);
+        }
+        // First row strictly greater than λ; the guards above keep it in 1..=last.
+        let hi = rows.partition_point(|r| r[0] <= lambda_nm).clamp(1, last);
+        let (a, b) = (rows[hi - 1], rows[hi]);
+        let t = (lambda_nm - a[0]) / (b[0] - a[0]);
+        (a[1] + t * (b[1] - a[1]), a[2] + t * (b[2] - a[2]))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn tables_cover_visible_range_and_increase() {
+        for m in Metal::ALL {
+            let ior = Ior::metal(m);
+            ior.check_covers(300.0, 900.0).unwrap();
+            for w in m.table().windows(2) {
+                assert!(w[1][0] > w[0][0], "{m:?} not increasing");
+            }
+            assert_eq!(Metal::from_name(m.name()), Some(m));
+        }
+    }
+
+    #[test]
+    fn interpolation_hits_rows_and_midpoints() {
+        let t = Metal::Cu.table();
+        let ior = Ior::metal(Metal::Cu);
+        for i in 0..t.len() - 1 {
+            let (n, k) = ior.at(t[i][0]);
+            assert!((n - t[i][1]).abs() < 1e-12 && (k - t[i][2]).abs() < 1e-12);
+            let mid = 0.5 * (t[i][0] + t[i + 1][0]);
+            let (n, k) = ior.at(mid);
+            assert!((n - 0.5 * (t[i][1] + t[i + 1][1])).abs() < 1e-12);
+            assert!((k - 0.5 * (t[i][2] + t[i + 1][2])).abs() < 1e-12);
+        }
+        assert_eq!(ior.at(1.0), (t[0][1], t[0][2]));
+        assert_eq!(ior.at(1e9), (t[t.len() - 1][1], t[t.len() - 1][2]));
+        assert_eq!(ior.at(f64::NAN), (t[0][1], t[0][2]));
+    }
+
+    #[test]
+    fn bad_tables_are_rejected_with_row() {
+        use alloc::vec;
+        assert!(Ior::table(vec![[400.0, 1.0, 1.0]]).is_err());
+        let e = Ior::table(vec![[400.0, 1.0, 1.0], [390.0, 1.0, 1.0]]).unwrap_err();
+        assert_eq!(
+            e,
+            BrdfError::InvalidTable {
+                reason: "wavelengths must be strictly increasing",
+                row: Some(1)
+            }
+        );
+        assert!(Ior::table(vec![[400.0, 1.0, 1.0], [500.0, f64::NAN, 1.0]]).is_err());
+        assert!(Ior::constant(0.0, 1.0).is_err());
+        assert!(Ior::metal(Metal::Al).check_covers(200.0, 830.0).is_err());
+    }
+}

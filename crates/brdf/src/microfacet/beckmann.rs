@@ -1,0 +1,150 @@
+//! Beckmann distribution.
+
+use core::f64::consts::PI;
+use glam::DVec3;
+
+const SQRT_PI: f64 = 1.772_453_850_905_516;
+
+/// D(h) for h.z > 0: exp(−tan²θ (cos²φ/αx² + sin²φ/αy²)) / (π αx αy cos⁴θ).
+#[inline]
+pub(super) fn d(h: DVec3, ax: f64, ay: f64) -> f64 {
+    let z2 = h.z * h.z;
+    let x = h.x / ax;
+    let y = h.y / ay;
+    let e = (x * x + y * y) / z2;
+    libm::exp(-e) / (PI * ax * ay * z2 * z2)
+}
+
+/// Λ from t = α² tan²θ, with a = 1/√t: (e^{−a²}/(a√π) − erfc a)/2.
+#[inline]
+pub(super) fn lambda(t: f64) -> f64 {
+    if t.is_infinite() {
+        return f64::INFINITY;
+    }
+    if t <= 0.0 {
+        return 0.0;
+    }
+    let a = 1.0 / libm::sqrt(t);
+    if a > 26.0 {
+        // Both terms underflow together; Λ < 1e-290.
+        return 0.0;
+    }
+    (0.5 * (libm::exp(-a * a) / (a * SQRT_PI) - libm::erfc(a))).max(0.0)
+}
+
+/// Visible-normal sampling: stretch to unit roughness, draw the slope along
+/// the view azimuth from its visible marginal by inverting its CDF, draw the
+/// orthogonal slope from the (independent) Gaussian marginal, unstretch.
+pub(super) fn sample_visible(wi: DVec3, ax: f64, ay: f64, u: [f64; 2]) -> DVec3 {
+    let ws = DVec3::new(ax * wi.x, ay * wi.y, wi.z).normalize();
+    let sin_t = libm::sqrt((ws.x * ws.x + ws.y * ws.y).min(1.0));
+    let (cos_phi, sin_phi) = if sin_t > 0.0 {
+        (ws.x / sin_t, ws.y / sin_t)
+    } else {
+        (1.0, 0.0)
+    };
+    let (sx, sy) = sample_slopes_unit(ws.z, sin_t, u);
+    // Rotate back to the view azimuth and unstretch; the normal is (−s, 1).
+    let rx = cos_phi * sx - sin_phi * sy;
+    let ry = sin_phi * sx + cos_phi * sy;
+    super::normalize_or_none(DVec3::new(-rx * ax, -ry * ay, 1.0)).unwrap_or(DVec3::Z)
+}
+
+/// Slopes of the visible normals of a unit-roughness Beckmann surface, for a
+/// view at cosθ = `c`, sinθ = `s` along +x. The x-slope density is
+/// ∝ (cotθ − x) e^{−x²} on x < cotθ, with CDF
+/// C(x) = [cotθ (1 + erf x) + e^{−x²}/√π] / 2; y is Gaussian with variance ½.
+fn sample_slopes_unit(c: f64, s: f64, u: [f64; 2]) -> (f64, f64) {
+    if s < 1e-7 {
+        // Normal view: the visible slope density is the isotropic Gaussian.
+        let r = libm::sqrt(-libm::log1p(-u[0]));
+        let (sp, cp) = libm::sincos(2.0 * PI * u[1]);
+        return (r * cp, r * sp);
+    }
+    // Per-axis slope variance ½ at unit roughness: erfinv of a uniform on (−1, 1).
+    let sy = erfinv(2.0 * u[1] - 1.0);
+    let cot = c / s;
+    let cdf = |x: f64| 0.5 * (cot * libm::erfc(-x) + libm::exp(-x * x) / SQRT_PI);
+    let total = cdf(cot);
+    let target = u[0] * total;
+    // Safeguarded Newton on C(x) = target over (lo, cot].
+    // C(x) < 1e-30 below −8 for every cotθ, so the root lies in (−8, cotθ].
+    let mut lo = (-8.0f64).min(cot - 1.0);
+    let mut hi = cot;
+    let mut x = (lo + hi) * 0.5;
+    for _ in 0..64 {
+        let f = cdf(x) - target;
+        if f > 0.0 {
+            hi = x;
+        } else {
+            lo = x;
+        }
+        let dens = 0.5 * (cot - x) * 2.0 / SQRT_PI * libm::exp(-x * x);
+        let mut next = if dens > 0.0 { x - f / dens } else { f64::NAN };
+        if !(next > lo && next < hi) {
+            next = 0.5 * (lo + hi);
+        }
+        if (next - x).abs() <= 1e-13 * (1.0 + x.abs()) {
+            x = next;
+            break;
+        }
+        x = next;
+    }
+    (x, sy)
+}
+
+/// Inverse error function to full f64 accuracy: Giles' single-precision
+/// approximation refined by two Newton steps on libm's erf.
+fn erfinv(y: f64) -> f64 {
+    if y <= -1.0 {
+        return -6.0;
+    }
+    if y >= 1.0 {
+        return 6.0;
+    }
+    let w = -libm::log((1.0 - y) * (1.0 + y));
+    let mut x = if w < 5.0 {
+        let w = w - 2.5;
+        let mut p = 2.810_226_36e-08;
+        p = 3.432_739_39e-07 + p * w;
+        p = -3.523_387_7e-06 + p * w;
+        p = -4.391_506_54e-06 + p * w;
+        p = 0.000_218_580_87 + p * w;
+        p = -0.001_253_725_03 + p * w;
+        p = -0.004_177_681_64 + p * w;
+        p = 0.246_640_727 + p * w;
+        p = 1.501_409_41 + p * w;
+        p * y
+    } else {
+        let w = libm::sqrt(w) - 3.0;
+        let mut p = -0.000_200_214_257;
+        p = 0.000_100_950_558 + p * w;
+        p = 0.001_349_343_22 + p * w;
+        p = -0.003_673_428_44 + p * w;
+        p = 0.005_739_507_73 + p * w;
+        p = -0.007_622_461_3 + p * w;
+        p = 0.009_438_870_47 + p * w;
+        p = 1.001_674_06 + p * w;
+        p = 2.832_976_82 + p * w;
+        p * y
+    };
+    for _ in 0..2 {
+        let err = libm::erf(x) - y;
+        x -= err / (2.0 / SQRT_PI * libm::exp(-x * x));
+    }
+    x
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn erfinv_inverts_erf() {
+        for i in 1..2000 {
+            let y = -1.0 + i as f64 / 1000.0;
+            let x = erfinv(y);
+            assert!((libm::erf(x) - y).abs() < 1e-14, "y={y}");
+        }
+    }
+}

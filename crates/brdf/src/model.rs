@@ -1,0 +1,93 @@
+use glam::DVec3;
+
+/// Shortest wavelength, in nm, that every built-in spectral table covers.
+pub const WAVELENGTH_MIN_NM: f64 = 360.0;
+/// Longest wavelength, in nm, that every built-in spectral table covers.
+pub const WAVELENGTH_MAX_NM: f64 = 830.0;
+
+/// One sampled outgoing direction.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BxdfSample {
+    /// Outgoing direction, unit length, local frame.
+    pub wo: DVec3,
+    /// Monte Carlo weight. Glossy: `eval(wi, wo) · cosθo / pdf`. Delta:
+    /// `specular.weight / specular.probability`.
+    pub weight: f64,
+    /// Glossy: solid-angle pdf of `wo`, including the probability of having
+    /// chosen the glossy lobe (equals [`Bxdf::pdf`]). Delta: the discrete
+    /// probability of having chosen the delta lobe.
+    pub pdf: f64,
+    /// Whether `wo` came from the specular delta lobe.
+    pub is_delta: bool,
+}
+
+/// The specular (delta) lobe of a model at one incident direction.
+///
+/// Its BRDF is `weight · δ_ω(o − s) / cosθo` with `s` the mirror direction of
+/// `wi`; the reflected radiance along `s` is `weight` times the incident one.
+#[derive(Clone, Copy, Debug, PartialEq, Default)]
+pub struct Specular {
+    /// Fraction of incident energy reflected coherently (e.g. `R · e^{−g}`).
+    pub weight: f64,
+    /// Probability that [`Bxdf::sample`] returns a delta sample for this `wi`
+    /// and wavelength; 0 for purely glossy models.
+    pub probability: f64,
+}
+
+/// The interface every reflection model implements.
+///
+/// Directions are unit vectors in the local shading frame (normal = +z),
+/// both pointing away from the surface. `lambda_nm` is the wavelength in
+/// nanometres; models whose parameters do not depend on it ignore it except
+/// through Fresnel. No method panics or returns NaN, infinity or a negative
+/// number, whatever the input: directions below the surface give 0.
+pub trait Bxdf {
+    /// Glossy (non-delta) BRDF value f(wi, wo) in sr⁻¹.
+    fn eval(&self, wi: DVec3, wo: DVec3, lambda_nm: f64) -> f64;
+
+    /// Solid-angle density with which [`Bxdf::sample`] returns the glossy
+    /// direction `wo`, including the probability of choosing the glossy lobe.
+    fn pdf(&self, wi: DVec3, wo: DVec3, lambda_nm: f64) -> f64;
+
+    /// Draws an outgoing direction from three uniform numbers in [0, 1).
+    /// Returns `None` when the sample carries no energy (below the horizon,
+    /// evanescent, or zero weight).
+    fn sample(&self, wi: DVec3, lambda_nm: f64, u: [f64; 3]) -> Option<BxdfSample>;
+
+    /// The specular delta lobe at `wi`; zero for models without one.
+    fn specular(&self, wi: DVec3, lambda_nm: f64) -> Specular {
+        let _ = (wi, lambda_nm);
+        Specular::default()
+    }
+}
+
+impl<T: Bxdf + ?Sized> Bxdf for &T {
+    fn eval(&self, wi: DVec3, wo: DVec3, lambda_nm: f64) -> f64 {
+        (**self).eval(wi, wo, lambda_nm)
+    }
+    fn pdf(&self, wi: DVec3, wo: DVec3, lambda_nm: f64) -> f64 {
+        (**self).pdf(wi, wo, lambda_nm)
+    }
+    fn sample(&self, wi: DVec3, lambda_nm: f64, u: [f64; 3]) -> Option<BxdfSample> {
+        (**self).sample(wi, lambda_nm, u)
+    }
+    fn specular(&self, wi: DVec3, lambda_nm: f64) -> Specular {
+        (**self).specular(wi, lambda_nm)
+    }
+}
+
+#[cfg(feature = "alloc")]
+impl<T: Bxdf + ?Sized> Bxdf for alloc::boxed::Box<T> {
+    fn eval(&self, wi: DVec3, wo: DVec3, lambda_nm: f64) -> f64 {
+        (**self).eval(wi, wo, lambda_nm)
+    }
+    fn pdf(&self, wi: DVec3, wo: DVec3, lambda_nm: f64) -> f64 {
+        (**self).pdf(wi, wo, lambda_nm)
+    }
+    fn sample(&self, wi: DVec3, lambda_nm: f64, u: [f64; 3]) -> Option<BxdfSample> {
+        (**self).sample(wi, lambda_nm, u)
+    }
+    fn specular(&self, wi: DVec3, lambda_nm: f64) -> Specular {
+        (**self).specular(wi, lambda_nm)
+    }
+}

@@ -1,0 +1,51 @@
+//! `lustre`: render metal surfaces from their measured micro-geometry.
+//!
+//! Argument parsing and error reporting only; each subcommand lives in its
+//! own module and calls into the workspace crates.
+
+mod cmd_brdf;
+mod cmd_fit;
+mod cmd_render;
+
+use clap::{Parser, Subcommand};
+
+#[derive(Parser)]
+#[command(name = "lustre", version, about, args_conflicts_with_subcommands = true)]
+struct Cli {
+    #[command(subcommand)]
+    command: Option<Command>,
+    /// Scene file to render (default: scenes/default.toml).
+    #[command(flatten)]
+    render: cmd_render::RenderArgs,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Render a scene file (the default when no subcommand is given).
+    Render(cmd_render::RenderArgs),
+    /// Combine partial films rendered with `--spp-range` into one image.
+    Merge(cmd_render::MergeArgs),
+    /// Query, plot and compare the BRDF models.
+    #[command(subcommand)]
+    Brdf(cmd_brdf::BrdfCommand),
+    /// Turn a measured surface scan into model parameters and a material file.
+    Fit(cmd_fit::FitArgs),
+}
+
+fn main() -> std::process::ExitCode {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        None => cmd_render::render(cli.render),
+        Some(Command::Render(args)) => cmd_render::render(args),
+        Some(Command::Merge(args)) => cmd_render::merge(args),
+        Some(Command::Brdf(cmd)) => cmd_brdf::run(cmd),
+        Some(Command::Fit(args)) => cmd_fit::run(args),
+    };
+    match result {
+        Ok(()) => std::process::ExitCode::SUCCESS,
+        Err(err) => {
+            eprintln!("error: {err:#}");
+            std::process::ExitCode::FAILURE
+        }
+    }
+}
