@@ -1,0 +1,85 @@
+//! Decoding packed binary samples with bounds checks.
+
+/// Binary sample types found in surface files.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Sample {
+    /// Unsigned 8-bit.
+    U8,
+    /// Signed 8-bit.
+    I8,
+    /// Unsigned 16-bit.
+    U16,
+    /// Signed 16-bit.
+    I16,
+    /// Unsigned 32-bit.
+    U32,
+    /// Signed 32-bit.
+    I32,
+    /// IEEE single.
+    F32,
+    /// IEEE double.
+    F64,
+}
+
+impl Sample {
+    /// Bytes per sample.
+    pub fn size(self) -> usize {
+        match self {
+            Sample::U8 | Sample::I8 => 1,
+            Sample::U16 | Sample::I16 => 2,
+            Sample::U32 | Sample::I32 | Sample::F32 => 4,
+            Sample::F64 => 8,
+        }
+    }
+
+    /// True for floating-point types.
+    pub fn is_float(self) -> bool {
+        matches!(self, Sample::F32 | Sample::F64)
+    }
+}
+
+/// Decode `count` samples from the start of `data`. Returns `None` if `data` is too short.
+/// Non-finite floats are returned as they are (callers decide what is invalid).
+pub fn decode(data: &[u8], kind: Sample, little_endian: bool, count: usize) -> Option<Vec<f64>> {
+    let size = kind.size();
+    let need = count.checked_mul(size)?;
+    let bytes = data.get(..need)?;
+    let mut out = Vec::with_capacity(count);
+    for c in bytes.chunks_exact(size) {
+        let v = match (kind, little_endian) {
+            (Sample::U8, _) => c[0] as f64,
+            (Sample::I8, _) => c[0] as i8 as f64,
+            (Sample::U16, true) => u16::from_le_bytes([c[0], c[1]]) as f64,
+            (Sample::U16, false) => u16::from_be_bytes([c[0], c[1]]) as f64,
+            (Sample::I16, true) => i16::from_le_bytes([c[0], c[1]]) as f64,
+            (Sample::I16, false) => i16::from_be_bytes([c[0], c[1]]) as f64,
+            (Sample::U32, true) => u32::from_le_bytes([c[0], c[1], c[2], c[3]]) as f64,
+            (Sample::U32, false) => u32::from_be_bytes([c[0], c[1], c[2], c[3]]) as f64,
+            (Sample::I32, true) => i32::from_le_bytes([c[0], c[1], c[2], c[3]]) as f64,
+            (Sample::I32, false) => i32::from_be_bytes([c[0], c[1], c[2], c[3]]) as f64,
+            (Sample::F32, true) => f32::from_le_bytes([c[0], c[1], c[2], c[3]]) as f64,
+            (Sample::F32, false) => f32::from_be_bytes([c[0], c[1], c[2], c[3]]) as f64,
+            (Sample::F64, le) => {
+                let mut b = [0u8; 8];
+                b.copy_from_slice(c);
+                if le {
+                    f64::from_le_bytes(b)
+                } else {
+                    f64::from_be_bytes(b)
+                }
+            }
+        };
+        out.push(v);
+    }
+    Some(out)
+}
+
+/// Read a little-endian u16 at `off`.
+pub fn le_u16(data: &[u8], off: usize) -> Option<u16> {
+    Some(u16::from_le_bytes(data.get(off..off + 2)?.try_into().ok()?))
+}
+
+/// Read a little-endian f64 at `off`.
+pub fn le_f64(data: &[u8], off: usize) -> Option<f64> {
+    Some(f64::from_le_bytes(data.get(off..off + 8)?.try_into().ok()?))
+}

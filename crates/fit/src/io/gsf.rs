@@ -1,0 +1,97 @@
+//! Gwyddion Simple Field (`.gsf`): the line `Gwyddion Simple Field 1.0`, `Key = Value`
+//! lines (XRes, YRes, XReal, YReal, XYUnits, ZUnits), NUL padding to a multiple of 4 bytes,
+//! then XRes·YRes little-endian float32 values. NaN marks invalid points.
+
+use super::{Ctx, binary, check_spacing, checked_grid, units};
+use crate::{ReadError, Topography};
+use std::collections::HashMap;
+
+const MAGIC: &[u8] = b"Gwyddion Simple Field 1.0";
+
+/// Parse a GSF file.
+pub(crate) fn read(ctx: Ctx<'_>, bytes: &[u8]) -> Result<Topography, ReadError> {
+    if !bytes.starts_with(MAGIC) {
+        return Err(ctx.err(
+            "magic",
+            "missing `Gwyddion Simple Field 1.0`",
+            "not a GSF file",
+        ));
+    }
+    let nul = bytes.iter().position(|&b| b == 0).ok_or_else(|| {
+        ctx.err(
+            "header",
+            "no NUL padding ends the header",
+            "the file is truncated",
+        )
+    })?;
+    let header = String::from_utf8_lossy(&bytes[..nul]);
+    let data_start = (nul / 4 + 1) * 4;
+    if data_start > bytes.len() {
+        return Err(ctx.short("header padding", data_start as u64, bytes.len() as u64));
+    }
+    let mut kv = HashMap::new();
+    for line in header.lines().skip(1) {
+        if let Some((k, v)) = line.split_once('=') {
+            kv.insert(k.trim().to_string(), v.trim().to_string());
+        }
+    }
+    let int = |k: &str| -> Result<u64, ReadError> {
+        kv.get(k)
+            .and_then(|v| v.parse::<u64>().ok())
+            .ok_or_else(|| {
+                ctx.err(
+                    k,
+                    "missing or not an integer",
+                    "the GSF header is incomplete",
+                )
+            })
+    };
+    let nx = int("XRes")?;
+    let ny = int("YRes")?;
+    let unit = |k: &str| -> Result<f64, ReadError> {
+        match kv.get(k) {
+            Some(u) if !u.is_empty() => units::length_factor(u).ok_or_else(|| {
+                ctx.err(
+                    k,
+                    format!("`{u}` is not a length unit"),
+                    "heights and lengths must be lengths (m, µm, nm)",
+                )
+            }),
+            _ => Ok(1.0),
+        }
+    };
+    let (xyu, zu) = (unit("XYUnits")?, unit("ZUnits")?);
+    let real = |k: &str| -> Result<f64, ReadError> {
+        kv.get(k)
+            .and_then(|v| v.parse::<f64>().ok())
+            .ok_or_else(|| {
+                ctx.err(
+                    k,
+                    "missing, so the pixel size is unknown",
+                    format!("add `{k} = <size in XYUnits>` to the header"),
+                )
+            })
+    };
+    let data = &bytes[data_start..];
+    let n = checked_grid(ctx, "XRes × YRes", nx, ny, 4, data.len() as u64)?;
+    let dx = check_spacing(ctx, "XReal", real("XReal")? * xyu / nx as f64)?;
+    let dy = if ny == 1 {
+        dx
+    } else {
+        check_spacing(ctx, "YReal", real("YReal")? * xyu / ny as f64)?
+    };
+    let raw = binary::decode(data, binary::Sample::F32, true, n)
+        .ok_or_else(|| ctx.short("data", n as u64 * 4, data.len() as u64))?;
+    Ok(Topography {
+        nx: nx as usize,
+        ny: ny as usize,
+        dx,
+        dy,
+        heights: raw
+            .into_iter()
+            .map(|v| if v.is_finite() { v * zu } else { f64::NAN })
+            .collect(),
+        channel: kv.get("Title").cloned().unwrap_or_else(|| "gsf".into()),
+        format: "gsf",
+    })
+}

@@ -1,0 +1,312 @@
+//! ISO 25178-72 X3P: a zip holding `main.xml` (axes, sizes, data link) and the point data
+//! (`bindata/data.bin`, x fastest) or an inline `<DataList>`. Data types D/F/L/I; integer
+//! data are scaled by the Z increment. Non-finite values and points flagged in the optional
+//! valid-points bit map become NaN.
+
+use super::{Ctx, binary, check_spacing, checked_grid};
+use crate::{ReadError, Topography};
+use quick_xml::events::Event;
+use std::collections::HashMap;
+use std::io::Read;
+
+/// Largest `main.xml` accepted (bytes).
+const MAX_XML: u64 = 64 << 20;
+/// Deflate cannot expand data by more than about 1032:1; a larger claim is a corrupt header.
+const MAX_DEFLATE_RATIO: u64 = 1100;
+
+/// Parse an X3P file.
+pub(crate) fn read(ctx: Ctx<'_>, bytes: &[u8]) -> Result<Topography, ReadError> {
+    let mut zip = zip::ZipArchive::new(std::io::Cursor::new(bytes)).map_err(|e| {
+        ctx.err(
+            "zip container",
+            format!("not a readable zip archive ({e})"),
+            "the X3P file is truncated or corrupt",
+        )
+    })?;
+    let xml = read_entry(ctx, &mut zip, "main.xml", MAX_XML)?;
+    let xml = String::from_utf8(xml)
+        .map_err(|_| ctx.err("main.xml", "not UTF-8", "the X3P file is corrupt"))?;
+    let doc = parse_xml(ctx, &xml)?;
+    let get = |path: &str| doc.fields.get(path).map(String::as_str);
+    let need = |path: &str| {
+        get(path).ok_or_else(|| {
+            ctx.err(
+                path,
+                "missing from main.xml",
+                "the X3P file is incomplete; re-export it",
+            )
+        })
+    };
+    let feature = get("Record1/FeatureType").unwrap_or("SUR");
+    if feature == "PCL" {
+        return Err(ctx.err(
+            "Record1/FeatureType",
+            "point clouds (PCL) are not supported",
+            "export the surface as a regular grid (SUR)",
+        ));
+    }
+    for axis in ["CX", "CY"] {
+        let t = get(&format!("Record1/Axes/{axis}/AxisType")).unwrap_or("I");
+        if t != "I" {
+            return Err(ctx.err(
+                &format!("Record1/Axes/{axis}/AxisType"),
+                format!("axis type `{t}` (absolute coordinates) is not supported"),
+                "export with incremental (regular-grid) lateral axes",
+            ));
+        }
+    }
+    let num = |path: &str| -> Result<f64, ReadError> {
+        need(path)?
+            .trim()
+            .parse::<f64>()
+            .map_err(|_| ctx.err(path, "not a number", "the X3P header is corrupt"))
+    };
+    let count = |path: &str| -> Result<u64, ReadError> {
+        need(path)?.trim().parse::<u64>().map_err(|_| {
+            ctx.err(
+                path,
+                "not a non-negative integer",
+                "the X3P header is corrupt",
+            )
+        })
+    };
+    let nx = count("Record3/MatrixDimension/SizeX")?;
+    let ny = count("Record3/MatrixDimension/SizeY")?;
+    let nz = get("Record3/MatrixDimension/SizeZ")
+        .map(|s| s.trim().parse::<u64>())
+        .unwrap_or(Ok(1));
+    if nz != Ok(1) {
+        return Err(ctx.err(
+            "Record3/MatrixDimension/SizeZ",
+            "only SizeZ = 1 (one layer) is supported",
+            "export a single layer",
+        ));
+    }
+    let dx = check_spacing(
+        ctx,
+        "Record1/Axes/CX/Increment",
+        num("Record1/Axes/CX/Increment")?,
+    )?;
+    let dy = if ny == 1 {
+        dx
+    } else {
+        check_spacing(
+            ctx,
+            "Record1/Axes/CY/Increment",
+            num("Record1/Axes/CY/Increment")?,
+        )?
+    };
+    let dtype = need("Record1/Axes/CZ/DataType")?.trim();
+    let kind = match dtype {
+        "D" => binary::Sample::F64,
+        "F" => binary::Sample::F32,
+        "L" => binary::Sample::I32,
+        "I" => binary::Sample::I16,
+        t => {
+            return Err(ctx.err(
+                "Record1/Axes/CZ/DataType",
+                format!("unknown data type `{t}`"),
+                "expected D, F, L or I",
+            ));
+        }
+    };
+    let zscale = if kind.is_float() {
+        1.0
+    } else {
+        match get("Record1/Axes/CZ/Increment") {
+            Some(s) => s
+                .trim()
+                .parse::<f64>()
+                .ok()
+                .filter(|v| v.is_finite() && *v != 0.0)
+                .ok_or_else(|| {
+                    ctx.err(
+                        "Record1/Axes/CZ/Increment",
+                        "not a usable number",
+                        "the X3P header is corrupt",
+                    )
+                })?,
+            None => 1.0,
+        }
+    };
+
+    let mut heights = if let Some(link) = get("Record3/DataLink/PointDataLink") {
+        let link = link.trim().replace('\\', "/");
+        let size = entry_size(ctx, &mut zip, &link)?;
+        let n = checked_grid(
+            ctx,
+            "Record3/MatrixDimension",
+            nx,
+            ny,
+            kind.size() as u64,
+            size,
+        )?;
+        let data = read_entry(ctx, &mut zip, &link, n as u64 * kind.size() as u64)?;
+        binary::decode(&data, kind, true, n)
+            .ok_or_else(|| ctx.short(&link, (n * kind.size()) as u64, data.len() as u64))?
+    } else if !doc.data_list.is_empty() {
+        let n = checked_grid(
+            ctx,
+            "Record3/MatrixDimension",
+            nx,
+            ny,
+            1,
+            doc.data_list.len() as u64,
+        )?;
+        doc.data_list[..n]
+            .iter()
+            .map(|d| {
+                // A datum holds the z value, or "x;y;z" for absolute axes.
+                let last = d.rsplit(';').next().unwrap_or("").trim();
+                if last.is_empty() {
+                    Ok(f64::NAN)
+                } else {
+                    last.parse::<f64>()
+                }
+            })
+            .collect::<Result<Vec<f64>, _>>()
+            .map_err(|_| {
+                ctx.err(
+                    "Record3/DataList/Datum",
+                    "a datum is not a number",
+                    "the X3P data list is corrupt",
+                )
+            })?
+    } else {
+        return Err(ctx.err(
+            "Record3/DataLink",
+            "neither a PointDataLink nor a DataList",
+            "the X3P file holds no data",
+        ));
+    };
+    for h in &mut heights {
+        *h = if h.is_finite() { *h * zscale } else { f64::NAN };
+    }
+    if let Some(valid) = get("Record3/DataLink/ValidPointsLink") {
+        let valid = valid.trim().replace('\\', "/");
+        let n = heights.len();
+        let size = entry_size(ctx, &mut zip, &valid)?;
+        let need_bytes = n.div_ceil(8) as u64;
+        if size < need_bytes {
+            return Err(ctx.short(&valid, need_bytes, size));
+        }
+        let bits = read_entry(ctx, &mut zip, &valid, need_bytes)?;
+        for (i, h) in heights.iter_mut().enumerate() {
+            if bits.get(i / 8).is_some_and(|b| b & (1 << (i % 8)) == 0) {
+                *h = f64::NAN;
+            }
+        }
+    }
+    Ok(Topography {
+        nx: nx as usize,
+        ny: ny as usize,
+        dx,
+        dy,
+        heights,
+        channel: get("Record2/Comment").unwrap_or("x3p").trim().to_string(),
+        format: "x3p",
+    })
+}
+
+fn entry_size<R: Read + std::io::Seek>(
+    ctx: Ctx<'_>,
+    zip: &mut zip::ZipArchive<R>,
+    name: &str,
+) -> Result<u64, ReadError> {
+    let f = zip.by_name(name).map_err(|e| {
+        ctx.err(
+            name,
+            format!("entry missing from the archive ({e})"),
+            "the X3P file is incomplete",
+        )
+    })?;
+    Ok(f.size().min(
+        f.compressed_size()
+            .saturating_mul(MAX_DEFLATE_RATIO)
+            .saturating_add(4096),
+    ))
+}
+
+/// Read at most `limit` bytes of an entry, never trusting the declared size for allocation.
+fn read_entry<R: Read + std::io::Seek>(
+    ctx: Ctx<'_>,
+    zip: &mut zip::ZipArchive<R>,
+    name: &str,
+    limit: u64,
+) -> Result<Vec<u8>, ReadError> {
+    let f = zip.by_name(name).map_err(|e| {
+        ctx.err(
+            name,
+            format!("entry missing from the archive ({e})"),
+            "the X3P file is incomplete",
+        )
+    })?;
+    let cap = f.size().min(limit).min(
+        f.compressed_size()
+            .saturating_mul(MAX_DEFLATE_RATIO)
+            .saturating_add(4096),
+    );
+    let mut out = Vec::with_capacity(usize::try_from(cap).unwrap_or(0));
+    f.take(limit).read_to_end(&mut out).map_err(|e| {
+        ctx.err(
+            name,
+            format!("cannot decompress ({e})"),
+            "the X3P file is corrupt",
+        )
+    })?;
+    Ok(out)
+}
+
+struct Doc {
+    fields: HashMap<String, String>,
+    data_list: Vec<String>,
+}
+
+fn parse_xml(ctx: Ctx<'_>, xml: &str) -> Result<Doc, ReadError> {
+    let mut reader = quick_xml::Reader::from_str(xml);
+    let mut stack: Vec<String> = Vec::new();
+    let mut fields = HashMap::new();
+    let mut data_list = Vec::new();
+    loop {
+        let ev = reader.read_event().map_err(|e| {
+            ctx.err(
+                "main.xml",
+                format!("malformed XML ({e})"),
+                "the X3P file is corrupt",
+            )
+        })?;
+        match ev {
+            Event::Start(e) => {
+                stack.push(AsRef::<str>::as_ref(&e.local_name()).to_string());
+                if stack.len() > 64 {
+                    return Err(ctx.err(
+                        "main.xml",
+                        "nesting deeper than 64 levels",
+                        "the X3P file is corrupt",
+                    ));
+                }
+            }
+            Event::End(_) => {
+                stack.pop();
+            }
+            Event::Text(t) => {
+                if stack.len() < 2 {
+                    continue;
+                }
+                let text = (*t).trim().to_string();
+                if text.is_empty() {
+                    continue;
+                }
+                let path = stack[1..].join("/");
+                if path == "Record3/DataList/Datum" {
+                    data_list.push(text);
+                } else {
+                    fields.entry(path).or_insert(text);
+                }
+            }
+            Event::Eof => break,
+            _ => {}
+        }
+    }
+    Ok(Doc { fields, data_list })
+}
