@@ -199,6 +199,32 @@ pub(crate) fn sample_u(nu: f64, xi: f64) -> f64 {
     libm::sqrt(libm::expm1(e).max(0.0))
 }
 
+impl super::RadialPsd for KcPsd {
+    fn sigma_um(&self) -> f64 {
+        self.sigma_um
+    }
+    fn length_um(&self) -> f64 {
+        self.lc_um
+    }
+    fn unit_psd_u(&self, u: f64) -> f64 {
+        p1(self.nu(), u)
+    }
+    fn cdf_u(&self, u: f64) -> f64 {
+        cdf_u(self.nu(), u)
+    }
+    fn sample_u(&self, xi: f64) -> f64 {
+        sample_u(self.nu(), xi)
+    }
+    #[cfg(feature = "alloc")]
+    fn build_table(
+        &self,
+        u_max: f64,
+        res: super::ghs_table::TableResolution,
+    ) -> Result<super::ghs_table::GhsTable, BrdfError> {
+        super::ghs_table::GhsTable::build(&super::matern::Matern::new(self.nu()), u_max, res)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -1,0 +1,264 @@
+//! Full GHS: all diffraction orders (physics.md §3–4, §9).
+//!
+//! f(i,o) = R_s A_s δ_ω(o − s)/cosθo + R·k²L²·S̃(L|ζ|; g(i,o)),
+//! S̃(u; g) = Σ_{m≥1} w_m(g) p_m(u) = (1/2π)∫[e^{−g(1−M)} − e^{−g}] J₀(ux) x dx,
+//! read from a per-surface [`GhsTable`] built when the model is made.
+//!
+//! **Sampling.** The exact law of the scattered frequency for the specular
+//! g_s = (2kσ cosθi)² is S̃(u; g_s)/(1 − e^{−g_s}): an order m ~ Pois(g_s | m ≥ 1)
+//! followed by a sum of m independent p₁ samples (see
+//! [`GhsFull::sample_orders_exact`], O(g_s) per draw). The renderer's
+//! sampler is the O(log n) fast path: it draws u from the table's own radial
+//! CDF of S̃(·; g_s) (a piecewise power law in w between columns, the two
+//! rows bracketing ln g_s mixed linearly), mixed defensively with p₁
+//! (weight 5 %, which has exactly the true u^{−(γ+1)} tail shape). `pdf()`
+//! is the density of exactly that mixture, so the estimator is unbiased
+//! whatever the table error; the table error only moves the proposal away
+//! from the exact law (measured in tests/ghs_sampling.rs). For g_s < 1e−4
+//! the lobe is p₁ to O(g_s) and p₁ is sampled exactly.
+
+use alloc::sync::Arc;
+
+use glam::DVec3;
+
+use super::energy::{GhsOptions, hemispherical_integral};
+use super::ghs_ssa::GhsCommon;
+use super::ghs_table::{G_MIN, GhsTable, TableResolution};
+use super::{Geometry, RadialPsd, direction_from_u, wavenumber};
+use crate::fresnel::Fresnel;
+use crate::math::finite_nonneg;
+use crate::model::{Bxdf, BxdfSample, Specular, WAVELENGTH_MAX_NM, WAVELENGTH_MIN_NM};
+use crate::{BrdfError, frame};
+
+/// Probability of drawing from p₁ instead of the tabulated S̃ CDF.
+pub const DEFENSIVE_WEIGHT: f64 = 0.05;
+
+/// Full GHS model driven by a radial PSD and its S̃ table.
+#[derive(Clone, Debug)]
+pub struct GhsFull<P: RadialPsd = super::KcPsd> {
+    psd: P,
+    common: GhsCommon,
+    table: Arc<GhsTable>,
+}
+
+/// u_max covering the hemisphere at the shortest supported wavelength.
+pub fn hemisphere_u_max(length_um: f64) -> f64 {
+    2.0 * wavenumber(WAVELENGTH_MIN_NM) * length_um * 1.001
+}
+
+impl<P: RadialPsd> GhsFull<P> {
+    /// Raw energy, halfway Fresnel angle, default table resolution.
+    pub fn new(psd: P, fresnel: Fresnel) -> Result<Self, BrdfError> {
+        Self::with_options(psd, fresnel, GhsOptions::default())
+    }
+
+    /// With explicit options and the default table resolution.
+    pub fn with_options(psd: P, fresnel: Fresnel, opts: GhsOptions) -> Result<Self, BrdfError> {
+        Self::with_resolution(psd, fresnel, opts, TableResolution::default())
+    }
+
+    /// With an explicit table resolution (benches/ghs.rs measures the
+    /// error/time trade-off).
+    pub fn with_resolution(
+        psd: P,
+        fresnel: Fresnel,
+        opts: GhsOptions,
+        res: TableResolution,
+    ) -> Result<Self, BrdfError> {
+        let table = psd.build_table(hemisphere_u_max(psd.length_um()), res)?;
+        Self::with_table(psd, fresnel, opts, Arc::new(table))
+    }
+
+    /// Shares an existing table (it depends only on the correlation shape and
+    /// the u range, not on σ, Lc or λ). Fails if the table does not cover
+    /// the hemisphere for this surface.
+    pub fn with_table(
+        psd: P,
+        fresnel: Fresnel,
+        opts: GhsOptions,
+        table: Arc<GhsTable>,
+    ) -> Result<Self, BrdfError> {
+        fresnel.check_covers(WAVELENGTH_MIN_NM, WAVELENGTH_MAX_NM)?;
+        let need = hemisphere_u_max(psd.length_um()) / 1.001;
+        if table.u_max() < need {
+            return Err(BrdfError::OutOfRange {
+                name: "table u_max",
+                value: table.u_max(),
+                valid: "≥ 2·k(360 nm)·L of the surface: build the table for this surface",
+            });
+        }
+        let common = GhsCommon {
+            fresnel,
+            opts,
+            energy_table: None,
+            sigma: psd.sigma_um(),
+            length: psd.length_um(),
+        };
+        let raw = GhsCommon {
+            fresnel: Fresnel::One,
+            opts: GhsOptions::default(),
+            ..common.clone()
+        };
+        let mut model = GhsFull { psd, common, table };
+        let mut common = model.common.clone();
+        common.build_table(
+            |u| model.psd.cdf_u(u),
+            |th, lam| {
+                let wi = frame::spherical(th, 0.0);
+                let kl = wavenumber(lam) * raw.length;
+                hemispherical_integral(wi, 1.0 / kl, |o| model.raw_lobe(&raw, wi, o, lam))
+            },
+        );
+        model.common = common;
+        Ok(model)
+    }
+
+    /// The surface PSD.
+    pub fn psd(&self) -> &P {
+        &self.psd
+    }
+
+    /// The S̃ table.
+    pub fn table(&self) -> &Arc<GhsTable> {
+        &self.table
+    }
+
+    /// The options in use.
+    pub fn options(&self) -> GhsOptions {
+        self.common.opts
+    }
+
+    /// S̃(u; g): the table for g ≥ 1e−4, (1 − e^{−g})·p(u) below.
+    #[inline]
+    pub fn s_tilde(&self, u: f64, g: f64) -> f64 {
+        if !(g > 0.0) {
+            return 0.0;
+        }
+        match self.table.s_tilde(u, g) {
+            Some(v) => v,
+            None => -libm::expm1(-g) * self.psd.unit_psd_u(u),
+        }
+    }
+
+    /// R = 1, unrenormalised scattered BRDF k²L² S̃.
+    #[inline]
+    fn raw_lobe(&self, c: &GhsCommon, wi: DVec3, wo: DVec3, lambda_nm: f64) -> f64 {
+        let Some(geo) = Geometry::new(wi, wo, lambda_nm, c.length) else {
+            return 0.0;
+        };
+        let s = c.sigma_eff(geo.ci, lambda_nm);
+        let t = geo.k * s * (geo.ci + geo.co);
+        let kl = geo.k * c.length;
+        kl * kl * self.s_tilde(libm::sqrt(geo.u2), t * t)
+    }
+
+    /// Density in the u-plane of the glossy proposal for specular g_s.
+    #[inline]
+    fn proposal_density(&self, gs: f64, u: f64) -> f64 {
+        let p = self.psd.unit_psd_u(u);
+        if gs < G_MIN {
+            return p;
+        }
+        let rows = self.table.proposal_rows(gs);
+        let mut q = 0.0;
+        for (r, w, lw) in rows {
+            if w > 0.0 {
+                q += w * self.table.row_density(r, lw, u);
+            }
+        }
+        DEFENSIVE_WEIGHT * p + (1.0 - DEFENSIVE_WEIGHT) * q
+    }
+
+    /// Draws u from the glossy proposal with two uniforms (`v` selects the
+    /// component and is reused).
+    #[inline]
+    fn proposal_sample(&self, gs: f64, v: f64, xi: f64) -> f64 {
+        if gs < G_MIN || v < DEFENSIVE_WEIGHT {
+            return self.psd.sample_u(xi);
+        }
+        let v = (v - DEFENSIVE_WEIGHT) / (1.0 - DEFENSIVE_WEIGHT);
+        let rows = self.table.proposal_rows(gs);
+        let (r, _, lw) = if v < rows[0].1 { rows[0] } else { rows[1] };
+        self.table.row_sample(r, lw, xi)
+    }
+
+    /// Reference sampler of the exact law of the scattered frequency for
+    /// order-weights Pois(g | m ≥ 1): draws m, then sums m independent p₁
+    /// vectors; returns |u|. Costs O(m) — for tests and validation.
+    pub fn sample_orders_exact(&self, g: f64, mut next: impl FnMut() -> f64) -> f64 {
+        let m = super::poisson::sample_conditioned(g, next());
+        let (mut x, mut y) = (0.0, 0.0);
+        for _ in 0..m {
+            let r = self.psd.sample_u(next());
+            let (s, c) = libm::sincos(2.0 * core::f64::consts::PI * next());
+            x += r * c;
+            y += r * s;
+        }
+        libm::hypot(x, y)
+    }
+}
+
+impl<P: RadialPsd> Bxdf for GhsFull<P> {
+    fn eval(&self, wi: DVec3, wo: DVec3, lambda_nm: f64) -> f64 {
+        let f = self.raw_lobe(&self.common, wi, wo, lambda_nm);
+        if f == 0.0 {
+            return 0.0;
+        }
+        finite_nonneg(
+            f * self.common.r_scatter(wi, wo, lambda_nm)
+                * self.common.scatter_factor(wi.z, lambda_nm),
+        )
+    }
+
+    fn pdf(&self, wi: DVec3, wo: DVec3, lambda_nm: f64) -> f64 {
+        let Some(geo) = Geometry::new(wi, wo, lambda_nm, self.common.length) else {
+            return 0.0;
+        };
+        let (_, p_delta, gs) = self.common.specular_and_choice(geo.ci, lambda_nm);
+        let kl = geo.k * self.common.length;
+        let q = self.proposal_density(gs, libm::sqrt(geo.u2));
+        finite_nonneg((1.0 - p_delta) * kl * kl * geo.co * q)
+    }
+
+    fn sample(&self, wi: DVec3, lambda_nm: f64, u: [f64; 3]) -> Option<BxdfSample> {
+        if !(wi.z > 0.0) {
+            return None;
+        }
+        let (spec, p_delta, gs) = self.common.specular_and_choice(wi.z.min(1.0), lambda_nm);
+        if u[0] < p_delta {
+            return (spec > 0.0).then(|| BxdfSample {
+                wo: frame::reflect_z(wi),
+                weight: spec / p_delta,
+                pdf: p_delta,
+                is_delta: true,
+            });
+        }
+        let v = (u[0] - p_delta) / (1.0 - p_delta);
+        let kl = wavenumber(lambda_nm) * self.common.length;
+        let uu = self.proposal_sample(gs, v, u[1]);
+        let wo = direction_from_u(wi, kl, uu, 2.0 * core::f64::consts::PI * u[2])?;
+        let f = self.eval(wi, wo, lambda_nm);
+        let pdf = self.pdf(wi, wo, lambda_nm);
+        if !(f > 0.0 && pdf > 0.0) {
+            return None;
+        }
+        let weight = f * wo.z / pdf;
+        weight.is_finite().then_some(BxdfSample {
+            wo,
+            weight,
+            pdf,
+            is_delta: false,
+        })
+    }
+
+    fn specular(&self, wi: DVec3, lambda_nm: f64) -> Specular {
+        if !(wi.z > 0.0) {
+            return Specular::default();
+        }
+        let (weight, probability, _) = self.common.specular_and_choice(wi.z.min(1.0), lambda_nm);
+        Specular {
+            weight: finite_nonneg(weight),
+            probability,
+        }
+    }
+}

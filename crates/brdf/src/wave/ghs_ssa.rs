@@ -1,0 +1,239 @@
+//! GHS smooth-surface approximation (physics.md §3.2 "SSA (paper)"):
+//!
+//! f(i,o) = R_s A_s δ_ω(o − s)/cosθo + R·(1 − e^{−g(i,o)})·k²·P(ζ)/σ²,
+//! A_s = exp(−(2kσ cosθi)²), g(i,o) = [kσ(cosθi + cosθo)]², ζ = k(o⊥ + i⊥).
+//!
+//! The scattered lobe is sampled exactly from P/σ² (the radial inverse CDF),
+//! so its pdf is k² cosθo P(ζ)/σ² and the weight is R(1 − e^{−g}) (× the
+//! energy factor). The delta and the lobe are chosen in proportion to
+//! R_s A_s and R_s(1 − A_s).
+
+use glam::DVec3;
+
+use super::energy::{Energy, EnergyTable, GhsOptions, hemispherical_integral, in_disk_fraction};
+use super::{Geometry, RadialPsd, direction_from_u, wavenumber};
+use crate::fresnel::Fresnel;
+use crate::math::finite_nonneg;
+use crate::model::{Bxdf, BxdfSample, Specular, WAVELENGTH_MAX_NM, WAVELENGTH_MIN_NM};
+use crate::{BrdfError, frame};
+
+/// Reflectance, specular weight and energy factor shared by the GHS models.
+#[derive(Clone, Debug, PartialEq)]
+pub(crate) struct GhsCommon {
+    pub fresnel: Fresnel,
+    pub opts: GhsOptions,
+    /// Krywonos K(θi, λ) or the in-disk fraction σ_rel²/σ² (SigmaRel).
+    pub energy_table: Option<EnergyTable>,
+    pub sigma: f64,
+    pub length: f64,
+}
+
+impl GhsCommon {
+    /// σ used in A_s and g for this incidence: σ_rel under [`Energy::SigmaRel`].
+    #[inline]
+    pub fn sigma_eff(&self, ci: f64, lambda_nm: f64) -> f64 {
+        match (self.opts.energy, &self.energy_table) {
+            (Energy::SigmaRel, Some(t)) => {
+                self.sigma * libm::sqrt(t.at(ci, lambda_nm).clamp(0.0, 1.0))
+            }
+            _ => self.sigma,
+        }
+    }
+
+    /// Multiplier of the scattered part (Krywonos K; 1 otherwise).
+    #[inline]
+    pub fn scatter_factor(&self, ci: f64, lambda_nm: f64) -> f64 {
+        match (self.opts.energy, &self.energy_table) {
+            (Energy::Krywonos, Some(t)) => t.at(ci, lambda_nm).max(0.0),
+            _ => 1.0,
+        }
+    }
+
+    /// Fresnel factor of the scattered part.
+    #[inline]
+    pub fn r_scatter(&self, wi: DVec3, wo: DVec3, lambda_nm: f64) -> f64 {
+        match self.opts.fresnel_angle {
+            super::FresnelAngle::Halfway => {
+                let c = libm::sqrt((0.5 * (1.0 + wi.dot(wo))).clamp(0.0, 1.0));
+                self.fresnel.reflectance(c, lambda_nm)
+            }
+            super::FresnelAngle::Incident => self.fresnel.reflectance(wi.z, lambda_nm),
+        }
+    }
+
+    /// (specular weight R_s A_s, probability of choosing the delta lobe).
+    #[inline]
+    pub fn specular_and_choice(&self, ci: f64, lambda_nm: f64) -> (f64, f64, f64) {
+        let k = wavenumber(lambda_nm);
+        let s = self.sigma_eff(ci, lambda_nm);
+        let gs = {
+            let t = 2.0 * k * s * ci;
+            t * t
+        };
+        let rs = self.fresnel.reflectance(ci, lambda_nm);
+        let a_s = libm::exp(-gs);
+        let spec = rs * a_s;
+        let glossy = rs * (-libm::expm1(-gs));
+        let total = spec + glossy;
+        let p = if total > 0.0 { spec / total } else { 0.0 };
+        (spec, p, gs)
+    }
+
+    /// Builds the energy table for `opts.energy` from the model's raw
+    /// scattered albedo with R = 1 (`raw_albedo(θi, λ)`) or from the unit
+    /// PSD's CDF.
+    pub fn build_table(
+        &mut self,
+        cdf_u: impl Fn(f64) -> f64,
+        mut raw_albedo: impl FnMut(f64, f64) -> f64,
+    ) {
+        self.energy_table = match self.opts.energy {
+            Energy::Raw => None,
+            Energy::SigmaRel => {
+                let l = self.length;
+                Some(EnergyTable::build(|th, lam| {
+                    in_disk_fraction(libm::sin(th), wavenumber(lam) * l, &cdf_u)
+                }))
+            }
+            Energy::Krywonos => {
+                let sigma = self.sigma;
+                Some(EnergyTable::build(|th, lam| {
+                    let k = wavenumber(lam);
+                    let t = 2.0 * k * sigma * libm::cos(th);
+                    let b = -libm::expm1(-t * t);
+                    let a = raw_albedo(th, lam);
+                    if a > 1e-6 * b { b / a } else { 0.0 }
+                }))
+            }
+        };
+    }
+}
+
+/// The GHS smooth-surface approximation driven by a radial PSD.
+#[derive(Clone, Debug, PartialEq)]
+pub struct GhsSsa<P: RadialPsd = super::KcPsd> {
+    psd: P,
+    common: GhsCommon,
+}
+
+impl<P: RadialPsd> GhsSsa<P> {
+    /// Raw energy, Fresnel at the halfway angle.
+    pub fn new(psd: P, fresnel: Fresnel) -> Result<Self, BrdfError> {
+        Self::with_options(psd, fresnel, GhsOptions::default())
+    }
+
+    /// With explicit energy and Fresnel-angle options. [`Energy::Krywonos`]
+    /// integrates the raw scattered albedo on a 64 × 16 (θi, λ) grid at
+    /// build time (about 1.5 M lobe evaluations).
+    pub fn with_options(psd: P, fresnel: Fresnel, opts: GhsOptions) -> Result<Self, BrdfError> {
+        fresnel.check_covers(WAVELENGTH_MIN_NM, WAVELENGTH_MAX_NM)?;
+        let common = GhsCommon {
+            fresnel,
+            opts,
+            energy_table: None,
+            sigma: psd.sigma_um(),
+            length: psd.length_um(),
+        };
+        let raw = GhsCommon {
+            fresnel: Fresnel::One,
+            opts: GhsOptions::default(),
+            ..common.clone()
+        };
+        let mut model = GhsSsa { psd, common };
+        let mut common = model.common.clone();
+        common.build_table(
+            |u| model.psd.cdf_u(u),
+            |th, lam| {
+                let wi = frame::spherical(th, 0.0);
+                let kl = wavenumber(lam) * raw.length;
+                hemispherical_integral(wi, 1.0 / kl, |o| raw_lobe(&model.psd, &raw, wi, o, lam))
+            },
+        );
+        model.common = common;
+        Ok(model)
+    }
+
+    /// The surface PSD.
+    pub fn psd(&self) -> &P {
+        &self.psd
+    }
+
+    /// The options in use.
+    pub fn options(&self) -> GhsOptions {
+        self.common.opts
+    }
+}
+
+/// R = 1, unrenormalised scattered lobe (1 − e^{−g}) k² L² p(u).
+fn raw_lobe<P: RadialPsd>(psd: &P, c: &GhsCommon, wi: DVec3, wo: DVec3, lambda_nm: f64) -> f64 {
+    let Some(geo) = Geometry::new(wi, wo, lambda_nm, c.length) else {
+        return 0.0;
+    };
+    let s = c.sigma_eff(geo.ci, lambda_nm);
+    let t = geo.k * s * (geo.ci + geo.co);
+    let kl = geo.k * c.length;
+    -libm::expm1(-t * t) * kl * kl * psd.unit_psd_u(libm::sqrt(geo.u2))
+}
+
+impl<P: RadialPsd> Bxdf for GhsSsa<P> {
+    fn eval(&self, wi: DVec3, wo: DVec3, lambda_nm: f64) -> f64 {
+        let f = raw_lobe(&self.psd, &self.common, wi, wo, lambda_nm);
+        if f == 0.0 {
+            return 0.0;
+        }
+        finite_nonneg(
+            f * self.common.r_scatter(wi, wo, lambda_nm)
+                * self.common.scatter_factor(wi.z, lambda_nm),
+        )
+    }
+
+    fn pdf(&self, wi: DVec3, wo: DVec3, lambda_nm: f64) -> f64 {
+        let Some(geo) = Geometry::new(wi, wo, lambda_nm, self.common.length) else {
+            return 0.0;
+        };
+        let (_, p_delta, _) = self.common.specular_and_choice(geo.ci, lambda_nm);
+        let kl = geo.k * self.common.length;
+        finite_nonneg((1.0 - p_delta) * kl * kl * geo.co * self.psd.unit_psd_u(libm::sqrt(geo.u2)))
+    }
+
+    fn sample(&self, wi: DVec3, lambda_nm: f64, u: [f64; 3]) -> Option<BxdfSample> {
+        if !(wi.z > 0.0) {
+            return None;
+        }
+        let (spec, p_delta, _) = self.common.specular_and_choice(wi.z.min(1.0), lambda_nm);
+        if u[0] < p_delta {
+            return (spec > 0.0).then(|| BxdfSample {
+                wo: frame::reflect_z(wi),
+                weight: spec / p_delta,
+                pdf: p_delta,
+                is_delta: true,
+            });
+        }
+        let kl = wavenumber(lambda_nm) * self.common.length;
+        let uu = self.psd.sample_u(u[1]);
+        let wo = direction_from_u(wi, kl, uu, 2.0 * core::f64::consts::PI * u[2])?;
+        let f = self.eval(wi, wo, lambda_nm);
+        let pdf = self.pdf(wi, wo, lambda_nm);
+        if !(f > 0.0 && pdf > 0.0) {
+            return None;
+        }
+        let weight = f * wo.z / pdf;
+        weight.is_finite().then_some(BxdfSample {
+            wo,
+            weight,
+            pdf,
+            is_delta: false,
+        })
+    }
+
+    fn specular(&self, wi: DVec3, lambda_nm: f64) -> Specular {
+        if !(wi.z > 0.0) {
+            return Specular::default();
+        }
+        let (weight, probability, _) = self.common.specular_and_choice(wi.z.min(1.0), lambda_nm);
+        Specular {
+            weight: finite_nonneg(weight),
+            probability,
+        }
+    }
+}

@@ -1,0 +1,465 @@
+//! Hankel transforms of the full GHS kernel (physics.md §4.1, §10):
+//!
+//! S̃(u; g) = (1/2π) ∫₀^∞ [e^{−g(1−M(x))} − e^{−g}] J₀(ux) x dx.
+//!
+//! Two independent methods:
+//! * [`s_tilde_direct`]: composite 16-point Gauss–Legendre on panels that
+//!   resolve both the kernel and the Bessel oscillation — the accurate,
+//!   slow reference (no allocation);
+//! * [`FftLog`] (feature `alloc`): Hamilton's FFTLog on a logarithmic grid,
+//!   all u at once in O(N log N) — the table generator.
+//!
+//! Both subtract the cusp. With A = 1 − e^{−g} and ε = (A/g)^{1/(2ν)}, the
+//! function A·M(x/ε) has the same value at 0 and the same leading
+//! non-analytic term −g a x^{2ν} as the kernel, and its transform is known
+//! exactly: A ε² p(εu), p the unit PSD in u. What is left is smoother and
+//! small in the tail, where the analytic part then carries the value.
+
+use core::f64::consts::PI;
+
+use super::kc;
+use super::matern::Matern;
+
+/// The normalised covariance M(x) of a surface (x = r/L), with the unit
+/// PSD p(u) = L² P(u/L)/σ² that is its Hankel transform.
+pub trait Correlation {
+    /// M(x), M(0) = 1.
+    fn m(&self, x: f64) -> f64;
+    /// 1 − M(x), accurate in relative terms at small x.
+    fn one_minus_m(&self, x: f64) -> f64;
+    /// p(u) with ∫ p d²u = 1.
+    fn unit_psd_u(&self, u: f64) -> f64;
+    /// Exponent ν of the leading non-analytic term 1 − M ≈ a x^{2ν}
+    /// (p ∝ u^{−2ν−2} in the tail).
+    fn cusp_nu(&self) -> f64;
+}
+
+/// The K-correlation surface: Matérn covariance and p₁.
+impl Correlation for Matern {
+    fn m(&self, x: f64) -> f64 {
+        self.value(x)
+    }
+    fn one_minus_m(&self, x: f64) -> f64 {
+        self.one_minus(x)
+    }
+    fn unit_psd_u(&self, u: f64) -> f64 {
+        kc::p1(self.nu(), u)
+    }
+    fn cusp_nu(&self) -> f64 {
+        self.nu()
+    }
+}
+
+/// The GHS kernel h(x) = e^{−g(1−M)} − e^{−g}, formed without cancellation:
+/// e^{−g}·expm1(gM) for small g, exp(−g(1−M)) − e^{−g} otherwise.
+#[inline]
+pub fn kernel<C: Correlation + ?Sized>(c: &C, x: f64, g: f64) -> f64 {
+    if g < 1.0 {
+        libm::exp(-g) * libm::expm1(g * c.m(x))
+    } else {
+        libm::exp(-g * c.one_minus_m(x)) - libm::exp(-g)
+    }
+}
+
+/// Cusp-subtraction parameters (A, ε) for this g.
+#[inline]
+pub fn cusp_params(nu: f64, g: f64) -> (f64, f64) {
+    let a = -libm::expm1(-g);
+    let eps = libm::exp(libm::log(a / g) / (2.0 * nu));
+    (a, eps)
+}
+
+/// Width scale of the kernel in x: the root of g(1 − M(x_s)) = 1 for g > 1,
+/// +∞ for g ≤ 1. The lobe's width in u is then W = sqrt(1 + 1/x_s²).
+pub fn kernel_width<C: Correlation + ?Sized>(c: &C, g: f64) -> f64 {
+    if g <= 1.0 {
+        return f64::INFINITY;
+    }
+    let target = 1.0 / g;
+    // 1 − M increases from 0 to 1; bracket in ln x.
+    let (mut lo, mut hi) = (-80.0f64, 8.0f64);
+    if c.one_minus_m(libm::exp(hi)) < target {
+        return libm::exp(hi);
+    }
+    for _ in 0..200 {
+        let mid = 0.5 * (lo + hi);
+        if c.one_minus_m(libm::exp(mid)) < target {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+        if hi - lo < 1e-13 {
+            break;
+        }
+    }
+    libm::exp(0.5 * (lo + hi))
+}
+
+/// Lobe width W(g) in u used to scale tables: sqrt(1 + 1/x_s²), 1 for g ≤ 1.
+pub fn lobe_width<C: Correlation + ?Sized>(c: &C, g: f64) -> f64 {
+    let xs = kernel_width(c, g);
+    if xs.is_finite() {
+        libm::sqrt(1.0 + 1.0 / (xs * xs))
+    } else {
+        1.0
+    }
+}
+
+/// Nodes and weights of n-point Gauss–Legendre on [−1, 1], positive half
+/// (n even): `nodes[i]`, `weights[i]` for i < n/2, with the mirror images
+/// implied. Newton iteration on P_n, accurate to round-off.
+pub fn gauss_legendre<const H: usize>() -> ([f64; H], [f64; H]) {
+    let n = 2 * H;
+    let mut x = [0.0; H];
+    let mut w = [0.0; H];
+    for i in 0..H {
+        let mut z = libm::cos(PI * (i as f64 + 0.75) / (n as f64 + 0.5));
+        let mut dp = 1.0;
+        for _ in 0..100 {
+            let mut p0 = 1.0;
+            let mut p1 = z;
+            for k in 2..=n {
+                let p2 = ((2 * k - 1) as f64 * z * p1 - (k - 1) as f64 * p0) / k as f64;
+                p0 = p1;
+                p1 = p2;
+            }
+            dp = n as f64 * (z * p1 - p0) / (z * z - 1.0);
+            let dz = p1 / dp;
+            z -= dz;
+            if dz.abs() < 1e-16 {
+                break;
+            }
+        }
+        x[i] = z;
+        w[i] = 2.0 / ((1.0 - z * z) * dp * dp);
+    }
+    (x, w)
+}
+
+/// Smallest x in [x0, 1e6] at which the decreasing function `f` drops below
+/// `level` (bisection in ln x); 1e6 if it never does.
+fn crossing(f: impl Fn(f64) -> f64, x0: f64, level: f64) -> f64 {
+    let mut hi = x0.max(1e-300);
+    while f(hi) > level {
+        hi *= 2.0;
+        if hi > 1e6 {
+            return 1e6;
+        }
+    }
+    let mut lo = hi * 0.5;
+    for _ in 0..60 {
+        let mid = libm::sqrt(lo * hi);
+        if f(mid) > level {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    hi
+}
+
+/// S̃(u; g) by the direct, cusp-subtracted Hankel transform: the reference
+/// generator (~1e−12 relative where S̃ is above the round-off floor of
+/// ~1e−18·A absolute). Costs O(u·x_c) kernel evaluations.
+pub fn s_tilde_direct<C: Correlation + ?Sized>(c: &C, u: f64, g: f64) -> f64 {
+    if !(g > 0.0) || !(u >= 0.0) || !u.is_finite() {
+        return 0.0;
+    }
+    let nu = c.cusp_nu();
+    let (a, eps) = cusp_params(nu, g);
+    let analytic = a * eps * eps * c.unit_psd_u(eps * u);
+    let xs = kernel_width(c, g).min(1.0);
+    let xw = xs.min(eps);
+    let rem = |x: f64| kernel(c, x, g) - a * c.m(x / eps);
+    let xh = crossing(|x| kernel(c, x, g), xs, 1e-19 * a);
+    let xe = eps * crossing(|x| c.m(x), 1.0, 1e-19);
+    let xc = xh.max(xe);
+    let (gx, gw) = gauss_legendre::<8>();
+    let integrate = |lo: f64, hi: f64| {
+        let half = 0.5 * (hi - lo);
+        let mid = 0.5 * (hi + lo);
+        let mut s = 0.0;
+        for k in 0..8 {
+            for sign in [-1.0, 1.0] {
+                let x = mid + sign * half * gx[k];
+                s += gw[k] * rem(x) * libm::j0(u * x) * x;
+            }
+        }
+        s * half
+    };
+    // Geometric panels resolve the kernel's own scale (down to 1e−9·x_w);
+    // uniform panels of at most half a Bessel period take over from 0.25.
+    let panel = if u > 0.0 { (PI / u).min(0.25) } else { 0.25 };
+    let mut total = 0.0;
+    // geometric panels (ratio 2) from 1e-9·x_w up to one panel length
+    let mut lo = 1e-9 * xw;
+    while lo < panel {
+        let hi = (2.0 * lo).min(panel);
+        total += integrate(lo, hi);
+        lo = hi;
+    }
+    let n_uniform = libm::ceil((xc - panel).max(0.0) / panel).min(1e8) as usize;
+    for i in 0..n_uniform {
+        let l = panel + i as f64 * panel;
+        total += integrate(l, l + panel);
+    }
+    analytic + total / (2.0 * PI)
+}
+
+#[cfg(feature = "alloc")]
+pub use fftlog::FftLog;
+
+#[cfg(feature = "alloc")]
+mod fftlog {
+    use super::super::special::ln_gamma_complex;
+    use alloc::vec;
+    use alloc::vec::Vec;
+    use core::f64::consts::PI;
+
+    /// In-place iterative radix-2 FFT, X_k = Σ x_n e^{−2πikn/N}.
+    struct Fft {
+        n: usize,
+        twiddle: Vec<(f64, f64)>,
+        rev: Vec<usize>,
+    }
+
+    impl Fft {
+        fn new(n: usize) -> Self {
+            assert!(n.is_power_of_two());
+            let bits = n.trailing_zeros();
+            let rev = (0..n)
+                .map(|i| {
+                    if bits == 0 {
+                        0
+                    } else {
+                        i.reverse_bits() >> (usize::BITS - bits)
+                    }
+                })
+                .collect();
+            let twiddle = (0..n / 2)
+                .map(|k| {
+                    let (s, c) = libm::sincos(-2.0 * PI * k as f64 / n as f64);
+                    (c, s)
+                })
+                .collect();
+            Fft { n, twiddle, rev }
+        }
+
+        fn run(&self, re: &mut [f64], im: &mut [f64]) {
+            let n = self.n;
+            for i in 0..n {
+                let j = self.rev[i];
+                if j > i {
+                    re.swap(i, j);
+                    im.swap(i, j);
+                }
+            }
+            let mut len = 2;
+            while len <= n {
+                let half = len / 2;
+                let step = n / len;
+                for start in (0..n).step_by(len) {
+                    for k in 0..half {
+                        let (wr, wi) = self.twiddle[k * step];
+                        let a = start + k;
+                        let b = a + half;
+                        let tr = re[b] * wr - im[b] * wi;
+                        let ti = re[b] * wi + im[b] * wr;
+                        re[b] = re[a] - tr;
+                        im[b] = im[a] - ti;
+                        re[a] += tr;
+                        im[a] += ti;
+                    }
+                }
+                len *= 2;
+            }
+        }
+    }
+
+    /// Hamilton's FFTLog for F(u) = ∫₀^∞ f(x) J₀(ux) x dx on the grid
+    /// x_n = e^{t₀ + nΔ}, u_j = e^{s₀ + jΔ} with s₀ = −(t₀ + (N−1)Δ).
+    ///
+    /// f(x)·x^{2−q} is expanded in a Fourier series in ln x and each term
+    /// x^{q−2+iω} is transformed exactly: ∫ y^{s−1} J₀(y) dy =
+    /// 2^{s−1} Γ(s/2)/Γ(1 − s/2), s = q + iω. The bias q = 1 makes both ends
+    /// of the input and output decay for every kernel used here; the window
+    /// must be wide enough that f·x^{2−q} and F·u^q are negligible at its
+    /// edges (the result is periodic in ln u with period NΔ).
+    pub struct FftLog {
+        n: usize,
+        dt: f64,
+        q: f64,
+        fft: Fft,
+        /// K(q + iω_m)·e^{−2πim/N}/N for each FFT bin.
+        kernel: Vec<(f64, f64)>,
+    }
+
+    impl FftLog {
+        /// Plan for `n` (a power of two) points spaced `dt` in ln x, bias q = 1.
+        pub fn new(n: usize, dt: f64) -> Self {
+            Self::with_bias(n, dt, 1.0)
+        }
+
+        /// Plan with bias `q` ∈ (0, 3/2): f·x^{2−q} and F·u^q must decay at
+        /// both ends of the window.
+        pub fn with_bias(n: usize, dt: f64, q: f64) -> Self {
+            let l = n as f64 * dt;
+            let mut kernel = vec![(0.0, 0.0); n];
+            for (m, slot) in kernel.iter_mut().enumerate() {
+                if m == n / 2 {
+                    continue; // Nyquist bin dropped (input decays at both ends)
+                }
+                let mm = if m < n / 2 {
+                    m as f64
+                } else {
+                    m as f64 - n as f64
+                };
+                let w = 2.0 * PI * mm / l;
+                // ln K = (s−1) ln 2 + lnΓ(s/2) − lnΓ(1 − s/2), s = q + iω
+                let (a_r, a_i) = ln_gamma_complex(0.5 * q, 0.5 * w);
+                let (b_r, b_i) = ln_gamma_complex(1.0 - 0.5 * q, -0.5 * w);
+                let lr = (q - 1.0) * core::f64::consts::LN_2 + a_r - b_r;
+                let li = w * core::f64::consts::LN_2 + a_i - b_i;
+                // phase e^{−2πi m/N}
+                let ph = li - 2.0 * PI * m as f64 / n as f64;
+                let mag = libm::exp(lr) / n as f64;
+                let (s, c) = libm::sincos(ph);
+                *slot = (mag * c, mag * s);
+            }
+            FftLog {
+                n,
+                dt,
+                q,
+                fft: Fft::new(n),
+                kernel,
+            }
+        }
+
+        /// Number of grid points.
+        pub fn len(&self) -> usize {
+            self.n
+        }
+
+        /// Always false (a plan has at least one point).
+        pub fn is_empty(&self) -> bool {
+            false
+        }
+
+        /// Grid spacing in ln x and ln u.
+        pub fn dt(&self) -> f64 {
+            self.dt
+        }
+
+        /// Transforms samples `f[n] = f(e^{t0 + nΔ})`; returns F at
+        /// u_j = e^{s0 + jΔ}, s0 = −(t0 + (N−1)Δ), in `out` (length N).
+        pub fn transform(&self, t0: f64, f: &[f64], re: &mut Vec<f64>, im: &mut Vec<f64>) {
+            let n = self.n;
+            re.clear();
+            im.clear();
+            re.resize(n, 0.0);
+            im.resize(n, 0.0);
+            for i in 0..n {
+                let t = t0 + i as f64 * self.dt;
+                re[i] = f[i] * libm::exp((2.0 - self.q) * t);
+            }
+            self.fft.run(re, im);
+            for m in 0..n {
+                let (kr, ki) = self.kernel[m];
+                let (a, b) = (re[m], im[m]);
+                re[m] = a * kr - b * ki;
+                im[m] = a * ki + b * kr;
+            }
+            self.fft.run(re, im);
+            let s0 = -(t0 + (n - 1) as f64 * self.dt);
+            for (j, v) in re.iter_mut().enumerate() {
+                let s = s0 + j as f64 * self.dt;
+                *v *= libm::exp(-self.q * s);
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn closed_form_gamma2(u: f64, g: f64) -> f64 {
+        // γ = 2: p_m(u) = m/(2π(m²+u²)^{3/2}); S̃ = Σ w_m p_m.
+        let (lo, hi) = super::super::poisson::term_range(g, 1e-18);
+        let mut s = 0.0;
+        for m in lo..=hi {
+            let w = libm::exp(super::super::poisson::log_weight(m, g));
+            let mf = m as f64;
+            s += w * mf / (2.0 * PI * libm::pow(mf * mf + u * u, 1.5));
+        }
+        s
+    }
+
+    #[test]
+    fn gauss_legendre_integrates_polynomials() {
+        let (x, w) = gauss_legendre::<8>();
+        let mut s = 0.0;
+        let mut s_w = 0.0;
+        for i in 0..8 {
+            s += 2.0 * w[i] * x[i] * x[i] * x[i] * x[i] * x[i] * x[i] * x[i] * x[i] * x[i] * x[i];
+            s_w += 2.0 * w[i];
+        }
+        assert!((s - 2.0 / 11.0).abs() < 1e-15 && (s_w - 2.0).abs() < 1e-14);
+    }
+
+    #[test]
+    fn direct_matches_gamma2_closed_form() {
+        let m = Matern::new(0.5);
+        let mut worst: f64 = 0.0;
+        for &g in &[1e-3, 0.1, 1.0, 10.0, 100.0, 1000.0] {
+            for &u in &[0.0, 0.3, 3.0, 30.0, 300.0] {
+                let a = s_tilde_direct(&m, u, g);
+                let b = closed_form_gamma2(u, g);
+                worst = worst.max((a / b - 1.0).abs());
+                assert!((a / b - 1.0).abs() < 1e-9, "g={g} u={u}: {a} vs {b}");
+            }
+        }
+        assert!(worst < 1e-9, "{worst}");
+    }
+
+    #[cfg(feature = "alloc")]
+    #[test]
+    fn fftlog_known_pairs() {
+        use alloc::vec::Vec;
+        let n = 4096;
+        let dt = 0.02;
+        let plan = FftLog::new(n, dt);
+        let t0 = -45.0;
+        let f: Vec<f64> = (0..n)
+            .map(|i| libm::exp(-libm::exp(t0 + i as f64 * dt)))
+            .collect();
+        let (mut re, mut im) = (Vec::new(), Vec::new());
+        plan.transform(t0, &f, &mut re, &mut im);
+        let s0 = -(t0 + (n - 1) as f64 * dt);
+        let mut worst: f64 = 0.0;
+        for (j, v) in re.iter().enumerate() {
+            let u = libm::exp(s0 + j as f64 * dt);
+            if (1e-4..1e4).contains(&u) {
+                let want = libm::pow(1.0 + u * u, -1.5);
+                worst = worst.max((v / want - 1.0).abs());
+            }
+        }
+        assert!(worst < 1e-8, "exp: {worst}");
+        let f: Vec<f64> = (0..n)
+            .map(|i| {
+                let x = libm::exp(t0 + i as f64 * dt);
+                libm::exp(-0.5 * x * x)
+            })
+            .collect();
+        plan.transform(t0, &f, &mut re, &mut im);
+        let mut worst: f64 = 0.0;
+        for (j, v) in re.iter().enumerate() {
+            let u = libm::exp(s0 + j as f64 * dt);
+            if (1e-4..6.0).contains(&u) {
+                let want = libm::exp(-0.5 * u * u);
+                worst = worst.max((v - want).abs() / want.max(1e-6));
+            }
+        }
+        assert!(worst < 1e-8, "gauss: {worst}");
+    }
+}

@@ -1,0 +1,455 @@
+//! A measured, tabulated isotropic PSD (as `fit` produces) driving the GHS
+//! models in place of a K-correlation fit.
+//!
+//! P(ζ) is interpolated log-log between the samples, held flat below the
+//! first sample (the low-frequency roll-off of a finite surface) and
+//! extended beyond the last one by the power law of the last segment, which
+//! must fall faster than ζ⁻² so that σ² = ∫P d²ζ is finite. Radial sampling
+//! inverts the exact CDF of that piecewise power law. For the full GHS the
+//! covariance M(x) = C(r)/σ² is computed by an FFTLog Hankel transform of the
+//! table (see [`TabulatedCorrelation`]).
+
+use alloc::vec::Vec;
+use core::f64::consts::PI;
+
+use super::RadialPsd;
+use super::ghs_table::{GhsTable, TableResolution, lagrange4};
+use super::hankel::{Correlation, FftLog};
+use super::matern::Matern;
+use crate::BrdfError;
+
+/// Radial PSD given by samples (ζ_j in rad/µm, P_j in µm⁴).
+#[derive(Clone, Debug, PartialEq)]
+pub struct TabulatedPsd {
+    ln_zeta: Vec<f64>,
+    ln_p: Vec<f64>,
+    /// d ln P/d ln ζ beyond the last sample (< −2).
+    slope_hi: f64,
+    sigma2: f64,
+    /// Normalised radial mass inside each ζ_j (index 0: the flat disk).
+    cum: Vec<f64>,
+    /// L = 1/ζ_half: the median radial frequency sets the unit of u.
+    length: f64,
+}
+
+impl TabulatedPsd {
+    /// From samples in the rad/µm convention: `zeta` strictly increasing and
+    /// positive, `psd` positive and finite, at least 2 samples.
+    pub fn new(zeta_rad_per_um: &[f64], psd_um4: &[f64]) -> Result<Self, BrdfError> {
+        let n = zeta_rad_per_um.len();
+        if n < 2 || psd_um4.len() != n {
+            return Err(BrdfError::InvalidTable {
+                reason: "need at least 2 (zeta, psd) samples and equally long columns",
+                row: None,
+            });
+        }
+        for j in 0..n {
+            let (z, p) = (zeta_rad_per_um[j], psd_um4[j]);
+            if !(z.is_finite() && z > 0.0) || (j > 0 && !(z > zeta_rad_per_um[j - 1])) {
+                return Err(BrdfError::InvalidTable {
+                    reason: "zeta must be finite, positive and strictly increasing (rad/µm)",
+                    row: Some(j),
+                });
+            }
+            if !(p.is_finite() && p > 0.0) {
+                return Err(BrdfError::InvalidTable {
+                    reason: "psd must be finite and positive (µm⁴); drop or floor zero bins",
+                    row: Some(j),
+                });
+            }
+        }
+        let ln_zeta: Vec<f64> = zeta_rad_per_um.iter().map(|z| libm::log(*z)).collect();
+        let ln_p: Vec<f64> = psd_um4.iter().map(|p| libm::log(*p)).collect();
+        let slope_hi = (ln_p[n - 1] - ln_p[n - 2]) / (ln_zeta[n - 1] - ln_zeta[n - 2]);
+        if !(slope_hi < -2.02) {
+            return Err(BrdfError::InvalidTable {
+                reason: "the last segment must fall faster than zeta^-2.02 (finite, normalisable \
+                         tail); extend the table to higher frequencies or trim the noise floor",
+                row: Some(n - 1),
+            });
+        }
+        let mut cum = Vec::with_capacity(n + 1);
+        let z0 = zeta_rad_per_um[0];
+        let mut acc = PI * z0 * z0 * psd_um4[0];
+        cum.push(acc);
+        for j in 0..n - 1 {
+            acc += seg_mass(ln_zeta[j], ln_p[j], ln_zeta[j + 1], ln_p[j + 1]);
+            cum.push(acc);
+        }
+        let zl = zeta_rad_per_um[n - 1];
+        acc += 2.0 * PI * psd_um4[n - 1] * zl * zl / (-(slope_hi + 2.0));
+        let sigma2 = acc;
+        for c in cum.iter_mut() {
+            *c /= sigma2;
+        }
+        let mut t = TabulatedPsd {
+            ln_zeta,
+            ln_p,
+            slope_hi,
+            sigma2,
+            cum,
+            length: 1.0,
+        };
+        let half = t.sample_zeta(0.5);
+        t.length = 1.0 / half;
+        Ok(t)
+    }
+
+    /// From samples in the cycles/µm convention: ζ = 2πf, P = PSD_cyc/(2π)².
+    pub fn from_cycles(f_cycles_per_um: &[f64], psd_cyc_um4: &[f64]) -> Result<Self, BrdfError> {
+        let z: Vec<f64> = f_cycles_per_um.iter().map(|f| 2.0 * PI * f).collect();
+        let p: Vec<f64> = psd_cyc_um4.iter().map(|p| p / (4.0 * PI * PI)).collect();
+        Self::new(&z, &p)
+    }
+
+    /// rms height σ = sqrt(∫ P d²ζ), µm.
+    pub fn sigma_um(&self) -> f64 {
+        libm::sqrt(self.sigma2)
+    }
+
+    /// P(ζ), µm⁴.
+    pub fn psd(&self, zeta: f64) -> f64 {
+        if !(zeta > 0.0) {
+            return libm::exp(self.ln_p[0]);
+        }
+        let lz = libm::log(zeta);
+        let n = self.ln_zeta.len();
+        if lz <= self.ln_zeta[0] {
+            return libm::exp(self.ln_p[0]);
+        }
+        if lz >= self.ln_zeta[n - 1] {
+            return libm::exp(self.ln_p[n - 1] + self.slope_hi * (lz - self.ln_zeta[n - 1]));
+        }
+        let j = self.segment(lz);
+        let t = (lz - self.ln_zeta[j]) / (self.ln_zeta[j + 1] - self.ln_zeta[j]);
+        libm::exp(self.ln_p[j] + t * (self.ln_p[j + 1] - self.ln_p[j]))
+    }
+
+    /// P/σ², µm².
+    pub fn unit_psd(&self, zeta: f64) -> f64 {
+        self.psd(zeta) / self.sigma2
+    }
+
+    /// Segment j with ln ζ_j ≤ lz < ln ζ_{j+1}.
+    fn segment(&self, lz: f64) -> usize {
+        let (mut lo, mut hi) = (0usize, self.ln_zeta.len() - 1);
+        while hi - lo > 1 {
+            let mid = (lo + hi) / 2;
+            if self.ln_zeta[mid] <= lz {
+                lo = mid
+            } else {
+                hi = mid
+            }
+        }
+        lo
+    }
+
+    /// Radial mass of P/σ² inside |ζ| ≤ zeta.
+    pub fn cdf(&self, zeta: f64) -> f64 {
+        if !(zeta > 0.0) {
+            return 0.0;
+        }
+        let n = self.ln_zeta.len();
+        let lz = libm::log(zeta);
+        if lz <= self.ln_zeta[0] {
+            let z0 = libm::exp(self.ln_zeta[0]);
+            return self.cum[0] * (zeta / z0) * (zeta / z0);
+        }
+        if lz >= self.ln_zeta[n - 1] {
+            let zl = libm::exp(self.ln_zeta[n - 1]);
+            let b2 = self.slope_hi + 2.0;
+            let m = 2.0
+                * PI
+                * libm::exp(self.ln_p[n - 1])
+                * zl
+                * zl
+                * (libm::expm1(b2 * (lz - self.ln_zeta[n - 1])) / b2)
+                / self.sigma2;
+            return (self.cum[n - 1] + m).min(1.0);
+        }
+        let j = self.segment(lz);
+        let m = seg_mass(
+            self.ln_zeta[j],
+            self.ln_p[j],
+            lz,
+            self.ln_p[j] + (lz - self.ln_zeta[j]) * self.seg_slope(j),
+        );
+        (self.cum[j] + m / self.sigma2).min(1.0)
+    }
+
+    fn seg_slope(&self, j: usize) -> f64 {
+        (self.ln_p[j + 1] - self.ln_p[j]) / (self.ln_zeta[j + 1] - self.ln_zeta[j])
+    }
+
+    /// Inverse of [`TabulatedPsd::cdf`] for ξ ∈ [0, 1) (rad/µm; +∞ at ξ ≥ 1).
+    pub fn sample_zeta(&self, xi: f64) -> f64 {
+        if !(xi > 0.0) {
+            return 0.0;
+        }
+        if xi >= 1.0 {
+            return f64::INFINITY;
+        }
+        let n = self.ln_zeta.len();
+        if xi < self.cum[0] {
+            return libm::exp(self.ln_zeta[0]) * libm::sqrt(xi / self.cum[0]);
+        }
+        if xi >= self.cum[n - 1] {
+            let zl = libm::exp(self.ln_zeta[n - 1]);
+            let b2 = self.slope_hi + 2.0;
+            let target = (xi - self.cum[n - 1]) * self.sigma2
+                / (2.0 * PI * libm::exp(self.ln_p[n - 1]) * zl * zl);
+            let z = 1.0 + b2 * target;
+            return if z <= 0.0 {
+                f64::INFINITY
+            } else {
+                zl * libm::exp(libm::log(z) / b2)
+            };
+        }
+        let (mut lo, mut hi) = (0usize, n - 1);
+        while hi - lo > 1 {
+            let mid = (lo + hi) / 2;
+            if self.cum[mid] <= xi {
+                lo = mid
+            } else {
+                hi = mid
+            }
+        }
+        let j = lo;
+        let zj = libm::exp(self.ln_zeta[j]);
+        let b2 = self.seg_slope(j) + 2.0;
+        let target =
+            (xi - self.cum[j]) * self.sigma2 / (2.0 * PI * libm::exp(self.ln_p[j]) * zj * zj);
+        let ln_ratio = if libm::fabs(b2) < 1e-9 {
+            target
+        } else {
+            libm::log1p(b2 * target) / b2
+        };
+        zj * libm::exp(ln_ratio.clamp(0.0, self.ln_zeta[j + 1] - self.ln_zeta[j]))
+    }
+
+    /// Exponent ν_t of the tail, P ∝ ζ^{−(2ν_t + 2)}.
+    pub fn tail_nu(&self) -> f64 {
+        0.5 * (-self.slope_hi - 2.0)
+    }
+}
+
+/// 2π ∫ P ζ dζ over a log-log-linear segment.
+fn seg_mass(lz0: f64, lp0: f64, lz1: f64, lp1: f64) -> f64 {
+    let d = lz1 - lz0;
+    if !(d > 0.0) {
+        return 0.0;
+    }
+    let b2 = (lp1 - lp0) / d + 2.0;
+    let base = 2.0 * PI * libm::exp(lp0 + 2.0 * lz0);
+    if libm::fabs(b2 * d) < 1e-12 {
+        base * d
+    } else {
+        base * libm::expm1(b2 * d) / b2
+    }
+}
+
+impl RadialPsd for TabulatedPsd {
+    fn sigma_um(&self) -> f64 {
+        TabulatedPsd::sigma_um(self)
+    }
+    fn length_um(&self) -> f64 {
+        self.length
+    }
+    fn unit_psd_u(&self, u: f64) -> f64 {
+        let l = self.length;
+        self.unit_psd(u / l) / (l * l)
+    }
+    fn cdf_u(&self, u: f64) -> f64 {
+        self.cdf(u / self.length)
+    }
+    fn sample_u(&self, xi: f64) -> f64 {
+        self.sample_zeta(xi) * self.length
+    }
+    fn build_table(&self, u_max: f64, res: TableResolution) -> Result<GhsTable, BrdfError> {
+        let c = TabulatedCorrelation::new(self);
+        GhsTable::build(&c, u_max, res)
+    }
+}
+
+/// Normalised covariance of a [`TabulatedPsd`] in x = r/L.
+///
+/// The tail of p(u) (a power law B u^{−2ν_t−2} beyond the last sample) sets
+/// the cusp of 1 − M at small x, which a numerical transform cannot resolve
+/// to the relative accuracy g(1 − M) needs. So p is split as
+/// p = c·p₁(u; ν_t) + r(u), with c = πB/ν_t the K-correlation (Lc = 1) of
+/// the same tail: the Matérn part is exact, and the remainder r, whose tail
+/// falls two powers faster, is transformed by FFTLog (bias ½, 8192 points
+/// over 44 decades) and interpolated (cubic in ln x); where the remainder
+/// is below 1e−6 its quadratic small-x form x²m₂/4 is used instead:
+/// 1 − M = c(1 − M_ν(x)) + [(1 − c) − M_r(x)].
+#[derive(Clone, Debug)]
+pub struct TabulatedCorrelation {
+    p: TabulatedPsd,
+    matern: Matern,
+    c: f64,
+    t0: f64,
+    dt: f64,
+    m_r: Vec<f64>,
+    m2: f64,
+    x_switch: f64,
+}
+
+impl TabulatedCorrelation {
+    /// Transforms the PSD once.
+    pub fn new(p: &TabulatedPsd) -> Self {
+        let n = 1 << 15;
+        let dt = 0.003125;
+        let nu = p.tail_nu();
+        let nl = p.ln_zeta.len();
+        // tail amplitude in u: p(u) = B u^{slope} for u ≥ u_last
+        let u_last = libm::exp(p.ln_zeta[nl - 1]) * p.length;
+        let b = p.unit_psd_u_inner(u_last) * libm::exp(-p.slope_hi * libm::log(u_last));
+        let c = PI * b / nu;
+        let plan = FftLog::with_bias(n, dt, 0.5);
+        let tu0 = -51.0;
+        let f: Vec<f64> = (0..n)
+            .map(|i| {
+                let u = libm::exp(tu0 + i as f64 * dt);
+                2.0 * PI * (p.unit_psd_u_inner(u) - c * super::kc::p1(nu, u))
+            })
+            .collect();
+        let (mut re, mut im) = (Vec::new(), Vec::new());
+        plan.transform(tu0, &f, &mut re, &mut im);
+        let t0 = -(tu0 + (n - 1) as f64 * dt);
+        // Second moment of r (finite: r falls like u^{slope−2}), for the
+        // small-x form (1 − c) − M_r ≈ x² m₂/4 where the transform's
+        // absolute error (~1e−9, from the kinks of the log-log table)
+        // would dominate.
+        let mut m2 = 0.0;
+        for (i, fi) in f.iter().enumerate() {
+            let u = libm::exp(tu0 + i as f64 * dt);
+            if u > u_last {
+                break;
+            }
+            m2 += fi * u * u * u * u * dt;
+        }
+        m2 += 2.0 * PI * b * (nu + 1.0) * libm::exp((p.slope_hi + 2.0) * libm::log(u_last))
+            / (-(p.slope_hi + 2.0));
+        // switch where the quadratic form reaches 1e−6
+        let x_switch = libm::sqrt(4e-6 / m2.abs().max(1e-300));
+        TabulatedCorrelation {
+            p: p.clone(),
+            matern: Matern::new(nu),
+            c,
+            t0,
+            dt,
+            m_r: re,
+            m2,
+            x_switch,
+        }
+    }
+
+    fn m_r(&self, x: f64) -> f64 {
+        let n = self.m_r.len();
+        let pos = (libm::log(x) - self.t0) / self.dt;
+        if pos >= (n - 2) as f64 {
+            return 0.0;
+        }
+        // below the window M_r is flat at its x → 0 value 1 − c
+        let pos = pos.max(1.0);
+        let i = (libm::floor(pos) as usize).clamp(1, n - 3);
+        let w = lagrange4(pos - i as f64);
+        (0..4).map(|k| w[k] * self.m_r[i - 1 + k]).sum()
+    }
+}
+
+impl TabulatedPsd {
+    fn unit_psd_u_inner(&self, u: f64) -> f64 {
+        <Self as RadialPsd>::unit_psd_u(self, u)
+    }
+}
+
+impl Correlation for TabulatedCorrelation {
+    fn m(&self, x: f64) -> f64 {
+        if !(x > 0.0) {
+            return 1.0;
+        }
+        if x < self.x_switch {
+            return 1.0 - self.one_minus_m(x);
+        }
+        (self.c * self.matern.value(x) + self.m_r(x)).clamp(-1.0, 1.0)
+    }
+    fn one_minus_m(&self, x: f64) -> f64 {
+        if !(x > 0.0) {
+            return 0.0;
+        }
+        let rem = if x < self.x_switch {
+            0.25 * x * x * self.m2
+        } else {
+            (1.0 - self.c) - self.m_r(x)
+        };
+        let v = self.c * self.matern.one_minus(x) + rem;
+        v.clamp(0.0, 2.0)
+    }
+    fn unit_psd_u(&self, u: f64) -> f64 {
+        <TabulatedPsd as RadialPsd>::unit_psd_u(&self.p, u)
+    }
+    fn cusp_nu(&self) -> f64 {
+        self.p.tail_nu()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::KcPsd;
+    use super::*;
+
+    fn kc_samples(k: &KcPsd, n: usize, lo: f64, hi: f64) -> (Vec<f64>, Vec<f64>) {
+        let z: Vec<f64> = (0..n)
+            .map(|i| {
+                libm::exp(
+                    libm::log(lo) + (libm::log(hi) - libm::log(lo)) * i as f64 / (n - 1) as f64,
+                )
+            })
+            .collect();
+        let p = z.iter().map(|z| k.psd(*z)).collect();
+        (z, p)
+    }
+
+    #[test]
+    fn rejects_bad_tables() {
+        assert!(TabulatedPsd::new(&[1.0], &[1.0]).is_err());
+        assert!(TabulatedPsd::new(&[1.0, 1.0], &[1.0, 0.1]).is_err());
+        assert!(TabulatedPsd::new(&[1.0, 2.0], &[1.0, 0.0]).is_err());
+        assert!(TabulatedPsd::new(&[1.0, 2.0], &[1.0, 0.5]).is_err()); // tail too shallow
+        assert!(TabulatedPsd::new(&[1.0, 2.0], &[1.0, 0.1]).is_ok());
+    }
+
+    #[test]
+    fn reproduces_kc_sigma_cdf_and_sampling() {
+        let k = KcPsd::new(0.2, 2.0, 3.5).unwrap();
+        let (z, p) = kc_samples(&k, 300, 1e-3, 1e3);
+        let t = TabulatedPsd::new(&z, &p).unwrap();
+        assert!((t.sigma_um() / 0.2 - 1.0).abs() < 2e-4, "{}", t.sigma_um());
+        for &zz in &[0.01, 0.3, 1.0, 10.0] {
+            assert!((t.psd(zz) / k.psd(zz) - 1.0).abs() < 1e-3);
+            assert!((t.cdf(zz) - k.cdf(zz)).abs() < 1e-3);
+        }
+        for i in 1..50 {
+            let xi = i as f64 / 50.0;
+            let zz = t.sample_zeta(xi);
+            assert!((t.cdf(zz) - xi).abs() < 1e-12, "{xi}");
+        }
+    }
+
+    #[test]
+    fn covariance_matches_matern() {
+        let k = KcPsd::new(0.2, 2.0, 2.5).unwrap();
+        let (z, p) = kc_samples(&k, 400, 1e-4, 1e4);
+        let t = TabulatedPsd::new(&z, &p).unwrap();
+        let c = TabulatedCorrelation::new(&t);
+        let mat = super::super::matern::Matern::new(k.nu());
+        // x is in units of the table's L; Matérn in units of Lc.
+        let scale = t.length / 2.0;
+        for &x in &[1e-8, 1e-6, 1e-4, 1e-2, 0.1, 0.5, 1.0, 3.0] {
+            let a = c.one_minus_m(x);
+            let b = mat.one_minus(x * scale);
+            assert!((a / b - 1.0).abs() < 3e-3, "x={x}: {a} vs {b}");
+        }
+    }
+}
