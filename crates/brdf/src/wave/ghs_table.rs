@@ -3,8 +3,8 @@
 //!
 //! Layout: rows are ln g on a uniform grid covering g ∈ [1e−4, 1e4] (plus
 //! one padding row each side); columns are ln w, w = u/W(g), on a uniform
-//! grid covering w ∈ [1e−3, u_max] (plus padding). W(g) = sqrt(1 + 1/x_s²)
-//! with g(1 − M(x_s)) = 1 is the lobe width (1 for g ≤ 1). Each entry holds
+//! grid covering w ∈ [w_lo, u_max] (plus padding). W(g) = sqrt(1 + 1/x_s²)
+//! with g(1 − M(x_s)) = 1 − e^{−g} is the lobe width. Each entry holds
 //! ln[S̃ W²/(1 − e^{−g})], a smooth O(1) function. Evaluation is 4×4-point
 //! Lagrange interpolation in (ln g, ln w), with ln W interpolated by the same
 //! row weights.
@@ -33,7 +33,7 @@ pub const W_MIN: f64 = 1e-3;
 /// Grid densities of a [`GhsTable`].
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct TableResolution {
-    /// Rows per decade of g.
+    /// Rows per decade of g (multiplied by 0.25/ν when ν < ¼).
     pub rows_per_decade: f64,
     /// Columns per decade of w.
     pub cols_per_decade: f64,
@@ -48,7 +48,7 @@ impl Default for TableResolution {
     fn default() -> Self {
         TableResolution {
             rows_per_decade: 12.0,
-            cols_per_decade: 24.0,
+            cols_per_decade: 40.0,
             fft_n: 8192,
             fft_dt: 0.0125,
         }
@@ -226,7 +226,9 @@ impl GhsTable {
             });
         }
         let ln10 = core::f64::consts::LN_10;
-        let d_g = ln10 / res.rows_per_decade;
+        // Heavy tails (ν < ¼) change shape quickly with g on the way to their
+        // stable law: rows are densified by 0.25/ν there.
+        let d_g = ln10 / (res.rows_per_decade * (0.25 / c.cusp_nu()).max(1.0));
         let ln_g0 = libm::log(G_MIN) - d_g;
         let n_g = libm::ceil((libm::log(G_MAX) - libm::log(G_MIN)) / d_g) as usize + 3;
         let plan = FftLog::new(res.fft_n, res.fft_dt);
@@ -508,33 +510,40 @@ impl GhsTable {
     }
 
     /// Largest relative error of the table against freshly transformed rows
-    /// at the midpoints between rows and between columns, over u ≤ u_max
-    /// and values above `floor`·S̃(0) (the deep tail below is reported
-    /// separately by the caller if needed). Costs about one table build.
+    /// half-way between rows, at quarter points between columns, over
+    /// u ≤ u_max and values above `floor`·S̃(0). Costs about one table build.
     pub fn measure_error<C: Correlation + ?Sized>(
         &self,
         c: &C,
         res: TableResolution,
         floor: f64,
     ) -> f64 {
+        self.measure_error_at(c, res, floor, 0.5).0
+    }
+
+    /// As [`GhsTable::measure_error`] with rows at fractional offset
+    /// `row_offset` from the nodes (0: interpolation in w only), also
+    /// returning where the worst point is: (error, g, u, S̃/S̃(0)).
+    pub fn measure_error_at<C: Correlation + ?Sized>(
+        &self,
+        c: &C,
+        res: TableResolution,
+        floor: f64,
+        row_offset: f64,
+    ) -> (f64, f64, f64, f64) {
         let plan = FftLog::new(res.fft_n, res.fft_dt);
         let mut scratch = (Vec::new(), Vec::new());
-        let mut worst: f64 = 0.0;
+        let mut at = (0.0, 0.0, 0.0, 0.0);
         let lo = libm::log(G_MIN);
         let hi = libm::log(G_MAX);
-        let mut r = 0;
-        loop {
-            let lg = self.ln_g0 + (r as f64 + 0.5) * self.d_g;
-            r += 1;
-            if lg < lo {
+        for r in 0..self.n_g {
+            let lg = self.ln_g0 + (r as f64 + row_offset) * self.d_g;
+            if lg < lo || lg > hi {
                 continue;
-            }
-            if lg > hi {
-                break;
             }
             let g = libm::exp(lg);
             let row = Row::build(c, &plan, g, &mut scratch);
-            let peak = row.s_tilde(c, 1e-6);
+            let peak = row.s_tilde(c, 0.0);
             let lw = self.ln_width(g);
             for k in 0..2 * self.n_w {
                 let u = libm::exp(lw + self.ln_w0 + (k as f64 * 0.5 + 0.25) * self.d_w);
@@ -546,10 +555,13 @@ impl GhsTable {
                     continue;
                 }
                 let got = self.s_tilde(u, g).unwrap_or(0.0);
-                worst = worst.max(libm::fabs(got / want - 1.0));
+                let e = libm::fabs(got / want - 1.0);
+                if e > at.0 {
+                    at = (e, g, u, want / peak);
+                }
             }
         }
-        worst
+        at
     }
 }
 

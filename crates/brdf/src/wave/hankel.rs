@@ -69,13 +69,14 @@ pub fn cusp_params(nu: f64, g: f64) -> (f64, f64) {
     (a, eps)
 }
 
-/// Width scale of the kernel in x: the root of g(1 − M(x_s)) = 1 for g > 1,
-/// +∞ for g ≤ 1. The lobe's width in u is then W = sqrt(1 + 1/x_s²).
+/// Width scale of the kernel in x: the root x_s of g(1 − M(x_s)) = 1 − e^{−g}
+/// (→ 1 − M = 1/g for large g; M(x_s) ≈ g/2 for small g). Smooth in g, so
+/// the lobe width W = sqrt(1 + 1/x_s²) built on it interpolates well.
 pub fn kernel_width<C: Correlation + ?Sized>(c: &C, g: f64) -> f64 {
-    if g <= 1.0 {
+    if !(g > 0.0) {
         return f64::INFINITY;
     }
-    let target = 1.0 / g;
+    let target = -libm::expm1(-g) / g;
     // 1 − M increases from 0 to 1; bracket in ln x.
     let (mut lo, mut hi) = (-80.0f64, 8.0f64);
     if c.one_minus_m(libm::exp(hi)) < target {
@@ -95,7 +96,7 @@ pub fn kernel_width<C: Correlation + ?Sized>(c: &C, g: f64) -> f64 {
     libm::exp(0.5 * (lo + hi))
 }
 
-/// Lobe width W(g) in u used to scale tables: sqrt(1 + 1/x_s²), 1 for g ≤ 1.
+/// Lobe width W(g) in u used to scale tables: sqrt(1 + 1/x_s²).
 pub fn lobe_width<C: Correlation + ?Sized>(c: &C, g: f64) -> f64 {
     let xs = kernel_width(c, g);
     if xs.is_finite() {
