@@ -1,25 +1,366 @@
 //! `lustre [render] scene.toml` and `lustre merge`.
 
-use std::path::PathBuf;
+use anyhow::{Context, bail};
+use render::film::Film;
+use render::{RenderOptions, Scene};
+use std::ops::Range;
+use std::path::{Path, PathBuf};
+use std::time::Duration;
 
 /// Arguments of the render command.
 #[derive(clap::Args, Default)]
 pub struct RenderArgs {
-    /// Scene file (TOML).
+    /// Scene file (TOML); default scenes/default.toml.
     pub scene: Option<PathBuf>,
+    /// Samples per pixel (overrides the scene's `film.spp`).
+    #[arg(long)]
+    pub spp: Option<u64>,
+    /// Render only sample indices A..B (a shard; combine shards with `lustre merge`).
+    #[arg(long, value_name = "A..B")]
+    pub spp_range: Option<String>,
+    /// Random seed (overrides the scene's `film.seed`).
+    #[arg(long)]
+    pub seed: Option<u64>,
+    /// Worker threads (default: all cores).
+    #[arg(long)]
+    pub threads: Option<usize>,
+    /// Stop after this long and write the image so far: `90`, `90s`, `15m`, `2h`.
+    #[arg(long, value_name = "DURATION")]
+    pub time_limit: Option<String>,
+    /// Continue from the film checkpoint to the requested samples.
+    #[arg(long)]
+    pub resume: bool,
+    /// EXR output (overrides the scene's `film.exr`).
+    #[arg(long)]
+    pub exr: Option<PathBuf>,
+    /// PNG output (overrides the scene's `film.png`).
+    #[arg(long)]
+    pub png: Option<PathBuf>,
+    /// Film (checkpoint / shard) file; default: the image path with extension `.film`.
+    #[arg(long)]
+    pub film: Option<PathBuf>,
+    /// Seconds between checkpoints of the film while rendering.
+    #[arg(long, default_value_t = 30.0)]
+    pub checkpoint_every: f64,
+    /// Print nothing but errors.
+    #[arg(long, short)]
+    pub quiet: bool,
 }
 
 /// Arguments of the merge command.
 #[derive(clap::Args)]
 pub struct MergeArgs {
-    /// Partial films to merge.
+    /// Partial films (`.film`) to merge; they must come from the same scene and seed.
+    #[arg(required = true)]
     pub inputs: Vec<PathBuf>,
+    /// Merged film output.
+    #[arg(long)]
+    pub film: Option<PathBuf>,
+    /// EXR output.
+    #[arg(long)]
+    pub exr: Option<PathBuf>,
+    /// PNG output.
+    #[arg(long)]
+    pub png: Option<PathBuf>,
+    /// Exposure in stops (default: the films' own).
+    #[arg(long)]
+    pub exposure: Option<f64>,
+    /// Print nothing but errors.
+    #[arg(long, short)]
+    pub quiet: bool,
 }
 
-pub fn render(_args: RenderArgs) -> anyhow::Result<()> {
-    anyhow::bail!("the renderer is not built yet")
+/// Parses `A..B` (B > A).
+pub fn parse_range(s: &str) -> anyhow::Result<Range<u64>> {
+    let (a, b) = s
+        .split_once("..")
+        .with_context(|| format!("--spp-range `{s}`: expected A..B, e.g. 0..64"))?;
+    let a: u64 = a
+        .trim()
+        .parse()
+        .with_context(|| format!("--spp-range `{s}`: `{a}` is not a sample index"))?;
+    let b: u64 = b
+        .trim()
+        .parse()
+        .with_context(|| format!("--spp-range `{s}`: `{b}` is not a sample index"))?;
+    if b <= a {
+        bail!("--spp-range `{s}`: the end must be greater than the start");
+    }
+    Ok(a..b)
 }
 
-pub fn merge(_args: MergeArgs) -> anyhow::Result<()> {
-    anyhow::bail!("merge is not built yet")
+/// Parses `90`, `90s`, `1.5m`, `2h`.
+pub fn parse_duration(s: &str) -> anyhow::Result<Duration> {
+    let t = s.trim();
+    let (num, unit) = match t.char_indices().find(|(_, c)| c.is_ascii_alphabetic()) {
+        Some((i, _)) => (&t[..i], &t[i..]),
+        None => (t, "s"),
+    };
+    let v: f64 = num
+        .trim()
+        .parse()
+        .with_context(|| format!("--time-limit `{s}`: expected e.g. 90, 90s, 15m, 2h"))?;
+    let k = match unit {
+        "s" => 1.0,
+        "m" | "min" => 60.0,
+        "h" => 3600.0,
+        _ => bail!("--time-limit `{s}`: unknown unit `{unit}` (use s, m or h)"),
+    };
+    let secs = v * k;
+    if !(secs.is_finite() && secs > 0.0) {
+        bail!("--time-limit `{s}`: must be positive");
+    }
+    Ok(Duration::from_secs_f64(secs))
+}
+
+fn with_suffix(path: &Path, suffix: &str) -> PathBuf {
+    let stem = path
+        .file_stem()
+        .map_or_else(String::new, |s| s.to_string_lossy().into_owned());
+    match path.extension() {
+        Some(ext) => path.with_file_name(format!("{stem}{suffix}.{}", ext.to_string_lossy())),
+        None => path.with_file_name(format!("{stem}{suffix}")),
+    }
+}
+
+fn default_scene() -> PathBuf {
+    let local = PathBuf::from("scenes/default.toml");
+    if local.exists() {
+        local
+    } else {
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/default.toml")
+    }
+}
+
+fn write_images(
+    film: &Film,
+    exr: Option<&Path>,
+    png: Option<&Path>,
+    quiet: bool,
+) -> anyhow::Result<()> {
+    let rgb = film.rgb();
+    if let Some(p) = exr {
+        render::output::write_exr(p, film.width, film.height, &rgb)?;
+        if !quiet {
+            eprintln!("wrote {}", p.display());
+        }
+    }
+    if let Some(p) = png {
+        render::output::write_png(p, film.width, film.height, &rgb)?;
+        if !quiet {
+            eprintln!("wrote {}", p.display());
+        }
+    }
+    Ok(())
+}
+
+/// Renders a scene file.
+pub fn render(args: RenderArgs) -> anyhow::Result<()> {
+    let scene_path = args.scene.clone().unwrap_or_else(default_scene);
+    let mut scene: Scene = render::load_scene(&scene_path)?;
+    if !args.quiet {
+        eprintln!("{}", scene.prepared);
+    }
+    if let Some(seed) = args.seed {
+        scene.settings.seed = seed;
+    }
+    let spp = args.spp.unwrap_or(scene.settings.spp);
+    if spp == 0 {
+        bail!("--spp must be ≥ 1");
+    }
+    let shard = args.spp_range.as_deref().map(parse_range).transpose()?;
+    let target = shard.clone().unwrap_or(0..spp);
+    // Shards get their own output names unless given explicitly.
+    let suffix = shard.as_ref().map(|r| format!(".spp{}-{}", r.start, r.end));
+    let name = |cli: &Option<PathBuf>, scene_value: &Option<PathBuf>| -> Option<PathBuf> {
+        cli.clone().or_else(|| {
+            scene_value.as_ref().map(|p| {
+                suffix
+                    .as_deref()
+                    .map_or_else(|| p.clone(), |s| with_suffix(p, s))
+            })
+        })
+    };
+    let exr = name(&args.exr, &scene.settings.exr);
+    let png = name(&args.png, &scene.settings.png);
+    let film_path = args.film.clone().unwrap_or_else(|| {
+        let base = exr.clone().or_else(|| png.clone()).unwrap_or_else(|| {
+            let stem = scene_path
+                .file_stem()
+                .map_or_else(|| "render".into(), |s| s.to_string_lossy().into_owned());
+            let p = PathBuf::from(format!("{stem}.film"));
+            suffix
+                .as_deref()
+                .map_or_else(|| p.clone(), |s| with_suffix(&p, s))
+        });
+        base.with_extension("film")
+    });
+    if exr.is_none() && png.is_none() && !args.quiet {
+        eprintln!(
+            "note: the scene names no `exr` or `png` output; only the film {} is written",
+            film_path.display()
+        );
+    }
+
+    let (w, h) = (scene.camera.width, scene.camera.height);
+    let mut film = Film::new(
+        w,
+        h,
+        scene.fingerprint,
+        scene.settings.seed,
+        scene.settings.exposure,
+    );
+    let mut todo = target.clone();
+    if args.resume {
+        if film_path.exists() {
+            let old = Film::load(&film_path)?;
+            if (old.width, old.height) != (w, h)
+                || old.fingerprint != scene.fingerprint
+                || old.seed != scene.settings.seed
+            {
+                bail!(
+                    "{}: the checkpoint belongs to a different scene, resolution or seed; \
+                     remove it or choose another --film",
+                    film_path.display()
+                );
+            }
+            let done_end = old
+                .ranges
+                .iter()
+                .filter(|r| r.start >= target.start && r.end <= target.end)
+                .map(|r| r.end)
+                .max();
+            if old.ranges.len() != 1 || old.ranges[0].start != target.start {
+                bail!(
+                    "{}: holds samples {:?}, not a prefix of {}..{}; use `lustre merge` for shards",
+                    film_path.display(),
+                    old.ranges,
+                    target.start,
+                    target.end
+                );
+            }
+            todo = done_end.unwrap_or(target.start)..target.end;
+            film = old;
+            film.exposure = scene.settings.exposure;
+            if !args.quiet {
+                eprintln!(
+                    "resuming from {}: {} spp done, {} to go",
+                    film_path.display(),
+                    film.spp(),
+                    todo.end.saturating_sub(todo.start)
+                );
+            }
+        } else if !args.quiet {
+            eprintln!(
+                "note: no checkpoint at {}; starting from sample {}",
+                film_path.display(),
+                target.start
+            );
+        }
+    }
+
+    let stop = render::interrupt::ctrlc_flag().map_err(anyhow::Error::msg)?;
+    let opts = RenderOptions {
+        threads: args.threads,
+        time_limit: args.time_limit.as_deref().map(parse_duration).transpose()?,
+        stop,
+        progress: !args.quiet,
+        checkpoint: Some((
+            film_path.clone(),
+            Duration::from_secs_f64(args.checkpoint_every.max(1.0)),
+        )),
+        ..RenderOptions::default()
+    };
+    let outcome = if todo.is_empty() {
+        None
+    } else {
+        Some(render::render_range(
+            &scene,
+            &mut film,
+            todo.clone(),
+            &opts,
+        )?)
+    };
+    film.save(&film_path)?;
+    write_images(&film, exr.as_deref(), png.as_deref(), args.quiet)?;
+    if !args.quiet {
+        match outcome {
+            Some(o) => {
+                eprintln!(
+                    "rendered samples {}..{} ({} spp in the film) in {:.2} s: {:.3e} samples/s; film {}",
+                    o.rendered.start,
+                    o.rendered.end,
+                    film.spp(),
+                    o.elapsed.as_secs_f64(),
+                    o.samples_per_second,
+                    film_path.display()
+                );
+                if !o.complete {
+                    eprintln!(
+                        "stopped early at sample {} of {}; continue with `--resume`",
+                        o.rendered.end, todo.end
+                    );
+                }
+            }
+            None => eprintln!(
+                "nothing to render: the film already holds samples up to {}",
+                target.end
+            ),
+        }
+    }
+    Ok(())
+}
+
+/// Merges partial films.
+pub fn merge(args: MergeArgs) -> anyhow::Result<()> {
+    let mut inputs = args.inputs.iter();
+    let first = inputs.next().context("give at least one film")?;
+    let mut film = Film::load(first)?;
+    for p in inputs {
+        let f = Film::load(p)?;
+        film.merge(&f)
+            .map_err(|m| anyhow::anyhow!("{}: cannot merge: {m}", p.display()))?;
+    }
+    if let Some(e) = args.exposure {
+        film.exposure = e;
+    }
+    if !args.quiet {
+        eprintln!(
+            "merged {} film(s): samples {:?}, {} spp",
+            args.inputs.len(),
+            film.ranges,
+            film.spp()
+        );
+    }
+    if let Some(p) = &args.film {
+        film.save(p)?;
+        if !args.quiet {
+            eprintln!("wrote {}", p.display());
+        }
+    }
+    if args.exr.is_none() && args.png.is_none() && args.film.is_none() {
+        bail!("nothing to write: give --exr, --png and/or --film");
+    }
+    write_images(&film, args.exr.as_deref(), args.png.as_deref(), args.quiet)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn parses_ranges_and_durations() {
+        assert_eq!(parse_range("0..64").unwrap(), 0..64);
+        assert!(parse_range("64..0").is_err());
+        assert!(parse_range("x").is_err());
+        assert_eq!(parse_duration("90").unwrap(), Duration::from_secs(90));
+        assert_eq!(parse_duration("1.5m").unwrap(), Duration::from_secs(90));
+        assert_eq!(parse_duration("2h").unwrap(), Duration::from_secs(7200));
+        assert!(parse_duration("5 parsecs").is_err());
+        assert!(parse_duration("-1").is_err());
+        assert_eq!(
+            with_suffix(Path::new("out/a.exr"), ".spp0-8"),
+            PathBuf::from("out/a.spp0-8.exr")
+        );
+    }
 }

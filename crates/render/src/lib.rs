@@ -1,1 +1,39 @@
+//! # render — a multi-threaded CPU spectral path tracer for the `brdf` models
+//!
+//! Scenes are TOML files (see `crates/render/README.md` for the schema).
+//! Wavelengths are sampled per path (optionally four hero wavelengths with
+//! spectral MIS), the film accumulates CIE 1931 XYZ in fixed point so partial
+//! renders merge exactly, and outputs are linear-sRGB EXR and 8-bit sRGB PNG,
+//! written atomically.
+//!
+//! ```no_run
+//! let scene = render::scene::load(std::path::Path::new("scenes/default.toml"))?;
+//! let mut film = render::Film::new(scene.camera.width, scene.camera.height,
+//!     scene.fingerprint, scene.settings.seed, scene.settings.exposure);
+//! render::render_range(&scene, &mut film, 0..scene.settings.spp, &Default::default())?;
+//! render::output::write_exr("out.exr".as_ref(), film.width, film.height, &film.rgb())?;
+//! # Ok::<(), render::RenderError>(())
+//! ```
 
+pub mod camera;
+pub mod color;
+pub mod distribution;
+pub mod error;
+pub mod film;
+pub mod geometry;
+pub mod integrator;
+pub mod interrupt;
+pub mod light;
+pub mod material;
+pub mod mesh;
+pub mod output;
+pub mod render;
+pub mod rng;
+pub mod scene;
+pub mod spectrum;
+pub mod wavelength;
+
+pub use error::{RenderError, SceneError};
+pub use film::Film;
+pub use render::{RenderOptions, RenderOutcome, render_range, render_range_in};
+pub use scene::{Scene, load as load_scene, load_str};

@@ -1,0 +1,2 @@
+//! Renderer throughput benchmark (filled in with the renderer API).
+fn main() {}

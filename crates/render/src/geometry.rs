@@ -1,0 +1,319 @@
+//! Rays and the analytic shapes (rectangle, disk, sphere), in f64.
+
+use glam::{DQuat, DVec3};
+
+/// A ray `o + t·d`, `d` unit length.
+#[derive(Clone, Copy, Debug)]
+pub struct Ray {
+    /// Origin.
+    pub o: DVec3,
+    /// Unit direction.
+    pub d: DVec3,
+}
+
+impl Ray {
+    /// Point at parameter `t`.
+    #[inline]
+    pub fn at(&self, t: f64) -> DVec3 {
+        self.o + t * self.d
+    }
+}
+
+/// Surface geometry at a ray hit.
+#[derive(Clone, Copy, Debug)]
+pub struct HitGeometry {
+    /// Ray parameter.
+    pub t: f64,
+    /// Hit point.
+    pub p: DVec3,
+    /// Unit geometric normal (the shape's outward / +z side).
+    pub n: DVec3,
+    /// Unit tangent, orthogonal to `n`: the anisotropy x axis.
+    pub tangent: DVec3,
+}
+
+/// Rotation, uniform scale, then translation.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Transform {
+    /// Rotation.
+    pub rotation: DQuat,
+    /// Uniform scale factor (> 0).
+    pub scale: f64,
+    /// Translation.
+    pub translation: DVec3,
+}
+
+impl Default for Transform {
+    fn default() -> Self {
+        Transform {
+            rotation: DQuat::IDENTITY,
+            scale: 1.0,
+            translation: DVec3::ZERO,
+        }
+    }
+}
+
+impl Transform {
+    /// Rotation by `deg[0]` about x, then `deg[1]` about y, then `deg[2]` about z.
+    pub fn new(rotate_deg: [f64; 3], scale: f64, translate: [f64; 3]) -> Transform {
+        let r = rotate_deg.map(f64::to_radians);
+        let rotation = DQuat::from_rotation_z(r[2])
+            * DQuat::from_rotation_y(r[1])
+            * DQuat::from_rotation_x(r[0]);
+        Transform {
+            rotation,
+            scale,
+            translation: DVec3::from(translate),
+        }
+    }
+
+    /// Maps a point.
+    #[inline]
+    pub fn point(&self, p: DVec3) -> DVec3 {
+        self.rotation * (p * self.scale) + self.translation
+    }
+
+    /// Maps a direction (rotation only).
+    #[inline]
+    pub fn direction(&self, v: DVec3) -> DVec3 {
+        self.rotation * v
+    }
+}
+
+/// A planar shape: a rectangle or disk in the plane through `center`
+/// spanned by `u`, `v` with normal `n = u × v`.
+#[derive(Clone, Copy, Debug)]
+pub struct Planar {
+    /// Centre.
+    pub center: DVec3,
+    /// Unit in-plane axis (tangent).
+    pub u: DVec3,
+    /// Unit in-plane axis.
+    pub v: DVec3,
+    /// Unit normal.
+    pub n: DVec3,
+    /// Half extents along `u`, `v` (rectangle) or radius in `.0` (disk).
+    pub half: (f64, f64),
+    /// Whether this is a disk.
+    pub disk: bool,
+}
+
+impl Planar {
+    /// A `width × height` rectangle in the local xy plane (normal +z), transformed.
+    pub fn rectangle(size: [f64; 2], xf: &Transform) -> Planar {
+        Planar::build(
+            xf,
+            (0.5 * size[0] * xf.scale, 0.5 * size[1] * xf.scale),
+            false,
+        )
+    }
+
+    /// A disk of `radius` in the local xy plane (normal +z), transformed.
+    pub fn disk(radius: f64, xf: &Transform) -> Planar {
+        Planar::build(xf, (radius * xf.scale, radius * xf.scale), true)
+    }
+
+    fn build(xf: &Transform, half: (f64, f64), disk: bool) -> Planar {
+        let u = xf.direction(DVec3::X).normalize();
+        let v = xf.direction(DVec3::Y).normalize();
+        Planar {
+            center: xf.translation,
+            u,
+            v,
+            n: u.cross(v),
+            half,
+            disk,
+        }
+    }
+
+    /// Area.
+    pub fn area(&self) -> f64 {
+        if self.disk {
+            std::f64::consts::PI * self.half.0 * self.half.0
+        } else {
+            4.0 * self.half.0 * self.half.1
+        }
+    }
+
+    /// Nearest hit with `t` in `(t_min, t_max)`.
+    #[inline]
+    pub fn intersect(&self, ray: &Ray, t_min: f64, t_max: f64) -> Option<HitGeometry> {
+        let denom = ray.d.dot(self.n);
+        if denom.abs() < 1e-14 {
+            return None;
+        }
+        let t = (self.center - ray.o).dot(self.n) / denom;
+        if !(t > t_min && t < t_max) {
+            return None;
+        }
+        let p = ray.at(t);
+        let r = p - self.center;
+        let (a, b) = (r.dot(self.u), r.dot(self.v));
+        let inside = if self.disk {
+            a * a + b * b <= self.half.0 * self.half.0
+        } else {
+            a.abs() <= self.half.0 && b.abs() <= self.half.1
+        };
+        inside.then_some(HitGeometry {
+            t,
+            p,
+            n: self.n,
+            tangent: self.u,
+        })
+    }
+
+    /// A uniformly distributed point on the shape.
+    pub fn sample_point(&self, u: [f64; 2]) -> DVec3 {
+        if self.disk {
+            // Concentric mapping keeps strata compact (Shirley & Chiu 1997).
+            let (a, b) = (2.0 * u[0] - 1.0, 2.0 * u[1] - 1.0);
+            let (r, phi) = if a == 0.0 && b == 0.0 {
+                (0.0, 0.0)
+            } else if a.abs() > b.abs() {
+                (a, std::f64::consts::FRAC_PI_4 * (b / a))
+            } else {
+                (
+                    b,
+                    std::f64::consts::FRAC_PI_2 - std::f64::consts::FRAC_PI_4 * (a / b),
+                )
+            };
+            let r = r * self.half.0;
+            self.center + r * phi.cos() * self.u + r * phi.sin() * self.v
+        } else {
+            self.center
+                + (2.0 * u[0] - 1.0) * self.half.0 * self.u
+                + (2.0 * u[1] - 1.0) * self.half.1 * self.v
+        }
+    }
+}
+
+/// A sphere.
+#[derive(Clone, Copy, Debug)]
+pub struct Sphere {
+    /// Centre.
+    pub center: DVec3,
+    /// Radius (> 0).
+    pub radius: f64,
+}
+
+impl Sphere {
+    /// Nearest hit with `t` in `(t_min, t_max)`.
+    #[inline]
+    pub fn intersect(&self, ray: &Ray, t_min: f64, t_max: f64) -> Option<HitGeometry> {
+        let oc = ray.o - self.center;
+        let b = oc.dot(ray.d);
+        // c via (|oc| − r)(|oc| + r) avoids cancellation for far origins.
+        let len = oc.length();
+        let c = (len - self.radius) * (len + self.radius);
+        // Discriminant from the perpendicular distance (Haines et al., Ray Tracing Gems ch. 7).
+        let perp = oc - b * ray.d;
+        let disc = self.radius * self.radius - perp.length_squared();
+        if disc < 0.0 {
+            return None;
+        }
+        let sq = disc.sqrt();
+        let q = -b - sq.copysign(b);
+        let (t0, t1) = {
+            let a0 = c / q;
+            let a1 = q;
+            if a0 < a1 { (a0, a1) } else { (a1, a0) }
+        };
+        let t = if t0 > t_min && t0 < t_max {
+            t0
+        } else if t1 > t_min && t1 < t_max {
+            t1
+        } else {
+            return None;
+        };
+        let p = ray.at(t);
+        let n = (p - self.center) / self.radius;
+        let n = n.normalize();
+        // dp/dφ about the sphere's z axis; at the poles fall back to x.
+        let tangent = DVec3::new(-n.y, n.x, 0.0)
+            .try_normalize()
+            .unwrap_or(DVec3::X);
+        Some(HitGeometry { t, p, n, tangent })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn rectangle_hit_and_miss() {
+        let r = Planar::rectangle(
+            [2.0, 1.0],
+            &Transform::new([0.0, 0.0, 0.0], 1.0, [0.0, 0.0, 1.0]),
+        );
+        let ray = Ray {
+            o: DVec3::new(0.9, 0.4, 5.0),
+            d: DVec3::NEG_Z,
+        };
+        let h = r.intersect(&ray, 0.0, f64::INFINITY).unwrap();
+        assert!((h.t - 4.0).abs() < 1e-12 && h.n == DVec3::Z);
+        let miss = Ray {
+            o: DVec3::new(0.9, 0.6, 5.0),
+            d: DVec3::NEG_Z,
+        };
+        assert!(r.intersect(&miss, 0.0, f64::INFINITY).is_none());
+        assert!((r.area() - 2.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn rotation_order_is_x_then_y_then_z() {
+        let xf = Transform::new([90.0, 0.0, 90.0], 1.0, [0.0; 3]);
+        // x-rotation maps +z to −y; the z-rotation then maps −y to +x.
+        assert!((xf.direction(DVec3::Z) - DVec3::X).length() < 1e-12);
+    }
+
+    #[test]
+    fn sphere_hits_from_outside_and_inside() {
+        let s = Sphere {
+            center: DVec3::new(0.0, 0.0, -10.0),
+            radius: 2.0,
+        };
+        let h = s
+            .intersect(
+                &Ray {
+                    o: DVec3::ZERO,
+                    d: DVec3::NEG_Z,
+                },
+                1e-9,
+                f64::INFINITY,
+            )
+            .unwrap();
+        assert!((h.t - 8.0).abs() < 1e-12 && (h.n - DVec3::Z).length() < 1e-12);
+        let inside = s
+            .intersect(
+                &Ray {
+                    o: s.center,
+                    d: DVec3::X,
+                },
+                1e-9,
+                f64::INFINITY,
+            )
+            .unwrap();
+        assert!((inside.t - 2.0).abs() < 1e-12);
+        assert!(
+            s.intersect(
+                &Ray {
+                    o: DVec3::ZERO,
+                    d: DVec3::X
+                },
+                1e-9,
+                f64::INFINITY
+            )
+            .is_none()
+        );
+    }
+
+    #[test]
+    fn disk_samples_stay_inside() {
+        let d = Planar::disk(0.5, &Transform::default());
+        for i in 0..100 {
+            let p = d.sample_point([i as f64 / 100.0, (i * 37 % 100) as f64 / 100.0]);
+            assert!(p.length() <= 0.5 + 1e-12 && p.z == 0.0);
+        }
+    }
+}

@@ -1,0 +1,239 @@
+//! The spectral path tracer: next-event estimation and BSDF sampling
+//! combined by the balance heuristic, exact delta lobes, Russian roulette,
+//! and optional hero wavelengths with spectral MIS (Wilkie et al. 2014).
+//!
+//! Bookkeeping (one set for both modes; `n` = 1 or 4 wavelengths): with
+//! `P_k` the pdf of the path so far had wavelength k been the hero (its
+//! wavelength pdf included) and `F_j` the path's measurement product at λ_j,
+//! the tracer keeps `T_j = F_j / P_hero` and `Q_k = P_k / P_hero`. A complete
+//! path then contributes `T_j Le_j / Σ_k (Q_k + L_k p_light)`: the balance
+//! heuristic over every (wavelength, strategy) pair that could have produced
+//! it, where `L_k p_light` is the light-sampling strategy's density for the
+//! last edge relative to the BSDF one. Both the estimator and the Russian
+//! roulette probability (a function of `T_j / Σ Q_k` only) are symmetric in
+//! which wavelength was the hero, which makes hero sampling unbiased.
+
+use crate::geometry::Ray;
+use crate::light::Emission;
+use crate::rng::Rng;
+use crate::scene::desc::WavelengthMode;
+use crate::scene::{Scene, Surface};
+use crate::spectrum::Cie;
+use crate::wavelength::HERO_COUNT;
+use brdf::frame::orthonormal_basis;
+use glam::DVec3;
+
+const N: usize = HERO_COUNT;
+
+/// Shading frame at a hit: tangent `t`, bitangent `b`, normal `n` (facing the viewer).
+struct Frame {
+    t: DVec3,
+    b: DVec3,
+    n: DVec3,
+}
+
+impl Frame {
+    fn new(n: DVec3, tangent: DVec3) -> Frame {
+        let t = (tangent - n * n.dot(tangent))
+            .try_normalize()
+            .unwrap_or_else(|| orthonormal_basis(n).0);
+        Frame {
+            t,
+            b: n.cross(t),
+            n,
+        }
+    }
+    #[inline]
+    fn to_local(&self, v: DVec3) -> DVec3 {
+        DVec3::new(v.dot(self.t), v.dot(self.b), v.dot(self.n))
+    }
+    #[inline]
+    fn to_world(&self, v: DVec3) -> DVec3 {
+        v.x * self.t + v.y * self.b + v.z * self.n
+    }
+}
+
+/// Offset that moves a ray origin off its surface, scaled to the coordinates.
+#[inline]
+fn offset(p: DVec3, n: DVec3) -> DVec3 {
+    let scale = 1.0f64.max(p.abs().max_element());
+    p + n * (1e-9 * scale)
+}
+
+/// XYZ estimate (before the film's 1/∫ȳ normalisation) of one camera sample
+/// at pixel (`x`, `y`).
+pub fn sample_pixel(scene: &Scene, x: u32, y: u32, sample: u64) -> [f64; 3] {
+    let cam = &scene.camera;
+    let pixel = y as u64 * cam.width as u64 + x as u64;
+    let mut rng = Rng::for_sample(scene.settings.seed, pixel, sample);
+    let ray = cam.ray(x as f64 + rng.uniform(), y as f64 + rng.uniform());
+    let n = match scene.settings.mode {
+        WavelengthMode::Single => 1,
+        WavelengthMode::Hero => N,
+    };
+    let wl = &scene.wavelengths;
+    let lambdas = wl.rotations(wl.sample(rng.uniform()), n);
+    let radiance = trace(scene, ray, &lambdas, n, &mut rng);
+    let cie = Cie::get();
+    let mut xyz = [0.0; 3];
+    for j in 0..n {
+        let c = cie.xyz(lambdas[j]);
+        for k in 0..3 {
+            xyz[k] += radiance[j] * c[k];
+        }
+    }
+    if xyz.iter().all(|v| v.is_finite()) {
+        xyz
+    } else {
+        [0.0; 3]
+    }
+}
+
+/// Spectral radiance estimates (wavelength pdf included) along `ray` at each λ_j.
+pub fn trace(scene: &Scene, mut ray: Ray, lambdas: &[f64; N], n: usize, rng: &mut Rng) -> [f64; N] {
+    let wl = &scene.wavelengths;
+    let lights = &scene.lights;
+    let settings = &scene.settings;
+    let mut pl = [0.0; N];
+    for k in 0..n {
+        pl[k] = wl.pdf(lambdas[k]);
+    }
+    let mut t = [0.0; N];
+    let mut q = [0.0; N];
+    let mut l_mis = [0.0; N];
+    for k in 0..n {
+        t[k] = 1.0 / pl[0];
+        q[k] = pl[k] / pl[0];
+    }
+    let m0 = 1.0 / pl[..n].iter().sum::<f64>();
+    let mut out = [0.0; N];
+
+    let add_emission = |out: &mut [f64; N],
+                        t: &[f64; N],
+                        q: &[f64; N],
+                        l_mis: &[f64; N],
+                        em: Emission,
+                        pdf_l: f64| {
+        if matches!(em, Emission::None) {
+            return;
+        }
+        let d: f64 = (0..n).map(|k| q[k] + l_mis[k] * pdf_l).sum();
+        if d > 0.0 {
+            for j in 0..n {
+                out[j] += t[j] * em.eval(lambdas[j]) / d;
+            }
+        }
+    };
+
+    for depth in 0..=settings.max_depth {
+        let Some(hit) = scene.intersect(&ray, f64::INFINITY) else {
+            let (em, pdf_l) = lights.environment(ray.d);
+            add_emission(&mut out, &t, &q, &l_mis, em, pdf_l);
+            break;
+        };
+        let m = match hit.surface {
+            Surface::Emitter(i) => {
+                let (em, pdf_l) = lights.emitted(i as usize, ray.o, ray.d, hit.geo.n, hit.geo.t);
+                add_emission(&mut out, &t, &q, &l_mis, em, pdf_l);
+                break;
+            }
+            Surface::Material(m) => m,
+        };
+        if depth == settings.max_depth {
+            break;
+        }
+        let bxdf = &scene.materials[m as usize].bxdf;
+        let ng = if hit.geo.n.dot(ray.d) > 0.0 {
+            -hit.geo.n
+        } else {
+            hit.geo.n
+        };
+        let frame = Frame::new(ng, hit.geo.tangent);
+        let wi = frame.to_local(-ray.d);
+        if wi.z <= 0.0 {
+            break;
+        }
+        let p = offset(hit.geo.p, ng);
+
+        // Next-event estimation.
+        if let Some(ls) = lights.sample(p, [rng.uniform(), rng.uniform(), rng.uniform()]) {
+            let wo = frame.to_local(ls.wi);
+            if wo.z > 0.0 && ls.pdf > 0.0 {
+                let shadow = Ray { o: p, d: ls.wi };
+                let t_max = if ls.dist.is_finite() {
+                    ls.dist * (1.0 - 1e-7)
+                } else {
+                    f64::INFINITY
+                };
+                let mut f = [0.0; N];
+                let mut any = false;
+                for j in 0..n {
+                    f[j] = bxdf.eval(wi, wo, lambdas[j]);
+                    any |= f[j] > 0.0;
+                }
+                if any && !scene.occluded(&shadow, t_max) {
+                    let d: f64 = if ls.is_delta {
+                        (0..n).map(|k| q[k] * ls.pdf).sum()
+                    } else {
+                        (0..n)
+                            .map(|k| q[k] * (ls.pdf + bxdf.pdf(wi, wo, lambdas[k])))
+                            .sum()
+                    };
+                    if d > 0.0 {
+                        for j in 0..n {
+                            out[j] += t[j] * f[j] * wo.z * ls.emission.eval(lambdas[j]) / d;
+                        }
+                    }
+                }
+            }
+        }
+
+        // BSDF sampling at the hero wavelength.
+        let Some(s) = bxdf.sample(
+            wi,
+            lambdas[0],
+            [rng.uniform(), rng.uniform(), rng.uniform()],
+        ) else {
+            break;
+        };
+        if !(s.pdf > 0.0) || s.wo.z <= 0.0 {
+            break;
+        }
+        if s.is_delta {
+            t[0] *= s.weight;
+            for j in 1..n {
+                let sp = bxdf.specular(wi, lambdas[j]);
+                t[j] *= sp.weight / s.pdf;
+                q[j] *= sp.probability / s.pdf;
+            }
+            l_mis = [0.0; N];
+        } else {
+            t[0] *= s.weight;
+            for k in 0..n {
+                l_mis[k] = q[k] / s.pdf;
+            }
+            for j in 1..n {
+                t[j] *= bxdf.eval(wi, s.wo, lambdas[j]) * s.wo.z / s.pdf;
+                q[j] *= bxdf.pdf(wi, s.wo, lambdas[j]) / s.pdf;
+            }
+        }
+
+        // Russian roulette on the hero-symmetric throughput T_j / Σ Q_k.
+        if depth + 1 >= settings.rr_depth {
+            let sum_q: f64 = q[..n].iter().sum();
+            let m = t[..n].iter().fold(0.0f64, |a, v| a.max(v.abs())) / (sum_q * m0);
+            let survive = m.min(1.0);
+            if !(survive > 0.0) || rng.uniform() >= survive {
+                break;
+            }
+            for tj in t.iter_mut().take(n) {
+                *tj /= survive;
+            }
+        }
+        ray = Ray {
+            o: p,
+            d: frame.to_world(s.wo).normalize(),
+        };
+    }
+    out
+}

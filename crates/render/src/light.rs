@@ -1,0 +1,525 @@
+//! Lights: point, sphere and rectangle emitters, constant and EXR environments.
+
+use crate::color::{SRGB_TO_XYZ, mul};
+use crate::distribution::Distribution2D;
+use crate::geometry::{Planar, Ray, Sphere};
+use crate::spectrum::{Cie, LAMBDA_MAX, LAMBDA_MIN, Spectrum};
+use glam::DVec3;
+use std::f64::consts::PI;
+use std::path::Path;
+
+/// Spectral radiance (or intensity) of one emission event.
+#[derive(Clone, Copy, Debug)]
+pub enum Emission<'a> {
+    /// A spectrum times a scale.
+    Spectrum(&'a Spectrum, f64),
+    /// `c · (x̄, ȳ, z̄)(λ)`: an RGB texel lifted to a spectrum (see [`RgbLift`]).
+    Cmf([f64; 3]),
+    /// Nothing.
+    None,
+}
+
+impl Emission<'_> {
+    /// Value at `lambda` nm.
+    #[inline]
+    pub fn eval(&self, lambda: f64) -> f64 {
+        match *self {
+            Emission::Spectrum(s, k) => k * s.eval(lambda),
+            Emission::Cmf(c) => {
+                let m = Cie::get().xyz(lambda);
+                c[0] * m[0] + c[1] * m[1] + c[2] * m[2]
+            }
+            Emission::None => 0.0,
+        }
+    }
+}
+
+/// Lifts linear sRGB to the spectrum `Σ cᵢ·cmfᵢ(λ)` whose XYZ (with the
+/// film's normalisation ∫S·cmf/∫ȳ) is exactly that of the RGB value: the
+/// coefficients solve the 3×3 Gram system of the CIE functions. The lift is
+/// exact in colour and smooth in λ; saturated colours may go negative at some
+/// wavelengths, which a linear estimator handles without bias.
+#[derive(Clone, Debug)]
+pub struct RgbLift {
+    m: [[f64; 3]; 3],
+}
+
+impl RgbLift {
+    /// Builds the lift from the CIE table.
+    pub fn new() -> RgbLift {
+        let cie = Cie::get();
+        let mut g = [[0.0; 3]; 3];
+        for i in 0..=470 {
+            let l = LAMBDA_MIN + i as f64;
+            let w = if i == 0 || i == 470 { 0.5 } else { 1.0 };
+            let c = cie.xyz(l);
+            for a in 0..3 {
+                for b in 0..3 {
+                    g[a][b] += w * c[a] * c[b] / cie.y_integral();
+                }
+            }
+        }
+        let gi = invert3(g);
+        let mut m = [[0.0; 3]; 3];
+        for (a, row) in m.iter_mut().enumerate() {
+            for (b, v) in row.iter_mut().enumerate() {
+                *v = (0..3).map(|k| gi[a][k] * SRGB_TO_XYZ[k][b]).sum();
+            }
+        }
+        RgbLift { m }
+    }
+
+    /// CMF coefficients of a linear sRGB value.
+    pub fn coefficients(&self, rgb: [f64; 3]) -> [f64; 3] {
+        mul(&self.m, rgb)
+    }
+}
+
+impl Default for RgbLift {
+    fn default() -> Self {
+        RgbLift::new()
+    }
+}
+
+fn invert3(m: [[f64; 3]; 3]) -> [[f64; 3]; 3] {
+    let det = m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1])
+        - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0])
+        + m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0]);
+    let c =
+        |r0: usize, c0: usize, r1: usize, c1: usize| m[r0][c0] * m[r1][c1] - m[r0][c1] * m[r1][c0];
+    [
+        [
+            c(1, 1, 2, 2) / det,
+            -c(0, 1, 2, 2) / det,
+            c(0, 1, 1, 2) / det,
+        ],
+        [
+            -c(1, 0, 2, 2) / det,
+            c(0, 0, 2, 2) / det,
+            -c(0, 0, 1, 2) / det,
+        ],
+        [
+            c(1, 0, 2, 1) / det,
+            -c(0, 0, 2, 1) / det,
+            c(0, 0, 1, 1) / det,
+        ],
+    ]
+}
+
+/// An environment: constant radiance or an equirectangular map.
+pub enum Environment {
+    /// The same radiance from every direction.
+    Constant(Spectrum),
+    /// A lat-long map of CMF coefficients, importance-sampled by luminance.
+    Map(EnvMap),
+}
+
+/// An equirectangular environment map (+y up, u = 0 at −z, increasing toward +x).
+pub struct EnvMap {
+    width: usize,
+    height: usize,
+    coeffs: Vec<[f64; 3]>,
+    dist: Distribution2D,
+    rotation: f64,
+}
+
+impl EnvMap {
+    /// Loads a lat-long EXR, scaling by `scale` and rotating by `rotate_deg` about +y.
+    pub fn load(path: &Path, scale: f64, rotate_deg: f64) -> Result<EnvMap, String> {
+        use exr::prelude::*;
+        let image = read_first_rgba_layer_from_file(
+            path,
+            |res, _| {
+                (
+                    res.width(),
+                    res.height(),
+                    vec![[0.0f64; 3]; res.width() * res.height()],
+                )
+            },
+            |px: &mut (usize, usize, Vec<[f64; 3]>), pos, (r, g, b, _a): (f32, f32, f32, f32)| {
+                let i = pos.y() * px.0 + pos.x();
+                px.2[i] = [r as f64, g as f64, b as f64];
+            },
+        )
+        .map_err(|e| format!("cannot read environment EXR {}: {e}", path.display()))?;
+        let (width, height, rgb) = image.layer_data.channel_data.pixels;
+        if width == 0 || height == 0 {
+            return Err(format!("environment EXR {} is empty", path.display()));
+        }
+        let lift = RgbLift::new();
+        let mut coeffs = Vec::with_capacity(rgb.len());
+        let mut weights = Vec::with_capacity(rgb.len());
+        for (i, px) in rgb.iter().enumerate() {
+            let px = px.map(|v| if v.is_finite() { v * scale } else { 0.0 });
+            coeffs.push(lift.coefficients(px));
+            let y = i / width;
+            let sin_theta = (PI * (y as f64 + 0.5) / height as f64).sin();
+            // |Y| plus a tenth of the channel sum keeps dim-but-coloured texels sampleable.
+            let lum =
+                mul(&SRGB_TO_XYZ, px)[1].abs() + 0.1 * (px[0].abs() + px[1].abs() + px[2].abs());
+            weights.push(lum * sin_theta);
+        }
+        let dist = Distribution2D::new(&weights, width, height);
+        Ok(EnvMap {
+            width,
+            height,
+            coeffs,
+            dist,
+            rotation: rotate_deg.to_radians(),
+        })
+    }
+
+    fn uv(&self, d: DVec3) -> [f64; 2] {
+        let phi = d.x.atan2(-d.z) + self.rotation;
+        let u = (phi / (2.0 * PI)).rem_euclid(1.0);
+        let v = d.y.clamp(-1.0, 1.0).acos() / PI;
+        [u, v.min(1.0 - 1e-12)]
+    }
+
+    fn dir(&self, uv: [f64; 2]) -> DVec3 {
+        let theta = uv[1] * PI;
+        let phi = uv[0] * 2.0 * PI - self.rotation;
+        let st = theta.sin();
+        DVec3::new(st * phi.sin(), theta.cos(), -st * phi.cos())
+    }
+
+    fn lookup(&self, uv: [f64; 2]) -> [f64; 3] {
+        let x = ((uv[0] * self.width as f64) as usize).min(self.width - 1);
+        let y = ((uv[1] * self.height as f64) as usize).min(self.height - 1);
+        self.coeffs[y * self.width + x]
+    }
+
+    fn pdf_dir(&self, uv: [f64; 2]) -> f64 {
+        let st = (uv[1] * PI).sin();
+        if st <= 0.0 {
+            0.0
+        } else {
+            self.dist.pdf(uv) / (2.0 * PI * PI * st)
+        }
+    }
+}
+
+/// What a light is.
+pub enum LightKind {
+    /// Point light with intensity spectrum.
+    Point {
+        /// Position.
+        position: DVec3,
+        /// Intensity.
+        spectrum: Spectrum,
+    },
+    /// Spherical emitter.
+    Sphere {
+        /// Geometry.
+        sphere: Sphere,
+        /// Radiance.
+        spectrum: Spectrum,
+    },
+    /// Rectangular emitter.
+    Rectangle {
+        /// Geometry.
+        shape: Planar,
+        /// Radiance.
+        spectrum: Spectrum,
+        /// Emits from both sides.
+        two_sided: bool,
+    },
+    /// Environment.
+    Environment(Environment),
+}
+
+/// One light sample seen from a shading point.
+pub struct LightSample<'a> {
+    /// Unit direction toward the light.
+    pub wi: DVec3,
+    /// Distance to the emitting point (infinite for environments).
+    pub dist: f64,
+    /// Solid-angle pdf including light selection; for delta lights, the selection probability.
+    pub pdf: f64,
+    /// Point light (cannot be hit by BSDF sampling).
+    pub is_delta: bool,
+    /// Emitted radiance (intensity / d² for point lights).
+    pub emission: Emission<'a>,
+}
+
+/// The scene's lights with uniform light selection.
+pub struct Lights {
+    /// All lights; emitting shapes refer to them by index.
+    pub lights: Vec<LightKind>,
+    /// Index of the environment, if any.
+    pub environment: Option<usize>,
+}
+
+fn sphere_cone_pdf(sphere: &Sphere, p: DVec3) -> f64 {
+    let d2 = (sphere.center - p).length_squared();
+    let r2 = sphere.radius * sphere.radius;
+    if d2 <= r2 {
+        return 1.0 / (4.0 * PI);
+    }
+    let cos_max = (1.0 - r2 / d2).max(0.0).sqrt();
+    // 1 − cosθmax written without cancellation.
+    let one_minus = (r2 / d2) / (1.0 + cos_max);
+    1.0 / (2.0 * PI * one_minus)
+}
+
+fn frame(n: DVec3) -> (DVec3, DVec3) {
+    brdf::frame::orthonormal_basis(n)
+}
+
+impl Lights {
+    /// Number of lights.
+    pub fn len(&self) -> usize {
+        self.lights.len()
+    }
+
+    /// Whether there are no lights.
+    pub fn is_empty(&self) -> bool {
+        self.lights.is_empty()
+    }
+
+    fn select_pdf(&self) -> f64 {
+        1.0 / self.lights.len() as f64
+    }
+
+    /// Samples a light and a direction toward it from `p`.
+    pub fn sample(&self, p: DVec3, u: [f64; 3]) -> Option<LightSample<'_>> {
+        let n = self.lights.len();
+        if n == 0 {
+            return None;
+        }
+        let idx = ((u[0] * n as f64) as usize).min(n - 1);
+        let sel = self.select_pdf();
+        let uv = [u[1], u[2]];
+        match &self.lights[idx] {
+            LightKind::Point { position, spectrum } => {
+                let d = *position - p;
+                let dist2 = d.length_squared();
+                if dist2 <= 0.0 {
+                    return None;
+                }
+                let dist = dist2.sqrt();
+                Some(LightSample {
+                    wi: d / dist,
+                    dist,
+                    pdf: sel,
+                    is_delta: true,
+                    emission: Emission::Spectrum(spectrum, 1.0 / dist2),
+                })
+            }
+            LightKind::Sphere { sphere, spectrum } => {
+                let to_c = sphere.center - p;
+                let d2 = to_c.length_squared();
+                let r2 = sphere.radius * sphere.radius;
+                let wi = if d2 <= r2 {
+                    uniform_sphere(uv)
+                } else {
+                    let cos_max = (1.0 - r2 / d2).max(0.0).sqrt();
+                    let one_minus = (r2 / d2) / (1.0 + cos_max);
+                    let cos_t = 1.0 - uv[0] * one_minus;
+                    let sin_t = (uv[0] * one_minus * (2.0 - uv[0] * one_minus))
+                        .max(0.0)
+                        .sqrt();
+                    let phi = 2.0 * PI * uv[1];
+                    let w = to_c / d2.sqrt();
+                    let (t, b) = frame(w);
+                    (sin_t * phi.cos() * t + sin_t * phi.sin() * b + cos_t * w).normalize()
+                };
+                let ray = Ray { o: p, d: wi };
+                // Grazing cone samples can miss by round-off; the tangent distance is then exact enough.
+                let dist = sphere
+                    .intersect(&ray, 0.0, f64::INFINITY)
+                    .map_or_else(|| (d2 - r2).max(0.0).sqrt(), |h| h.t);
+                Some(LightSample {
+                    wi,
+                    dist,
+                    pdf: sel * sphere_cone_pdf(sphere, p),
+                    is_delta: false,
+                    emission: Emission::Spectrum(spectrum, 1.0),
+                })
+            }
+            LightKind::Rectangle {
+                shape,
+                spectrum,
+                two_sided,
+            } => {
+                let q = shape.sample_point(uv);
+                let d = q - p;
+                let dist2 = d.length_squared();
+                let dist = dist2.sqrt();
+                if dist <= 0.0 {
+                    return None;
+                }
+                let wi = d / dist;
+                let cos_l = -wi.dot(shape.n);
+                if cos_l <= 0.0 && !two_sided {
+                    return None;
+                }
+                Some(LightSample {
+                    wi,
+                    dist,
+                    pdf: sel * dist2 / (shape.area() * cos_l.abs()),
+                    is_delta: false,
+                    emission: Emission::Spectrum(spectrum, 1.0),
+                })
+            }
+            LightKind::Environment(env) => {
+                let (wi, pdf, emission) = match env {
+                    Environment::Constant(s) => (
+                        uniform_sphere(uv),
+                        1.0 / (4.0 * PI),
+                        Emission::Spectrum(s, 1.0),
+                    ),
+                    Environment::Map(m) => {
+                        let (st, _) = m.dist.sample(uv);
+                        let wi = m.dir(st);
+                        (wi, m.pdf_dir(st), Emission::Cmf(m.lookup(st)))
+                    }
+                };
+                (pdf > 0.0).then_some(LightSample {
+                    wi,
+                    dist: f64::INFINITY,
+                    pdf: sel * pdf,
+                    is_delta: false,
+                    emission,
+                })
+            }
+        }
+    }
+
+    /// Radiance leaving emitter `idx` toward `-dir` at a hit with geometric normal `n`,
+    /// and the pdf with which [`Lights::sample`] from `from` would have chosen that point.
+    pub fn emitted(
+        &self,
+        idx: usize,
+        from: DVec3,
+        dir: DVec3,
+        n: DVec3,
+        dist: f64,
+    ) -> (Emission<'_>, f64) {
+        let sel = self.select_pdf();
+        match &self.lights[idx] {
+            LightKind::Sphere { sphere, spectrum } => (
+                Emission::Spectrum(spectrum, 1.0),
+                sel * sphere_cone_pdf(sphere, from),
+            ),
+            LightKind::Rectangle {
+                shape,
+                spectrum,
+                two_sided,
+            } => {
+                let cos_l = -dir.dot(n);
+                if cos_l <= 0.0 && !two_sided {
+                    return (Emission::None, 0.0);
+                }
+                let pdf = sel * dist * dist / (shape.area() * cos_l.abs().max(1e-300));
+                (Emission::Spectrum(spectrum, 1.0), pdf)
+            }
+            LightKind::Point { .. } | LightKind::Environment(_) => (Emission::None, 0.0),
+        }
+    }
+
+    /// Environment radiance along `dir` (escaping rays) and its sampling pdf.
+    pub fn environment(&self, dir: DVec3) -> (Emission<'_>, f64) {
+        let Some(i) = self.environment else {
+            return (Emission::None, 0.0);
+        };
+        let sel = self.select_pdf();
+        match &self.lights[i] {
+            LightKind::Environment(Environment::Constant(s)) => {
+                (Emission::Spectrum(s, 1.0), sel / (4.0 * PI))
+            }
+            LightKind::Environment(Environment::Map(m)) => {
+                let uv = m.uv(dir);
+                (Emission::Cmf(m.lookup(uv)), sel * m.pdf_dir(uv))
+            }
+            _ => (Emission::None, 0.0),
+        }
+    }
+
+    /// The union of the lights' emission ranges within 360–830 nm.
+    pub fn emission_range(&self) -> Option<(f64, f64)> {
+        let mut lo = f64::INFINITY;
+        let mut hi = f64::NEG_INFINITY;
+        for l in &self.lights {
+            let s = match l {
+                LightKind::Point { spectrum, .. }
+                | LightKind::Sphere { spectrum, .. }
+                | LightKind::Rectangle { spectrum, .. }
+                | LightKind::Environment(Environment::Constant(spectrum)) => spectrum.support(),
+                LightKind::Environment(Environment::Map(_)) => Some((LAMBDA_MIN, LAMBDA_MAX)),
+            };
+            if let Some((a, b)) = s {
+                lo = lo.min(a);
+                hi = hi.max(b);
+            }
+        }
+        (lo < hi).then_some((lo, hi))
+    }
+}
+
+/// Uniform direction on the unit sphere.
+pub fn uniform_sphere(u: [f64; 2]) -> DVec3 {
+    let z = 1.0 - 2.0 * u[0];
+    let r = (1.0 - z * z).max(0.0).sqrt();
+    let phi = 2.0 * PI * u[1];
+    DVec3::new(r * phi.cos(), r * phi.sin(), z)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn rgb_lift_reproduces_xyz() {
+        let lift = RgbLift::new();
+        let cie = Cie::get();
+        for rgb in [[1.0, 1.0, 1.0], [0.8, 0.2, 0.1], [0.0, 0.0, 1.0]] {
+            let c = lift.coefficients(rgb);
+            let e = Emission::Cmf(c);
+            let mut xyz = [0.0; 3];
+            for i in 0..=470 {
+                let l = 360.0 + i as f64;
+                let w = if i == 0 || i == 470 { 0.5 } else { 1.0 };
+                let m = cie.xyz(l);
+                for k in 0..3 {
+                    xyz[k] += w * e.eval(l) * m[k] / cie.y_integral();
+                }
+            }
+            let want = mul(&SRGB_TO_XYZ, rgb);
+            for k in 0..3 {
+                assert!(
+                    (xyz[k] - want[k]).abs() < 1e-9,
+                    "{rgb:?}: {xyz:?} vs {want:?}"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn sphere_cone_pdf_integrates_to_one() {
+        // Monte Carlo over the cone: E[1/pdf] = solid angle; compare with 2π(1 − cosθmax).
+        let s = Sphere {
+            center: DVec3::new(0.0, 0.0, 5.0),
+            radius: 1.0,
+        };
+        let pdf = sphere_cone_pdf(&s, DVec3::ZERO);
+        let cos_max = (1.0f64 - 1.0 / 25.0).sqrt();
+        assert!((1.0 / pdf - 2.0 * PI * (1.0 - cos_max)).abs() < 1e-12);
+        let lights = Lights {
+            lights: vec![LightKind::Sphere {
+                sphere: s,
+                spectrum: Spectrum::Constant(1.0),
+            }],
+            environment: None,
+        };
+        for i in 0..100 {
+            let ls = lights
+                .sample(
+                    DVec3::ZERO,
+                    [0.0, i as f64 / 100.0, (i * 31 % 100) as f64 / 100.0],
+                )
+                .unwrap();
+            assert!(ls.wi.z >= cos_max - 1e-9 && (ls.dist - 4.0).abs() < 1.0 + 1e-9);
+        }
+    }
+}

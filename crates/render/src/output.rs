@@ -1,0 +1,135 @@
+//! Writing images and films atomically: a temporary file in the target's
+//! directory, then a rename, so a reader never sees a half-written file and an
+//! interrupted write leaves the previous version intact.
+
+use crate::color::to_u8;
+use crate::error::RenderError;
+use std::fs::File;
+use std::io::{BufWriter, Write};
+use std::path::{Path, PathBuf};
+
+fn temp_path(path: &Path) -> PathBuf {
+    let name = path
+        .file_name()
+        .map_or_else(|| "out".into(), |n| n.to_string_lossy().into_owned());
+    path.with_file_name(format!(".{name}.tmp{}", std::process::id()))
+}
+
+/// Writes `path` through `write` into a temporary file, then renames it into place.
+pub fn write_atomic(
+    path: &Path,
+    write: impl FnOnce(&mut BufWriter<File>) -> std::io::Result<()>,
+) -> Result<(), RenderError> {
+    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir).map_err(|e| RenderError::io(dir, e))?;
+    }
+    let tmp = temp_path(path);
+    let result = (|| {
+        let mut w = BufWriter::new(File::create(&tmp)?);
+        write(&mut w)?;
+        let f = w.into_inner().map_err(|e| e.into_error())?;
+        f.sync_all()?;
+        std::fs::rename(&tmp, path)
+    })();
+    result.map_err(|e| {
+        let _ = std::fs::remove_file(&tmp);
+        RenderError::io(path, e)
+    })
+}
+
+/// Writes a linear-sRGB float EXR (channels R, G, B; f32).
+pub fn write_exr(
+    path: &Path,
+    width: u32,
+    height: u32,
+    rgb: &[[f32; 3]],
+) -> Result<(), RenderError> {
+    use exr::prelude::*;
+    let w = width as usize;
+    let channels = SpecificChannels::rgb(|Vec2(x, y): Vec2<usize>| {
+        let p = rgb[y * w + x];
+        (p[0], p[1], p[2])
+    });
+    let image = Image::from_channels((w, height as usize), channels);
+    let mut bytes = std::io::Cursor::new(Vec::new());
+    image
+        .write()
+        .to_buffered(&mut bytes)
+        .map_err(|e| RenderError::Image {
+            path: path.to_path_buf(),
+            message: e.to_string(),
+        })?;
+    write_atomic(path, |f| f.write_all(bytes.get_ref()))
+}
+
+/// Writes an 8-bit sRGB PNG (values clamped to [0, 1] before encoding).
+pub fn write_png(
+    path: &Path,
+    width: u32,
+    height: u32,
+    rgb: &[[f32; 3]],
+) -> Result<(), RenderError> {
+    let buf: Vec<u8> = rgb
+        .iter()
+        .flat_map(|p| p.map(|v| to_u8(v as f64)))
+        .collect();
+    let mut bytes = std::io::Cursor::new(Vec::new());
+    image::write_buffer_with_format(
+        &mut bytes,
+        &buf,
+        width,
+        height,
+        image::ExtendedColorType::Rgb8,
+        image::ImageFormat::Png,
+    )
+    .map_err(|e| RenderError::Image {
+        path: path.to_path_buf(),
+        message: e.to_string(),
+    })?;
+    write_atomic(path, |f| f.write_all(bytes.get_ref()))
+}
+
+/// Reads back a float RGB EXR as (width, height, pixels); used by tests and tools.
+pub fn read_exr(path: &Path) -> Result<(u32, u32, Vec<[f32; 3]>), RenderError> {
+    use exr::prelude::*;
+    let img = read_first_rgba_layer_from_file(
+        path,
+        |res, _| (res.width(), vec![[0f32; 3]; res.width() * res.height()]),
+        |px: &mut (usize, Vec<[f32; 3]>), pos, (r, g, b, _a): (f32, f32, f32, f32)| {
+            px.1[pos.y() * px.0 + pos.x()] = [r, g, b];
+        },
+    )
+    .map_err(|e| RenderError::Image {
+        path: path.to_path_buf(),
+        message: e.to_string(),
+    })?;
+    let size = img.layer_data.size;
+    Ok((
+        size.width() as u32,
+        size.height() as u32,
+        img.layer_data.channel_data.pixels.1,
+    ))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn exr_and_png_round_trip() {
+        let dir = std::env::temp_dir().join(format!("lustre-output-test-{}", std::process::id()));
+        let rgb: Vec<[f32; 3]> = (0..6).map(|i| [i as f32, 0.5, -1.0]).collect();
+        let exr = dir.join("a.exr");
+        write_exr(&exr, 3, 2, &rgb).unwrap();
+        let (w, h, back) = read_exr(&exr).unwrap();
+        assert_eq!((w, h), (3, 2));
+        assert_eq!(back, rgb);
+        let png = dir.join("a.png");
+        write_png(&png, 3, 2, &rgb).unwrap();
+        let bytes = std::fs::read(&png).unwrap();
+        assert_eq!(&bytes[1..4], b"PNG");
+        // No temporary files left behind.
+        assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 2);
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+}

@@ -1,0 +1,261 @@
+//! The render loop: progressive passes over image tiles on a rayon pool.
+//!
+//! A pass renders a contiguous range of sample indices for every pixel. Only
+//! complete passes are added to the film, so the film always holds the same
+//! samples for every pixel; an interruption (Ctrl-C, time limit) discards the
+//! pass in flight, costing at most one pass (sized to about two seconds).
+
+use crate::error::RenderError;
+use crate::film::{Film, to_fixed};
+use crate::integrator::sample_pixel;
+use crate::scene::Scene;
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use rayon::prelude::*;
+use std::ops::Range;
+use std::path::PathBuf;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::{Duration, Instant};
+
+const TILE: u32 = 16;
+
+/// How to run a render.
+#[derive(Clone, Debug)]
+pub struct RenderOptions {
+    /// Worker threads (default: all cores).
+    pub threads: Option<usize>,
+    /// Stop after this long, keeping the completed passes.
+    pub time_limit: Option<Duration>,
+    /// Set from outside (Ctrl-C) to stop after the current tile.
+    pub stop: Arc<AtomicBool>,
+    /// Show a progress bar (only drawn when stderr is a terminal).
+    pub progress: bool,
+    /// Where to write the film after passes, and how often.
+    pub checkpoint: Option<(PathBuf, Duration)>,
+    /// Target duration of one pass.
+    pub pass_target: Duration,
+}
+
+impl Default for RenderOptions {
+    fn default() -> Self {
+        RenderOptions {
+            threads: None,
+            time_limit: None,
+            stop: Arc::new(AtomicBool::new(false)),
+            progress: false,
+            checkpoint: None,
+            pass_target: Duration::from_secs(2),
+        }
+    }
+}
+
+/// What a render achieved.
+#[derive(Clone, Debug)]
+pub struct RenderOutcome {
+    /// Sample indices added to the film by this call.
+    pub rendered: Range<u64>,
+    /// Whether the whole requested range was rendered.
+    pub complete: bool,
+    /// Wall time spent.
+    pub elapsed: Duration,
+    /// Camera samples (pixel × spp) per second.
+    pub samples_per_second: f64,
+}
+
+/// A pixel rectangle.
+#[derive(Clone, Copy, Debug)]
+struct Tile {
+    x0: u32,
+    y0: u32,
+    x1: u32,
+    y1: u32,
+}
+
+fn tiles(width: u32, height: u32) -> Vec<Tile> {
+    let mut v = Vec::new();
+    for y0 in (0..height).step_by(TILE as usize) {
+        for x0 in (0..width).step_by(TILE as usize) {
+            v.push(Tile {
+                x0,
+                y0,
+                x1: (x0 + TILE).min(width),
+                y1: (y0 + TILE).min(height),
+            });
+        }
+    }
+    v
+}
+
+/// Renders one tile for samples `range`; `None` if stopped.
+fn render_tile(
+    scene: &Scene,
+    tile: Tile,
+    range: &Range<u64>,
+    stop: &AtomicBool,
+) -> Option<Vec<[i128; 3]>> {
+    let mut sums = Vec::with_capacity(((tile.x1 - tile.x0) * (tile.y1 - tile.y0)) as usize);
+    for y in tile.y0..tile.y1 {
+        if stop.load(Ordering::Relaxed) {
+            return None;
+        }
+        for x in tile.x0..tile.x1 {
+            let mut acc = [0i128; 3];
+            for s in range.clone() {
+                let f = to_fixed(sample_pixel(scene, x, y, s));
+                for k in 0..3 {
+                    acc[k] += f[k];
+                }
+            }
+            sums.push(acc);
+        }
+    }
+    Some(sums)
+}
+
+/// Creates the worker pool.
+pub fn thread_pool(threads: Option<usize>) -> Result<rayon::ThreadPool, RenderError> {
+    let mut b = rayon::ThreadPoolBuilder::new();
+    if let Some(n) = threads {
+        if n == 0 {
+            return Err(RenderError::Options("--threads must be ≥ 1".into()));
+        }
+        b = b.num_threads(n);
+    }
+    b.build()
+        .map_err(|e| RenderError::Options(format!("cannot start worker threads: {e}")))
+}
+
+/// Adds samples `range` of every pixel to `film`, in passes.
+pub fn render_range(
+    scene: &Scene,
+    film: &mut Film,
+    range: Range<u64>,
+    opts: &RenderOptions,
+) -> Result<RenderOutcome, RenderError> {
+    let pool = thread_pool(opts.threads)?;
+    render_range_in(&pool, scene, film, range, opts)
+}
+
+/// [`render_range`] on an existing pool.
+pub fn render_range_in(
+    pool: &rayon::ThreadPool,
+    scene: &Scene,
+    film: &mut Film,
+    range: Range<u64>,
+    opts: &RenderOptions,
+) -> Result<RenderOutcome, RenderError> {
+    let start = Instant::now();
+    let (w, h) = (scene.camera.width, scene.camera.height);
+    if (film.width, film.height) != (w, h) {
+        return Err(RenderError::Options(format!(
+            "film is {}×{} but the scene renders {w}×{h}",
+            film.width, film.height
+        )));
+    }
+    let tiles = tiles(w, h);
+    let pixels = w as u64 * h as u64;
+    let bar = if opts.progress && std::io::IsTerminal::is_terminal(&std::io::stderr()) {
+        let b = ProgressBar::with_draw_target(
+            Some(pixels * (range.end - range.start)),
+            ProgressDrawTarget::stderr_with_hz(4),
+        );
+        b.set_style(
+            ProgressStyle::with_template(
+                "{elapsed_precise} [{bar:40}] {percent:>3}% {msg} ETA {eta}",
+            )
+            .unwrap_or_else(|_| ProgressStyle::default_bar())
+            .progress_chars("=> "),
+        );
+        b
+    } else {
+        ProgressBar::hidden()
+    };
+
+    let mut next = range.start;
+    let mut pass_spp = 1u64;
+    let mut last_checkpoint = Instant::now();
+    let deadline = opts.time_limit.map(|t| start + t);
+    let stop = opts.stop.clone();
+    // A timer thread turns the deadline into the same stop flag Ctrl-C uses.
+    let local_stop = Arc::new(AtomicBool::new(false));
+    let watcher = {
+        let local = local_stop.clone();
+        let ext = stop.clone();
+        let done = Arc::new(AtomicBool::new(false));
+        let d2 = done.clone();
+        let handle = std::thread::spawn(move || {
+            while !d2.load(Ordering::Relaxed) {
+                if ext.load(Ordering::Relaxed) || deadline.is_some_and(|d| Instant::now() >= d) {
+                    local.store(true, Ordering::Relaxed);
+                    return;
+                }
+                std::thread::sleep(Duration::from_millis(20));
+            }
+        });
+        (done, handle)
+    };
+
+    let mut result = Ok(());
+    while next < range.end && !local_stop.load(Ordering::Relaxed) {
+        let pass = next..(next + pass_spp).min(range.end);
+        let t0 = Instant::now();
+        let results: Vec<Option<Vec<[i128; 3]>>> = pool.install(|| {
+            tiles
+                .par_iter()
+                .map(|&t| {
+                    let r = render_tile(scene, t, &pass, &local_stop);
+                    bar.inc(((t.x1 - t.x0) * (t.y1 - t.y0)) as u64 * (pass.end - pass.start));
+                    r
+                })
+                .collect()
+        });
+        if results.iter().any(Option::is_none) {
+            break;
+        }
+        for (t, sums) in tiles.iter().zip(results.into_iter().flatten()) {
+            let mut k = 0;
+            for y in t.y0..t.y1 {
+                for x in t.x0..t.x1 {
+                    let px = &mut film.sums[(y * w + x) as usize];
+                    for c in 0..3 {
+                        px[c] = px[c].saturating_add(sums[k][c]);
+                    }
+                    k += 1;
+                }
+            }
+        }
+        if let Err(m) = film.add_range(pass.clone()) {
+            result = Err(RenderError::Options(m));
+            break;
+        }
+        next = pass.end;
+        bar.set_message(format!("{} spp", film.spp()));
+        if let Some((path, every)) = &opts.checkpoint
+            && last_checkpoint.elapsed() >= *every
+            && next < range.end
+        {
+            film.save(path)?;
+            last_checkpoint = Instant::now();
+        }
+        // Size the next pass to about `pass_target`, growing at most 4× at a time.
+        let per_spp = t0.elapsed().as_secs_f64() / (pass.end - pass.start) as f64;
+        let mut target = opts.pass_target.as_secs_f64();
+        if let Some(d) = deadline {
+            target = target.min(d.saturating_duration_since(Instant::now()).as_secs_f64());
+        }
+        let want = (target / per_spp.max(1e-9)).floor() as u64;
+        pass_spp = want.clamp(1, pass_spp.saturating_mul(4));
+    }
+    watcher.0.store(true, Ordering::Relaxed);
+    let _ = watcher.1.join();
+    bar.finish_and_clear();
+    result?;
+    let elapsed = start.elapsed();
+    let done = next - range.start;
+    Ok(RenderOutcome {
+        rendered: range.start..next,
+        complete: next == range.end,
+        elapsed,
+        samples_per_second: (done * pixels) as f64 / elapsed.as_secs_f64().max(1e-12),
+    })
+}

@@ -1,0 +1,345 @@
+//! The scene file as written: serde types mirroring the TOML schema.
+//!
+//! Every table denies unknown keys, so a misspelt key is an error that lists
+//! the valid ones. Defaults are only used where this file documents them.
+
+use serde::Deserialize;
+use std::collections::BTreeMap;
+use std::path::PathBuf;
+use toml::Spanned;
+
+/// A whole scene file.
+#[derive(Deserialize, Debug)]
+#[serde(deny_unknown_fields)]
+pub struct SceneDesc {
+    /// The camera.
+    pub camera: CameraDesc,
+    /// Samples, seed and outputs.
+    pub film: FilmDesc,
+    /// Path-tracing settings (all keys optional).
+    #[serde(default)]
+    pub integrator: IntegratorDesc,
+    /// Named materials, `[materials.NAME]`.
+    #[serde(default)]
+    pub materials: BTreeMap<String, Spanned<MaterialDesc>>,
+    /// `[[shapes]]` entries.
+    #[serde(default)]
+    pub shapes: Vec<Spanned<ShapeDesc>>,
+    /// `[[lights]]` entries.
+    #[serde(default)]
+    pub lights: Vec<Spanned<LightDesc>>,
+}
+
+/// `[camera]`: a pinhole perspective camera.
+#[derive(Deserialize, Debug)]
+#[serde(deny_unknown_fields)]
+pub struct CameraDesc {
+    /// Eye position.
+    pub look_from: [f64; 3],
+    /// Point the camera looks at.
+    pub look_at: [f64; 3],
+    /// Up direction (default +y).
+    #[serde(default = "default_up")]
+    pub up: [f64; 3],
+    /// Vertical field of view in degrees, in (0, 180).
+    pub fov_deg: Spanned<f64>,
+    /// Image width and height in pixels.
+    pub resolution: Spanned<[u32; 2]>,
+}
+
+fn default_up() -> [f64; 3] {
+    [0.0, 1.0, 0.0]
+}
+
+/// `[film]`.
+#[derive(Deserialize, Debug)]
+#[serde(deny_unknown_fields)]
+pub struct FilmDesc {
+    /// Samples per pixel (≥ 1).
+    pub spp: Spanned<u64>,
+    /// Random seed (default 0).
+    #[serde(default)]
+    pub seed: u64,
+    /// Linear sRGB float EXR output, relative to the working directory.
+    #[serde(default)]
+    pub exr: Option<PathBuf>,
+    /// 8-bit sRGB PNG output, relative to the working directory.
+    #[serde(default)]
+    pub png: Option<PathBuf>,
+    /// Exposure in stops applied to both outputs (default 0).
+    #[serde(default)]
+    pub exposure: f64,
+}
+
+/// How wavelengths are sampled per camera path.
+#[derive(Deserialize, Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum WavelengthMode {
+    /// One wavelength per path.
+    #[default]
+    Single,
+    /// Four stratified wavelengths per path with spectral MIS (Wilkie et al. 2014).
+    Hero,
+}
+
+/// `[integrator]`.
+#[derive(Deserialize, Debug)]
+#[serde(deny_unknown_fields)]
+pub struct IntegratorDesc {
+    /// Maximum number of scattering events along a path (default 8; 1 = direct light only).
+    #[serde(default = "default_depth")]
+    pub max_depth: Spanned<u32>,
+    /// `single` (default) or `hero`.
+    #[serde(default)]
+    pub wavelengths: WavelengthMode,
+    /// Bounces before Russian roulette may end a path (default 3).
+    #[serde(default = "default_rr")]
+    pub rr_depth: u32,
+}
+
+fn default_depth() -> Spanned<u32> {
+    Spanned::new(0..0, 8)
+}
+
+fn default_rr() -> u32 {
+    3
+}
+
+impl Default for IntegratorDesc {
+    fn default() -> Self {
+        IntegratorDesc {
+            max_depth: default_depth(),
+            wavelengths: WavelengthMode::Single,
+            rr_depth: 3,
+        }
+    }
+}
+
+/// The reflection model of a material.
+#[derive(Deserialize, Debug, Clone, Copy, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum ModelKind {
+    /// GGX microfacet conductor (`alpha` or `alpha_x`/`alpha_y`).
+    Ggx,
+    /// Beckmann microfacet conductor.
+    Beckmann,
+    /// A perfect mirror (delta reflection only).
+    Smooth,
+    /// GHS, single-scatter (SSA) approximation, KC surface.
+    GhsSsa,
+    /// Full GHS, KC surface.
+    Ghs,
+    /// Holzschuch–Pacanowski 2017 two-scale model.
+    TwoScale,
+    /// GHS with a measured (tabulated) PSD.
+    MeasuredPsd,
+}
+
+impl ModelKind {
+    /// The name used in scene files.
+    pub fn name(self) -> &'static str {
+        match self {
+            ModelKind::Ggx => "ggx",
+            ModelKind::Beckmann => "beckmann",
+            ModelKind::Smooth => "smooth",
+            ModelKind::GhsSsa => "ghs_ssa",
+            ModelKind::Ghs => "ghs",
+            ModelKind::TwoScale => "two_scale",
+            ModelKind::MeasuredPsd => "measured_psd",
+        }
+    }
+}
+
+/// What the Fresnel factor is.
+#[derive(Deserialize, Debug, Clone, Copy, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum FresnelKind {
+    /// Conductor Fresnel from the metal's n, k (default).
+    Conductor,
+    /// R ≡ 1 (white furnace tests).
+    One,
+}
+
+/// Energy handling of the GHS scattered lobe (docs/physics.md §5).
+#[derive(Deserialize, Debug, Clone, Copy, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum EnergyDesc {
+    /// The physics as written (reciprocal, not energy-normalised).
+    Raw,
+    /// Krywonos renormalisation of the scattered part.
+    Krywonos,
+    /// Band-limited relevant roughness σ_rel.
+    SigmaRel,
+}
+
+/// `[materials.NAME]`: a conductor. Keys given here override those of `include`.
+#[derive(Deserialize, Debug, Default, Clone)]
+#[serde(deny_unknown_fields)]
+pub struct MaterialDesc {
+    /// A material file written by `lustre fit` (relative to this scene file).
+    pub include: Option<PathBuf>,
+    /// Reflection model.
+    pub model: Option<ModelKind>,
+    /// Built-in metal by name (`stainless_steel`, `brass`, `cu`, `au`, `ag`, `al`, `fe`, `cr`).
+    pub metal: Option<String>,
+    /// n, k table: CSV `wavelength_nm,n,k` (relative to this scene file).
+    pub nk_csv: Option<PathBuf>,
+    /// Constant complex index `[n, k]`.
+    pub nk: Option<[f64; 2]>,
+    /// `conductor` (default) or `one`.
+    pub fresnel: Option<FresnelKind>,
+    /// Isotropic microfacet roughness.
+    pub alpha: Option<f64>,
+    /// Anisotropic roughness along the surface tangent.
+    pub alpha_x: Option<f64>,
+    /// Anisotropic roughness along the bitangent.
+    pub alpha_y: Option<f64>,
+    /// Beckmann roughness (used instead of `alpha` when the model is beckmann).
+    pub alpha_beckmann: Option<f64>,
+    /// RMS height σ in µm.
+    pub sigma_um: Option<f64>,
+    /// Correlation (Matérn range) length Lc in µm.
+    pub lc_um: Option<f64>,
+    /// KC exponent γ (> 1).
+    pub gamma: Option<f64>,
+    /// Energy handling of GHS models (default raw).
+    pub energy: Option<EnergyDesc>,
+    /// Two-scale split parameter β (HP17).
+    pub beta: Option<f64>,
+    /// Which `[two_scale.NAME]` table of the included fit file to use.
+    pub cutoff: Option<String>,
+}
+
+/// Optional placement of a shape.
+#[derive(Deserialize, Debug, Clone, Copy)]
+#[serde(deny_unknown_fields)]
+pub struct TransformDesc {
+    /// Translation.
+    #[serde(default)]
+    pub translate: [f64; 3],
+    /// Rotation in degrees about x, then y, then z.
+    #[serde(default)]
+    pub rotate_deg: [f64; 3],
+    /// Uniform scale (default 1).
+    #[serde(default = "one")]
+    pub scale: f64,
+}
+
+fn one() -> f64 {
+    1.0
+}
+
+impl Default for TransformDesc {
+    fn default() -> Self {
+        TransformDesc {
+            translate: [0.0; 3],
+            rotate_deg: [0.0; 3],
+            scale: 1.0,
+        }
+    }
+}
+
+/// `[[shapes]]`, tagged by `type`.
+#[derive(Deserialize, Debug)]
+#[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
+pub enum ShapeDesc {
+    /// `size = [w, h]` in the local xy plane, normal +z.
+    Rectangle {
+        /// Width and height.
+        size: [f64; 2],
+        /// Material name.
+        material: String,
+        /// Placement.
+        #[serde(default)]
+        transform: TransformDesc,
+    },
+    /// A disk in the local xy plane, normal +z.
+    Disk {
+        /// Radius.
+        radius: f64,
+        /// Material name.
+        material: String,
+        /// Placement.
+        #[serde(default)]
+        transform: TransformDesc,
+    },
+    /// A sphere.
+    Sphere {
+        /// Centre.
+        center: [f64; 3],
+        /// Radius.
+        radius: f64,
+        /// Material name.
+        material: String,
+    },
+    /// A triangle mesh from an OBJ file (relative to the scene file).
+    Mesh {
+        /// OBJ file.
+        file: PathBuf,
+        /// Material name.
+        material: String,
+        /// Placement.
+        #[serde(default)]
+        transform: TransformDesc,
+    },
+}
+
+/// `[[lights]]`, tagged by `type`. `spectrum` defaults to `"d65"`; every
+/// spectrum is normalised to unit luminance before `intensity`/`radiance`
+/// scales it.
+#[derive(Deserialize, Debug)]
+#[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
+pub enum LightDesc {
+    /// An isotropic point light; `intensity` in luminance units per sr.
+    Point {
+        /// Position.
+        position: [f64; 3],
+        /// Radiant intensity scale.
+        intensity: f64,
+        /// Spectrum.
+        #[serde(default)]
+        spectrum: Option<String>,
+    },
+    /// A spherical emitter of uniform radiance.
+    Sphere {
+        /// Centre.
+        center: [f64; 3],
+        /// Radius.
+        radius: f64,
+        /// Radiance scale.
+        radiance: f64,
+        /// Spectrum.
+        #[serde(default)]
+        spectrum: Option<String>,
+    },
+    /// A rectangular emitter, emitting from its +z side (both with `two_sided`).
+    Rectangle {
+        /// Width and height.
+        size: [f64; 2],
+        /// Radiance scale.
+        radiance: f64,
+        /// Placement.
+        #[serde(default)]
+        transform: TransformDesc,
+        /// Emit from both sides.
+        #[serde(default)]
+        two_sided: bool,
+        /// Spectrum.
+        #[serde(default)]
+        spectrum: Option<String>,
+    },
+    /// Light from infinitely far away: constant, or a lat-long EXR map.
+    Environment {
+        /// Radiance scale.
+        radiance: f64,
+        /// Spectrum of a constant environment.
+        #[serde(default)]
+        spectrum: Option<String>,
+        /// Lat-long (equirectangular) EXR file, relative to the scene file; +y is up.
+        #[serde(default)]
+        file: Option<PathBuf>,
+        /// Rotation of the map about +y in degrees.
+        #[serde(default)]
+        rotate_deg: f64,
+    },
+}

@@ -1,0 +1,337 @@
+//! Spectra: the CIE 1931 observer, emission spectra of lights, and CSV tables.
+//!
+//! Every emission spectrum is normalised to unit luminance,
+//! ∫S ȳ dλ / ∫ȳ dλ = 1 over 360–830 nm, so a light's scalar strength is
+//! directly its luminance-weighted value whatever its spectral shape.
+
+use std::path::Path;
+use std::sync::OnceLock;
+
+/// Shortest wavelength rendered, nm (the CIE table's first row).
+pub const LAMBDA_MIN: f64 = 360.0;
+/// Longest wavelength rendered, nm (the CIE table's last row).
+pub const LAMBDA_MAX: f64 = 830.0;
+
+const CIE_1931_CSV: &str = include_str!("../../../data/spectra/cie1931_2deg_xyz.csv");
+const D65_CSV: &str = include_str!("../../../data/spectra/illuminant_D65.csv");
+const A_CSV: &str = include_str!("../../../data/spectra/illuminant_A.csv");
+
+/// The CIE 1931 2° colour-matching functions at 1 nm, 360–830 nm.
+pub struct Cie {
+    xyz: Vec<[f64; 3]>,
+    y_integral: f64,
+}
+
+impl Cie {
+    /// The table, parsed once from the repository's `data/spectra` CSV.
+    pub fn get() -> &'static Cie {
+        static CIE: OnceLock<Cie> = OnceLock::new();
+        CIE.get_or_init(|| {
+            let rows = parse_csv_rows(CIE_1931_CSV, 4).expect("bundled CIE table is valid");
+            let xyz: Vec<[f64; 3]> = rows.iter().map(|r| [r[1], r[2], r[3]]).collect();
+            debug_assert_eq!(xyz.len(), 471);
+            // Trapezoid rule on the 1 nm grid.
+            let y_integral = xyz.windows(2).map(|w| 0.5 * (w[0][1] + w[1][1])).sum();
+            Cie { xyz, y_integral }
+        })
+    }
+
+    /// x̄, ȳ, z̄ at `lambda` nm, interpolated linearly; zero outside 360–830 nm.
+    #[inline]
+    pub fn xyz(&self, lambda: f64) -> [f64; 3] {
+        if !(LAMBDA_MIN..=LAMBDA_MAX).contains(&lambda) {
+            return [0.0; 3];
+        }
+        let x = lambda - LAMBDA_MIN;
+        let i = (x as usize).min(self.xyz.len() - 2);
+        let t = x - i as f64;
+        let (a, b) = (self.xyz[i], self.xyz[i + 1]);
+        [
+            a[0] + t * (b[0] - a[0]),
+            a[1] + t * (b[1] - a[1]),
+            a[2] + t * (b[2] - a[2]),
+        ]
+    }
+
+    /// ∫ȳ dλ over 360–830 nm (≈ 106.86 nm).
+    pub fn y_integral(&self) -> f64 {
+        self.y_integral
+    }
+}
+
+/// A spectral power distribution as a function of wavelength.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Spectrum {
+    /// The same value at every wavelength.
+    Constant(f64),
+    /// Planck's law at `kelvin`, multiplied by `scale`.
+    Blackbody {
+        /// Temperature in K.
+        kelvin: f64,
+        /// Normalisation factor.
+        scale: f64,
+    },
+    /// Linear interpolation of `(λ nm, value)` rows; zero outside the table.
+    Table(Vec<[f64; 2]>),
+}
+
+impl Spectrum {
+    /// Value at `lambda` nm.
+    #[inline]
+    pub fn eval(&self, lambda: f64) -> f64 {
+        match self {
+            Spectrum::Constant(v) => *v,
+            Spectrum::Blackbody { kelvin, scale } => scale * planck(lambda, *kelvin),
+            Spectrum::Table(rows) => interpolate(rows, lambda),
+        }
+    }
+
+    /// The wavelength interval outside which the spectrum is zero,
+    /// intersected with 360–830 nm; `None` if it is zero everywhere there.
+    pub fn support(&self) -> Option<(f64, f64)> {
+        match self {
+            Spectrum::Constant(v) => (*v != 0.0).then_some((LAMBDA_MIN, LAMBDA_MAX)),
+            Spectrum::Blackbody { .. } => Some((LAMBDA_MIN, LAMBDA_MAX)),
+            Spectrum::Table(rows) => {
+                // A row with a nonzero value makes the segments on both sides nonzero.
+                let first = rows.iter().position(|r| r[1] != 0.0)?;
+                let last = rows.iter().rposition(|r| r[1] != 0.0)?;
+                let lo = rows[first.saturating_sub(1)][0].max(LAMBDA_MIN);
+                let hi = rows[(last + 1).min(rows.len() - 1)][0].min(LAMBDA_MAX);
+                (lo < hi).then_some((lo, hi))
+            }
+        }
+    }
+
+    /// ∫S ȳ dλ / ∫ȳ dλ over 360–830 nm (1 nm trapezoid rule).
+    pub fn luminance(&self) -> f64 {
+        let cie = Cie::get();
+        let mut sum = 0.0;
+        for i in 0..=470 {
+            let l = LAMBDA_MIN + i as f64;
+            let w = if i == 0 || i == 470 { 0.5 } else { 1.0 };
+            sum += w * self.eval(l) * cie.xyz(l)[1];
+        }
+        sum / cie.y_integral()
+    }
+
+    /// This spectrum scaled so that its luminance is `target`.
+    /// Errors when the spectrum has no luminance to scale.
+    pub fn with_luminance(self, target: f64) -> Result<Spectrum, String> {
+        let lum = self.luminance();
+        if !(lum.is_finite() && lum > 0.0) {
+            return Err("the spectrum has zero luminance over 360–830 nm".into());
+        }
+        let k = target / lum;
+        Ok(match self {
+            Spectrum::Constant(v) => Spectrum::Constant(v * k),
+            Spectrum::Blackbody { kelvin, scale } => Spectrum::Blackbody {
+                kelvin,
+                scale: scale * k,
+            },
+            Spectrum::Table(rows) => {
+                Spectrum::Table(rows.into_iter().map(|[l, v]| [l, v * k]).collect())
+            }
+        })
+    }
+}
+
+/// Planck's spectral radiance at `lambda_nm`, in arbitrary units (W·sr⁻¹·m⁻³ / 1e13).
+fn planck(lambda_nm: f64, kelvin: f64) -> f64 {
+    const C2: f64 = 1.438_776_877e7; // hc/k in nm·K
+    let l = lambda_nm * 1e-3; // µm, keeps the numbers O(1)
+    let x = C2 / (lambda_nm * kelvin);
+    // exp_m1 keeps the Rayleigh–Jeans end accurate; huge x underflows to 0 cleanly.
+    1.0 / (l.powi(5) * x.exp_m1())
+}
+
+/// Linear interpolation in rows sorted by wavelength; zero outside.
+fn interpolate(rows: &[[f64; 2]], lambda: f64) -> f64 {
+    let (Some(first), Some(last)) = (rows.first(), rows.last()) else {
+        return 0.0;
+    };
+    if lambda < first[0] || lambda > last[0] {
+        return 0.0;
+    }
+    let i = rows
+        .partition_point(|r| r[0] <= lambda)
+        .clamp(1, rows.len() - 1);
+    let (a, b) = (rows[i - 1], rows[i]);
+    let t = if b[0] > a[0] {
+        (lambda - a[0]) / (b[0] - a[0])
+    } else {
+        0.0
+    };
+    a[1] + t * (b[1] - a[1])
+}
+
+/// Parses numeric CSV rows with exactly `columns` fields, skipping a header
+/// line that does not parse as numbers and blank / `#` lines. Errors name
+/// the 1-based line.
+pub fn parse_csv_rows(text: &str, columns: usize) -> Result<Vec<Vec<f64>>, String> {
+    let mut rows = Vec::new();
+    for (i, line) in text.lines().enumerate() {
+        let line = line.trim();
+        if line.is_empty() || line.starts_with('#') {
+            continue;
+        }
+        let fields: Vec<&str> = line.split(',').map(str::trim).collect();
+        let parsed: Result<Vec<f64>, _> = fields.iter().map(|f| f.parse::<f64>()).collect();
+        match parsed {
+            Ok(v) if v.len() == columns && v.iter().all(|x| x.is_finite()) => rows.push(v),
+            Ok(v) => {
+                return Err(format!(
+                    "line {}: expected {columns} finite numbers, found {} field(s)",
+                    i + 1,
+                    v.len()
+                ));
+            }
+            Err(_) if rows.is_empty() => continue, // header
+            Err(_) => return Err(format!("line {}: `{line}` is not {columns} numbers", i + 1)),
+        }
+    }
+    if rows.len() < 2 {
+        return Err(format!("needs at least two data rows of {columns} numbers"));
+    }
+    if rows.windows(2).any(|w| w[1][0] <= w[0][0]) {
+        return Err("the wavelength column (first) must be strictly increasing".into());
+    }
+    Ok(rows)
+}
+
+/// Reads a two-column `wavelength_nm,value` CSV file as a spectrum table.
+pub fn read_spectrum_csv(path: &Path) -> Result<Spectrum, String> {
+    let text = std::fs::read_to_string(path)
+        .map_err(|e| format!("cannot read {}: {e}", path.display()))?;
+    let rows = parse_csv_rows(&text, 2).map_err(|e| format!("{}: {e}", path.display()))?;
+    if rows.iter().any(|r| r[1] < 0.0) {
+        return Err(format!("{}: spectral values must be ≥ 0", path.display()));
+    }
+    Ok(Spectrum::Table(
+        rows.into_iter().map(|r| [r[0], r[1]]).collect(),
+    ))
+}
+
+/// The CIE standard illuminant D65 (relative SPD, not yet normalised).
+pub fn d65() -> Spectrum {
+    bundled(D65_CSV)
+}
+
+/// The CIE standard illuminant A (relative SPD, not yet normalised).
+pub fn illuminant_a() -> Spectrum {
+    bundled(A_CSV)
+}
+
+fn bundled(csv: &str) -> Spectrum {
+    let rows = parse_csv_rows(csv, 2).expect("bundled illuminant table is valid");
+    Spectrum::Table(rows.into_iter().map(|r| [r[0], r[1]]).collect())
+}
+
+/// Parses a spectrum description: `d65`, `a`, `constant`, `blackbody(T)` (T in K)
+/// or `csv(path)` (path relative to `base_dir`). The result is normalised to
+/// unit luminance.
+pub fn parse_spectrum(desc: &str, base_dir: &Path) -> Result<Spectrum, String> {
+    const CHOICES: &str =
+        "valid: \"d65\", \"a\", \"constant\", \"blackbody(T)\" with T in kelvin, \"csv(path.csv)\"";
+    let d = desc.trim();
+    let lower = d.to_ascii_lowercase();
+    let raw = if lower == "d65" {
+        d65()
+    } else if lower == "a" {
+        illuminant_a()
+    } else if lower == "constant" {
+        Spectrum::Constant(1.0)
+    } else if let Some(arg) = lower
+        .strip_prefix("blackbody(")
+        .and_then(|s| s.strip_suffix(')'))
+    {
+        let t: f64 = arg
+            .trim()
+            .trim_end_matches('k')
+            .trim()
+            .parse()
+            .map_err(|_| {
+                format!("spectrum `{d}`: temperature `{arg}` is not a number; {CHOICES}")
+            })?;
+        if !(t.is_finite() && (100.0..=1e6).contains(&t)) {
+            return Err(format!(
+                "spectrum `{d}`: temperature must be within 100–1e6 K"
+            ));
+        }
+        Spectrum::Blackbody {
+            kelvin: t,
+            scale: 1.0,
+        }
+    } else if lower.starts_with("csv(") && d.ends_with(')') {
+        let file = d[4..d.len() - 1].trim().trim_matches('"');
+        read_spectrum_csv(&base_dir.join(file))?
+    } else {
+        return Err(format!("unknown spectrum `{d}`; {CHOICES}"));
+    };
+    raw.with_luminance(1.0)
+        .map_err(|e| format!("spectrum `{d}`: {e}"))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn cie_y_integral_matches_published_value() {
+        // CIE 1931 ∫ȳ over 360–830 nm at 1 nm is 106.857 (sum of the table).
+        let y = Cie::get().y_integral();
+        assert!((y - 106.857).abs() < 0.01, "{y}");
+        assert_eq!(Cie::get().xyz(555.0)[1], 1.0);
+    }
+
+    #[test]
+    fn normalised_spectra_have_unit_luminance() {
+        for s in [
+            "d65",
+            "a",
+            "constant",
+            "blackbody(3000)",
+            "BlackBody(6500 K)",
+        ] {
+            let sp = parse_spectrum(s, Path::new(".")).unwrap();
+            assert!((sp.luminance() - 1.0).abs() < 1e-12, "{s}");
+        }
+        assert!(
+            parse_spectrum("blackbody(x)", Path::new("."))
+                .unwrap_err()
+                .contains("not a number")
+        );
+        assert!(
+            parse_spectrum("sun", Path::new("."))
+                .unwrap_err()
+                .contains("valid:")
+        );
+    }
+
+    #[test]
+    fn planck_peak_follows_wien() {
+        // Wien: λ_max = 2.897771955e6 nm·K / T. At 5000 K → 579.6 nm.
+        let s = Spectrum::Blackbody {
+            kelvin: 5000.0,
+            scale: 1.0,
+        };
+        let peak = (4000..7000)
+            .map(|i| i as f64 / 10.0)
+            .max_by(|a, b| s.eval(*a).total_cmp(&s.eval(*b)));
+        assert!((peak.unwrap() - 579.6).abs() < 0.15);
+    }
+
+    #[test]
+    fn table_support_and_interpolation() {
+        let s = Spectrum::Table(vec![
+            [500.0, 0.0],
+            [520.0, 0.0],
+            [530.0, 2.0],
+            [540.0, 0.0],
+            [600.0, 0.0],
+        ]);
+        assert_eq!(s.support(), Some((520.0, 540.0)));
+        assert_eq!(s.eval(525.0), 1.0);
+        assert_eq!(s.eval(700.0), 0.0);
+    }
+}

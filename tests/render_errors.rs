@@ -1,0 +1,161 @@
+//! Bad scene files give the documented errors: file, line, column, and the
+//! valid choices — never a panic.
+
+use std::path::PathBuf;
+
+const GOOD: &str = r#"[camera]
+look_from = [0.0, 1.0, 2.0]
+look_at = [0.0, 0.0, 0.0]
+fov_deg = 40.0
+resolution = [8, 8]
+
+[film]
+spp = 1
+
+[materials.m]
+model = "ggx"
+metal = "brass"
+alpha = 0.2
+
+[[shapes]]
+type = "rectangle"
+size = [1.0, 1.0]
+material = "m"
+
+[[lights]]
+type = "point"
+position = [0.0, 1.0, 0.0]
+intensity = 1.0
+"#;
+
+fn path() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/bad.toml")
+}
+
+/// Loads `GOOD` with `from` replaced by `to`; returns the error text.
+fn error(from: &str, to: &str) -> String {
+    assert!(GOOD.contains(from), "test bug: `{from}` not in the scene");
+    let text = GOOD.replacen(from, to, 1);
+    match render::load_str(&path(), &text) {
+        Ok(_) => panic!("`{to}` was accepted"),
+        Err(e) => e.to_string(),
+    }
+}
+
+#[test]
+fn the_good_scene_loads() {
+    let s = render::load_str(&path(), GOOD).unwrap();
+    assert!(
+        s.prepared.contains("no BVH") && s.prepared.contains("no environment sampling"),
+        "{}",
+        s.prepared
+    );
+}
+
+#[test]
+fn unknown_key_names_position_and_valid_keys() {
+    let e = error("fov_deg = 40.0", "fov = 40.0");
+    assert!(e.contains("bad.toml:4:1"), "{e}");
+    assert!(
+        e.contains("unknown field `fov`") && e.contains("fov_deg"),
+        "{e}"
+    );
+}
+
+#[test]
+fn wrong_type_is_located() {
+    let e = error("spp = 1", "spp = \"many\"");
+    assert!(e.contains("bad.toml:8:7"), "{e}");
+    assert!(e.contains("integer"), "{e}");
+}
+
+#[test]
+fn invalid_values_are_rejected_with_the_range() {
+    let e = error("spp = 1", "spp = 0");
+    assert!(e.contains(":8:7") && e.contains("expected ≥ 1"), "{e}");
+    let e = error("fov_deg = 40.0", "fov_deg = 190.0");
+    assert!(e.contains(":4:") && e.contains("0 < fov_deg < 179"), "{e}");
+    let e = error("alpha = 0.2", "alpha = 3.0");
+    assert!(
+        e.contains("[materials.m]") && e.contains("alpha") && e.contains("≤ 1"),
+        "{e}"
+    );
+    let e = error("intensity = 1.0", "intensity = -1.0");
+    assert!(e.contains("lights[0]") && e.contains("> 0"), "{e}");
+    let e = error("size = [1.0, 1.0]", "size = [1.0, 0.0]");
+    assert!(e.contains("shapes[0]") && e.contains(":15:1"), "{e}");
+}
+
+#[test]
+fn unknown_choices_list_the_valid_ones() {
+    let e = error("model = \"ggx\"", "model = \"phong\"");
+    assert!(
+        e.contains("phong") && e.contains("ggx") && e.contains("measured_psd"),
+        "{e}"
+    );
+    let e = error("metal = \"brass\"", "metal = \"unobtanium\"");
+    assert!(
+        e.contains("unknown metal `unobtanium`") && e.contains("stainless_steel"),
+        "{e}"
+    );
+    let e = error("type = \"rectangle\"", "type = \"torus\"");
+    assert!(e.contains("torus") && e.contains("sphere"), "{e}");
+    let e = error("material = \"m\"", "material = \"gold\"");
+    assert!(
+        e.contains("unknown material `gold`") && e.contains("defined: m"),
+        "{e}"
+    );
+    let e = error(
+        "intensity = 1.0",
+        "intensity = 1.0\nspectrum = \"sunlight\"",
+    );
+    assert!(e.contains("valid:") && e.contains("blackbody(T)"), "{e}");
+}
+
+#[test]
+fn missing_files_are_named() {
+    let e = error(
+        "material = \"m\"\n",
+        "material = \"m\"\n\n[[shapes]]\ntype = \"mesh\"\nfile = \"nope.obj\"\nmaterial = \"m\"\n",
+    );
+    assert!(e.contains("nope.obj") && e.contains("shapes[1]"), "{e}");
+    let e = error("metal = \"brass\"", "nk_csv = \"missing_nk.csv\"");
+    assert!(
+        e.contains("missing_nk.csv") && e.contains("cannot read"),
+        "{e}"
+    );
+    let e = error("alpha = 0.2", "alpha = 0.2\ninclude = \"no_such_fit.toml\"");
+    assert!(e.contains("no_such_fit.toml"), "{e}");
+    let e = render::load_scene(&PathBuf::from("/nonexistent/scene.toml"))
+        .err()
+        .unwrap()
+        .to_string();
+    assert!(
+        e.contains("/nonexistent/scene.toml") && e.contains("cannot read"),
+        "{e}"
+    );
+}
+
+#[test]
+fn missing_sections_and_lights() {
+    let e = error("[film]\nspp = 1\n", "");
+    assert!(e.contains("missing field `film`"), "{e}");
+    let e = error(
+        "[[lights]]\ntype = \"point\"\nposition = [0.0, 1.0, 0.0]\nintensity = 1.0\n",
+        "",
+    );
+    assert!(e.contains("no lights"), "{e}");
+}
+
+#[test]
+fn garbage_never_panics() {
+    for text in [
+        "",
+        "[[[",
+        "camera = 3",
+        "\u{0}\u{1}",
+        "[camera]\nlook_from = [1e400, 0, 0]",
+    ] {
+        assert!(render::load_str(&path(), text).is_err(), "{text:?}");
+    }
+}
