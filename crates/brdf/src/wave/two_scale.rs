@@ -1,0 +1,1 @@
+//! Holzschuch–Pacanowski two-scale BRDF (work in progress, not yet exported).
