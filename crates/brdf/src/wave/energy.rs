@@ -25,6 +25,9 @@ pub enum Energy {
     /// Band-limited roughness: σ is replaced by σ_rel(θi, λ) with
     /// σ_rel² = σ² × (in-disk fraction of the unit PSD about the mirror
     /// direction), in A_s and in g. Tabulated over (θi, λ). Not reciprocal.
+    /// σ_rel alone can still leave A_s + scattered > 1 at grazing incidence
+    /// (g gains where cosθo > cosθi); there the scattered part is scaled
+    /// down to 1 − A_s by a second (θi, λ) table (a cap that only reduces).
     SigmaRel,
 }
 

@@ -91,22 +91,18 @@ impl<P: RadialPsd> GhsFull<P> {
             fresnel,
             opts,
             energy_table: None,
+            cap_table: None,
             sigma: psd.sigma_um(),
             length: psd.length_um(),
-        };
-        let raw = GhsCommon {
-            fresnel: Fresnel::One,
-            opts: GhsOptions::default(),
-            ..common.clone()
         };
         let mut model = GhsFull { psd, common, table };
         let mut common = model.common.clone();
         common.build_table(
             |u| model.psd.cdf_u(u),
-            |th, lam| {
+            |c, th, lam| {
                 let wi = frame::spherical(th, 0.0);
-                let kl = wavenumber(lam) * raw.length;
-                hemispherical_integral(wi, 1.0 / kl, |o| model.raw_lobe(&raw, wi, o, lam))
+                let kl = wavenumber(lam) * c.length;
+                hemispherical_integral(wi, 1.0 / kl, |o| model.raw_lobe(c, wi, o, lam))
             },
         );
         model.common = common;
@@ -152,9 +148,10 @@ impl<P: RadialPsd> GhsFull<P> {
         kl * kl * self.s_tilde(libm::sqrt(geo.u2), t * t)
     }
 
-    /// Density in the u-plane of the glossy proposal for specular g_s.
+    /// Density in the u-plane (∫ d²u = 1) with which the glossy sampler
+    /// draws u = L|ζ| for specular exponent `gs` (before the evanescent cut).
     #[inline]
-    fn proposal_density(&self, gs: f64, u: f64) -> f64 {
+    pub fn proposal_density(&self, gs: f64, u: f64) -> f64 {
         let p = self.psd.unit_psd_u(u);
         if gs < G_MIN {
             return p;

@@ -24,6 +24,8 @@ pub(crate) struct GhsCommon {
     pub opts: GhsOptions,
     /// Krywonos K(θi, λ) or the in-disk fraction σ_rel²/σ² (SigmaRel).
     pub energy_table: Option<EnergyTable>,
+    /// SigmaRel only: factor ≤ 1 that keeps A_s + scattered ≤ 1.
+    pub cap_table: Option<EnergyTable>,
     pub sigma: f64,
     pub length: f64,
 }
@@ -43,8 +45,9 @@ impl GhsCommon {
     /// Multiplier of the scattered part (Krywonos K; 1 otherwise).
     #[inline]
     pub fn scatter_factor(&self, ci: f64, lambda_nm: f64) -> f64 {
-        match (self.opts.energy, &self.energy_table) {
-            (Energy::Krywonos, Some(t)) => t.at(ci, lambda_nm).max(0.0),
+        match (self.opts.energy, &self.energy_table, &self.cap_table) {
+            (Energy::Krywonos, Some(t), _) => t.at(ci, lambda_nm).max(0.0),
+            (Energy::SigmaRel, _, Some(c)) => c.at(ci, lambda_nm).clamp(0.0, 1.0),
             _ => 1.0,
         }
     }
@@ -79,33 +82,62 @@ impl GhsCommon {
         (spec, p, gs)
     }
 
-    /// Builds the energy table for `opts.energy` from the model's raw
-    /// scattered albedo with R = 1 (`raw_albedo(θi, λ)`) or from the unit
-    /// PSD's CDF.
+    /// Builds the energy tables for `opts.energy`. `raw_albedo(c, θi, λ)`
+    /// must return the scattered albedo of the model's raw lobe (R = 1, no
+    /// scatter factor) evaluated with the settings `c`.
     pub fn build_table(
         &mut self,
         cdf_u: impl Fn(f64) -> f64,
-        mut raw_albedo: impl FnMut(f64, f64) -> f64,
+        mut raw_albedo: impl FnMut(&GhsCommon, f64, f64) -> f64,
     ) {
-        self.energy_table = match self.opts.energy {
-            Energy::Raw => None,
+        let probe = GhsCommon {
+            fresnel: Fresnel::One,
+            opts: GhsOptions {
+                energy: self.opts.energy,
+                ..GhsOptions::default()
+            },
+            energy_table: None,
+            cap_table: None,
+            ..self.clone()
+        };
+        match self.opts.energy {
+            Energy::Raw => {}
             Energy::SigmaRel => {
                 let l = self.length;
-                Some(EnergyTable::build(|th, lam| {
+                let frac = EnergyTable::build(|th, lam| {
                     in_disk_fraction(libm::sin(th), wavenumber(lam) * l, &cdf_u)
-                }))
+                });
+                let probe = GhsCommon {
+                    energy_table: Some(frac.clone()),
+                    ..probe
+                };
+                // Cap: where σ_rel still leaves a total above 1 (the grazing
+                // gain of physics.md §5), scale the scattered part down to
+                // 1 − A_s; elsewhere leave it untouched.
+                let cap = EnergyTable::build(|th, lam| {
+                    let ci = libm::cos(th);
+                    let t = 2.0 * wavenumber(lam) * probe.sigma_eff(ci, lam) * ci;
+                    let b = -libm::expm1(-t * t);
+                    let a = raw_albedo(&probe, th, lam);
+                    if a > b { b / a } else { 1.0 }
+                });
+                self.energy_table = Some(frac);
+                self.cap_table = Some(cap);
             }
             Energy::Krywonos => {
                 let sigma = self.sigma;
-                Some(EnergyTable::build(|th, lam| {
-                    let k = wavenumber(lam);
-                    let t = 2.0 * k * sigma * libm::cos(th);
+                let probe = GhsCommon {
+                    opts: GhsOptions::default(),
+                    ..probe
+                };
+                self.energy_table = Some(EnergyTable::build(|th, lam| {
+                    let t = 2.0 * wavenumber(lam) * sigma * libm::cos(th);
                     let b = -libm::expm1(-t * t);
-                    let a = raw_albedo(th, lam);
+                    let a = raw_albedo(&probe, th, lam);
                     if a > 1e-6 * b { b / a } else { 0.0 }
-                }))
+                }));
             }
-        };
+        }
     }
 }
 
@@ -131,22 +163,18 @@ impl<P: RadialPsd> GhsSsa<P> {
             fresnel,
             opts,
             energy_table: None,
+            cap_table: None,
             sigma: psd.sigma_um(),
             length: psd.length_um(),
-        };
-        let raw = GhsCommon {
-            fresnel: Fresnel::One,
-            opts: GhsOptions::default(),
-            ..common.clone()
         };
         let mut model = GhsSsa { psd, common };
         let mut common = model.common.clone();
         common.build_table(
             |u| model.psd.cdf_u(u),
-            |th, lam| {
+            |c, th, lam| {
                 let wi = frame::spherical(th, 0.0);
-                let kl = wavenumber(lam) * raw.length;
-                hemispherical_integral(wi, 1.0 / kl, |o| raw_lobe(&model.psd, &raw, wi, o, lam))
+                let kl = wavenumber(lam) * c.length;
+                hemispherical_integral(wi, 1.0 / kl, |o| raw_lobe(&model.psd, c, wi, o, lam))
             },
         );
         model.common = common;

@@ -26,6 +26,8 @@ pub const G_MIN: f64 = 1e-4;
 /// Largest g held by the table; above it the g = 1e4 shape is stretched by
 /// the extrapolated width W(g).
 pub const G_MAX: f64 = 1e4;
+/// Smallest tail exponent ν = (γ − 1)/2 a table accepts (γ ≥ 1.05).
+pub const NU_MIN: f64 = 0.025;
 /// Largest first column in w; lowered for surfaces whose core is narrower
 /// than W (see [`GhsTable::build`]). Below the first column S̃ is held flat.
 pub const W_MIN: f64 = 1e-3;
@@ -226,9 +228,20 @@ impl GhsTable {
             });
         }
         let ln10 = core::f64::consts::LN_10;
+        let nu = c.cusp_nu();
+        if !(nu >= NU_MIN) {
+            return Err(BrdfError::OutOfRange {
+                name: "gamma",
+                value: 2.0 * nu + 1.0,
+                valid: "gamma ≥ 1.05 (tail exponent ν ≥ 0.025) for the full-GHS table: nearer \
+                        γ = 1 the lobe is a stable law of index 2ν spanning more decades than \
+                        f64 holds and nearly all scattered light is evanescent (physics.md §11); \
+                        use GhsSsa there",
+            });
+        }
         // Heavy tails (ν < ¼) change shape quickly with g on the way to their
-        // stable law: rows are densified by 0.25/ν there.
-        let d_g = ln10 / (res.rows_per_decade * (0.25 / c.cusp_nu()).max(1.0));
+        // stable law: rows are densified by 0.25/ν there (at most 4×).
+        let d_g = ln10 / (res.rows_per_decade * (0.25 / nu).clamp(1.0, 4.0));
         let ln_g0 = libm::log(G_MIN) - d_g;
         let n_g = libm::ceil((libm::log(G_MAX) - libm::log(G_MIN)) / d_g) as usize + 3;
         let plan = FftLog::new(res.fft_n, res.fft_dt);

@@ -78,7 +78,7 @@ pub fn kernel_width<C: Correlation + ?Sized>(c: &C, g: f64) -> f64 {
     }
     let target = -libm::expm1(-g) / g;
     // 1 − M increases from 0 to 1; bracket in ln x.
-    let (mut lo, mut hi) = (-80.0f64, 8.0f64);
+    let (mut lo, mut hi) = (-700.0f64, 8.0f64);
     if c.one_minus_m(libm::exp(hi)) < target {
         return libm::exp(hi);
     }

@@ -281,7 +281,8 @@ impl RadialPsd for TabulatedPsd {
 /// falls two powers faster, is transformed by FFTLog (bias ½, 8192 points
 /// over 44 decades) and interpolated (cubic in ln x); where the remainder
 /// is below 1e−6 its quadratic small-x form x²m₂/4 is used instead:
-/// 1 − M = c(1 − M_ν(x)) + [(1 − c) − M_r(x)].
+/// 1 − M = c(1 − M_ν(x)) + [(1 − c) − M_r(x)]. Beyond the last separation
+/// where |M| > 1e−6 (×2) M is set to 0, removing the transform's noise floor.
 #[derive(Clone, Debug)]
 pub struct TabulatedCorrelation {
     p: TabulatedPsd,
@@ -292,6 +293,8 @@ pub struct TabulatedCorrelation {
     m_r: Vec<f64>,
     m2: f64,
     x_switch: f64,
+    /// M ≡ 0 beyond this separation.
+    x_cut: f64,
 }
 
 impl TabulatedCorrelation {
@@ -332,7 +335,7 @@ impl TabulatedCorrelation {
             / (-(p.slope_hi + 2.0));
         // switch where the quadratic form reaches 1e−6
         let x_switch = libm::sqrt(4e-6 / m2.abs().max(1e-300));
-        TabulatedCorrelation {
+        let mut t = TabulatedCorrelation {
             p: p.clone(),
             matern: Matern::new(nu),
             c,
@@ -341,7 +344,25 @@ impl TabulatedCorrelation {
             m_r: re,
             m2,
             x_switch,
+            x_cut: f64::INFINITY,
+        };
+        // The transform leaves ~1e−9 of noise where M has decayed; cut M to
+        // zero beyond the last point where |M| > 1e−6 (×2 margin) so the
+        // kernel e^{−g}(e^{gM} − 1) really vanishes at large separations.
+        let mut x_cut = libm::exp(t0);
+        for i in (0..n).rev() {
+            let x = libm::exp(t0 + i as f64 * dt);
+            if libm::fabs(t.m_full(x)) > 1e-6 {
+                x_cut = 2.0 * x;
+                break;
+            }
         }
+        t.x_cut = x_cut;
+        t
+    }
+
+    fn m_full(&self, x: f64) -> f64 {
+        self.c * self.matern.value(x) + self.m_r(x)
     }
 
     fn m_r(&self, x: f64) -> f64 {
@@ -372,11 +393,17 @@ impl Correlation for TabulatedCorrelation {
         if x < self.x_switch {
             return 1.0 - self.one_minus_m(x);
         }
-        (self.c * self.matern.value(x) + self.m_r(x)).clamp(-1.0, 1.0)
+        if x > self.x_cut {
+            return 0.0;
+        }
+        self.m_full(x).clamp(-1.0, 1.0)
     }
     fn one_minus_m(&self, x: f64) -> f64 {
         if !(x > 0.0) {
             return 0.0;
+        }
+        if x > self.x_cut {
+            return 1.0;
         }
         let rem = if x < self.x_switch {
             0.25 * x * x * self.m2
