@@ -98,10 +98,9 @@ impl EnergyTable {
         let (j, wt) = weights(ft, TABLE_THETA_NODES);
         let (l, wl) = weights(fl, TABLE_LAMBDA_NODES);
         let mut acc = 0.0;
-        for a in 0..4 {
-            for b in 0..4 {
-                acc += wt[a] * wl[b] * self.data[(j - 1 + a) * TABLE_LAMBDA_NODES + (l - 1 + b)];
-            }
+        for (a, wa) in wt.iter().enumerate() {
+            let row = &self.data[(j - 1 + a) * TABLE_LAMBDA_NODES + l - 1..][..4];
+            acc += wa * (wl[0] * row[0] + wl[1] * row[1] + wl[2] * row[2] + wl[3] * row[3]);
         }
         acc
     }
