@@ -9,6 +9,10 @@
 //!   Hankel transform ([`ghs_table`]), needs the `alloc` feature;
 //! * [`Energy`] and [`FresnelAngle`]: the switches of physics.md §5 and §3.2.
 
+// `!(x > 0.0)` is used on purpose throughout: it rejects NaN together with
+// the out-of-range values, which `x <= 0.0` would let through.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
 pub mod bessel01;
 pub mod energy;
 pub mod epd;
