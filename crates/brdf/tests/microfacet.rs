@@ -285,7 +285,7 @@ fn ndf_and_smith_lambda_match_closed_forms() {
             let dist = Distribution::new(kind, a.0, a.1).unwrap();
             for _ in 0..2000 {
                 let w = spherical(
-                    (0.5 * PI * rng.next_f64()).min(1.5707),
+                    (0.5 * PI * rng.next_f64()).min(89.99f64.to_radians()),
                     2.0 * PI * rng.next_f64(),
                 );
                 let (d, dr) = (dist.d(w), d_ref(kind, a, w));
@@ -467,7 +467,7 @@ fn hazard_directions() -> Vec<DVec3> {
         0.3,
         1.0,
         1.4,
-        1.5707,
+        PI / 2.0 - 1e-4,
         PI / 2.0 - 1e-9,
         PI / 2.0,
         PI / 2.0 + 1e-9,

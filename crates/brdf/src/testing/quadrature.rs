@@ -470,7 +470,7 @@ mod tests {
         assert_eq!(e[0], 0.0);
         assert_eq!(*e.last().unwrap(), 1.0);
         assert!(e.windows(2).all(|w| w[1] > w[0]));
-        assert!(e.iter().any(|&x| x == 0.37));
+        assert!(e.contains(&0.37));
         assert!(e[1] < 2e-6 && 1.0 - e[e.len() - 2] < 2e-6);
     }
 }
