@@ -12,7 +12,7 @@ use brdf::frame::spherical;
 use brdf::microfacet::{Distribution, MicrofacetConductor, NdfKind};
 use brdf::testing::quadrature::{Cubature, Tolerance, graded_edges, grid};
 use brdf::testing::{Chi2Config, Pcg32, albedo_quadrature, albedo_sampled, chi2_test, sidak};
-use brdf::{BrdfError, Bxdf, BxdfSample, DVec3, Fresnel, Ior, Metal};
+use brdf::{BrdfError, Bxdf, BxdfSample, DVec3, Fresnel, Ior, Metal, SmoothConductor};
 
 const ALPHAS: [(f64, f64); 8] = [
     (0.01, 0.01),
@@ -572,6 +572,33 @@ fn sampled_pdf_positive_within_1e9_rad_of_grazing() {
                 }
             }
         }
+    }
+}
+
+#[test]
+fn smooth_conductor_is_a_pure_delta_lobe() {
+    // The harnesses' delta accounting on a real model: every sample is a
+    // delta sample, the glossy pdf integrates to 0, and both albedos equal
+    // the Fresnel reflectance at θi.
+    let m = SmoothConductor::new(copper()).unwrap();
+    let cfg = Chi2Config {
+        samples: 20_000,
+        pilot_samples: 5_000,
+        ..Chi2Config::default()
+    };
+    for th in [0.0, 60.0, 89.0] {
+        let wi = wi_at(th);
+        let r = chi2_test(&m, wi, LAMBDA, &cfg);
+        r.check(0.01).unwrap();
+        assert_eq!(r.delta.0, cfg.samples, "{r}");
+        assert!(r.pdf_integral == 0.0, "{r}");
+        let want = copper().reflectance(wi.z, LAMBDA);
+        let q = albedo_quadrature(&m, wi, LAMBDA, 1e-9);
+        let s = albedo_sampled(&m, wi, LAMBDA, 1000, 1);
+        assert!(
+            (q.value - want).abs() < 1e-15 && (s.mean - want).abs() < 1e-12,
+            "{q:?} {s:?} vs {want}"
+        );
     }
 }
 
