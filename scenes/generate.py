@@ -30,7 +30,7 @@ SAMPLES = [
     ("s027", 0.027, 1.0, 4.0, "stainless_steel", 5),
 ]
 VIEWS = [("normal", 0.0), ("45deg", 45.0), ("grazing", 80.0)]
-MODELS = ["ggx", "beckmann", "ghs_ssa", "ghs"]
+MODELS = ["ggx", "beckmann", "ghs_ssa", "ghs", "measured_psd"]
 
 
 def alpha_for(sigma, lc, gamma):
@@ -60,6 +60,13 @@ def material(model, s):
         lines.append(f"gamma = {gamma}")
         if model == "ghs":
             lines.append('energy = "raw"')
+    if model == "measured_psd":
+        lines = lines[:4] + [
+            f"# No measured PSD of the paper's samples is in the repository: this is the KC PSD of",
+            f"# {name.upper()} sampled as a table (psd/{name}_kc.csv, written by scenes/generate.py), which",
+            "# exercises the tabulated-PSD path. For a real sample use `include = \"fit.toml\"` from `lustre fit`.",
+            f'psd_csv = "../psd/{name}_kc.csv"',
+        ]
     return "\n".join(lines)
 
 
@@ -91,6 +98,7 @@ png = "{s[0]}_{model}_{view}.png"
 
 [integrator]
 max_depth = 3
+wavelengths = "hero"
 
 {material(model, s)}
 
@@ -116,9 +124,27 @@ spectrum = "d65"
 """
 
 
+def kc_psd_csv(sigma, lc, gamma):
+    """P(zeta) = sigma^2 Lc^2 (gamma-1)/(2 pi) (1 + Lc^2 zeta^2)^(-(gamma+1)/2), rad/um, um^4
+    (docs/physics.md section 2; integral over the plane = sigma^2)."""
+    rows = ["zeta_rad_per_um,p_um4"]
+    lo, hi = 1e-3 / lc, max(300.0 / lc, 200.0)
+    n = 240
+    for i in range(n):
+        z = lo * (hi / lo) ** (i / (n - 1))
+        p = sigma**2 * lc**2 * (gamma - 1) / (2 * math.pi) * (1 + (lc * z) ** 2) ** (-(gamma + 1) / 2)
+        rows.append(f"{z:.9e},{p:.9e}")
+    return "\n".join(rows) + "\n"
+
+
 def main():
-    out = os.path.join(os.path.dirname(os.path.abspath(__file__)), "samples")
+    here = os.path.dirname(os.path.abspath(__file__))
+    out = os.path.join(here, "samples")
     os.makedirs(out, exist_ok=True)
+    os.makedirs(os.path.join(here, "psd"), exist_ok=True)
+    for s in SAMPLES:
+        with open(os.path.join(here, "psd", f"{s[0]}_kc.csv"), "w") as f:
+            f.write(kc_psd_csv(s[1], s[2], s[3]))
     for s in SAMPLES:
         for model in MODELS:
             for view, theta in VIEWS:

@@ -54,7 +54,7 @@ spectrum = "constant"
     )
 }
 
-fn check_furnace(mode: &str, tol: f64) {
+fn check_furnace(mode: &str, tol: f64, pixel_tol: f64) {
     let scene = render::load_str(&scene_path("furnace.toml"), &furnace_scene(mode)).unwrap();
     let mut film = Film::new(24, 16, scene.fingerprint, 3, 0.0);
     render::render_range(
@@ -74,7 +74,8 @@ fn check_furnace(mode: &str, tol: f64) {
     eprintln!("{mode}: mean Y = {mean:.5}, worst pixel |Y − 1| = {worst:.4}");
     // 24·16·64 = 24 576 samples: the mean is within ~0.3 % of 1 at 3σ.
     assert!((mean - 1.0).abs() < tol, "{mode}: mean Y = {mean}");
-    assert!(worst < 0.15, "{mode}: worst pixel {worst}");
+    // Per pixel (64 samples) the wavelength noise allows ~4σ ≈ 0.4 (single), 0.15 (hero).
+    assert!(worst < pixel_tol, "{mode}: worst pixel {worst}");
     // XYZ of an equal-energy spectrum is (1, 1, 1) with this normalisation.
     let x_mean = (0..n).map(|i| film.xyz(i)[0]).sum::<f64>() / n as f64;
     let z_mean = (0..n).map(|i| film.xyz(i)[2]).sum::<f64>() / n as f64;
@@ -86,12 +87,12 @@ fn check_furnace(mode: &str, tol: f64) {
 
 #[test]
 fn furnace_single_wavelength() {
-    check_furnace("single", 0.006);
+    check_furnace("single", 0.006, 0.45);
 }
 
 #[test]
 fn furnace_hero_wavelengths() {
-    check_furnace("hero", 0.004);
+    check_furnace("hero", 0.004, 0.15);
 }
 
 /// Directional albedo of GGX (α = 0.3, F = 1) by brute-force quadrature

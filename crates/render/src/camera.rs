@@ -34,7 +34,7 @@ impl Camera {
         let right = forward
             .cross(up)
             .try_normalize()
-            .ok_or("`up` must not be parallel to the viewing direction")?;
+            .ok_or("`up` must not be parallel to the viewing direction (`up` defaults to +y)")?;
         let up = right.cross(forward);
         if !(fov_deg.is_finite() && fov_deg > 0.0 && fov_deg < 179.0) {
             return Err(format!(

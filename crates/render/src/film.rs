@@ -261,7 +261,8 @@ mod tests {
         let mut a = Film::new(2, 2, 1, 0, 0.0);
         a.add_range(0..5).unwrap();
         let mut b = a.clone();
-        b.ranges = vec![5..9];
+        b.ranges.clear();
+        b.add_range(5..9).unwrap();
         b.sums[0] = [3, 3, 3];
         a.merge(&b).unwrap();
         assert_eq!(a.spp(), 9);

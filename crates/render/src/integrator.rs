@@ -196,7 +196,7 @@ pub fn trace(scene: &Scene, mut ray: Ray, lambdas: &[f64; N], n: usize, rng: &mu
         ) else {
             break;
         };
-        if !(s.pdf > 0.0) || s.wo.z <= 0.0 {
+        if s.pdf.is_nan() || s.pdf <= 0.0 || s.wo.z <= 0.0 {
             break;
         }
         if s.is_delta {
@@ -223,7 +223,7 @@ pub fn trace(scene: &Scene, mut ray: Ray, lambdas: &[f64; N], n: usize, rng: &mu
             let sum_q: f64 = q[..n].iter().sum();
             let m = t[..n].iter().fold(0.0f64, |a, v| a.max(v.abs())) / (sum_q * m0);
             let survive = m.min(1.0);
-            if !(survive > 0.0) || rng.uniform() >= survive {
+            if survive.is_nan() || survive <= 0.0 || rng.uniform() >= survive {
                 break;
             }
             for tj in t.iter_mut().take(n) {

@@ -3,8 +3,9 @@
 //! Each model is one match arm producing a `Box<dyn Bxdf + Send + Sync>`, so
 //! adding a model is adding an arm.
 
-use crate::scene::desc::{FresnelKind, MaterialDesc, ModelKind};
+use crate::scene::desc::{EnergyDesc, FresnelAngleDesc, FresnelKind, MaterialDesc, ModelKind};
 use crate::spectrum::parse_csv_rows;
+use brdf::wave::{Energy, FresnelAngle, GhsFull, GhsOptions, GhsSsa, KcPsd, TabulatedPsd};
 use brdf::{Bxdf, Distribution, Fresnel, Ior, Metal, MicrofacetConductor, SmoothConductor};
 use std::path::Path;
 
@@ -21,11 +22,23 @@ pub struct Material {
     pub bxdf: DynBxdf,
 }
 
+/// A material description with its include file folded in.
+pub struct Resolved {
+    /// Scalar keys (scene keys win over the include's).
+    pub desc: MaterialDesc,
+    /// Measured PSD samples (ζ rad/µm, P µm⁴) from the include's `[psd]` table.
+    pub psd: Option<(Vec<f64>, Vec<f64>)>,
+}
+
 /// Resolves `include` (a `lustre fit` material file) under the scene's own
-/// keys: keys set in the scene win. Returns the merged description.
-pub fn resolve_include(desc: &MaterialDesc, base_dir: &Path) -> Result<MaterialDesc, String> {
+/// keys: keys set in the scene win. For `two_scale`, the parameters come from
+/// the include's `[two_scale.NAME]` table chosen by `cutoff = "NAME"`.
+pub fn resolve_include(desc: &MaterialDesc, base_dir: &Path) -> Result<Resolved, String> {
     let Some(inc) = &desc.include else {
-        return Ok(desc.clone());
+        return Ok(Resolved {
+            desc: desc.clone(),
+            psd: None,
+        });
     };
     let path = base_dir.join(inc);
     let text = std::fs::read_to_string(&path).map_err(|e| {
@@ -35,38 +48,71 @@ pub fn resolve_include(desc: &MaterialDesc, base_dir: &Path) -> Result<MaterialD
             path.display()
         )
     })?;
-    let table: toml::Table = toml::from_str(&text).map_err(|e| {
+    let located = |e: toml::de::Error, what: &str| {
         let pos = e.span().map(|s| crate::error::line_column(&text, s.start));
         match pos {
-            Some((l, c)) => format!("{}:{l}:{c}: {}", path.display(), e.message()),
-            None => format!("{}: {}", path.display(), e.message()),
+            Some((l, c)) => format!("{}:{l}:{c}: {what}{}", path.display(), e.message().trim()),
+            None => format!("{}: {what}{}", path.display(), e.message().trim()),
         }
-    })?;
-    let Some(mat) = table.get("material") else {
+    };
+    let file: FitFile = toml::from_str(&text).map_err(|e| located(e, ""))?;
+    let Some(fit) = file.material else {
         return Err(format!(
             "{}: a material file needs a [material] table (as written by `lustre fit`)",
             path.display()
         ));
     };
-    let fit: FitMaterial = mat
-        .clone()
-        .try_into()
-        .map_err(|e: toml::de::Error| format!("{}: [material]: {}", path.display(), e.message()))?;
     let mut out = desc.clone();
     out.include = None;
-    let base_dir = path.parent().unwrap_or(Path::new("."));
+    let inc_dir = path.parent().unwrap_or(Path::new("."));
     macro_rules! inherit {
-        ($($f:ident),*) => { $( if out.$f.is_none() { out.$f = fit.$f; } )* };
+        ($src:expr; $($f:ident),*) => { $( if out.$f.is_none() { out.$f = $src.$f; } )* };
     }
-    inherit!(model, metal, alpha, alpha_beckmann, sigma_um, lc_um, gamma);
+    inherit!(fit; model, metal, alpha, alpha_beckmann);
     if out.nk_csv.is_none() {
-        out.nk_csv = fit.nk_csv.map(|p| base_dir.join(p));
+        out.nk_csv = fit.nk_csv.map(|p| inc_dir.join(p));
     }
-    Ok(out)
+    if out.model == Some(ModelKind::TwoScale) {
+        let names: Vec<&str> = file.two_scale.keys().map(String::as_str).collect();
+        let chosen = match (&desc.cutoff, names.as_slice()) {
+            (Some(c), _) => c.as_str(),
+            (None, [only]) => only,
+            (None, _) => {
+                return Err(format!(
+                    "{}: choose a two-scale split with `cutoff = \"NAME\"`; the file has: {}",
+                    path.display(),
+                    if names.is_empty() {
+                        "none".to_string()
+                    } else {
+                        names.join(", ")
+                    }
+                ));
+            }
+        };
+        let t = file.two_scale.get(chosen).ok_or_else(|| {
+            format!(
+                "{}: no [two_scale.{chosen}] table; the file has: {}",
+                path.display(),
+                names.join(", ")
+            )
+        })?;
+        inherit!(t; beta, sigma_um, lc_um, gamma);
+    }
+    inherit!(fit; sigma_um, lc_um, gamma);
+    let psd = file.psd.map(|p| (p.zeta_rad_per_um, p.p_um4));
+    Ok(Resolved { desc: out, psd })
 }
 
-/// The `[material]` table of a fit file. Unlike scene tables it tolerates
-/// extra keys, since `lustre fit` records provenance next to the parameters.
+/// A `lustre fit` material file. Unlike scene tables it tolerates extra keys,
+/// since `fit` records provenance and fit diagnostics next to the parameters.
+#[derive(serde::Deserialize)]
+struct FitFile {
+    material: Option<FitMaterial>,
+    #[serde(default)]
+    two_scale: std::collections::BTreeMap<String, FitTwoScale>,
+    psd: Option<FitPsd>,
+}
+
 #[derive(serde::Deserialize)]
 struct FitMaterial {
     model: Option<ModelKind>,
@@ -77,6 +123,28 @@ struct FitMaterial {
     sigma_um: Option<f64>,
     lc_um: Option<f64>,
     gamma: Option<f64>,
+}
+
+#[derive(serde::Deserialize)]
+struct FitTwoScale {
+    beta: Option<f64>,
+    sigma_um: Option<f64>,
+    lc_um: Option<f64>,
+    gamma: Option<f64>,
+}
+
+#[derive(serde::Deserialize)]
+struct FitPsd {
+    zeta_rad_per_um: Vec<f64>,
+    p_um4: Vec<f64>,
+}
+
+/// Reads a two-column `zeta_rad_per_um,p_um4` CSV.
+fn read_psd_csv(path: &Path) -> Result<(Vec<f64>, Vec<f64>), String> {
+    let text = std::fs::read_to_string(path)
+        .map_err(|e| format!("psd_csv: cannot read {}: {e}", path.display()))?;
+    let rows = parse_csv_rows(&text, 2).map_err(|e| format!("psd_csv {}: {e}", path.display()))?;
+    Ok(rows.into_iter().map(|r| (r[0], r[1])).unzip())
 }
 
 /// Builds the Fresnel factor of a (resolved) material description.
@@ -141,13 +209,37 @@ fn roughness(
     }
 }
 
+/// The KC surface of a GHS-family material.
+fn kc(desc: &MaterialDesc, model: ModelKind) -> Result<KcPsd, String> {
+    KcPsd::new(
+        required(desc.sigma_um, "sigma_um", model)?,
+        required(desc.lc_um, "lc_um", model)?,
+        required(desc.gamma, "gamma", model)?,
+    )
+    .map_err(|e| e.to_string())
+}
+
+fn ghs_options(desc: &MaterialDesc) -> GhsOptions {
+    GhsOptions {
+        energy: match desc.energy.unwrap_or(EnergyDesc::Raw) {
+            EnergyDesc::Raw => Energy::Raw,
+            EnergyDesc::Krywonos => Energy::Krywonos,
+            EnergyDesc::SigmaRel => Energy::SigmaRel,
+        },
+        fresnel_angle: match desc.fresnel_angle.unwrap_or(FresnelAngleDesc::Halfway) {
+            FresnelAngleDesc::Halfway => FresnelAngle::Halfway,
+            FresnelAngleDesc::Incident => FresnelAngle::Incident,
+        },
+    }
+}
+
 /// Builds the named material. `base_dir` resolves relative paths.
 pub fn build_material(
     name: &str,
     desc: &MaterialDesc,
     base_dir: &Path,
 ) -> Result<Material, String> {
-    let desc = resolve_include(desc, base_dir)?;
+    let Resolved { desc, psd } = resolve_include(desc, base_dir)?;
     let Some(model) = desc.model else {
         return Err(
             "needs `model`; valid: ggx, beckmann, smooth, ghs_ssa, ghs, two_scale, measured_psd"
@@ -172,16 +264,28 @@ pub fn build_material(
             )
         }
         ModelKind::Smooth => Box::new(SmoothConductor::new(fresnel).map_err(err)?),
-        ModelKind::GhsSsa | ModelKind::Ghs | ModelKind::TwoScale | ModelKind::MeasuredPsd => {
-            let _ = (
-                required(desc.sigma_um, "sigma_um", model),
-                desc.lc_um,
-                desc.gamma,
-            );
-            return Err(format!(
-                "model `{}` is not available yet: the brdf crate does not provide it in this build",
-                model.name()
-            ));
+        ModelKind::GhsSsa => Box::new(
+            GhsSsa::with_options(kc(&desc, model)?, fresnel, ghs_options(&desc)).map_err(err)?,
+        ),
+        ModelKind::Ghs => Box::new(
+            GhsFull::with_options(kc(&desc, model)?, fresnel, ghs_options(&desc)).map_err(err)?,
+        ),
+        ModelKind::MeasuredPsd => {
+            let (zeta, p) = match (&desc.psd_csv, psd) {
+                (Some(csv), _) => read_psd_csv(&base_dir.join(csv))?,
+                (None, Some(t)) => t,
+                (None, None) => {
+                    return Err("model `measured_psd` needs `psd_csv = \"file.csv\"` (zeta_rad_per_um,p_um4) \
+                                or an `include` file with a [psd] table"
+                        .into());
+                }
+            };
+            let table = TabulatedPsd::new(&zeta, &p).map_err(|e| format!("measured PSD: {e}"))?;
+            Box::new(GhsFull::with_options(table, fresnel, ghs_options(&desc)).map_err(err)?)
+        }
+        ModelKind::TwoScale => {
+            let _ = (desc.beta, required(desc.sigma_um, "sigma_um", model)?);
+            return Err("model `two_scale` is not available yet: the brdf crate does not provide it in this build".into());
         }
     };
     Ok(Material {

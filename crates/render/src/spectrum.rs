@@ -103,15 +103,34 @@ impl Spectrum {
         }
     }
 
-    /// ∫S ȳ dλ / ∫ȳ dλ over 360–830 nm (1 nm trapezoid rule).
+    /// ∫S ȳ dλ / ∫ȳ dλ over 360–830 nm. ȳ is piecewise linear on the 1 nm
+    /// grid (as the renderer evaluates it) and a table spectrum piecewise
+    /// linear between its rows, so on the union of both sets of breakpoints
+    /// the product is quadratic and Simpson's rule is exact; a narrow band
+    /// between grid nodes is integrated correctly. Planck's law is smooth,
+    /// for which Simpson per 1 nm is accurate to ~1e−10.
     pub fn luminance(&self) -> f64 {
         let cie = Cie::get();
-        let mut sum = 0.0;
-        for i in 0..=470 {
-            let l = LAMBDA_MIN + i as f64;
-            let w = if i == 0 || i == 470 { 0.5 } else { 1.0 };
-            sum += w * self.eval(l) * cie.xyz(l)[1];
+        let mut nodes: Vec<f64> = (0..=470).map(|i| LAMBDA_MIN + i as f64).collect();
+        if let Spectrum::Table(rows) = self {
+            nodes.extend(
+                rows.iter()
+                    .map(|r| r[0])
+                    .filter(|l| (LAMBDA_MIN..=LAMBDA_MAX).contains(l)),
+            );
+            nodes.sort_by(f64::total_cmp);
+            nodes.dedup();
         }
+        // A table is discontinuous only at its ends (zero outside); evaluate just inside them.
+        let f = |l: f64| self.eval(l) * cie.xyz(l)[1];
+        let sum: f64 = nodes
+            .windows(2)
+            .map(|w| {
+                let (a, b) = (w[0], w[1]);
+                let e = 1e-9 * (b - a);
+                (b - a) / 6.0 * (f(a + e) + 4.0 * f(0.5 * (a + b)) + f(b - e))
+            })
+            .sum();
         sum / cie.y_integral()
     }
 
@@ -319,6 +338,25 @@ mod tests {
             .map(|i| i as f64 / 10.0)
             .max_by(|a, b| s.eval(*a).total_cmp(&s.eval(*b)));
         assert!((peak.unwrap() - 579.6).abs() < 0.15);
+    }
+
+    #[test]
+    fn narrow_band_luminance_is_exact() {
+        // A 1.25 nm-wide trapezoid around 700 nm, between grid nodes: its
+        // luminance is ȳ(700)·1.25/∫ȳ up to ȳ's curvature across the band.
+        let s = Spectrum::Table(vec![
+            [699.25, 0.0],
+            [699.5, 1.0],
+            [700.5, 1.0],
+            [700.75, 0.0],
+        ]);
+        let cie = Cie::get();
+        let want = cie.xyz(700.0)[1] * 1.25 / cie.y_integral();
+        assert!(
+            (s.luminance() / want - 1.0).abs() < 1e-3,
+            "{} vs {want}",
+            s.luminance()
+        );
     }
 
     #[test]

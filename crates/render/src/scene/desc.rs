@@ -35,20 +35,20 @@ pub struct SceneDesc {
 #[serde(deny_unknown_fields)]
 pub struct CameraDesc {
     /// Eye position.
-    pub look_from: [f64; 3],
+    pub look_from: Spanned<[f64; 3]>,
     /// Point the camera looks at.
-    pub look_at: [f64; 3],
+    pub look_at: Spanned<[f64; 3]>,
     /// Up direction (default +y).
     #[serde(default = "default_up")]
-    pub up: [f64; 3],
+    pub up: Spanned<[f64; 3]>,
     /// Vertical field of view in degrees, in (0, 180).
     pub fov_deg: Spanned<f64>,
     /// Image width and height in pixels.
     pub resolution: Spanned<[u32; 2]>,
 }
 
-fn default_up() -> [f64; 3] {
-    [0.0, 1.0, 0.0]
+fn default_up() -> Spanned<[f64; 3]> {
+    Spanned::new(0..0, [0.0, 1.0, 0.0])
 }
 
 /// `[film]`.
@@ -172,6 +172,16 @@ pub enum EnergyDesc {
     SigmaRel,
 }
 
+/// Which angle the Fresnel factor of the GHS scattered lobe uses (docs/physics.md §3.2).
+#[derive(Deserialize, Debug, Clone, Copy, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum FresnelAngleDesc {
+    /// R(i·h): reciprocal.
+    Halfway,
+    /// R(θi) everywhere.
+    Incident,
+}
+
 /// `[materials.NAME]`: a conductor. Keys given here override those of `include`.
 #[derive(Deserialize, Debug, Default, Clone)]
 #[serde(deny_unknown_fields)]
@@ -204,7 +214,11 @@ pub struct MaterialDesc {
     pub gamma: Option<f64>,
     /// Energy handling of GHS models (default raw).
     pub energy: Option<EnergyDesc>,
-    /// Two-scale split parameter β (HP17).
+    /// Fresnel angle of the GHS scattered part: `halfway` (default) or `incident`.
+    pub fresnel_angle: Option<FresnelAngleDesc>,
+    /// Measured PSD for `measured_psd`: CSV `zeta_rad_per_um,p_um4` (relative to this file).
+    pub psd_csv: Option<PathBuf>,
+    /// Two-scale: width β of the exponential macro-scale NDF (HP17).
     pub beta: Option<f64>,
     /// Which `[two_scale.NAME]` table of the included fit file to use.
     pub cutoff: Option<String>,

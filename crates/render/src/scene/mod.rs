@@ -175,15 +175,32 @@ pub fn load_str(path: &Path, text: &str) -> Result<Scene, SceneError> {
             format!("resolution = [{w}, {h}] is invalid: expected 1..=32768 each"),
         ));
     }
+    for v in [&cam.look_from, &cam.look_at, &cam.up] {
+        if !v.get_ref().iter().all(|x| x.is_finite()) {
+            return Err(at(v.span(), "[camera]: coordinates must be finite".into()));
+        }
+    }
     let camera = Camera::new(
-        DVec3::from(cam.look_from),
-        DVec3::from(cam.look_at),
-        DVec3::from(cam.up),
+        DVec3::from(*cam.look_from.get_ref()),
+        DVec3::from(*cam.look_at.get_ref()),
+        DVec3::from(*cam.up.get_ref()),
         *cam.fov_deg.get_ref(),
         w,
         h,
     )
-    .map_err(|m| at(cam.fov_deg.span(), format!("[camera]: {m}")))?;
+    .map_err(|m| {
+        // Point at the key the message is about (`up` may be defaulted: then the table).
+        let span = if m.contains("`look_at`") {
+            cam.look_at.span()
+        } else if m.contains("`up`") && !cam.up.span().is_empty() {
+            cam.up.span()
+        } else if m.contains("`up`") {
+            cam.look_at.span()
+        } else {
+            cam.fov_deg.span()
+        };
+        at(span, format!("[camera]: {m}"))
+    })?;
     let film = &desc.film;
     if *film.spp.get_ref() == 0 {
         return Err(at(
