@@ -145,7 +145,15 @@ impl<P: RadialPsd> GhsFull<P> {
         let s = c.sigma_eff(geo.ci, lambda_nm);
         let t = geo.k * s * (geo.ci + geo.co);
         let kl = geo.k * c.length;
-        kl * kl * self.s_tilde(libm::sqrt(geo.u2), t * t)
+        let g = t * t;
+        if !(g > 0.0) {
+            return 0.0;
+        }
+        let s_tilde = match self.table.s_tilde_ln_u(0.5 * libm::log(geo.u2), g) {
+            Some(v) => v,
+            None => -libm::expm1(-g) * self.psd.unit_psd_u(libm::sqrt(geo.u2)),
+        };
+        kl * kl * s_tilde
     }
 
     /// Density in the u-plane (∫ d²u = 1) with which the glossy sampler
@@ -157,10 +165,15 @@ impl<P: RadialPsd> GhsFull<P> {
             return p;
         }
         let rows = self.table.proposal_rows(gs);
+        let ln_u = if u > 0.0 {
+            libm::log(u)
+        } else {
+            f64::NEG_INFINITY
+        };
         let mut q = 0.0;
         for (r, w, lw) in rows {
             if w > 0.0 {
-                q += w * self.table.row_density(r, lw, u);
+                q += w * self.table.row_density(r, lw, ln_u);
             }
         }
         DEFENSIVE_WEIGHT * p + (1.0 - DEFENSIVE_WEIGHT) * q
@@ -211,7 +224,7 @@ impl<P: RadialPsd> Bxdf for GhsFull<P> {
         let Some(geo) = Geometry::new(wi, wo, lambda_nm, self.common.length) else {
             return 0.0;
         };
-        let (_, p_delta, gs) = self.common.specular_and_choice(geo.ci, lambda_nm);
+        let (p_delta, gs) = self.common.choice(geo.ci, lambda_nm);
         let kl = geo.k * self.common.length;
         let q = self.proposal_density(gs, libm::sqrt(geo.u2));
         finite_nonneg((1.0 - p_delta) * kl * kl * geo.co * q)
@@ -221,8 +234,9 @@ impl<P: RadialPsd> Bxdf for GhsFull<P> {
         if !(wi.z > 0.0) {
             return None;
         }
-        let (spec, p_delta, gs) = self.common.specular_and_choice(wi.z.min(1.0), lambda_nm);
+        let (p_delta, gs) = self.common.choice(wi.z.min(1.0), lambda_nm);
         if u[0] < p_delta {
+            let spec = self.common.fresnel.reflectance(wi.z.min(1.0), lambda_nm) * p_delta;
             return (spec > 0.0).then(|| BxdfSample {
                 wo: frame::reflect_z(wi),
                 weight: spec / p_delta,

@@ -64,22 +64,23 @@ impl GhsCommon {
         }
     }
 
-    /// (specular weight R_s A_s, probability of choosing the delta lobe).
+    /// (probability of choosing the delta lobe, specular exponent g_s).
+    ///
+    /// The delta and the glossy lobe are chosen in proportion to R_s A_s
+    /// and R_s (1 − A_s), so the probability is A_s = e^{−g_s} and needs no
+    /// Fresnel evaluation.
+    #[inline]
+    pub fn choice(&self, ci: f64, lambda_nm: f64) -> (f64, f64) {
+        let t = 2.0 * wavenumber(lambda_nm) * self.sigma_eff(ci, lambda_nm) * ci;
+        let gs = t * t;
+        (libm::exp(-gs), gs)
+    }
+
+    /// (specular weight R_s A_s, delta probability, g_s).
     #[inline]
     pub fn specular_and_choice(&self, ci: f64, lambda_nm: f64) -> (f64, f64, f64) {
-        let k = wavenumber(lambda_nm);
-        let s = self.sigma_eff(ci, lambda_nm);
-        let gs = {
-            let t = 2.0 * k * s * ci;
-            t * t
-        };
-        let rs = self.fresnel.reflectance(ci, lambda_nm);
-        let a_s = libm::exp(-gs);
-        let spec = rs * a_s;
-        let glossy = rs * (-libm::expm1(-gs));
-        let total = spec + glossy;
-        let p = if total > 0.0 { spec / total } else { 0.0 };
-        (spec, p, gs)
+        let (p, gs) = self.choice(ci, lambda_nm);
+        (self.fresnel.reflectance(ci, lambda_nm) * p, p, gs)
     }
 
     /// Builds the energy tables for `opts.energy`. `raw_albedo(c, θi, λ)`
@@ -219,7 +220,7 @@ impl<P: RadialPsd> Bxdf for GhsSsa<P> {
         let Some(geo) = Geometry::new(wi, wo, lambda_nm, self.common.length) else {
             return 0.0;
         };
-        let (_, p_delta, _) = self.common.specular_and_choice(geo.ci, lambda_nm);
+        let (p_delta, _) = self.common.choice(geo.ci, lambda_nm);
         let kl = geo.k * self.common.length;
         finite_nonneg((1.0 - p_delta) * kl * kl * geo.co * self.psd.unit_psd_u(libm::sqrt(geo.u2)))
     }
@@ -228,8 +229,9 @@ impl<P: RadialPsd> Bxdf for GhsSsa<P> {
         if !(wi.z > 0.0) {
             return None;
         }
-        let (spec, p_delta, _) = self.common.specular_and_choice(wi.z.min(1.0), lambda_nm);
+        let (p_delta, _) = self.common.choice(wi.z.min(1.0), lambda_nm);
         if u[0] < p_delta {
+            let spec = self.common.fresnel.reflectance(wi.z.min(1.0), lambda_nm) * p_delta;
             return (spec > 0.0).then(|| BxdfSample {
                 wo: frame::reflect_z(wi),
                 weight: spec / p_delta,

@@ -5,7 +5,7 @@
 //! one padding row each side); columns are ln w, w = u/W(g), on a uniform
 //! grid covering w ∈ [w_lo, u_max] (plus padding). W(g) = sqrt(1 + 1/x_s²)
 //! with g(1 − M(x_s)) = 1 − e^{−g} is the lobe width. Each entry holds
-//! ln[S̃ W²/(1 − e^{−g})], a smooth O(1) function. Evaluation is 4×4-point
+//! ln[S̃ W²], a smooth function of (ln g, ln w). Evaluation is 4×4-point
 //! Lagrange interpolation in (ln g, ln w), with ln W interpolated by the same
 //! row weights.
 //!
@@ -26,6 +26,7 @@ pub const G_MIN: f64 = 1e-4;
 /// Largest g held by the table; above it the g = 1e4 shape is stretched by
 /// the extrapolated width W(g).
 pub const G_MAX: f64 = 1e4;
+const LN_G_MAX: f64 = 9.210_340_371_976_184;
 /// Smallest tail exponent ν = (γ − 1)/2 a table accepts (γ ≥ 1.05).
 pub const NU_MIN: f64 = 0.025;
 /// Largest first column in w; lowered for surfaces whose core is narrower
@@ -35,7 +36,7 @@ pub const W_MIN: f64 = 1e-3;
 /// Grid densities of a [`GhsTable`].
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct TableResolution {
-    /// Rows per decade of g (multiplied by 0.25/ν when ν < ¼).
+    /// Rows per decade of g (multiplied by 0.4/ν, at most 4, when ν < 0.4).
     pub rows_per_decade: f64,
     /// Columns per decade of w.
     pub cols_per_decade: f64,
@@ -157,14 +158,17 @@ fn first_below(f: impl Fn(f64) -> f64, level: f64, t0: f64, dt: f64, n: usize) -
 /// t ∈ [0, 1] (extrapolates smoothly outside).
 #[inline]
 pub(crate) fn lagrange4(t: f64) -> [f64; 4] {
+    const SIXTH: f64 = 1.0 / 6.0;
     let tm1 = t - 1.0;
     let tm2 = t - 2.0;
     let tp1 = t + 1.0;
+    let a = t * tm1; // t(t−1)
+    let b = tp1 * tm2; // (t+1)(t−2)
     [
-        -t * tm1 * tm2 / 6.0,
-        tp1 * tm1 * tm2 * 0.5,
-        -tp1 * t * tm2 * 0.5,
-        tp1 * t * tm1 / 6.0,
+        -a * tm2 * SIXTH,
+        b * tm1 * 0.5,
+        -b * t * 0.5,
+        a * tp1 * SIXTH,
     ]
 }
 
@@ -173,13 +177,15 @@ pub(crate) fn lagrange4(t: f64) -> [f64; 4] {
 pub struct GhsTable {
     ln_g0: f64,
     d_g: f64,
+    inv_d_g: f64,
     n_g: usize,
     ln_w0: f64,
     d_w: f64,
+    inv_d_w: f64,
     n_w: usize,
     /// ln W at each row.
     ln_width: Vec<f64>,
-    /// ln[S̃ W²/A], row-major n_g × n_w.
+    /// ln[S̃ W²], row-major n_g × n_w.
     values: Vec<f64>,
     /// Normalised cumulative masses per row: [disk, cells…, tail] → n_w + 1 entries.
     cdf: Vec<f64>,
@@ -239,9 +245,9 @@ impl GhsTable {
                         use GhsSsa there",
             });
         }
-        // Heavy tails (ν < ¼) change shape quickly with g on the way to their
-        // stable law: rows are densified by 0.25/ν there (at most 4×).
-        let d_g = ln10 / (res.rows_per_decade * (0.25 / nu).clamp(1.0, 4.0));
+        // Heavy tails (ν < 0.4) change shape quickly with g on the way to
+        // their stable law: rows are densified by 0.4/ν there (at most 4×).
+        let d_g = ln10 / (res.rows_per_decade * (0.4 / nu).clamp(1.0, 4.0));
         let ln_g0 = libm::log(G_MIN) - d_g;
         let n_g = libm::ceil((libm::log(G_MAX) - libm::log(G_MIN)) / d_g) as usize + 3;
         let plan = FftLog::new(res.fft_n, res.fft_dt);
@@ -265,16 +271,20 @@ impl GhsTable {
             for k in 0..n_w {
                 let u = row.w * libm::exp(ln_w0 + k as f64 * d_w);
                 let s = row.s_tilde(c, u);
-                let v = s * row.w * row.w / row.a;
+                // ln(S̃W²): the factor A = 1 − e^{−g} is kept inside (it is
+                // smooth in ln g), which saves an expm1 per evaluation.
+                let v = s * row.w * row.w;
                 values.push(libm::log(v.max(1e-300)));
             }
         }
         let mut t = GhsTable {
             ln_g0,
             d_g,
+            inv_d_g: 1.0 / d_g,
             n_g,
             ln_w0,
             d_w,
+            inv_d_w: 1.0 / d_w,
             n_w,
             ln_width,
             values,
@@ -304,8 +314,9 @@ impl GhsTable {
     /// Row index and 4 Lagrange weights for ln g (clamped to the table).
     #[inline]
     fn row_weights(&self, ln_g: f64) -> (usize, [f64; 4]) {
-        let f = (ln_g - self.ln_g0) / self.d_g;
-        let i = (libm::floor(f) as isize).clamp(1, self.n_g as isize - 3) as usize;
+        let f = ((ln_g - self.ln_g0) * self.inv_d_g).max(0.0);
+        // f ≥ 0, so truncation is floor (and cheaper than libm::floor)
+        let i = (f as usize).clamp(1, self.n_g - 3);
         (i, lagrange4(f - i as f64))
     }
 
@@ -332,23 +343,32 @@ impl GhsTable {
     /// columns.
     #[inline]
     pub fn s_tilde(&self, u: f64, g: f64) -> Option<f64> {
-        if !(g >= G_MIN) {
-            return None;
-        }
-        let lg = libm::log(g.min(1e300));
-        let gi = lg.min(libm::log(G_MAX));
-        let (i, wg) = self.row_weights(gi);
-        let ln_w_g = if g > G_MAX {
-            self.ln_width(g)
-        } else {
-            (0..4).map(|k| wg[k] * self.ln_width[i - 1 + k]).sum()
-        };
         let ln_u = if u > 0.0 {
             libm::log(u)
         } else {
             f64::NEG_INFINITY
         };
-        let fw = ((ln_u - ln_w_g) - self.ln_w0) / self.d_w;
+        self.s_tilde_ln_u(ln_u, g)
+    }
+
+    /// [`GhsTable::s_tilde`] with ln u given (saves a logarithm when the
+    /// caller has u²: ln u = ½ ln u²).
+    #[inline]
+    pub fn s_tilde_ln_u(&self, ln_u: f64, g: f64) -> Option<f64> {
+        if !(g >= G_MIN) {
+            return None;
+        }
+        let lg = libm::log(g.min(1e300));
+        let (i, wg) = self.row_weights(lg.min(LN_G_MAX));
+        let ln_w_g = if g > G_MAX {
+            self.ln_width(g)
+        } else {
+            wg[0] * self.ln_width[i - 1]
+                + wg[1] * self.ln_width[i]
+                + wg[2] * self.ln_width[i + 1]
+                + wg[3] * self.ln_width[i + 2]
+        };
+        let fw = ((ln_u - ln_w_g) - self.ln_w0) * self.inv_d_w;
         let fw = if fw.is_nan() { 1.0 } else { fw.max(1.0) };
         let last = (self.n_w - 2) as f64;
         let v = if fw > last {
@@ -362,7 +382,8 @@ impl GhsTable {
             let b = row_val(self.n_w - 1);
             b + (b - a) * (fw - (self.n_w - 1) as f64)
         } else {
-            let j = (libm::floor(fw) as usize).clamp(1, self.n_w - 3);
+            // fw ≥ 1, so truncation is floor
+            let j = (fw as usize).clamp(1, self.n_w - 3);
             let ww = lagrange4(fw - j as f64);
             let mut acc = 0.0;
             for (a, wa) in wg.iter().enumerate() {
@@ -372,8 +393,7 @@ impl GhsTable {
             }
             acc
         };
-        let amp = -libm::expm1(-g);
-        Some(amp * libm::exp(v - 2.0 * ln_w_g))
+        Some(libm::exp(v - 2.0 * ln_w_g))
     }
 
     /// Per-row proposal densities for sampling: in each row the density in
@@ -449,7 +469,7 @@ impl GhsTable {
             return [(r, 1.0, lw), (r, 0.0, lw)];
         }
         let f = f.max(lo_f);
-        let i = libm::floor(f) as usize;
+        let i = f as usize; // f ≥ 1
         let t = f - i as f64;
         [
             (i, 1.0 - t, self.ln_width[i]),
@@ -457,22 +477,18 @@ impl GhsTable {
         ]
     }
 
-    /// Density (per unit u-area) of the row-r proposal stretched to width e^{ln_w}.
+    /// Density (per unit u-area) at ln u of the row-r proposal stretched to
+    /// width e^{ln_w}.
     #[inline]
-    pub(crate) fn row_density(&self, r: usize, ln_w: f64, u: f64) -> f64 {
+    pub(crate) fn row_density(&self, r: usize, ln_w: f64, ln_u: f64) -> f64 {
         let vals = &self.values[r * self.n_w..(r + 1) * self.n_w];
-        let ln_u = if u > 0.0 {
-            libm::log(u)
-        } else {
-            f64::NEG_INFINITY
-        };
         let fw = (ln_u - ln_w - self.ln_w0) / self.d_w;
         let v = if !(fw > 0.0) {
             vals[0]
         } else if fw >= (self.n_w - 1) as f64 {
             vals[self.n_w - 1] + self.tail_beta(vals) * (fw - (self.n_w - 1) as f64) * self.d_w
         } else {
-            let k = libm::floor(fw) as usize;
+            let k = fw as usize; // fw > 0
             let t = fw - k as f64;
             vals[k] + t * (vals[k + 1] - vals[k])
         };
