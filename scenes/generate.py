@@ -30,7 +30,12 @@ SAMPLES = [
     ("s027", 0.027, 1.0, 4.0, "stainless_steel", 5),
 ]
 VIEWS = [("normal", 0.0), ("45deg", 45.0), ("grazing", 80.0)]
-MODELS = ["ggx", "beckmann", "ghs_ssa", "ghs", "measured_psd"]
+MODELS = ["ggx", "beckmann", "ghs_ssa", "ghs", "two_scale", "measured_psd"]
+# two_scale: without a measured scan to split (that is what `lustre fit` does, writing
+# [two_scale.cutoff_N] tables), the whole KC spectrum is taken as the micro scale and the
+# macro-scale exponential NDF is nearly flat (beta = TWO_SCALE_BETA). This is the limit in which
+# the two-scale model reduces to GHS-SSA on facets; for a real sample use `include` + `cutoff`.
+TWO_SCALE_BETA = 0.01
 
 
 def alpha_for(sigma, lc, gamma):
@@ -60,6 +65,9 @@ def material(model, s):
         lines.append(f"gamma = {gamma}")
         if model == "ghs":
             lines.append('energy = "raw"')
+        if model == "two_scale":
+            lines.append(f"# beta: nearly flat macro scale, see scenes/generate.py (TWO_SCALE_BETA).")
+            lines.append(f"beta = {TWO_SCALE_BETA}")
     if model == "measured_psd":
         lines = lines[:4] + [
             f"# No measured PSD of the paper's samples is in the repository: this is the KC PSD of",

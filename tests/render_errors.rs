@@ -151,12 +151,17 @@ fn camera_errors_point_at_the_key() {
 }
 
 #[test]
-fn models_the_build_lacks_are_named() {
+fn two_scale_needs_beta() {
     let e = error(
         "model = \"ggx\"",
-        "model = \"two_scale\"\nsigma_um = 0.1\nlc_um = 1.0\ngamma = 2.0\nbeta = 0.1",
+        "model = \"two_scale\"\nsigma_um = 0.1\nlc_um = 1.0\ngamma = 2.0",
     );
-    assert!(e.contains("model `two_scale` is not available yet"), "{e}");
+    assert!(e.contains("model `two_scale` needs `beta`"), "{e}");
+    let e = error(
+        "model = \"ggx\"",
+        "model = \"two_scale\"\nsigma_um = 0.1\nlc_um = 1.0\ngamma = 2.0\nbeta = 0.1\ncoherent = \"both\"",
+    );
+    assert!(e.contains("macro_ndf") && e.contains("delta"), "{e}");
 }
 
 #[test]

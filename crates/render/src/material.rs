@@ -3,8 +3,13 @@
 //! Each model is one match arm producing a `Box<dyn Bxdf + Send + Sync>`, so
 //! adding a model is adding an arm.
 
-use crate::scene::desc::{EnergyDesc, FresnelAngleDesc, FresnelKind, MaterialDesc, ModelKind};
+use crate::scene::desc::{
+    CoherentDesc, EnergyDesc, FresnelAngleDesc, FresnelKind, MaterialDesc, ModelKind,
+};
 use crate::spectrum::parse_csv_rows;
+use brdf::wave::two_scale::{
+    CoherentPart, TableResolution as TwoScaleResolution, TwoScale, TwoScaleParams,
+};
 use brdf::wave::{Energy, FresnelAngle, GhsFull, GhsOptions, GhsSsa, KcPsd, TabulatedPsd};
 use brdf::{Bxdf, Distribution, Fresnel, Ior, Metal, MicrofacetConductor, SmoothConductor};
 use std::path::Path;
@@ -283,10 +288,21 @@ pub fn build_material(
             let table = TabulatedPsd::new(&zeta, &p).map_err(|e| format!("measured PSD: {e}"))?;
             Box::new(GhsFull::with_options(table, fresnel, ghs_options(&desc)).map_err(err)?)
         }
-        ModelKind::TwoScale => {
-            let _ = (desc.beta, required(desc.sigma_um, "sigma_um", model)?);
-            return Err("model `two_scale` is not available yet: the brdf crate does not provide it in this build".into());
-        }
+        ModelKind::TwoScale => Box::new(
+            TwoScale::new(TwoScaleParams {
+                beta: required(desc.beta, "beta", model)?,
+                sigma_um: required(desc.sigma_um, "sigma_um", model)?,
+                lc_um: required(desc.lc_um, "lc_um", model)?,
+                gamma: required(desc.gamma, "gamma", model)?,
+                fresnel,
+                coherent: match desc.coherent.unwrap_or(CoherentDesc::MacroNdf) {
+                    CoherentDesc::MacroNdf => CoherentPart::MacroNdf,
+                    CoherentDesc::Delta => CoherentPart::Delta,
+                },
+                resolution: TwoScaleResolution::default(),
+            })
+            .map_err(err)?,
+        ),
     };
     Ok(Material {
         name: name.to_string(),

@@ -10,6 +10,7 @@ use crate::film::{Film, to_fixed};
 use crate::integrator::sample_pixel;
 use crate::scene::Scene;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+pub use rayon::ThreadPool;
 use rayon::prelude::*;
 use std::ops::Range;
 use std::path::PathBuf;

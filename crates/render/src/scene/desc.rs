@@ -182,6 +182,16 @@ pub enum FresnelAngleDesc {
     Incident,
 }
 
+/// How the two-scale model treats the coherent part (docs/physics.md §8.3).
+#[derive(Deserialize, Debug, Clone, Copy, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum CoherentDesc {
+    /// Each microfacet mirrors its coherent part: the macro lobe is D.
+    MacroNdf,
+    /// A mirror delta of the mean plane (the paper's eq. 10).
+    Delta,
+}
+
 /// `[materials.NAME]`: a conductor. Keys given here override those of `include`.
 #[derive(Deserialize, Debug, Default, Clone)]
 #[serde(deny_unknown_fields)]
@@ -220,6 +230,8 @@ pub struct MaterialDesc {
     pub psd_csv: Option<PathBuf>,
     /// Two-scale: width β of the exponential macro-scale NDF (HP17).
     pub beta: Option<f64>,
+    /// Two-scale reading of the coherent part: `macro_ndf` (default) or `delta` (the paper's eq. 10).
+    pub coherent: Option<CoherentDesc>,
     /// Which `[two_scale.NAME]` table of the included fit file to use.
     pub cutoff: Option<String>,
 }

@@ -32,6 +32,8 @@ pub struct Hit {
     pub geo: HitGeometry,
     /// What was hit.
     pub surface: Surface,
+    /// Whether it is a mesh triangle (traversed in f32: needs a larger ray offset).
+    pub mesh: bool,
 }
 
 /// Render settings from `[film]` and `[integrator]`.
@@ -503,6 +505,7 @@ impl Scene {
                 best = Some(Hit {
                     geo: g,
                     surface: *s,
+                    mesh: false,
                 });
             }
         }
@@ -512,6 +515,7 @@ impl Scene {
                 best = Some(Hit {
                     geo: g,
                     surface: *s,
+                    mesh: false,
                 });
             }
         }
@@ -521,6 +525,7 @@ impl Scene {
             best = Some(Hit {
                 geo: g,
                 surface: Surface::Material(mat),
+                mesh: true,
             });
         }
         best
