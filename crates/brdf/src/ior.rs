@@ -208,9 +208,18 @@ impl Ior {
         if lambda_nm >= rows[last][0] {
             return (rows[last][1], rows[last][2]);
         }
-        // First row strictly greater than λ; the guards above keep it in 1..=last.
-        let hi = rows.partition_point(|r| r[0] <= lambda_nm).clamp(1, last);
-        let (a, b) = (rows[hi - 1], rows[hi]);
+        // The tables are close to uniform in λ: guess the interval from the
+        // proportional position and walk the one or two steps to the right
+        // one, cheaper than a binary search. Ends: rows[0] < λ < rows[last].
+        let span = rows[last][0] - rows[0][0];
+        let mut lo = (((lambda_nm - rows[0][0]) / span * last as f64) as usize).min(last - 1);
+        while lo > 0 && rows[lo][0] > lambda_nm {
+            lo -= 1;
+        }
+        while lo + 1 < last && rows[lo + 1][0] <= lambda_nm {
+            lo += 1;
+        }
+        let (a, b) = (rows[lo], rows[lo + 1]);
         let t = (lambda_nm - a[0]) / (b[0] - a[0]);
         (a[1] + t * (b[1] - a[1]), a[2] + t * (b[2] - a[2]))
     }

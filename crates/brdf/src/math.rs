@@ -12,3 +12,29 @@ pub fn safe_sqrt(x: f64) -> f64 {
 pub fn finite_nonneg(x: f64) -> f64 {
     if x.is_finite() && x > 0.0 { x } else { 0.0 }
 }
+
+/// (sin x, cos x): the platform's fast version with `std`, libm's without.
+#[inline]
+pub fn sincos(x: f64) -> (f64, f64) {
+    #[cfg(feature = "std")]
+    {
+        x.sin_cos()
+    }
+    #[cfg(not(feature = "std"))]
+    {
+        libm::sincos(x)
+    }
+}
+
+/// eˣ: the platform's version with `std`, libm's without.
+#[inline]
+pub fn exp(x: f64) -> f64 {
+    #[cfg(feature = "std")]
+    {
+        x.exp()
+    }
+    #[cfg(not(feature = "std"))]
+    {
+        libm::exp(x)
+    }
+}

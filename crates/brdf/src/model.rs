@@ -49,6 +49,13 @@ pub trait Bxdf {
     /// direction `wo`, including the probability of choosing the glossy lobe.
     fn pdf(&self, wi: DVec3, wo: DVec3, lambda_nm: f64) -> f64;
 
+    /// `(eval, pdf)` together. Light sampling with MIS needs both at the same
+    /// pair of directions; models override this to share the work.
+    #[inline]
+    fn eval_pdf(&self, wi: DVec3, wo: DVec3, lambda_nm: f64) -> (f64, f64) {
+        (self.eval(wi, wo, lambda_nm), self.pdf(wi, wo, lambda_nm))
+    }
+
     /// Draws an outgoing direction from three uniform numbers in [0, 1).
     /// Returns `None` when the sample carries no energy (below the horizon,
     /// evanescent, or zero weight).
@@ -68,6 +75,9 @@ impl<T: Bxdf + ?Sized> Bxdf for &T {
     fn pdf(&self, wi: DVec3, wo: DVec3, lambda_nm: f64) -> f64 {
         (**self).pdf(wi, wo, lambda_nm)
     }
+    fn eval_pdf(&self, wi: DVec3, wo: DVec3, lambda_nm: f64) -> (f64, f64) {
+        (**self).eval_pdf(wi, wo, lambda_nm)
+    }
     fn sample(&self, wi: DVec3, lambda_nm: f64, u: [f64; 3]) -> Option<BxdfSample> {
         (**self).sample(wi, lambda_nm, u)
     }
@@ -83,6 +93,9 @@ impl<T: Bxdf + ?Sized> Bxdf for alloc::boxed::Box<T> {
     }
     fn pdf(&self, wi: DVec3, wo: DVec3, lambda_nm: f64) -> f64 {
         (**self).pdf(wi, wo, lambda_nm)
+    }
+    fn eval_pdf(&self, wi: DVec3, wo: DVec3, lambda_nm: f64) -> (f64, f64) {
+        (**self).eval_pdf(wi, wo, lambda_nm)
     }
     fn sample(&self, wi: DVec3, lambda_nm: f64, u: [f64; 3]) -> Option<BxdfSample> {
         (**self).sample(wi, lambda_nm, u)

@@ -547,9 +547,9 @@ fn never_negative_nan_or_infinite() {
 /// gets pdf() = 0 although eval > 0: pdf() computes i·h as the dot product
 /// with the normalised h = (i + o)/|i + o|, whose tangential components are a
 /// cancelling difference, so i·h (≈ 3e-9) comes out ≤ 0. Using the exact
-/// identity i·h = |i + o|/2 fixes it. Reported to the lead; ignored until then.
+/// identity i·h = |i + o|/2, which the model now uses, fixes it: this is the
+/// regression test.
 #[test]
-#[ignore = "known defect in MicrofacetConductor::pdf at 90° − 1e-9 rad; see doc comment"]
 fn sampled_pdf_positive_within_1e9_rad_of_grazing() {
     let wi = spherical(PI / 2.0 - 1e-9, 0.7);
     let us = [

@@ -12,7 +12,7 @@ pub(super) fn d(h: DVec3, ax: f64, ay: f64) -> f64 {
     let x = h.x / ax;
     let y = h.y / ay;
     let e = (x * x + y * y) / z2;
-    libm::exp(-e) / (PI * ax * ay * z2 * z2)
+    crate::math::exp(-e) / (PI * ax * ay * z2 * z2)
 }
 
 /// Λ from t = α² tan²θ, with a = 1/√t: (e^{−a²}/(a√π) − erfc a)/2.
@@ -71,7 +71,12 @@ fn sample_slopes_unit(c: f64, s: f64, u: [f64; 2]) -> (f64, f64) {
     // C(x) < 1e-30 below −8 for every cotθ, so the root lies in (−8, cotθ].
     let mut lo = (-8.0f64).min(cot - 1.0);
     let mut hi = cot;
-    let mut x = (lo + hi) * 0.5;
+    // Start from the exact inverse of the cotθ → ∞ limit (the Gaussian CDF
+    // rescaled to the mass below cotθ); Newton then needs a few steps only.
+    let mut x = erfinv(u[0] * (1.0 + libm::erf(cot)) - 1.0);
+    if !(x > lo && x < hi) {
+        x = 0.5 * (lo + hi);
+    }
     for _ in 0..64 {
         let f = cdf(x) - target;
         if f > 0.0 {

@@ -35,25 +35,38 @@ impl MicrofacetConductor {
     }
 }
 
-/// Unnormalised half vector i + o, or `None` when i and o are opposite.
+/// Half vector h and cosθd = i·h = |i + o|/2, or `None` when i and o are
+/// opposite. The length form of cosθd stays exact at grazing incidence,
+/// where the tangential parts of i + o cancel and i·h computed from the
+/// normalised h would lose every digit.
 #[inline]
-fn half_vector(wi: DVec3, wo: DVec3) -> Option<DVec3> {
-    super::normalize_or_none(wi + wo)
+fn half_vector(wi: DVec3, wo: DVec3) -> Option<(DVec3, f64)> {
+    let v = wi + wo;
+    let len = v.length();
+    (len > 0.0 && len.is_finite()).then(|| (v / len, 0.5 * len))
+}
+
+impl MicrofacetConductor {
+    /// D(h), Λ(wi), Λ(wo) and i·h for a valid pair, shared by eval and pdf.
+    #[inline]
+    fn terms(&self, wi: DVec3, wo: DVec3) -> Option<(f64, f64, f64, f64)> {
+        if wi.z <= 0.0 || wo.z <= 0.0 {
+            return None;
+        }
+        let (h, cos_ih) = half_vector(wi, wo)?;
+        Some((
+            self.dist.d(h),
+            self.dist.lambda(wi),
+            self.dist.lambda(wo),
+            cos_ih,
+        ))
+    }
 }
 
 impl Bxdf for MicrofacetConductor {
     #[inline]
     fn eval(&self, wi: DVec3, wo: DVec3, lambda_nm: f64) -> f64 {
-        if wi.z <= 0.0 || wo.z <= 0.0 {
-            return 0.0;
-        }
-        let Some(h) = half_vector(wi, wo) else {
-            return 0.0;
-        };
-        let f =
-            self.fresnel.reflectance(wi.dot(h), lambda_nm) * self.dist.d(h) * self.dist.g2(wi, wo)
-                / (4.0 * wi.z * wo.z);
-        finite_nonneg(f)
+        self.eval_pdf(wi, wo, lambda_nm).0
     }
 
     #[inline]
@@ -61,15 +74,23 @@ impl Bxdf for MicrofacetConductor {
         if wi.z <= 0.0 || wo.z <= 0.0 {
             return 0.0;
         }
-        let Some(h) = half_vector(wi, wo) else {
+        let Some((h, _)) = half_vector(wi, wo) else {
             return 0.0;
         };
-        // Reflection maps dω_h to dω_o with Jacobian 1 / (4 |o·h|), and o·h = i·h.
-        let cos_ih = wi.dot(h);
-        if cos_ih <= 0.0 {
-            return 0.0;
-        }
-        finite_nonneg(self.dist.pdf_visible(wi, h) / (4.0 * cos_ih))
+        // Visible-normal density G1(i)(i·h)D(h)/cosθi times the reflection
+        // Jacobian 1/(4 o·h), with o·h = i·h cancelling.
+        finite_nonneg(self.dist.d(h) / ((1.0 + self.dist.lambda(wi)) * 4.0 * wi.z))
+    }
+
+    #[inline]
+    fn eval_pdf(&self, wi: DVec3, wo: DVec3, lambda_nm: f64) -> (f64, f64) {
+        let Some((d, lambda_i, lambda_o, cos_ih)) = self.terms(wi, wo) else {
+            return (0.0, 0.0);
+        };
+        let g2 = 1.0 / (1.0 + lambda_i + lambda_o);
+        let f = self.fresnel.reflectance(cos_ih, lambda_nm) * d * g2 / (4.0 * wi.z * wo.z);
+        let pdf = d / ((1.0 + lambda_i) * 4.0 * wi.z);
+        (finite_nonneg(f), finite_nonneg(pdf))
     }
 
     #[inline]

@@ -31,7 +31,7 @@ pub(super) fn sample_visible(wi: DVec3, ax: f64, ay: f64, u: [f64; 2]) -> DVec3 
     let phi = 2.0 * PI * u[0];
     let z = (1.0 - u[1]) * (1.0 + ws.z) - ws.z;
     let sin_t = libm::sqrt((1.0 - z * z).max(0.0));
-    let (sp, cp) = libm::sincos(phi);
+    let (sp, cp) = crate::math::sincos(phi);
     let hs = DVec3::new(sin_t * cp, sin_t * sp, z) + ws;
     let h = DVec3::new(ax * hs.x, ay * hs.y, hs.z.max(0.0));
     super::normalize_or_none(h).unwrap_or(DVec3::Z)
