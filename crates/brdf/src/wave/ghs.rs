@@ -149,7 +149,12 @@ impl<P: RadialPsd> GhsFull<P> {
         if !(g > 0.0) {
             return 0.0;
         }
-        let s_tilde = match self.table.s_tilde_ln_u(0.5 * libm::log(geo.u2), g) {
+        let ln_u = if geo.u2 > 0.0 {
+            0.5 * libm::log(geo.u2)
+        } else {
+            f64::NEG_INFINITY
+        };
+        let s_tilde = match self.table.s_tilde_ln_u(ln_u, g) {
             Some(v) => v,
             None => -libm::expm1(-g) * self.psd.unit_psd_u(libm::sqrt(geo.u2)),
         };
