@@ -1,14 +1,222 @@
 //! `lustre fit …`: from a measured scan to a material file.
+//!
+//! `lustre fit <scan> [--stylus <profile>] [--cutoff 50,100,150] -o material.toml` runs the
+//! whole analysis and writes the material file plus PSD/NDF plots (PNG and CSV) next to it;
+//! `lustre fit stats <scan> --json` prints the headline numbers for scripting.
 
-use std::path::PathBuf;
+use anyhow::Context;
+use fit::io::{Format, ReadOptions};
+use fit::pipeline::{self, Options};
+use std::path::{Path, PathBuf};
 
 /// Arguments of the fit command.
 #[derive(clap::Args)]
+#[command(args_conflicts_with_subcommands = true)]
 pub struct FitArgs {
-    /// Surface scan (X3P, BCR/SDF, NanoScope .di, Gwyddion, CSV, XYZ).
-    pub scan: PathBuf,
+    #[command(subcommand)]
+    pub command: Option<FitCommand>,
+    #[command(flatten)]
+    pub material: MaterialArgs,
 }
 
-pub fn run(_args: FitArgs) -> anyhow::Result<()> {
-    anyhow::bail!("fit is not built yet")
+/// Subcommands of `fit`.
+#[derive(clap::Subcommand)]
+pub enum FitCommand {
+    /// Print Sq, RMS slope, the K-correlation fit and the line PSD.
+    Stats(StatsArgs),
+}
+
+/// Options shared by every way of reading a scan.
+#[derive(clap::Args, Clone)]
+pub struct ScanArgs {
+    /// Channel (image) index of multi-channel files such as NanoScope .di.
+    #[arg(long)]
+    pub channel: Option<usize>,
+    /// Length unit of plain XYZ/CSV column files (m, mm, um, nm).
+    #[arg(long)]
+    pub units: Option<String>,
+    /// Force the file format (x3p, bcr, sdf, di, matrix, gsf, dektak, xyz).
+    #[arg(long)]
+    pub format: Option<String>,
+}
+
+/// `lustre fit <scan> …`.
+#[derive(clap::Args)]
+pub struct MaterialArgs {
+    /// Surface scan (X3P, BCR, SDF, NanoScope .di, Gwyddion matrix/.gsf, Dektak CSV, XYZ).
+    pub scan: Option<PathBuf>,
+    /// Stylus profile whose PSD replaces the scan's below the merge cutoff.
+    #[arg(long)]
+    pub stylus: Option<PathBuf>,
+    /// Two-scale cutoff periods as multiples of --lambda-nm.
+    #[arg(long, value_delimiter = ',', default_values_t = vec![50.0, 100.0, 150.0])]
+    pub cutoff: Vec<f64>,
+    /// Wavelength for the two-scale cutoffs [nm].
+    #[arg(long, default_value_t = 550.0)]
+    pub lambda_nm: f64,
+    /// AFM/stylus merge cutoff [rad/µm].
+    #[arg(long, default_value_t = 1.0)]
+    pub merge_cutoff: f64,
+    /// Metal written to [material].metal.
+    #[arg(long, default_value = "stainless_steel")]
+    pub metal: String,
+    /// Model written to [material].model.
+    #[arg(long, default_value = "ghs")]
+    pub model: String,
+    /// Output material file.
+    #[arg(short, long, default_value = "material.toml")]
+    pub output: PathBuf,
+    /// Skip the PNG/CSV plots.
+    #[arg(long)]
+    pub no_plots: bool,
+    #[command(flatten)]
+    pub read: ScanArgs,
+}
+
+/// `lustre fit stats <scan> --json`.
+#[derive(clap::Args)]
+pub struct StatsArgs {
+    /// Surface scan.
+    pub scan: PathBuf,
+    /// Print JSON (the only output format).
+    #[arg(long)]
+    pub json: bool,
+    #[command(flatten)]
+    pub read: ScanArgs,
+}
+
+pub fn run(args: FitArgs) -> anyhow::Result<()> {
+    match args.command {
+        Some(FitCommand::Stats(s)) => stats(s),
+        None => material(args.material),
+    }
+}
+
+fn read_options(a: &ScanArgs) -> anyhow::Result<ReadOptions> {
+    let units = match &a.units {
+        Some(u) => Some(
+            fit::io::units::length_factor(u)
+                .with_context(|| format!("--units {u}: not a length unit (use m, mm, um, nm)"))?,
+        ),
+        None => None,
+    };
+    let format = match &a.format {
+        Some(f) => Some(Format::from_name(f).with_context(|| {
+            format!("--format {f}: unknown (use x3p, bcr, sdf, di, matrix, gsf, dektak, xyz)")
+        })?),
+        None => None,
+    };
+    Ok(ReadOptions {
+        channel: a.channel,
+        units,
+        format,
+    })
+}
+
+fn load(path: &Path, opts: &ReadOptions) -> anyhow::Result<(Vec<u8>, fit::Topography)> {
+    let bytes = std::fs::read(path).with_context(|| format!("cannot read {}", path.display()))?;
+    let topo = fit::io::read_bytes(&path.display().to_string(), &bytes, opts)?;
+    Ok((bytes, topo))
+}
+
+fn stats(args: StatsArgs) -> anyhow::Result<()> {
+    let (_, topo) = load(&args.scan, &read_options(&args.read)?)?;
+    let (t, _) = pipeline::prepare(topo)?;
+    let s = fit::stats::compute(&t);
+    let p = fit::psd::welch(&t, &Default::default())?;
+    let kc = fit::kc::fit_bins(&p, 3, t.nx / 4)?;
+    let json = serde_json::json!({
+        "sq_m": s.sq,
+        "rms_slope": s.rms_slope(),
+        "kc": {
+            "sigma_m": kc.params.sigma,
+            "lc_m": kc.params.lc,
+            "l_1d_m": kc.params.l_cycles(),
+            "gamma": kc.params.gamma,
+            "degenerate": kc.degenerate,
+            "fit_f_range_per_m": [kc.range.0, kc.range.1],
+        },
+        "psd": { "f_per_m": p.f, "p": p.p },
+        "units": "SI; lc_m is the Matérn range Lc (physics.md), l_1d_m = 2π·Lc is the data-README 1D-form length; psd p in m³ (one-sided, f in cycles/m)",
+    });
+    if !args.json {
+        eprintln!("note: only JSON output is implemented; printing JSON");
+    }
+    println!("{}", serde_json::to_string(&json)?);
+    Ok(())
+}
+
+fn material(args: MaterialArgs) -> anyhow::Result<()> {
+    let scan_path = args
+        .scan
+        .clone()
+        .context("missing <SCAN>: usage `lustre fit <scan> -o material.toml`")?;
+    let ropts = read_options(&args.read)?;
+    let (bytes, topo) = load(&scan_path, &ropts)?;
+    let stylus = match &args.stylus {
+        Some(p) => Some(load(
+            p,
+            &ReadOptions {
+                channel: None,
+                ..ropts.clone()
+            },
+        )?),
+        None => None,
+    };
+    anyhow::ensure!(
+        args.lambda_nm > 0.0 && args.lambda_nm.is_finite(),
+        "--lambda-nm must be positive"
+    );
+    anyhow::ensure!(
+        args.merge_cutoff > 0.0 && args.merge_cutoff.is_finite(),
+        "--merge-cutoff must be positive"
+    );
+    anyhow::ensure!(
+        args.cutoff.iter().all(|c| *c > 0.0 && c.is_finite()),
+        "--cutoff values must be positive"
+    );
+    let opts = Options {
+        cutoff_multiples: args.cutoff.clone(),
+        wavelength: args.lambda_nm * 1e-9,
+        merge_cutoff: args.merge_cutoff * 1e6,
+        ..Options::default()
+    };
+    let analysis = pipeline::analyse(topo, stylus.as_ref().map(|s| s.1.clone()), &opts)?;
+    let scan_name = scan_path.display().to_string();
+    let stylus_name = args.stylus.as_ref().map(|p| p.display().to_string());
+    let prov = fit::material::Provenance {
+        file: &scan_name,
+        bytes: &bytes,
+        stylus: stylus_name
+            .as_deref()
+            .zip(stylus.as_ref().map(|s| s.0.as_slice())),
+        merge_cutoff_rad_per_um: args.merge_cutoff,
+        metal: &args.metal,
+        model: &args.model,
+    };
+    let doc = fit::material::build(&analysis, &prov);
+    fit::material::write_atomic(&args.output, &fit::material::to_toml(&doc)?)?;
+    let k = analysis.kc.params;
+    eprintln!(
+        "wrote {}: Sq {:.4} µm, rms slope {:.4}, KC σ {:.4} µm Lc {:.4} µm γ {:.3}{}, GGX α {:.4}, Beckmann α {:.4}",
+        args.output.display(),
+        analysis.stats.sq * 1e6,
+        analysis.stats.rms_slope(),
+        k.sigma * 1e6,
+        k.lc * 1e6,
+        k.gamma,
+        if analysis.kc.degenerate {
+            " (DEGENERATE)"
+        } else {
+            ""
+        },
+        analysis.ndf.alpha_ggx.0,
+        analysis.ndf.alpha_beckmann.0,
+    );
+    if !args.no_plots {
+        for path in fit::plots::write(&analysis, &args.output)? {
+            eprintln!("wrote {}", path.display());
+        }
+    }
+    Ok(())
 }

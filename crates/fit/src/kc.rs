@@ -73,7 +73,7 @@ pub struct KcFit {
     pub params: KcParams,
     /// One-standard-error uncertainties (delta method on `s²(JᵀJ)⁻¹`).
     pub stderr: KcParams,
-    /// Rms of the natural-log residuals.
+    /// Rms of the natural-log residuals (weighted when weights are given).
     pub rms_log_residual: f64,
     /// Number of PSD points fitted.
     pub points: usize,
@@ -120,6 +120,7 @@ struct Problem<'a> {
     form: Form,
     lx: &'a [f64],
     ly: &'a [f64],
+    sw: &'a [f64],
     q: Vector3<f64>,
 }
 
@@ -147,10 +148,14 @@ impl LeastSquaresProblem<f64, Dyn, U3> for Problem<'_> {
         let (c, a, e) = shape_consts(self.form, g);
         let r = DVector::from_iterator(
             self.lx.len(),
-            self.lx.iter().zip(self.ly).map(|(&lx, &ly)| {
-                let u2 = (l * lx.exp()).powi(2);
-                c + 2.0 * lns + a * l.ln() - e * u2.ln_1p() - ly
-            }),
+            self.lx
+                .iter()
+                .zip(self.ly)
+                .zip(self.sw)
+                .map(|((&lx, &ly), &sw)| {
+                    let u2 = (l * lx.exp()).powi(2);
+                    sw * (c + 2.0 * lns + a * l.ln() - e * u2.ln_1p() - ly)
+                }),
         );
         r.iter().all(|v| v.is_finite()).then_some(r)
     }
@@ -160,11 +165,11 @@ impl LeastSquaresProblem<f64, Dyn, U3> for Problem<'_> {
         let (_, a, e) = shape_consts(self.form, g);
         let (dc, de) = dshape_dgamma(self.form, g);
         let mut j = OMatrix::<f64, Dyn, U3>::zeros(self.lx.len());
-        for (i, &lx) in self.lx.iter().enumerate() {
+        for (i, (&lx, &sw)) in self.lx.iter().zip(self.sw).enumerate() {
             let u2 = (l * lx.exp()).powi(2);
-            j[(i, 0)] = 2.0;
-            j[(i, 1)] = a - 2.0 * e * u2 / (1.0 + u2);
-            j[(i, 2)] = (g - 1.0) * (dc - de * u2.ln_1p());
+            j[(i, 0)] = sw * 2.0;
+            j[(i, 1)] = sw * (a - 2.0 * e * u2 / (1.0 + u2));
+            j[(i, 2)] = sw * (g - 1.0) * (dc - de * u2.ln_1p());
         }
         j.iter().all(|v| v.is_finite()).then_some(j)
     }
@@ -173,14 +178,38 @@ impl LeastSquaresProblem<f64, Dyn, U3> for Problem<'_> {
 /// Fit the K-correlation `form` to `(x, p)` restricted to `x_min ≤ x ≤ x_max`.
 /// Non-positive or non-finite points are ignored.
 pub fn fit(form: Form, x: &[f64], p: &[f64], x_min: f64, x_max: f64) -> Result<KcFit, FitError> {
-    let (lx, ly): (Vec<f64>, Vec<f64>) = x
-        .iter()
-        .zip(p)
-        .filter(|(x, p)| {
-            x.is_finite() && p.is_finite() && **x > 0.0 && **p > 0.0 && **x >= x_min && **x <= x_max
-        })
-        .map(|(x, p)| (x.ln(), p.ln()))
-        .unzip();
+    fit_weighted(form, x, p, None, x_min, x_max)
+}
+
+/// As [`fit`], with per-point weights (e.g. the number of periodogram samples averaged in
+/// a radial bin: the variance of a log-averaged periodogram is ≈ 1/count).
+pub fn fit_weighted(
+    form: Form,
+    x: &[f64],
+    p: &[f64],
+    weights: Option<&[f64]>,
+    x_min: f64,
+    x_max: f64,
+) -> Result<KcFit, FitError> {
+    let mut lx = Vec::new();
+    let mut ly = Vec::new();
+    let mut lw = Vec::new();
+    for (i, (&x, &p)) in x.iter().zip(p).enumerate() {
+        let w = weights.map_or(1.0, |w| w.get(i).copied().unwrap_or(0.0));
+        if x.is_finite()
+            && p.is_finite()
+            && x > 0.0
+            && p > 0.0
+            && x >= x_min
+            && x <= x_max
+            && w > 0.0
+            && w.is_finite()
+        {
+            lx.push(x.ln());
+            ly.push(p.ln());
+            lw.push(w);
+        }
+    }
     let n = lx.len();
     if n < 6 {
         return Err(FitError::data(
@@ -188,6 +217,10 @@ pub fn fit(form: Form, x: &[f64], p: &[f64], x_min: f64, x_max: f64) -> Result<K
             format!("only {n} usable PSD points in the fit range; need ≥ 6"),
         ));
     }
+    // Normalise weights to mean 1 so residual scales stay comparable.
+    let wmean = lw.iter().sum::<f64>() / n as f64;
+    let sw: Vec<f64> = lw.iter().map(|w| (w / wmean).sqrt()).collect();
+    let lw: Vec<f64> = lw.iter().map(|w| w / wmean).collect();
     let (xlo, xhi) = (lx[0].min(lx[n - 1]).exp(), lx[0].max(lx[n - 1]).exp());
 
     // Profiled grid search: σ enters additively in log space.
@@ -204,13 +237,15 @@ pub fn fit(form: Form, x: &[f64], p: &[f64], x_min: f64, x_max: f64) -> Result<K
             let mean = ly
                 .iter()
                 .zip(&lg)
-                .map(|(y, t)| y - (base - e * t))
+                .zip(&lw)
+                .map(|((y, t), w)| w * (y - (base - e * t)))
                 .sum::<f64>()
                 / n as f64;
             let ssr: f64 = ly
                 .iter()
                 .zip(&lg)
-                .map(|(y, t)| (y - (base - e * t) - mean).powi(2))
+                .zip(&lw)
+                .map(|((y, t), w)| w * (y - (base - e * t) - mean).powi(2))
                 .sum();
             if ssr < best.0 {
                 best = (ssr, mean / 2.0, l, g);
@@ -222,6 +257,7 @@ pub fn fit(form: Form, x: &[f64], p: &[f64], x_min: f64, x_max: f64) -> Result<K
         form,
         lx: &lx,
         ly: &ly,
+        sw: &sw,
         q: start,
     };
     let (problem, report) = LevenbergMarquardt::new()

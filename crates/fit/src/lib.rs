@@ -19,6 +19,8 @@ pub mod kc;
 pub mod level;
 pub mod material;
 pub mod ndf;
+pub mod pipeline;
+pub mod plots;
 pub mod psd;
 pub mod rng;
 pub mod sha256;

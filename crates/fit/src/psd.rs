@@ -115,7 +115,11 @@ pub fn welch(t: &Topography, opts: &WelchOptions) -> Result<Psd1d, FitError> {
             },
         );
     let scale = t.dx / wss / (nseg * t.ny) as f64;
-    let last_doubled = if nperseg % 2 == 0 { nbin - 1 } else { nbin };
+    let last_doubled = if nperseg.is_multiple_of(2) {
+        nbin - 1
+    } else {
+        nbin
+    };
     let p = sum
         .iter()
         .enumerate()
@@ -134,6 +138,9 @@ pub struct RadialPsd {
     pub zeta: Vec<f64>,
     /// Mean PSD in the bin [m⁴]; `∫ P d²ζ = σ²`.
     pub p: Vec<f64>,
+    /// Number of periodogram samples averaged in the bin (fit weights); empty when the
+    /// table was not made from a 2D periodogram.
+    pub count: Vec<f64>,
 }
 
 /// Radially averaged 2D PSD of a NaN-free map (separable Hann window, power-normalised).
@@ -189,7 +196,7 @@ pub fn radial(t: &Topography) -> Result<RadialPsd, FitError> {
             |(mut sz, mut sp, mut sw), kx| {
                 let mut col: Vec<Complex<f64>> = rows.iter().map(|r| r[kx]).collect();
                 cfft.process(&mut col);
-                let weight = if kx == 0 || (nx % 2 == 0 && kx == nx / 2) {
+                let weight = if kx == 0 || (nx.is_multiple_of(2) && kx == nx / 2) {
                     1.0
                 } else {
                     2.0
@@ -227,11 +234,13 @@ pub fn radial(t: &Topography) -> Result<RadialPsd, FitError> {
     let mut out = RadialPsd {
         zeta: Vec::new(),
         p: Vec::new(),
+        count: Vec::new(),
     };
     for i in 0..nbins {
         if sw[i] > 0.0 {
             out.zeta.push(sz[i] / sw[i]);
             out.p.push(sp[i] / sw[i]);
+            out.count.push(sw[i]);
         }
     }
     Ok(out)
@@ -274,6 +283,7 @@ pub fn radial_from_profile(psd: &Psd1d, half_window: usize) -> RadialPsd {
     let mut out = RadialPsd {
         zeta: Vec::new(),
         p: Vec::new(),
+        count: Vec::new(),
     };
     for i in 0..pts.len() {
         let lo = i.saturating_sub(half_window.max(1));

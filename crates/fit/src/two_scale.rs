@@ -41,14 +41,15 @@ pub struct TwoScale {
 }
 
 /// Split `t` (levelled, NaN-free) at `multiple × wavelength`. `line_psd` is the PSD used
-/// when the map cannot resolve the cutoff (e.g. a stylus-merged PSD); `f_max` bounds every
-/// KC fit from above [cycles/m].
+/// when the map cannot resolve the cutoff (e.g. a stylus-merged PSD); every KC fit uses
+/// frequencies in `[max(1/Λ, f_min), f_max]` [cycles/m] (the lowest Welch bins are biased by
+/// the window, hence `f_min`).
 pub fn split(
     t: &Topography,
     line_psd: &Psd1d,
     multiple: f64,
     wavelength: f64,
-    f_max: f64,
+    (f_min, f_max): (f64, f64),
 ) -> Result<TwoScale, FitError> {
     let cutoff = multiple * wavelength;
     if !(cutoff.is_finite() && cutoff > 0.0) {
@@ -73,7 +74,13 @@ pub fn split(
             *r -= l;
         }
         let rpsd = psd::welch(&residual, &WelchOptions::default())?;
-        let kc = kc::fit(kc::Form::Profile1d, &rpsd.f, &rpsd.p, f_cut, f_max)?;
+        let kc = kc::fit(
+            kc::Form::Profile1d,
+            &rpsd.f,
+            &rpsd.p,
+            f_cut.max(f_min),
+            f_max,
+        )?;
         return Ok(TwoScale {
             multiple,
             cutoff,
@@ -102,7 +109,13 @@ pub fn split(
     } else {
         (0.0, BetaSource::Unresolved)
     };
-    let kc = kc::fit(kc::Form::Profile1d, &line_psd.f, &line_psd.p, f_cut, f_max)?;
+    let kc = kc::fit(
+        kc::Form::Profile1d,
+        &line_psd.f,
+        &line_psd.p,
+        f_cut.max(f_min),
+        f_max,
+    )?;
     Ok(TwoScale {
         multiple,
         cutoff,

@@ -100,7 +100,7 @@ pub(crate) fn read(ctx: Ctx<'_>, bytes: &[u8], channel: usize) -> Result<Topogra
         }
     };
     let file_len = bytes.len() as u64;
-    let block_end = offset.checked_add(length).unwrap_or(u64::MAX);
+    let block_end = offset.saturating_add(length);
     if block_end > file_len {
         return Err(ctx.short("Data offset + Data length", block_end, file_len));
     }
@@ -270,7 +270,7 @@ fn z_factor(ctx: Ctx<'_>, img: &Section, sections: &[Section]) -> Result<(String
     // "V 790.3658 nm/V"
     let toks: Vec<&str> = sens.split_whitespace().collect();
     let (value, unit) = match toks.as_slice() {
-        [_, v, u, ..] => (v.parse::<f64>().ok(), *u),
+        [_, v, rest @ ..] => (v.parse::<f64>().ok(), rest.first().copied().unwrap_or("")),
         _ => (None, ""),
     };
     let value = value.ok_or_else(|| {

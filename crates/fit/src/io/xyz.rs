@@ -103,13 +103,25 @@ fn profile(ctx: Ctx<'_>, mut rows: Vec<Vec<f64>>) -> Result<Topography, ReadErro
 fn axis(ctx: Ctx<'_>, field: &str, mut v: Vec<f64>) -> Result<(f64, f64, usize), ReadError> {
     v.sort_by(f64::total_cmp);
     let span = v[v.len() - 1] - v[0];
-    let tol = 1e-6 * span.abs().max(f64::MIN_POSITIVE);
+    let scale = v[0].abs().max(v[v.len() - 1].abs());
+    let tol = 1e-9 * scale.max(f64::MIN_POSITIVE);
     v.dedup_by(|a, b| (*a - *b).abs() <= tol);
     if v.len() == 1 {
         return Ok((v[0], f64::NAN, 1));
     }
     let d = span / (v.len() - 1) as f64;
     let d = check_spacing(ctx, field, d)?;
+    // Every step between distinct values must be one lattice spacing.
+    if let Some(w) = v.windows(2).find(|w| ((w[1] - w[0]) - d).abs() > 0.25 * d) {
+        return Err(ctx.err(
+            field,
+            format!(
+                "values {} and {} are not one grid step ({d} m) apart",
+                w[0], w[1]
+            ),
+            "the points must lie on a regular grid; resample the data",
+        ));
+    }
     Ok((v[0], d, v.len()))
 }
 

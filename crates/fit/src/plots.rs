@@ -1,0 +1,112 @@
+//! PNG plots (and the same data as CSV) of an analysis: the PSD with its fits on log-log
+//! axes and the NDF with its GGX/Beckmann fits. Files are written next to the material file
+//! as `<stem>_psd.png/.csv` and `<stem>_ndf.png/.csv`.
+
+use crate::pipeline::Analysis;
+use crate::{FitError, ndf};
+use plot::{Axis, LineStyle, Marker, Plot, Series};
+use std::path::{Path, PathBuf};
+
+fn perr(e: plot::PlotError) -> FitError {
+    FitError::data("plot", e.to_string())
+}
+
+/// Write the plots; returns the files written.
+pub fn write(a: &Analysis, material: &Path) -> Result<Vec<PathBuf>, FitError> {
+    let stem = material
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "material".into());
+    let dir = material
+        .parent()
+        .filter(|p| !p.as_os_str().is_empty())
+        .unwrap_or(Path::new("."));
+    let mut written = Vec::new();
+
+    // PSD in cycles/µm and µm³ so the numbers read naturally.
+    let (f, p): (Vec<f64>, Vec<f64>) = a
+        .fit_psd
+        .f
+        .iter()
+        .zip(&a.fit_psd.p)
+        .filter(|(f, _)| **f > 0.0)
+        .map(|(f, p)| (f * 1e-6, p * 1e18))
+        .unzip();
+    let k = a.kc.params;
+    let (flo, fhi) = (a.kc.range.0 * 1e-6, a.kc.range.1 * 1e-6);
+    let fk: Vec<f64> = (0..200)
+        .map(|i| flo * (fhi / flo).powf(i as f64 / 199.0))
+        .collect();
+    let pk: Vec<f64> = fk.iter().map(|f| k.psd_1d(f * 1e6) * 1e18).collect();
+    let mut psd_plot = Plot::new(format!(
+        "line PSD and K-correlation fit (σ {:.3} µm, Lc {:.3} µm, γ {:.2})",
+        k.sigma * 1e6,
+        k.lc * 1e6,
+        k.gamma
+    ))
+    .x_axis(Axis::log("f [cycles/µm]"))
+    .y_axis(Axis::log("PSD (1D, one-sided) [µm³]"))
+    .series(
+        Series::points("measured", &f, &p)
+            .marker(Marker::Circle)
+            .marker_size(2.0),
+    )
+    .series(Series::line("KC fit", &fk, &pk).width(2.0));
+    for t in &a.two_scale {
+        let tk = t.kc.params;
+        let lo = (t.kc.range.0 * 1e-6).max(flo);
+        let ft: Vec<f64> = (0..100)
+            .map(|i| lo * (fhi / lo).powf(i as f64 / 99.0))
+            .collect();
+        let pt: Vec<f64> = ft.iter().map(|f| tk.psd_1d(f * 1e6) * 1e18).collect();
+        psd_plot = psd_plot.series(
+            Series::line(
+                format!("residual KC, Λ = {:.1} µm", t.cutoff * 1e6),
+                &ft,
+                &pt,
+            )
+            .style(LineStyle::Dashed),
+        );
+    }
+    let png = dir.join(format!("{stem}_psd.png"));
+    psd_plot.save_png(&png, 900, 650).map_err(perr)?;
+    let csv = dir.join(format!("{stem}_psd.csv"));
+    psd_plot.save_csv(&csv).map_err(perr)?;
+    written.extend([png, csv]);
+
+    if let Some(h) = &a.ndf.ndf {
+        let (th, d): (Vec<f64>, Vec<f64>) = h
+            .theta
+            .iter()
+            .zip(&h.d)
+            .filter(|(_, d)| **d > 0.0)
+            .map(|(t, d)| (t.to_degrees(), *d))
+            .unzip();
+        let (ag, ab) = (a.ndf.alpha_ggx.0, a.ndf.alpha_beckmann.0);
+        let gg: Vec<f64> = th.iter().map(|t| ndf::ggx(ag, t.to_radians())).collect();
+        let bb: Vec<f64> = th
+            .iter()
+            .map(|t| ndf::beckmann(ab, t.to_radians()))
+            .collect();
+        let ndf_plot = Plot::new("NDF of facet normals (projected-area weighted)")
+            .x_axis(Axis::linear("θm [deg]"))
+            .y_axis(Axis::log("D(θm) [sr⁻¹]"))
+            .series(
+                Series::points("measured", &th, &d)
+                    .marker(Marker::Circle)
+                    .marker_size(2.5),
+            )
+            .series(Series::line(format!("GGX α = {ag:.4}"), &th, &gg).width(2.0))
+            .series(
+                Series::line(format!("Beckmann α = {ab:.4}"), &th, &bb)
+                    .style(LineStyle::Dashed)
+                    .width(2.0),
+            );
+        let png = dir.join(format!("{stem}_ndf.png"));
+        ndf_plot.save_png(&png, 900, 650).map_err(perr)?;
+        let csv = dir.join(format!("{stem}_ndf.csv"));
+        ndf_plot.save_csv(&csv).map_err(perr)?;
+        written.extend([png, csv]);
+    }
+    Ok(written)
+}

@@ -1,0 +1,446 @@
+//! Hostile input for every reader: truncated files, bit flips and headers that claim huge
+//! grids must give errors, never panics or giant allocations. Also round trips of the
+//! formats without a real sample in data/surfaces (GSF, SDF, BCR int16, XYZ), written here
+//! by independent encoders.
+
+use fit::ReadError;
+use fit::io::{Format, ReadOptions, read_bytes};
+use fit::rng::SplitMix64;
+use std::io::Write;
+use std::path::PathBuf;
+
+fn data(name: &str) -> Vec<u8> {
+    std::fs::read(
+        PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+            .join("../../data/surfaces")
+            .join(name),
+    )
+    .unwrap()
+}
+
+fn opts(format: Format) -> ReadOptions {
+    ReadOptions {
+        format: Some(format),
+        ..ReadOptions::default()
+    }
+}
+
+/// Truncations at many lengths and random bit flips: must return (Ok or Err) without panicking,
+/// and any Ok result must have consistent dimensions.
+fn torture(name: &str, bytes: &[u8], format: Format, seed: u64, flips: usize) {
+    let o = opts(format);
+    let check = |b: &[u8], what: &str| {
+        if let Ok(t) = read_bytes(name, b, &o) {
+            assert_eq!(t.heights.len(), t.nx * t.ny, "{name} {what}");
+            assert!(
+                t.dx > 0.0 && t.dx.is_finite() && t.dy > 0.0 && t.dy.is_finite(),
+                "{name} {what}"
+            );
+            assert!(
+                t.heights.len() <= 8 * b.len().max(1) + 64,
+                "{name} {what}: more points than bytes"
+            );
+        }
+    };
+    let n = bytes.len();
+    let mut cuts: Vec<usize> = (0..64).map(|i| i * n / 64).collect();
+    cuts.extend([
+        1,
+        2,
+        7,
+        80,
+        81,
+        82,
+        100,
+        2048,
+        4095,
+        4096,
+        4097,
+        40960,
+        n.saturating_sub(1),
+    ]);
+    for c in cuts.into_iter().filter(|&c| c < n) {
+        check(&bytes[..c], &format!("truncated at {c}"));
+        // Formats whose header fixes the data size must reject a file cut in half (text
+        // formats and multi-channel NanoScope files can legitimately hold less data).
+        if matches!(
+            format,
+            Format::X3p | Format::Bcr | Format::Sdf | Format::Gsf
+        ) && c < n / 2
+        {
+            assert!(
+                read_bytes(name, &bytes[..c], &o).is_err(),
+                "{name}: truncated file at {c} accepted"
+            );
+        }
+    }
+    let mut rng = SplitMix64::new(seed);
+    for i in 0..flips {
+        let mut b = bytes.to_vec();
+        // Flip bits, biased to the header where parsing decisions are made.
+        for _ in 0..1 + (rng.next_u64() % 8) {
+            let region = if rng.next_u64().is_multiple_of(2) {
+                n.min(4096)
+            } else {
+                n
+            };
+            let pos = (rng.next_u64() as usize) % region;
+            b[pos] ^= 1 << (rng.next_u64() % 8);
+        }
+        check(&b, &format!("flip variant {i}"));
+    }
+}
+
+fn expect_err(name: &str, bytes: &[u8], format: Format, needle: &str) {
+    match read_bytes(name, bytes, &opts(format)) {
+        Err(e) => {
+            let msg = e.to_string();
+            println!("{name}: {msg}");
+            assert!(
+                msg.contains(needle),
+                "{name}: `{msg}` should mention `{needle}`"
+            );
+            assert!(
+                msg.contains("Fix:") || matches!(e, ReadError::UnknownFormat { .. }),
+                "{msg}"
+            );
+        }
+        Ok(t) => panic!("{name}: accepted a corrupt header ({} × {})", t.nx, t.ny),
+    }
+}
+
+/// Replace the first `from` after the first `after`.
+fn replace_after(bytes: &[u8], after: &str, from: &str, to: &str) -> Vec<u8> {
+    let start = bytes
+        .windows(after.len())
+        .position(|w| w == after.as_bytes())
+        .unwrap_or(0);
+    let pos = start
+        + bytes[start..]
+            .windows(from.len())
+            .position(|w| w == from.as_bytes())
+            .unwrap_or_else(|| panic!("`{from}` not found"));
+    let mut out = bytes[..pos].to_vec();
+    out.extend_from_slice(to.as_bytes());
+    out.extend_from_slice(&bytes[pos + from.len()..]);
+    out
+}
+
+#[test]
+fn nanoscope_survives_hostile_input() {
+    let b = data("di-3.di");
+    torture("di-3.di", &b, Format::NanoScope, 1, 150);
+    // Same length keeps the header layout: 256 → 9999 points per line.
+    expect_err(
+        "huge.di",
+        &replace_after(&b, "Ciao image list", "Samps/line: 256", "Samps/line: 9999"),
+        Format::NanoScope,
+        "Samps/line",
+    );
+    let huge = replace_after(
+        &b,
+        "Ciao image list",
+        "Number of lines: 256",
+        "Number of lines: 1000000000000",
+    );
+    expect_err("huge2.di", &huge, Format::NanoScope, "Samps/line");
+    expect_err(
+        "offset.di",
+        &replace_after(
+            &b,
+            "Ciao image list",
+            "Data offset: 40960",
+            "Data offset: 99999999",
+        ),
+        Format::NanoScope,
+        "Data offset",
+    );
+    let e = read_bytes(
+        "di-3.di",
+        &b,
+        &ReadOptions {
+            channel: Some(7),
+            ..opts(Format::NanoScope)
+        },
+    )
+    .unwrap_err();
+    assert!(e.to_string().contains("--channel"), "{e}");
+    // The phase channel is not a height.
+    let e = read_bytes(
+        "di-3.di",
+        &b,
+        &ReadOptions {
+            channel: Some(2),
+            ..opts(Format::NanoScope)
+        },
+    )
+    .unwrap_err();
+    assert!(
+        e.to_string().contains("not a height") || e.to_string().contains("choose"),
+        "{e}"
+    );
+}
+
+#[test]
+fn matrix_and_dektak_survive_hostile_input() {
+    let m = data("matrix-3.txt");
+    torture("matrix-3.txt", &m[..20_000], Format::Matrix, 2, 100);
+    expect_err(
+        "ragged.txt",
+        b"# Width: 1 um\n1 2 3\n4 5\n",
+        Format::Matrix,
+        "line 3",
+    );
+    expect_err(
+        "nowidth.txt",
+        b"1 2 3 4\n4 5 6 7\n",
+        Format::Matrix,
+        "Width",
+    );
+    let d = data("dektak-1.csv");
+    torture("dektak-1.csv", &d, Format::Dektak, 3, 100);
+    expect_err(
+        "nodata.csv",
+        b"Scan Parameters\nfoo,bar\n",
+        Format::Dektak,
+        "Scan Data",
+    );
+}
+
+#[test]
+fn x3p_survives_hostile_input() {
+    let b = data("KautschukInfiniteFocus.x3p");
+    torture("k.x3p", &b, Format::X3p, 4, 60);
+    // Rebuild the archive with a main.xml that claims 10⁹ × 10⁹ points.
+    let mut zip = zip::ZipArchive::new(std::io::Cursor::new(&b[..])).unwrap();
+    let mut xml = String::new();
+    std::io::Read::read_to_string(&mut zip.by_name("main.xml").unwrap(), &mut xml).unwrap();
+    let mut bin = Vec::new();
+    std::io::Read::read_to_end(&mut zip.by_name("bindata/data.bin").unwrap(), &mut bin).unwrap();
+    let build = |xml: &str, bin: &[u8]| -> Vec<u8> {
+        let mut w = zip::ZipWriter::new(std::io::Cursor::new(Vec::new()));
+        let o = zip::write::SimpleFileOptions::default()
+            .compression_method(zip::CompressionMethod::Stored);
+        w.start_file("main.xml", o).unwrap();
+        w.write_all(xml.as_bytes()).unwrap();
+        w.start_file("bindata/data.bin", o).unwrap();
+        w.write_all(bin).unwrap();
+        w.finish().unwrap().into_inner()
+    };
+    // Sanity: the rebuilt archive reads.
+    let ok = read_bytes("rebuilt.x3p", &build(&xml, &bin), &opts(Format::X3p)).unwrap();
+    assert_eq!((ok.nx, ok.ny), (860, 634));
+    let huge = xml
+        .replace("<SizeX>860</SizeX>", "<SizeX>1000000000</SizeX>")
+        .replace("<SizeY>634</SizeY>", "<SizeY>1000000000</SizeY>");
+    expect_err(
+        "huge.x3p",
+        &build(&huge, &bin),
+        Format::X3p,
+        "MatrixDimension",
+    );
+    let short = xml.replace("<SizeX>860</SizeX>", "<SizeX>861</SizeX>");
+    expect_err(
+        "short.x3p",
+        &build(&short, &bin),
+        Format::X3p,
+        "MatrixDimension",
+    );
+    let dtype = xml.replacen(
+        "<DataType>F</DataType>\n      </CZ>",
+        "<DataType>Q</DataType>\n      </CZ>",
+        1,
+    );
+    assert_ne!(dtype, xml);
+    expect_err("dtype.x3p", &build(&dtype, &bin), Format::X3p, "DataType");
+    // Double data and an inline data list give the same heights.
+    let f32s: Vec<f64> = bin
+        .chunks_exact(4)
+        .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]) as f64)
+        .collect();
+    let dxml = xml.replacen(
+        "<DataType>F</DataType>\n      </CZ>",
+        "<DataType>D</DataType>\n      </CZ>",
+        1,
+    );
+    let dbin: Vec<u8> = f32s.iter().flat_map(|v| v.to_le_bytes()).collect();
+    let d = read_bytes("double.x3p", &build(&dxml, &dbin), &opts(Format::X3p)).unwrap();
+    for (a, b) in d.heights.iter().zip(&ok.heights) {
+        assert!(a == b || (a.is_nan() && b.is_nan()));
+    }
+    // Integer data (I = int16) are scaled by the Z increment.
+    let ixml = xml.replacen(
+        "<DataType>F</DataType>\n      </CZ>",
+        "<DataType>I</DataType>\n        <Increment>1e-9</Increment>\n      </CZ>",
+        1,
+    );
+    let ibin: Vec<u8> = (0..860 * 634)
+        .flat_map(|i| ((i % 1000) as i16 - 500).to_le_bytes())
+        .collect();
+    let it = read_bytes("int.x3p", &build(&ixml, &ibin), &opts(Format::X3p)).unwrap();
+    assert!((it.heights[1234] - ((1234 % 1000) as f64 - 500.0) * 1e-9).abs() < 1e-20);
+    assert_eq!(
+        ok.invalid_count(),
+        5296,
+        "+Inf points of the Alicona file become NaN"
+    );
+}
+
+#[test]
+fn bcr_survives_hostile_input() {
+    let b = data("bcrf-1.bcrf");
+    torture("bcrf-1.bcrf", &b[..200_000], Format::Bcr, 5, 150);
+    let utf16 = |s: &str| -> Vec<u8> { s.encode_utf16().flat_map(|u| u.to_le_bytes()).collect() };
+    let mut huge = b.clone();
+    let from = utf16("xpixels = 960");
+    let to = utf16("xpixels = 9e9");
+    let pos = huge
+        .windows(from.len())
+        .position(|w| w == from.as_slice())
+        .unwrap();
+    huge[pos..pos + to.len()].copy_from_slice(&to);
+    expect_err("huge.bcrf", &huge, Format::Bcr, "xpixels");
+    let to = utf16("xpixels = 999");
+    huge[pos..pos + to.len()].copy_from_slice(&to);
+    expect_err("big.bcrf", &huge, Format::Bcr, "xpixels");
+}
+
+/// An ASCII-header int16 BCR file written from scratch.
+fn bcr_int16(nx: usize, ny: usize, values: &[i16]) -> Vec<u8> {
+    let mut h = format!(
+        "fileformat = bcrstm\nheadersize = 2048\nxpixels = {nx}\nypixels = {ny}\nxlength = {}\nylength = {}\nbit2nm = 0.5\nvoidpixels = 1\n",
+        nx * 10,
+        ny * 20
+    )
+    .into_bytes();
+    h.resize(2048, b' ');
+    h.extend(values.iter().flat_map(|v| v.to_le_bytes()));
+    h
+}
+
+#[test]
+fn bcr_int16_round_trip_and_torture() {
+    let vals: Vec<i16> = (0..12)
+        .map(|i| i * 3 - 5)
+        .chain([i16::MAX])
+        .chain(0..3)
+        .collect();
+    let b = bcr_int16(4, 4, &vals);
+    let t = read_bytes("x.bcr", &b, &ReadOptions::default()).unwrap();
+    assert_eq!((t.nx, t.ny), (4, 4));
+    assert!((t.dx - 10e-9).abs() < 1e-20 && (t.dy - 20e-9).abs() < 1e-20);
+    assert!((t.heights[1] - (-2.0 * 0.5e-9)).abs() < 1e-20);
+    assert!(t.heights[12].is_nan(), "void pixel");
+    torture("x.bcr", &b, Format::Bcr, 6, 200);
+}
+
+/// A GSF file written from scratch.
+fn gsf(nx: usize, ny: usize, values: &[f32], extra: &str) -> Vec<u8> {
+    let mut h = format!("Gwyddion Simple Field 1.0\nXRes = {nx}\nYRes = {ny}\nXReal = 2e-6\nYReal = 1e-6\nZUnits = nm\n{extra}").into_bytes();
+    let pad = 4 - h.len() % 4;
+    h.extend(std::iter::repeat_n(0u8, pad));
+    h.extend(values.iter().flat_map(|v| v.to_le_bytes()));
+    h
+}
+
+#[test]
+fn gsf_round_trip_and_torture() {
+    let vals: Vec<f32> = (0..20)
+        .map(|i| i as f32)
+        .chain([f32::NAN])
+        .chain((0..3).map(|i| i as f32))
+        .collect();
+    let b = gsf(6, 4, &vals, "Title = test\n");
+    let t = read_bytes("x.gsf", &b, &ReadOptions::default()).unwrap();
+    assert_eq!((t.nx, t.ny, t.channel.as_str()), (6, 4, "test"));
+    assert!((t.dx - 2e-6 / 6.0).abs() < 1e-18 && (t.dy - 0.25e-6).abs() < 1e-18);
+    assert!((t.heights[7] - 7e-9).abs() < 1e-20 && t.heights[20].is_nan());
+    torture("x.gsf", &b, Format::Gsf, 7, 200);
+    let huge = String::from_utf8_lossy(&b).replace("XRes = 6", "XRes = 600000000000");
+    expect_err("huge.gsf", huge.as_bytes(), Format::Gsf, "XRes");
+}
+
+/// Binary SDF written from scratch (81-byte header).
+fn sdf_binary(nx: u16, ny: u16, values: &[i16]) -> Vec<u8> {
+    let mut h = Vec::new();
+    h.extend_from_slice(b"bISO-1.0");
+    h.extend_from_slice(b"lustre    ");
+    h.extend_from_slice(b"010120250000");
+    h.extend_from_slice(b"010120250000");
+    h.extend_from_slice(&nx.to_le_bytes());
+    h.extend_from_slice(&ny.to_le_bytes());
+    for v in [1e-6f64, 2e-6, 1e-9, 1e-9] {
+        h.extend_from_slice(&v.to_le_bytes());
+    }
+    h.extend_from_slice(&[0, 5, 0]); // uncompressed, int16, no checksum
+    assert_eq!(h.len(), 81);
+    h.extend(values.iter().flat_map(|v| v.to_le_bytes()));
+    h
+}
+
+#[test]
+fn sdf_round_trip_and_torture() {
+    let vals: Vec<i16> = (0..15).map(|i| i * 100 - 700).collect();
+    let b = sdf_binary(5, 3, &vals);
+    let t = read_bytes("x.sdf", &b, &ReadOptions::default()).unwrap();
+    assert_eq!((t.nx, t.ny), (5, 3));
+    assert!((t.dx - 1e-6).abs() < 1e-18 && (t.dy - 2e-6).abs() < 1e-18);
+    assert!((t.heights[4] - (-300e-9)).abs() < 1e-18);
+    torture("x.sdf", &b, Format::Sdf, 8, 200);
+    let mut huge = b.clone();
+    huge[42..46].copy_from_slice(&[0xff, 0xff, 0xff, 0xff]);
+    expect_err("huge.sdf", &huge, Format::Sdf, "NumPoints");
+
+    let ascii = "aISO-1.0\nManufacID = lustre\nNumPoints = 3\nNumProfiles = 2\nXscale = 1e-6\nYscale = 1e-6\nZscale = 1e-9\nDataType = 7\n*\n1 2 3\n4 5 6\n*\n";
+    let t = read_bytes("a.sdf", ascii.as_bytes(), &ReadOptions::default()).unwrap();
+    assert_eq!((t.nx, t.ny), (3, 2));
+    assert!((t.heights[5] - 6e-9).abs() < 1e-20);
+    torture("a.sdf", ascii.as_bytes(), Format::Sdf, 9, 200);
+    expect_err(
+        "huge-a.sdf",
+        ascii
+            .replace("NumPoints = 3", "NumPoints = 300000000")
+            .as_bytes(),
+        Format::Sdf,
+        "NumPoints",
+    );
+}
+
+#[test]
+fn xyz_round_trip_and_torture() {
+    let mut s = String::from("x,y,z\n");
+    for y in 0..4 {
+        for x in 0..5 {
+            if (x, y) != (2, 2) {
+                s.push_str(&format!(
+                    "{},{},{}\n",
+                    x as f64 * 0.5,
+                    y as f64 * 0.5,
+                    x * 10 + y
+                ));
+            }
+        }
+    }
+    let o = ReadOptions {
+        units: Some(1e-6),
+        ..ReadOptions::default()
+    };
+    let t = read_bytes("x.xyz", s.as_bytes(), &o).unwrap();
+    assert_eq!((t.nx, t.ny), (5, 4));
+    assert!((t.dx - 0.5e-6).abs() < 1e-18);
+    assert!((t.heights[3 * 5 + 4] - 43e-6).abs() < 1e-15);
+    assert!(t.heights[2 * 5 + 2].is_nan(), "missing grid point is NaN");
+    torture("x.xyz", s.as_bytes(), Format::Xyz, 10, 300);
+    let prof = "0 1\n1 2\n2 3\n3 5\n";
+    let t = read_bytes("p.xyz", prof.as_bytes(), &ReadOptions::default()).unwrap();
+    assert_eq!((t.nx, t.ny, t.dx), (4, 1, 1.0));
+    // A far-away point cannot make the grid explode.
+    let sparse = "0 0 1\n1 0 1\n0 1 1\n1e6 1e6 1\n";
+    assert!(read_bytes("s.xyz", sparse.as_bytes(), &ReadOptions::default()).is_err());
+}
+
+#[test]
+fn unknown_formats_are_reported() {
+    let e = read_bytes("x.bin", &[0u8, 1, 2, 3, 255], &ReadOptions::default()).unwrap_err();
+    assert!(matches!(e, ReadError::UnknownFormat { .. }), "{e}");
+}
