@@ -1,5 +1,6 @@
 //! Per-call cost of the microfacet conductors: GGX and Beckmann, copper
-//! Fresnel (measured n, k table lookup included), `eval + pdf` and `sample`.
+//! Fresnel (measured n, k table lookup included), `eval + pdf` (one
+//! `eval_pdf` call, as a renderer's light sampling makes it) and `sample`.
 //!
 //! Each iteration handles one input from a pre-drawn ring of 1024 random
 //! (wi, wo, λ, u) tuples, so branch predictors and caches see realistic
@@ -162,7 +163,8 @@ fn bench_model(c: &mut Criterion<CpuTime>, name: &str, model: MicrofacetConducto
             i = (i + 1) & (RING - 1);
             let x = &ring[i];
             let (wi, wo, l) = (black_box(x.wi), black_box(x.wo), black_box(x.lambda));
-            black_box(model.eval(wi, wo, l) + model.pdf(wi, wo, l))
+            let (f, p) = model.eval_pdf(wi, wo, l);
+            black_box(f + p)
         })
     });
     g.bench_function("eval", |b| {

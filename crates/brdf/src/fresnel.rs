@@ -62,11 +62,11 @@ pub fn conductor_reflectance(cos_theta: f64, n: f64, k: f64) -> f64 {
     let a = libm::sqrt((0.5 * (a2b2 + t0)).max(0.0));
     let t1 = a2b2 + c2;
     let t2 = 2.0 * c * a;
-    let rs = (t1 - t2) / (t1 + t2);
     let t3 = c2 * a2b2 + s2 * s2;
     let t4 = t2 * s2;
-    let rp = rs * (t3 - t4) / (t3 + t4);
-    let r = 0.5 * (rs + rp);
+    // R_s = (t1 − t2)/(t1 + t2) and R_p = R_s (t3 − t4)/(t3 + t4), so
+    // ½(R_s + R_p) = (t1 − t2) t3 / ((t1 + t2)(t3 + t4)): one division.
+    let r = (t1 - t2) * t3 / ((t1 + t2) * (t3 + t4));
     // n = 1, κ = 0 at normal incidence is 0/0; a matched interface reflects nothing.
     if r.is_finite() {
         r.clamp(0.0, 1.0)
