@@ -1,0 +1,43 @@
+/// An sRGB colour with 8 bits per channel.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub struct Rgb(pub u8, pub u8, pub u8);
+
+impl Rgb {
+    /// Pure white, the background of plots and grids.
+    pub const WHITE: Rgb = Rgb(255, 255, 255);
+    /// Pure black, used for axes and text.
+    pub const BLACK: Rgb = Rgb(0, 0, 0);
+    /// Light grey used for grid lines.
+    pub const GRID: Rgb = Rgb(222, 222, 222);
+
+    /// The `i`-th colour of the default palette (cycles after 8).
+    ///
+    /// The palette is Okabe & Ito's colour-blind-safe set, reordered so the first colours are
+    /// the most distinct, with yellow replaced by a darker gold that stays visible on white.
+    pub fn palette(i: usize) -> Rgb {
+        const P: [Rgb; 8] = [
+            Rgb(0, 114, 178),   // blue
+            Rgb(213, 94, 0),    // vermillion
+            Rgb(0, 158, 115),   // bluish green
+            Rgb(204, 121, 167), // reddish purple
+            Rgb(86, 180, 233),  // sky blue
+            Rgb(230, 159, 0),   // orange
+            Rgb(0, 0, 0),       // black
+            Rgb(170, 140, 0),   // dark gold
+        ];
+        P[i % P.len()]
+    }
+
+    pub(crate) fn blend_over(self, dst: [u8; 3], alpha: f32) -> [u8; 3] {
+        let a = alpha.clamp(0.0, 1.0);
+        let mix = |s: u8, d: u8| -> u8 {
+            let v = f32::from(s) * a + f32::from(d) * (1.0 - a);
+            v.round().clamp(0.0, 255.0) as u8
+        };
+        [
+            mix(self.0, dst[0]),
+            mix(self.1, dst[1]),
+            mix(self.2, dst[2]),
+        ]
+    }
+}
