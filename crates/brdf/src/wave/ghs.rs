@@ -139,9 +139,23 @@ impl<P: RadialPsd> GhsFull<P> {
     /// R = 1, unrenormalised scattered BRDF k²L² S̃.
     #[inline]
     fn raw_lobe(&self, c: &GhsCommon, wi: DVec3, wo: DVec3, lambda_nm: f64) -> f64 {
-        let Some(geo) = Geometry::new(wi, wo, lambda_nm, c.length) else {
-            return 0.0;
-        };
+        match Geometry::new(wi, wo, lambda_nm, c.length) {
+            Some(geo) => self.raw_lobe_at(c, &geo, lambda_nm, Self::ln_u(&geo)),
+            None => 0.0,
+        }
+    }
+
+    #[inline]
+    fn ln_u(geo: &Geometry) -> f64 {
+        if geo.u2 > 0.0 {
+            0.5 * libm::log(geo.u2)
+        } else {
+            f64::NEG_INFINITY
+        }
+    }
+
+    #[inline]
+    fn raw_lobe_at(&self, c: &GhsCommon, geo: &Geometry, lambda_nm: f64, ln_u: f64) -> f64 {
         let s = c.sigma_eff(geo.ci, lambda_nm);
         let t = geo.k * s * (geo.ci + geo.co);
         let kl = geo.k * c.length;
@@ -149,11 +163,6 @@ impl<P: RadialPsd> GhsFull<P> {
         if !(g > 0.0) {
             return 0.0;
         }
-        let ln_u = if geo.u2 > 0.0 {
-            0.5 * libm::log(geo.u2)
-        } else {
-            f64::NEG_INFINITY
-        };
         let s_tilde = match self.table.s_tilde_ln_u(ln_u, g) {
             Some(v) => v,
             None => -libm::expm1(-g) * self.psd.unit_psd_u(libm::sqrt(geo.u2)),
@@ -165,18 +174,22 @@ impl<P: RadialPsd> GhsFull<P> {
     /// draws u = L|ζ| for specular exponent `gs` (before the evanescent cut).
     #[inline]
     pub fn proposal_density(&self, gs: f64, u: f64) -> f64 {
-        let p = self.psd.unit_psd_u(u);
-        if gs < G_MIN {
-            return p;
-        }
-        let rows = self.table.proposal_rows(gs);
         let ln_u = if u > 0.0 {
             libm::log(u)
         } else {
             f64::NEG_INFINITY
         };
+        self.proposal_density_ln(gs, u, ln_u)
+    }
+
+    #[inline]
+    fn proposal_density_ln(&self, gs: f64, u: f64, ln_u: f64) -> f64 {
+        let p = self.psd.unit_psd_u(u);
+        if gs < G_MIN {
+            return p;
+        }
         let mut q = 0.0;
-        for (r, w, lw) in rows {
+        for (r, w, lw) in self.table.proposal_rows(gs) {
             if w > 0.0 {
                 q += w * self.table.row_density(r, lw, ln_u);
             }
@@ -195,6 +208,34 @@ impl<P: RadialPsd> GhsFull<P> {
         let rows = self.table.proposal_rows(gs);
         let (r, _, lw) = if v < rows[0].1 { rows[0] } else { rows[1] };
         self.table.row_sample(r, lw, xi)
+    }
+
+    /// (eval, pdf) sharing the geometry and ln u; `with_eval` false skips
+    /// the BRDF.
+    #[inline]
+    fn eval_pdf_impl(&self, wi: DVec3, wo: DVec3, lambda_nm: f64, with_eval: bool) -> (f64, f64) {
+        let Some(geo) = Geometry::new(wi, wo, lambda_nm, self.common.length) else {
+            return (0.0, 0.0);
+        };
+        let ln_u = Self::ln_u(&geo);
+        let u = libm::sqrt(geo.u2);
+        let kl = geo.k * self.common.length;
+        let (p_delta, gs) = self.common.choice(geo.ci, lambda_nm);
+        let q = self.proposal_density_ln(gs, u, ln_u);
+        let pdf = finite_nonneg((1.0 - p_delta) * kl * kl * geo.co * q);
+        if !with_eval {
+            return (0.0, pdf);
+        }
+        let f = self.raw_lobe_at(&self.common, &geo, lambda_nm, ln_u);
+        let f = if f == 0.0 {
+            0.0
+        } else {
+            finite_nonneg(
+                f * self.common.r_scatter(wi, wo, lambda_nm)
+                    * self.common.scatter_factor(geo.ci, lambda_nm),
+            )
+        };
+        (f, pdf)
     }
 
     /// Reference sampler of the exact law of the scattered frequency for
@@ -226,13 +267,11 @@ impl<P: RadialPsd> Bxdf for GhsFull<P> {
     }
 
     fn pdf(&self, wi: DVec3, wo: DVec3, lambda_nm: f64) -> f64 {
-        let Some(geo) = Geometry::new(wi, wo, lambda_nm, self.common.length) else {
-            return 0.0;
-        };
-        let (p_delta, gs) = self.common.choice(geo.ci, lambda_nm);
-        let kl = geo.k * self.common.length;
-        let q = self.proposal_density(gs, libm::sqrt(geo.u2));
-        finite_nonneg((1.0 - p_delta) * kl * kl * geo.co * q)
+        self.eval_pdf_impl(wi, wo, lambda_nm, false).1
+    }
+
+    fn eval_pdf(&self, wi: DVec3, wo: DVec3, lambda_nm: f64) -> (f64, f64) {
+        self.eval_pdf_impl(wi, wo, lambda_nm, true)
     }
 
     fn sample(&self, wi: DVec3, lambda_nm: f64, u: [f64; 3]) -> Option<BxdfSample> {
@@ -253,8 +292,7 @@ impl<P: RadialPsd> Bxdf for GhsFull<P> {
         let kl = wavenumber(lambda_nm) * self.common.length;
         let uu = self.proposal_sample(gs, v, u[1]);
         let wo = direction_from_u(wi, kl, uu, 2.0 * core::f64::consts::PI * u[2])?;
-        let f = self.eval(wi, wo, lambda_nm);
-        let pdf = self.pdf(wi, wo, lambda_nm);
+        let (f, pdf) = self.eval_pdf_impl(wi, wo, lambda_nm, true);
         if !(f > 0.0 && pdf > 0.0) {
             return None;
         }

@@ -225,6 +225,27 @@ impl<P: RadialPsd> Bxdf for GhsSsa<P> {
         finite_nonneg((1.0 - p_delta) * kl * kl * geo.co * self.psd.unit_psd_u(libm::sqrt(geo.u2)))
     }
 
+    fn eval_pdf(&self, wi: DVec3, wo: DVec3, lambda_nm: f64) -> (f64, f64) {
+        let Some(geo) = Geometry::new(wi, wo, lambda_nm, self.common.length) else {
+            return (0.0, 0.0);
+        };
+        let (p_delta, _) = self.common.choice(geo.ci, lambda_nm);
+        let kl = geo.k * self.common.length;
+        let lobe = kl * kl * self.psd.unit_psd_u(libm::sqrt(geo.u2));
+        let pdf = finite_nonneg((1.0 - p_delta) * geo.co * lobe);
+        let s = self.common.sigma_eff(geo.ci, lambda_nm);
+        let t = geo.k * s * (geo.ci + geo.co);
+        let f = -libm::expm1(-t * t) * lobe;
+        if f == 0.0 {
+            return (0.0, pdf);
+        }
+        let f = finite_nonneg(
+            f * self.common.r_scatter(wi, wo, lambda_nm)
+                * self.common.scatter_factor(geo.ci, lambda_nm),
+        );
+        (f, pdf)
+    }
+
     fn sample(&self, wi: DVec3, lambda_nm: f64, u: [f64; 3]) -> Option<BxdfSample> {
         if !(wi.z > 0.0) {
             return None;
@@ -242,8 +263,7 @@ impl<P: RadialPsd> Bxdf for GhsSsa<P> {
         let kl = wavenumber(lambda_nm) * self.common.length;
         let uu = self.psd.sample_u(u[1]);
         let wo = direction_from_u(wi, kl, uu, 2.0 * core::f64::consts::PI * u[2])?;
-        let f = self.eval(wi, wo, lambda_nm);
-        let pdf = self.pdf(wi, wo, lambda_nm);
+        let (f, pdf) = self.eval_pdf(wi, wo, lambda_nm);
         if !(f > 0.0 && pdf > 0.0) {
             return None;
         }
