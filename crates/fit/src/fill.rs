@@ -30,7 +30,10 @@ pub fn harmonic(topo: &mut Topography) -> Result<usize, FitError> {
         .map(|v| (v - mean).abs())
         .fold(0.0, f64::max)
         .max(f64::MIN_POSITIVE);
-    for _sweep in 0..20_000 {
+    // Bound the work (≈ 5·10⁸ point updates) so a map that is mostly holes cannot stall
+    // the command; small holes converge long before the cap.
+    let sweeps = (500_000_000 / holes.len()).clamp(200, 20_000);
+    for _sweep in 0..sweeps {
         let mut max_change: f64 = 0.0;
         for &i in &holes {
             let (x, y) = (i % nx, i / nx);

@@ -411,3 +411,104 @@ fn sha256_matches_known_digests() {
         );
     }
 }
+
+fn map(nx: usize, ny: usize, f: impl Fn(f64, f64) -> f64) -> Topography {
+    let mut h = Vec::new();
+    for y in 0..ny {
+        for x in 0..nx {
+            h.push(f(x as f64, y as f64));
+        }
+    }
+    Topography {
+        nx,
+        ny,
+        dx: 1e-6,
+        dy: 1e-6,
+        heights: h,
+        channel: String::new(),
+        format: "test",
+    }
+}
+
+#[test]
+fn harmonic_fill_reproduces_harmonic_functions() {
+    // x² − y² and planes are harmonic: interior holes must be filled with their values.
+    let truth = map(40, 30, |x, y| {
+        1e-9 * ((x - 20.0).powi(2) - (y - 15.0).powi(2)) + 3e-9 * x
+    });
+    let mut t = truth.clone();
+    let mut rng = SplitMix64::new(5);
+    for _ in 0..150 {
+        let (x, y) = (
+            1 + (rng.next_u64() % 38) as usize,
+            1 + (rng.next_u64() % 28) as usize,
+        );
+        t.heights[y * 40 + x] = f64::NAN;
+    }
+    for y in 10..14 {
+        for x in 12..20 {
+            t.heights[y * 40 + x] = f64::NAN; // a block hole
+        }
+    }
+    let n = fit::fill::harmonic(&mut t).unwrap();
+    assert!(n > 150);
+    let worst = t
+        .heights
+        .iter()
+        .zip(&truth.heights)
+        .map(|(a, b)| (a - b).abs())
+        .fold(0.0, f64::max);
+    assert!(worst < 1e-15, "{worst}");
+    let mut all = truth.clone();
+    all.heights.iter_mut().for_each(|h| *h = f64::NAN);
+    assert!(fit::fill::harmonic(&mut all).is_err());
+}
+
+#[test]
+fn levelling_removes_exactly_what_it_fits() {
+    let mut rng = SplitMix64::new(9);
+    let noise: Vec<f64> = (0..50 * 40).map(|_| rng.normal() * 1e-9).collect();
+    let base = map(50, 40, |x, y| 1e-7 + 2e-8 * x - 3e-8 * y);
+    let mut t = base.clone();
+    for (h, n) in t.heights.iter_mut().zip(&noise) {
+        *h += n;
+    }
+    let mut plain = t.clone();
+    plain.heights.copy_from_slice(&noise);
+    fit::level::plane(&mut t).unwrap();
+    fit::level::plane(&mut plain).unwrap();
+    // Levelling is linear: the tilt disappears and the noise is levelled the same way.
+    let worst = t
+        .heights
+        .iter()
+        .zip(&plain.heights)
+        .map(|(a, b)| (a - b).abs())
+        .fold(0.0, f64::max);
+    assert!(worst < 1e-18, "{worst}");
+    // A quadratic surface is removed to rounding by the degree-2 polynomial.
+    let mut q = map(50, 40, |x, y| {
+        1e-9 * (x * x - 2.0 * x * y + 0.5 * y * y) + 1e-8 * x
+    });
+    fit::level::polynomial(&mut q, 2).unwrap();
+    assert!(
+        q.heights.iter().all(|h| h.abs() < 1e-18),
+        "{:e}",
+        q.heights.iter().fold(0.0f64, |m, h| m.max(h.abs()))
+    );
+    // Per-line levelling leaves every line with zero mean and zero slope.
+    let mut l = map(50, 40, |x, y| 1e-9 * (x * y).sin() + 1e-8 * x * (y + 1.0));
+    fit::level::per_line(&mut l, 1).unwrap();
+    for y in 0..40 {
+        let line = l.line(y);
+        let mean = line.iter().sum::<f64>() / 50.0;
+        let slope: f64 = line
+            .iter()
+            .enumerate()
+            .map(|(i, v)| (i as f64 - 24.5) * v)
+            .sum();
+        assert!(
+            mean.abs() < 1e-19 && slope.abs() < 1e-16,
+            "line {y}: {mean} {slope}"
+        );
+    }
+}
