@@ -1,0 +1,404 @@
+#!/usr/bin/env python3
+"""Mitsuba 3 peer benchmark: rough-conductor plates at doubling sample counts.
+
+Renders the scenes of plate_scenes.toml with Mitsuba 3 (scalar_spectral and, when the
+machine's LLVM works, llvm_ad_spectral), timing every render (scene loading is timed
+separately and excluded), and measures RMSE against a cached high-spp Mitsuba reference.
+
+Outputs (in --out, default benches/peer/out/):
+  timings.csv            scene,variant,spp,load_s,render_s,render_cold_s,threads,loadavg_1min
+  rmse.csv               scene,variant,spp,render_s,rmse,rel_rmse,mse_ref_noise,
+                         rmse_corrected,efficiency
+  ref/<scene>.npy        reference image (linear sRGB, float32, H x W x 3) + .json metadata
+  img/<scene>/<variant>_<spp>spp.{npy,exr}   every timed render (--no-images to skip)
+  lustre_scenes/<scene>.toml   with --write-lustre-scenes: the same scenes for crates/render
+
+Run benches/peer/setup.sh first. See benches/peer/README.md.
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import hashlib
+import json
+import math
+import os
+import sys
+import time
+import tomllib
+from pathlib import Path
+
+HERE = Path(__file__).resolve().parent
+
+# lustre metal names -> Mitsuba roughconductor `material` names.
+MITSUBA_METALS = {"cu": "Cu", "copper": "Cu", "au": "Au", "gold": "Au", "ag": "Ag",
+                  "silver": "Ag", "al": "Al", "aluminium": "Al", "aluminum": "Al",
+                  "cr": "Cr", "chromium": "Cr", "fe": "Fe", "iron": "Fe"}
+
+
+def die(msg: str) -> None:
+    print(f"mitsuba_plate.py: error: {msg}", file=sys.stderr)
+    sys.exit(2)
+
+
+def load_scenes(path: Path) -> list[dict]:
+    try:
+        with open(path, "rb") as f:
+            doc = tomllib.load(f)
+    except (OSError, tomllib.TOMLDecodeError) as e:
+        die(f"cannot read scene description {path}: {e}")
+    scenes = doc.get("scene")
+    if not isinstance(scenes, list) or not scenes:
+        die(f"{path}: expected one or more [[scene]] tables")
+    names = [s.get("name") for s in scenes]
+    if len(set(names)) != len(names) or None in names:
+        die(f"{path}: every [[scene]] needs a unique `name` (got {names})")
+    return scenes
+
+
+# ---------------------------------------------------------------------------------------
+# Scene translation (lustre scene format -> Mitsuba dict)
+
+def rotation_xyz(mi, deg):
+    """lustre applies rotate_deg as x, then y, then z."""
+    T = mi.ScalarTransform4f
+    return (T().rotate([0, 0, 1], deg[2]) @ T().rotate([0, 1, 0], deg[1])
+            @ T().rotate([1, 0, 0], deg[0]))
+
+
+def shape_transform(mi, tr: dict | None):
+    T = mi.ScalarTransform4f
+    tr = tr or {}
+    m = T().translate(tr.get("translate", [0.0, 0.0, 0.0]))
+    m = m @ rotation_xyz(mi, tr.get("rotate_deg", [0.0, 0.0, 0.0]))
+    s = tr.get("scale", 1.0)
+    return m @ T().scale(s if isinstance(s, list) else [s, s, s])
+
+
+def spectrum(name: str, value: float, where: str) -> dict:
+    if name == "constant":
+        return {"type": "uniform", "value": float(value)}
+    if name.startswith("blackbody(") and name.endswith(")"):
+        # Not used by plate_scenes.toml; Mitsuba's blackbody is not luminance-normalised.
+        die(f"{where}: spectrum {name!r} has no luminance-matched Mitsuba equivalent; use 'constant'")
+    die(f"{where}: spectrum {name!r} not supported by the peer script (use 'constant')")
+    return {}
+
+
+def material(sc: dict, mname: str) -> dict:
+    where = f"scene {sc['name']}, materials.{mname}"
+    m = sc.get("materials", {}).get(mname)
+    if m is None:
+        die(f"{where}: material not defined")
+    model = m.get("model")
+    if model not in ("ggx", "beckmann"):
+        die(f"{where}: model {model!r}: Mitsuba has only ggx and beckmann microfacets")
+    alpha = m.get("alpha_beckmann", m.get("alpha")) if model == "beckmann" else m.get("alpha")
+    if not isinstance(alpha, (int, float)) or not 1e-4 <= alpha <= 1.0:
+        die(f"{where}: alpha must be a number in [1e-4, 1], got {alpha!r}")
+    if m.get("fresnel", "conductor") == "one":
+        metal = "none"  # Mitsuba: eta = 0, k = 1 -> a 100 % reflecting conductor
+    else:
+        metal = MITSUBA_METALS.get(str(m.get("metal", "")).lower())
+        if metal is None:
+            die(f"{where}: metal {m.get('metal')!r} has no Mitsuba table; known: {sorted(MITSUBA_METALS)}")
+    return {"type": "roughconductor", "distribution": model, "alpha": float(alpha),
+            "material": metal, "sample_visible": True}
+
+
+def mitsuba_scene_dict(mi, sc: dict, spp: int, resolution=None) -> dict:
+    T = mi.ScalarTransform4f
+    cam = sc["camera"]
+    w, h = resolution or cam["resolution"]
+    d = {
+        "type": "scene",
+        # lustre max_depth counts scattering events; Mitsuba counts the emitter vertex too.
+        "integrator": {"type": "path", "max_depth": int(sc["integrator"]["max_depth"]) + 1,
+                       "hide_emitters": False},
+        "sensor": {
+            "type": "perspective",
+            "fov": float(cam["fov_deg"]),
+            "fov_axis": "y",
+            "to_world": T().look_at(origin=cam["look_from"], target=cam["look_at"],
+                                    up=cam.get("up", [0.0, 1.0, 0.0])),
+            "film": {"type": "hdrfilm", "width": int(w), "height": int(h),
+                     "rfilter": {"type": "box"}, "pixel_format": "rgb"},
+            "sampler": {"type": "independent", "sample_count": int(spp)},
+        },
+    }
+    for i, s in enumerate(sc.get("shapes", [])):
+        where = f"scene {sc['name']}, shapes[{i}]"
+        bsdf = material(sc, s.get("material", ""))
+        if s["type"] == "rectangle":
+            sx, sy = s["size"]
+            # Mitsuba's rectangle spans [-1, 1]^2; lustre's spans size/2 either side.
+            to_world = shape_transform(mi, s.get("transform")) @ T().scale([sx / 2, sy / 2, 1.0])
+            d[f"shape{i}"] = {"type": "rectangle", "to_world": to_world, "bsdf": bsdf}
+        elif s["type"] == "disk":
+            r = s["radius"]
+            to_world = shape_transform(mi, s.get("transform")) @ T().scale([r, r, 1.0])
+            d[f"shape{i}"] = {"type": "disk", "to_world": to_world, "bsdf": bsdf}
+        elif s["type"] == "sphere":
+            d[f"shape{i}"] = {"type": "sphere", "center": s["center"], "radius": s["radius"],
+                              "bsdf": bsdf}
+        else:
+            die(f"{where}: shape type {s['type']!r} not supported by the peer script")
+    for i, l in enumerate(sc.get("lights", [])):
+        where = f"scene {sc['name']}, lights[{i}]"
+        spec = l.get("spectrum", "d65")
+        if l["type"] == "sphere":
+            d[f"light{i}"] = {"type": "sphere", "center": l["center"], "radius": l["radius"],
+                              "emitter": {"type": "area",
+                                          "radiance": spectrum(spec, l["radiance"], where)}}
+        elif l["type"] == "point":
+            d[f"light{i}"] = {"type": "point", "position": l["position"],
+                              "intensity": spectrum(spec, l["intensity"], where)}
+        else:
+            die(f"{where}: light type {l['type']!r} not supported by the peer script")
+    return d
+
+
+# ---------------------------------------------------------------------------------------
+# lustre scene files
+
+def toml_value(v) -> str:
+    if isinstance(v, bool):
+        return "true" if v else "false"
+    if isinstance(v, (int, float)):
+        return repr(v)
+    if isinstance(v, str):
+        return json.dumps(v, ensure_ascii=False)
+    if isinstance(v, list):
+        return "[" + ", ".join(toml_value(x) for x in v) + "]"
+    if isinstance(v, dict):
+        return "{ " + ", ".join(f"{k} = {toml_value(x)}" for k, x in v.items()) + " }"
+    raise TypeError(type(v))
+
+
+def lustre_scene_text(sc: dict, spp: int) -> str:
+    out = [f"# {sc['name']}: {sc.get('description', '')}",
+           "# Generated from benches/peer/plate_scenes.toml by mitsuba_plate.py.", ""]
+
+    def table(header: str, t: dict):
+        out.append(header)
+        out.extend(f"{k} = {toml_value(v)}" for k, v in t.items())
+        out.append("")
+
+    table("[camera]", sc["camera"])
+    table("[film]", {"spp": spp, "seed": 1, "exr": f"{sc['name']}.exr", "png": f"{sc['name']}.png"})
+    table("[integrator]", sc["integrator"])
+    for name, m in sc.get("materials", {}).items():
+        table(f"[materials.{name}]", m)
+    for s in sc.get("shapes", []):
+        table("[[shapes]]", s)
+    for l in sc.get("lights", []):
+        table("[[lights]]", l)
+    return "\n".join(out)
+
+
+# ---------------------------------------------------------------------------------------
+# Rendering
+
+def atomic_write_text(path: Path, text: str) -> None:
+    tmp = path.with_name(f".{path.name}.tmp-{os.getpid()}")
+    tmp.write_text(text)
+    os.replace(tmp, path)
+
+
+def atomic_save_npy(np, path: Path, arr) -> None:
+    tmp = path.with_name(f".{path.name}.tmp-{os.getpid()}.npy")
+    np.save(tmp, arr)
+    os.replace(tmp, path)
+
+
+def render_timed(mi, dr, np, scene, spp: int, seed: int):
+    """Renders and forces evaluation; returns (image as numpy HxWx3 float32, seconds)."""
+    t0 = time.perf_counter()
+    img = mi.render(scene, spp=spp, seed=seed)
+    dr.eval(img)
+    arr = np.array(img, dtype=np.float32)  # LLVM: waits for the kernel to finish
+    dt = time.perf_counter() - t0
+    return arr[..., :3], dt
+
+
+def scene_hash(sc: dict, resolution) -> str:
+    blob = json.dumps({"scene": sc, "res": resolution}, sort_keys=True).encode()
+    return hashlib.sha256(blob).hexdigest()[:16]
+
+
+def reference(mi, dr, np, sc, args, out: Path):
+    """High-spp reference, rendered in chunks with distinct seeds and cached on disk.
+
+    Returns (image, estimated per-pixel MSE of the reference itself, averaged)."""
+    ref_dir = out / "ref"
+    ref_dir.mkdir(parents=True, exist_ok=True)
+    npy, meta_path = ref_dir / f"{sc['name']}.npy", ref_dir / f"{sc['name']}.json"
+    key = {"hash": scene_hash(sc, args.resolution), "spp": args.ref_spp,
+           "variant": args.ref_variant, "mitsuba": mi.__version__}
+    if npy.exists() and meta_path.exists() and not args.fresh_reference:
+        meta = json.loads(meta_path.read_text())
+        if all(meta.get(k) == v for k, v in key.items()):
+            return np.load(npy), meta["mse_ref_noise"], meta
+    mi.set_variant(args.ref_variant)
+    chunk = min(args.ref_chunk, args.ref_spp)
+    n = max(1, args.ref_spp // chunk)
+    scene = mi.load_dict(mitsuba_scene_dict(mi, sc, chunk, args.resolution))
+    acc, acc2, total = None, None, 0.0
+    for k in range(n):
+        img, dt = render_timed(mi, dr, np, scene, chunk, seed=10_000 + k)
+        img = img.astype(np.float64)
+        acc = img if acc is None else acc + img
+        acc2 = img * img if acc2 is None else acc2 + img * img
+        total += dt
+        print(f"  reference {sc['name']}: chunk {k + 1}/{n} ({chunk} spp) {dt:.2f} s", flush=True)
+    mean = acc / n
+    # Variance of the mean over n chunk estimates: what the reference's own noise adds to
+    # every measured MSE.
+    mse_ref = float(np.mean((acc2 / n - mean * mean) / max(n - 1, 1))) if n > 1 else float("nan")
+    ref = mean.astype(np.float32)
+    atomic_save_npy(np, npy, ref)
+    meta = dict(key, seconds=total, chunks=n, chunk_spp=chunk, mse_ref_noise=mse_ref,
+                mean=float(ref.mean()))
+    atomic_write_text(meta_path, json.dumps(meta, indent=1))
+    try:
+        mi.util.write_bitmap(str(ref_dir / f"{sc['name']}.exr"), ref)
+    except Exception as e:  # EXR is a convenience; the NPY is the reference
+        print(f"  (could not write reference EXR: {e})")
+    return ref, mse_ref, meta
+
+
+def set_llvm_path() -> None:
+    """Dr.Jit's LLVM backend dlopen()s libLLVM; point it at Debian's libllvm19 unless the
+    caller chose one. Must run before drjit is imported."""
+    if os.environ.get("DRJIT_LIBLLVM_PATH"):
+        return
+    for cand in ("/usr/lib/x86_64-linux-gnu/libLLVM.so.19.1", "/usr/lib/llvm-19/lib/libLLVM.so.1",
+                 "/usr/lib/llvm-19/lib/libLLVM.so"):
+        if os.path.exists(cand):
+            os.environ["DRJIT_LIBLLVM_PATH"] = cand
+            return
+
+
+def llvm_works(mi) -> str | None:
+    try:
+        mi.set_variant("llvm_ad_spectral")
+        import drjit as dr
+        x = dr.llvm.Float([1.0, 2.0]) * 2.0
+        dr.eval(x)
+        return None
+    except Exception as e:  # ImportError, RuntimeError("LLVM backend could not be initialised") ...
+        return str(e)
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--scenes", type=Path, default=HERE / "plate_scenes.toml")
+    ap.add_argument("--out", type=Path, default=HERE / "out")
+    ap.add_argument("--only", nargs="*", help="scene names to run (default: all)")
+    ap.add_argument("--variants", default="scalar_spectral,llvm_ad_spectral")
+    ap.add_argument("--max-spp", type=int, default=256)
+    ap.add_argument("--ref-spp", type=int, default=4096)
+    ap.add_argument("--ref-chunk", type=int, default=256)
+    ap.add_argument("--ref-variant", default="llvm_ad_spectral")
+    ap.add_argument("--fresh-reference", action="store_true")
+    ap.add_argument("--resolution", type=int, nargs=2, metavar=("W", "H"))
+    ap.add_argument("--no-images", action="store_true", help="do not save every timed render")
+    ap.add_argument("--write-lustre-scenes", type=Path, metavar="DIR",
+                    help="only write lustre scene TOML files for every scene to DIR and exit")
+    ap.add_argument("--lustre-spp", type=int, default=64)
+    args = ap.parse_args()
+
+    scenes = load_scenes(args.scenes)
+    if args.only:
+        unknown = set(args.only) - {s["name"] for s in scenes}
+        if unknown:
+            die(f"unknown scene(s) {sorted(unknown)}; known: {[s['name'] for s in scenes]}")
+        scenes = [s for s in scenes if s["name"] in args.only]
+
+    if args.write_lustre_scenes:
+        args.write_lustre_scenes.mkdir(parents=True, exist_ok=True)
+        for sc in scenes:
+            atomic_write_text(args.write_lustre_scenes / f"{sc['name']}.toml",
+                              lustre_scene_text(sc, args.lustre_spp))
+        print(f"wrote {len(scenes)} lustre scenes to {args.write_lustre_scenes}")
+        return
+
+    set_llvm_path()
+    try:
+        import mitsuba as mi
+        import drjit as dr
+        import numpy as np
+    except ImportError as e:
+        die(f"{e}: run benches/peer/setup.sh first")
+
+    variants = [v for v in args.variants.split(",") if v]
+    bad = [v for v in variants + [args.ref_variant] if v not in mi.variants()]
+    if bad:
+        die(f"variant(s) {bad} not in this Mitsuba build: {mi.variants()}")
+    if any(v.startswith("llvm") for v in variants + [args.ref_variant]):
+        err = llvm_works(mi)
+        if err:
+            print(f"LLVM variants unavailable ({err}); set DRJIT_LIBLLVM_PATH (see setup.sh). "
+                  "Continuing with scalar variants only.", file=sys.stderr)
+            variants = [v for v in variants if not v.startswith("llvm")]
+            if args.ref_variant.startswith("llvm"):
+                args.ref_variant = "scalar_spectral"
+    if not variants:
+        die("no usable variant left")
+
+    out = args.out
+    out.mkdir(parents=True, exist_ok=True)
+    spps = [1 << k for k in range(int(math.log2(args.max_spp)) + 1)]
+    threads = os.cpu_count()
+    tim_rows, err_rows = [], []
+    for sc in scenes:
+        print(f"scene {sc['name']}", flush=True)
+        ref, mse_ref, meta = reference(mi, dr, np, sc, args, out)
+        ref_mean = float(ref.mean())
+        for variant in variants:
+            mi.set_variant(variant)
+            for spp in spps:
+                t0 = time.perf_counter()
+                scene = mi.load_dict(mitsuba_scene_dict(mi, sc, spp, args.resolution))
+                load_s = time.perf_counter() - t0
+                cold = float("nan")
+                if variant.startswith("llvm"):
+                    # First render of a kernel includes JIT compilation (or a kernel-cache
+                    # lookup); report it, and time a second, warm render with another seed.
+                    _, cold = render_timed(mi, dr, np, scene, spp, seed=20_000 + spp)
+                img, dt = render_timed(mi, dr, np, scene, spp, seed=spp)
+                mse = float(np.mean((img.astype(np.float64) - ref) ** 2))
+                rmse = math.sqrt(mse)
+                corr = math.sqrt(max(mse - mse_ref, 0.0)) if not math.isnan(mse_ref) else float("nan")
+                tim_rows.append([sc["name"], variant, spp, f"{load_s:.6f}", f"{dt:.6f}", f"{cold:.6f}",
+                                 threads, f"{os.getloadavg()[0]:.2f}"])
+                err_rows.append([sc["name"], variant, spp, f"{dt:.6f}", f"{rmse:.6e}",
+                                 f"{rmse / ref_mean:.6e}", f"{mse_ref:.6e}", f"{corr:.6e}",
+                                 f"{1.0 / (dt * mse):.6e}" if mse > 0 and dt > 0 else "inf"])
+                print(f"  {variant:18s} {spp:4d} spp  load {load_s:6.3f} s  render {dt:8.3f} s"
+                      f"  rmse {rmse:.4e} (rel {rmse / ref_mean:.4e})", flush=True)
+                if not args.no_images:
+                    d = out / "img" / sc["name"]
+                    d.mkdir(parents=True, exist_ok=True)
+                    atomic_save_npy(np, d / f"{variant}_{spp}spp.npy", img)
+                    mi.util.write_bitmap(str(d / f"{variant}_{spp}spp.exr"), img)
+        # Rewrite the CSVs after every scene so an interrupted run keeps what it measured.
+        write_csv(out / "timings.csv", ["scene", "variant", "spp", "load_s", "render_s",
+                                        "render_cold_s", "threads", "loadavg_1min"], tim_rows)
+        write_csv(out / "rmse.csv", ["scene", "variant", "spp", "render_s", "rmse", "rel_rmse",
+                                     "mse_ref_noise", "rmse_corrected", "efficiency"], err_rows)
+    print(f"wrote {out / 'timings.csv'} and {out / 'rmse.csv'}")
+
+
+def write_csv(path: Path, header: list[str], rows: list[list]) -> None:
+    tmp = path.with_name(f".{path.name}.tmp-{os.getpid()}")
+    with open(tmp, "w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow(header)
+        w.writerows(rows)
+    os.replace(tmp, path)
+
+
+if __name__ == "__main__":
+    main()
