@@ -9,9 +9,13 @@
 
 use brdf::frame::spherical;
 use brdf::microfacet::{Distribution, MicrofacetConductor, NdfKind};
+use brdf::wave::ghs_table::GhsTable;
+use brdf::wave::two_scale::{CoherentPart, TwoScale, TwoScaleParams};
+use brdf::wave::{Energy, FresnelAngle, GhsFull, GhsOptions, GhsSsa, KcPsd, RadialPsd};
 use brdf::{Bxdf, Fresnel, Ior, Metal, SmoothConductor};
 use proptest::prelude::*;
 use proptest::test_runner::{Config, RngAlgorithm, TestRng, TestRunner};
+use std::sync::Arc;
 
 const STRESS_CASES: u32 = 10_000;
 const LONG_CASES: u32 = 1_000_000;
@@ -150,6 +154,192 @@ fn microfacet_stress_long() {
 #[ignore = "long: 10^6 points per model; run with --release -- --ignored"]
 fn smooth_stress_long() {
     smooth_suite(LONG_CASES);
+}
+
+/// σ 0.1 nm…10 µm, Lc 0.01…1000 µm, γ 1.001…10 (issue 6's ranges); with
+/// λ ≥ 360 nm and cosθ ≤ 1 that spans g = (kσ(cosθi + cosθo))² from 0 to 1.2e5.
+fn kc_params() -> impl Strategy<Value = (f64, f64, f64)> {
+    (
+        log_uniform(1e-4, 10.0),
+        log_uniform(0.01, 1000.0),
+        1.001..10.0f64,
+    )
+}
+
+fn energy() -> impl Strategy<Value = GhsOptions> {
+    (
+        prop_oneof![
+            Just(Energy::Raw),
+            Just(Energy::Krywonos),
+            Just(Energy::SigmaRel)
+        ],
+        prop_oneof![Just(FresnelAngle::Halfway), Just(FresnelAngle::Incident)],
+    )
+        .prop_map(|(energy, fresnel_angle)| GhsOptions {
+            energy,
+            fresnel_angle,
+        })
+}
+
+fn raw_options() -> impl Strategy<Value = GhsOptions> {
+    prop_oneof![Just(FresnelAngle::Halfway), Just(FresnelAngle::Incident)].prop_map(
+        |fresnel_angle| GhsOptions {
+            energy: Energy::Raw,
+            fresnel_angle,
+        },
+    )
+}
+
+/// SSA with raw energy at every point; the renormalised variants build
+/// (θi, λ) tables per material, so they get one material per 1000 points
+/// (500 geometries each).
+fn ssa_suite(cases: u32) {
+    runner(cases, 3)
+        .run(
+            &(kc_params(), metal(), geometry()),
+            |((s, l, g), fresnel, geo)| {
+                let model = GhsSsa::new(KcPsd::new(s, l, g).unwrap(), fresnel).unwrap();
+                check_model(&model, geo)
+            },
+        )
+        .unwrap();
+    let per_material = proptest::collection::vec(geometry(), 500);
+    runner((cases / 1000).max(4), 4)
+        .run(
+            &(kc_params(), energy(), per_material),
+            |((s, l, g), opts, geos)| {
+                let model =
+                    GhsSsa::with_options(KcPsd::new(s, l, g).unwrap(), Fresnel::One, opts).unwrap();
+                geos.into_iter()
+                    .try_for_each(|geo| check_model(&model, geo))
+            },
+        )
+        .unwrap();
+}
+
+/// The full model refuses γ < 1.05 with an error pointing to GhsSsa (its
+/// lobe would span more decades than f64 holds); SSA covers 1.001…1.05.
+const GAMMA_FULL_MIN: f64 = 1.05;
+
+/// Full GHS: the S̃ table depends only on γ and the u range, so a handful of
+/// tables (γ drawn over the whole range, u covering Lc = 1000 µm) serve all
+/// points; σ, Lc, λ, angles and the energy options vary freely.
+fn full_suite(cases: u32, tables: usize) {
+    let mut rng = TestRng::from_seed(RngAlgorithm::ChaCha, &[5; 32]);
+    let gammas: Vec<f64> = (0..tables)
+        .map(|i| {
+            if i == 0 {
+                GAMMA_FULL_MIN
+            } else if i == 1 {
+                10.0
+            } else {
+                GAMMA_FULL_MIN + (10.0 - GAMMA_FULL_MIN) * rand_unit(&mut rng)
+            }
+        })
+        .collect();
+    for (t, gamma) in gammas.into_iter().enumerate() {
+        let big = KcPsd::new(1.0, 1000.0, gamma).unwrap();
+        let table = Arc::new(
+            big.build_table(
+                brdf::wave::ghs::hemisphere_u_max(1000.0),
+                Default::default(),
+            )
+            .unwrap(),
+        );
+        let per_material = proptest::collection::vec(geometry(), 20);
+        // Renormalised energy options integrate albedo tables when built, so
+        // only one material in 50 uses them.
+        let opts = prop_oneof![49 => raw_options(), 1 => energy()];
+        runner((cases / tables as u32 / 20).max(2), 6 + t as u8)
+            .run(
+                &(
+                    (log_uniform(1e-4, 10.0), log_uniform(0.01, 1000.0)),
+                    opts,
+                    metal(),
+                    per_material,
+                ),
+                |((s, l), opts, fresnel, geos)| {
+                    let psd = KcPsd::new(s, l, gamma).unwrap();
+                    let model = GhsFull::with_table(psd, fresnel, opts, table_for(&table)).unwrap();
+                    geos.into_iter()
+                        .try_for_each(|geo| check_model(&model, geo))
+                },
+            )
+            .unwrap();
+    }
+}
+
+fn table_for(t: &Arc<GhsTable>) -> Arc<GhsTable> {
+    Arc::clone(t)
+}
+
+fn rand_unit(rng: &mut TestRng) -> f64 {
+    use proptest::prelude::Rng;
+    (rng.next_u64() >> 11) as f64 / (1u64 << 53) as f64
+}
+
+/// Two-scale: one D_eff table per material (the cost), many geometries each.
+fn two_scale_suite(materials: u32, per: usize) {
+    let per_material = proptest::collection::vec(geometry(), per);
+    let coherent = prop_oneof![Just(CoherentPart::MacroNdf), Just(CoherentPart::Delta)];
+    runner(materials, 12)
+        .run(
+            &(
+                log_uniform(1e-3, 1.0),
+                kc_params(),
+                coherent,
+                metal(),
+                per_material,
+            ),
+            |(beta, (s, l, g), coherent, fresnel, geos)| {
+                let model = TwoScale::new(TwoScaleParams {
+                    beta,
+                    sigma_um: s,
+                    lc_um: l,
+                    gamma: g,
+                    fresnel,
+                    coherent,
+                    resolution: Default::default(),
+                })
+                .unwrap();
+                geos.into_iter()
+                    .try_for_each(|geo| check_model(&model, geo))
+            },
+        )
+        .unwrap();
+}
+
+#[test]
+fn ghs_ssa_stress() {
+    ssa_suite(STRESS_CASES);
+}
+
+#[test]
+fn ghs_full_stress() {
+    full_suite(STRESS_CASES, 5);
+}
+
+#[test]
+fn two_scale_stress() {
+    two_scale_suite(25, STRESS_CASES as usize / 25);
+}
+
+#[test]
+#[ignore = "long: 10^6 points per model; run with --release -- --ignored"]
+fn ghs_ssa_stress_long() {
+    ssa_suite(LONG_CASES);
+}
+
+#[test]
+#[ignore = "long: 10^6 points per model; run with --release -- --ignored"]
+fn ghs_full_stress_long() {
+    full_suite(LONG_CASES, 20);
+}
+
+#[test]
+#[ignore = "long: 10^6 points per model; run with --release -- --ignored"]
+fn two_scale_stress_long() {
+    two_scale_suite(500, LONG_CASES as usize / 500);
 }
 
 /// Exact edge cases that random sampling hits with probability zero.
