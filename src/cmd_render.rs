@@ -224,12 +224,6 @@ pub fn render(args: RenderArgs) -> anyhow::Result<()> {
                     film_path.display()
                 );
             }
-            let done_end = old
-                .ranges
-                .iter()
-                .filter(|r| r.start >= target.start && r.end <= target.end)
-                .map(|r| r.end)
-                .max();
             if old.ranges.len() != 1 || old.ranges[0].start != target.start {
                 bail!(
                     "{}: holds samples {:?}, not a prefix of {}..{}; use `lustre merge` for shards",
@@ -239,7 +233,7 @@ pub fn render(args: RenderArgs) -> anyhow::Result<()> {
                     target.end
                 );
             }
-            todo = done_end.unwrap_or(target.start)..target.end;
+            todo = old.ranges[0].end.min(target.end)..target.end;
             film = old;
             film.exposure = scene.settings.exposure;
             if !args.quiet {

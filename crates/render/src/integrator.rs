@@ -167,20 +167,21 @@ pub fn trace(scene: &Scene, mut ray: Ray, lambdas: &[f64; N], n: usize, rng: &mu
                 } else {
                     f64::INFINITY
                 };
+                // A delta light cannot be reached by BSDF sampling: its MIS
+                // denominator has no BSDF term, so the pdf is not needed.
                 let mut f = [0.0; N];
+                let mut pdf = [0.0; N];
                 let mut any = false;
                 for j in 0..n {
-                    f[j] = bxdf.eval(wi, wo, lambdas[j]);
+                    (f[j], pdf[j]) = if ls.is_delta {
+                        (bxdf.eval(wi, wo, lambdas[j]), 0.0)
+                    } else {
+                        bxdf.eval_pdf(wi, wo, lambdas[j])
+                    };
                     any |= f[j] > 0.0;
                 }
                 if any && !scene.occluded(&shadow, t_max) {
-                    let d: f64 = if ls.is_delta {
-                        (0..n).map(|k| q[k] * ls.pdf).sum()
-                    } else {
-                        (0..n)
-                            .map(|k| q[k] * (ls.pdf + bxdf.pdf(wi, wo, lambdas[k])))
-                            .sum()
-                    };
+                    let d: f64 = (0..n).map(|k| q[k] * (ls.pdf + pdf[k])).sum();
                     if d > 0.0 {
                         for j in 0..n {
                             out[j] += t[j] * f[j] * wo.z * ls.emission.eval(lambdas[j]) / d;
@@ -215,8 +216,9 @@ pub fn trace(scene: &Scene, mut ray: Ray, lambdas: &[f64; N], n: usize, rng: &mu
                 l_mis[k] = q[k] / s.pdf;
             }
             for j in 1..n {
-                t[j] *= bxdf.eval(wi, s.wo, lambdas[j]) * s.wo.z / s.pdf;
-                q[j] *= bxdf.pdf(wi, s.wo, lambdas[j]) / s.pdf;
+                let (f, pdf) = bxdf.eval_pdf(wi, s.wo, lambdas[j]);
+                t[j] *= f * s.wo.z / s.pdf;
+                q[j] *= pdf / s.pdf;
             }
         }
 
