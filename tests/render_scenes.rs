@@ -248,3 +248,136 @@ fn bundled_scenes_load_and_render() {
         }
     }
 }
+
+/// A material file as `lustre fit` writes it (provenance and fit diagnostics
+/// included) is usable through `include`, for every model it can feed; keys
+/// in the scene override the file's.
+#[test]
+fn fit_material_files_are_included() {
+    let dir = temp_dir("include");
+    let zeta: Vec<String> = (0..60)
+        .map(|i| format!("{:.6e}", 1e-3 * 1.2f64.powi(i)))
+        .collect();
+    let p: Vec<String> = (0..60)
+        .map(|i| {
+            let z = 1e-3 * 1.2f64.powi(i);
+            // KC, σ = 0.1 µm, Lc = 2 µm, γ = 2.5
+            format!(
+                "{:.6e}",
+                0.01 * 4.0 * 1.5 / (2.0 * PI) * (1.0 + 4.0 * z * z).powf(-1.75)
+            )
+        })
+        .collect();
+    let fit = format!(
+        r#"[provenance]
+file = "scan.x3p"
+sha256 = "00"
+tool = "lustre fit"
+
+[material]
+metal = "brass"
+model = "ghs"
+sigma_um = 0.1
+lc_um = 2.0
+gamma = 2.5
+alpha = 0.05
+alpha_beckmann = 0.06
+
+[fit]
+sigma_um_err = 0.001
+
+[two_scale.cutoff_4]
+beta = 0.03
+beta_source = "slopes"
+sigma_um = 0.05
+lc_um = 1.0
+gamma = 2.2
+cutoff_um = 4.0
+
+[two_scale.cutoff_16]
+beta = 0.05
+sigma_um = 0.08
+lc_um = 1.5
+gamma = 2.4
+cutoff_um = 16.0
+
+[psd]
+source = "welch"
+zeta_rad_per_um = [{}]
+p_um4 = [{}]
+"#,
+        zeta.join(", "),
+        p.join(", ")
+    );
+    std::fs::write(dir.join("fit.toml"), fit).unwrap();
+    let scene = |material: &str| {
+        format!(
+            r#"
+[camera]
+look_from = [0.0, 1.0, 1.0]
+look_at = [0.0, 0.0, 0.0]
+fov_deg = 20.0
+resolution = [4, 4]
+
+[film]
+spp = 1
+
+[materials.m]
+include = "fit.toml"
+{material}
+
+[[shapes]]
+type = "rectangle"
+size = [1.0, 1.0]
+material = "m"
+transform = {{ rotate_deg = [-90.0, 0.0, 0.0] }}
+
+[[lights]]
+type = "point"
+position = [0.0, 1.0, -1.0]
+intensity = 1.0
+"#
+        )
+    };
+    let load = |m: &str| render::load_str(&dir.join("scene.toml"), &scene(m));
+    let models = |s: &render::Scene| {
+        s.materials
+            .iter()
+            .map(|m| m.model.name())
+            .collect::<Vec<_>>()
+    };
+    assert_eq!(models(&load("").unwrap()), ["ghs"]);
+    for m in ["ggx", "beckmann", "ghs_ssa", "measured_psd"] {
+        assert_eq!(models(&load(&format!("model = \"{m}\"")).unwrap()), [m]);
+    }
+    assert_eq!(
+        models(&load("model = \"two_scale\"\ncutoff = \"cutoff_16\"").unwrap()),
+        ["two_scale"]
+    );
+    let e = load("model = \"two_scale\"").err().unwrap().to_string();
+    assert!(e.contains("cutoff_16") && e.contains("cutoff_4"), "{e}");
+    let e = load("model = \"two_scale\"\ncutoff = \"cutoff_9\"")
+        .err()
+        .unwrap()
+        .to_string();
+    assert!(e.contains("no [two_scale.cutoff_9]"), "{e}");
+    // Scene keys win: an invalid override is reported, proving it was used.
+    let e = load("model = \"ggx\"\nalpha = 7.0")
+        .err()
+        .unwrap()
+        .to_string();
+    assert!(e.contains("alpha"), "{e}");
+    std::fs::write(dir.join("bad.toml"), "[material]\nsigma_um = \"x\"\n").unwrap();
+    let e = render::load_str(
+        &dir.join("scene.toml"),
+        &scene("").replace("fit.toml", "bad.toml"),
+    )
+    .err()
+    .unwrap()
+    .to_string();
+    assert!(
+        e.contains("bad.toml:2:") && e.contains("invalid type"),
+        "{e}"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
