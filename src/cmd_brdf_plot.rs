@@ -1,0 +1,410 @@
+//! `lustre brdf plot`: the figures scatterometry papers show — in-plane BRDF
+//! slices on a log scale against θo or against β − β0 (direction cosines
+//! sinθo − sinθi), and the directional albedo / total integrated scatter
+//! against θi — for chosen surfaces, models, wavelengths and incidence angles.
+//!
+//! Per surface it writes `<name>_slices.{png,csv}` and `<name>_albedo.{png,csv}`
+//! into `--out`, plus `panel.png` (one row per surface: slices | albedo) when
+//! several surfaces are plotted. All files are written atomically.
+//!
+//! CSV columns carry every input of the evaluation (model fields, λ, θi, θo,
+//! φo), so each row can be recomputed with `lustre brdf eval` or the `brdf`
+//! crate. Geometry as `brdf eval`: i at azimuth 0, the in-plane forward
+//! (specular) side is φo = 180°; the signed θo of the plots is negative on the
+//! backscatter side (φo = 0°).
+
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+use anyhow::{Context, anyhow, bail};
+use brdf::{Bxdf, DVec3};
+use plot::{Axis, ImageGrid, Legend, LineStyle, Marker, Plot, Rgb, Series};
+
+use crate::models::{self, ModelSpec, Surface};
+
+/// Horizontal axis of the slice plots.
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SliceAxis {
+    /// Signed outgoing angle θo in degrees (negative: backscatter side).
+    Theta,
+    /// β − β0 = sinθo − sinθi (signed direction cosine offset from the mirror direction).
+    Beta,
+}
+
+/// Arguments of `lustre brdf plot`.
+#[derive(clap::Args, Debug)]
+pub struct PlotArgs {
+    /// Paper samples to plot, comma-separated (default: S808,S280,S138,S091,S027).
+    #[arg(long, value_delimiter = ',')]
+    pub samples: Vec<String>,
+    /// Plot one custom K-correlation surface instead: SIGMA_UM,LC_UM,GAMMA.
+    #[arg(long, value_delimiter = ',', num_args = 1, value_name = "SIGMA,LC,GAMMA", conflicts_with = "samples")]
+    pub kc: Option<Vec<f64>>,
+    /// Fresnel: "none" (R = 1) or a metal name; default the sample's metal
+    /// (stainless_steel for --kc).
+    #[arg(long)]
+    pub fresnel: Option<String>,
+    /// Models, comma-separated: ggx, beckmann, ghs_ssa, ghs, two_scale.
+    #[arg(long, value_delimiter = ',', default_value = "ggx,ghs_ssa,ghs,two_scale")]
+    pub models: Vec<String>,
+    /// Wavelengths in nm, comma-separated.
+    #[arg(long, value_delimiter = ',', default_value = "550")]
+    pub lambda_nm: Vec<f64>,
+    /// Incidence angles in degrees, comma-separated.
+    #[arg(long, value_delimiter = ',', default_value = "0,80")]
+    pub theta_i: Vec<f64>,
+    /// Horizontal axis of the slices.
+    #[arg(long, value_enum, default_value = "theta")]
+    pub x: SliceAxis,
+    /// GGX/Beckmann α (default: slope-space equivalent 1/(2kLc) at 550 nm, normal incidence).
+    #[arg(long)]
+    pub alpha: Option<f64>,
+    /// Two-scale cutoff period as a multiple of 550 nm.
+    #[arg(long, default_value_t = 100.0)]
+    pub cutoff: f64,
+    /// Directions per slice (half uniform in θo, half clustered about the mirror direction).
+    #[arg(long, default_value_t = 600)]
+    pub points: usize,
+    /// Incidence angles of the albedo curves, 0°..89° (0: no albedo plot).
+    #[arg(long, default_value_t = 30)]
+    pub albedo_angles: usize,
+    /// Size of each plot in pixels, WIDTHxHEIGHT.
+    #[arg(long, default_value = "960x640")]
+    pub size: String,
+    /// Output directory.
+    #[arg(long, default_value = "out/plots")]
+    pub out: PathBuf,
+    /// Print nothing but errors.
+    #[arg(long, short)]
+    pub quiet: bool,
+}
+
+/// Parses `WIDTHxHEIGHT`.
+pub fn parse_size(s: &str) -> anyhow::Result<(u32, u32)> {
+    let (w, h) = s
+        .split_once(['x', 'X', '×'])
+        .ok_or_else(|| anyhow!("size {s:?}: expected WIDTHxHEIGHT, e.g. 960x640"))?;
+    let w: u32 = w.trim().parse().with_context(|| format!("size {s:?}: bad width {w:?}"))?;
+    let h: u32 = h.trim().parse().with_context(|| format!("size {s:?}: bad height {h:?}"))?;
+    if w == 0 || h == 0 {
+        bail!("size {s:?}: width and height must be ≥ 1");
+    }
+    Ok((w, h))
+}
+
+fn surfaces(args: &PlotArgs) -> anyhow::Result<Vec<Surface>> {
+    let mut out = Vec::new();
+    if let Some(kc) = &args.kc {
+        let [sigma, lc, gamma] = kc[..] else {
+            bail!("--kc needs three numbers SIGMA_UM,LC_UM,GAMMA, got {}", kc.len());
+        };
+        brdf::wave::KcPsd::new(sigma, lc, gamma).context("--kc")?;
+        out.push(Surface {
+            name: format!("kc_{sigma}_{lc}_{gamma}"),
+            sigma_um: sigma,
+            lc_um: lc,
+            gamma,
+            fresnel: "stainless_steel".into(),
+            alpha: models::ggx_alpha(lc, models::REFERENCE_LAMBDA_NM)?,
+        });
+    } else if args.samples.is_empty() {
+        for s in models::SAMPLES {
+            out.push(Surface::from_sample(s)?);
+        }
+    } else {
+        for name in &args.samples {
+            out.push(Surface::from_sample(models::sample(name.trim())?)?);
+        }
+    }
+    for s in &mut out {
+        if let Some(f) = &args.fresnel {
+            s.fresnel = f.clone();
+        }
+        if let Some(a) = args.alpha {
+            s.alpha = a;
+        }
+    }
+    Ok(out)
+}
+
+fn check_args(args: &PlotArgs) -> anyhow::Result<()> {
+    let (lo, hi) = (brdf::WAVELENGTH_MIN_NM, brdf::WAVELENGTH_MAX_NM);
+    for &l in &args.lambda_nm {
+        if !(lo..=hi).contains(&l) {
+            bail!("--lambda-nm {l}: must lie in {lo}–{hi} nm");
+        }
+    }
+    for &t in &args.theta_i {
+        if !(0.0..90.0).contains(&t) {
+            bail!("--theta-i {t}: must lie in [0, 90) degrees");
+        }
+    }
+    if args.lambda_nm.is_empty() || args.theta_i.is_empty() || args.models.is_empty() {
+        bail!("--lambda-nm, --theta-i and --models each need at least one value");
+    }
+    if args.points < 8 {
+        bail!("--points {}: need at least 8", args.points);
+    }
+    if !(args.cutoff.is_finite() && args.cutoff > 0.0) {
+        bail!("--cutoff {}: must be a positive multiple of the wavelength", args.cutoff);
+    }
+    Ok(())
+}
+
+/// Runs `lustre brdf plot`.
+pub fn run(args: PlotArgs) -> anyhow::Result<()> {
+    check_args(&args)?;
+    let (w, h) = parse_size(&args.size)?;
+    let surfaces = surfaces(&args)?;
+    std::fs::create_dir_all(&args.out)
+        .with_context(|| format!("creating output directory {}", args.out.display()))?;
+    let mut panel: Vec<(String, Vec<plot::RgbImage>)> = Vec::new();
+    for s in &surfaces {
+        let specs: Vec<ModelSpec> =
+            args.models.iter().map(|m| s.model(m.trim(), args.cutoff)).collect::<anyhow::Result<_>>()?;
+        let built: Vec<Box<dyn Bxdf>> = specs.iter().map(ModelSpec::build).collect::<anyhow::Result<_>>()?;
+        let title = format!(
+            "{}: σ {} µm, Lc {} µm, γ {}, {}",
+            s.name, s.sigma_um, s.lc_um, s.gamma, s.fresnel
+        );
+        let mut images = Vec::new();
+        let slices = slice_plot(&args, s, &specs, &built, &title)?;
+        let stem = s.name.to_lowercase();
+        let png = args.out.join(format!("{stem}_slices.png"));
+        let (img, report) = slices.0.render(w, h)?;
+        plot::save_png(&img, &png)?;
+        plot::write_atomic(&args.out.join(format!("{stem}_slices.csv")), slices.1.as_bytes())?;
+        note(&args, &png, &report.skipped);
+        images.push(img);
+        if args.albedo_angles > 0 {
+            let (p, csv) = albedo_plot(&args, s, &specs, &built, &title)?;
+            let png = args.out.join(format!("{stem}_albedo.png"));
+            let (img, report) = p.render(w, h)?;
+            plot::save_png(&img, &png)?;
+            plot::write_atomic(&args.out.join(format!("{stem}_albedo.csv")), csv.as_bytes())?;
+            note(&args, &png, &report.skipped);
+            images.push(img);
+        }
+        panel.push((s.name.clone(), images));
+    }
+    if panel.len() > 1 {
+        let cols = panel[0].1.len();
+        let mut grid = ImageGrid::new(panel.len(), cols);
+        for (r, (_, imgs)) in panel.into_iter().enumerate() {
+            for (c, img) in imgs.into_iter().enumerate() {
+                grid.set(r, c, img)?;
+            }
+        }
+        let path = args.out.join("panel.png");
+        grid.save_png(&path)?;
+        if !args.quiet {
+            eprintln!("wrote {}", path.display());
+        }
+    }
+    Ok(())
+}
+
+fn note(args: &PlotArgs, png: &Path, skipped: &[plot::Skipped]) {
+    if args.quiet {
+        return;
+    }
+    eprintln!("wrote {} (+ .csv)", png.display());
+    for s in skipped {
+        eprintln!("  {}: {} points ≤ 0 not drawn on the log axis (kept in the CSV)", s.label, s.count);
+    }
+}
+
+const STYLES: [LineStyle; 4] = [LineStyle::Solid, LineStyle::Dashed, LineStyle::Dotted, LineStyle::DashDot];
+const MARKERS: [Marker; 4] = [Marker::None, Marker::Circle, Marker::Square, Marker::Triangle];
+
+/// Signed in-plane coordinates s = β (sinθo, positive on the specular side)
+/// for a slice at incidence `theta_i_deg`: half uniform in θo over ±89.5°, half
+/// geometric offsets 1e−6…1 about the mirror value sinθi, sorted, deduplicated.
+pub fn slice_positions(theta_i_deg: f64, points: usize) -> Vec<f64> {
+    let s_max = 89.5f64.to_radians().sin();
+    let s0 = theta_i_deg.to_radians().sin();
+    let n_uni = points / 2;
+    let mut s: Vec<f64> = (0..n_uni)
+        .map(|j| (-89.5 + 179.0 * j as f64 / (n_uni - 1) as f64).to_radians().sin())
+        .collect();
+    let n_side = (points - n_uni) / 2;
+    for j in 0..n_side {
+        let d = 10f64.powf(-6.0 + 6.0 * j as f64 / (n_side - 1).max(1) as f64);
+        s.extend([s0 - d, s0 + d]);
+    }
+    s.push(s0);
+    s.retain(|v| v.abs() <= s_max);
+    s.sort_by(f64::total_cmp);
+    s.dedup();
+    s
+}
+
+/// Signed s → (θo in degrees, φo in degrees) as `brdf eval` takes them.
+pub fn in_plane_angles(s: f64) -> (f64, f64) {
+    (s.abs().asin().to_degrees(), if s >= 0.0 { 180.0 } else { 0.0 })
+}
+
+fn direction(theta_deg: f64, phi_deg: f64) -> DVec3 {
+    brdf::frame::spherical(theta_deg.to_radians(), phi_deg.to_radians())
+}
+
+fn csv_fields_header() -> &'static str {
+    "fresnel,alpha,sigma_um,lc_um,gamma,beta"
+}
+
+fn csv_fields(m: &ModelSpec) -> String {
+    let f = |k: &str| {
+        let v = m.num(k);
+        if v.is_nan() { String::new() } else { format!("{v}") }
+    };
+    format!(
+        "{},{},{},{},{},{}",
+        m.text("fresnel"),
+        f("alpha"),
+        f("sigma_um"),
+        f("lc_um"),
+        f("gamma"),
+        f("beta")
+    )
+}
+
+fn quote(s: &str) -> String {
+    if s.contains([',', '"']) { format!("\"{}\"", s.replace('"', "\"\"")) } else { s.to_string() }
+}
+
+fn slice_plot(
+    args: &PlotArgs,
+    s: &Surface,
+    specs: &[ModelSpec],
+    built: &[Box<dyn Bxdf>],
+    title: &str,
+) -> anyhow::Result<(Plot, String)> {
+    let mut csv = format!(
+        "surface,model,label,lambda_nm,theta_i_deg,theta_o_deg,phi_o_deg,theta_o_signed_deg,beta_minus_beta0,brdf_per_sr,{}\n",
+        csv_fields_header()
+    );
+    let x_label = match args.x {
+        SliceAxis::Theta => "θo [deg]  (< 0: backscatter side)",
+        SliceAxis::Beta => "β − β0 = sinθo − sinθi",
+    };
+    let mut series = Vec::new();
+    let mut y_max = 0.0f64;
+    let multi_lambda = args.lambda_nm.len() > 1;
+    for (mi, (spec, model)) in specs.iter().zip(built).enumerate() {
+        for (ti, &theta_i) in args.theta_i.iter().enumerate() {
+            for (li, &lambda) in args.lambda_nm.iter().enumerate() {
+                let wi = direction(theta_i, 0.0);
+                let (mut xs, mut ys) = (Vec::new(), Vec::new());
+                for sv in slice_positions(theta_i, args.points) {
+                    let (theta_o, phi_o) = in_plane_angles(sv);
+                    let wo = direction(theta_o, phi_o);
+                    let f = model.eval(wi, wo, lambda);
+                    let signed = if phi_o == 180.0 { theta_o } else { -theta_o };
+                    let db = -wo.x - wi.x;
+                    writeln!(
+                        csv,
+                        "{},{},{},{lambda},{theta_i},{theta_o},{phi_o},{signed},{db},{f},{}",
+                        s.name,
+                        spec.text("model"),
+                        quote(&spec.label),
+                        csv_fields(spec)
+                    )?;
+                    xs.push(if args.x == SliceAxis::Theta { signed } else { db });
+                    ys.push(f);
+                    y_max = y_max.max(if f.is_finite() { f } else { 0.0 });
+                }
+                let mut label = format!("{}, θi {theta_i}°", spec.label);
+                if multi_lambda {
+                    let _ = write!(label, ", {lambda} nm");
+                }
+                let mut ser = Series::line(label, &xs, &ys)
+                    .color(Rgb::palette(mi))
+                    .style(STYLES[ti % STYLES.len()]);
+                if li > 0 {
+                    ser = ser.marker(MARKERS[li % MARKERS.len()]).marker_every((xs.len() / 12).max(1));
+                }
+                series.push(ser);
+            }
+        }
+    }
+    if !(y_max > 0.0) {
+        bail!("{}: every BRDF value is zero; nothing to plot on a log axis", s.name);
+    }
+    // Twelve decades below the highest peak: deeper tails are numerically
+    // meaningless for the figure (they stay in the CSV).
+    let mut p = Plot::new(format!("{title}, in-plane BRDF"))
+        .x_axis(Axis::linear(x_label))
+        .y_axis(Axis::log("BRDF [sr⁻¹]").range(y_max * 1e-12, y_max * 3.0))
+        .legend(Legend::Outside);
+    for ser in series {
+        p = p.series(ser);
+    }
+    Ok((p, csv))
+}
+
+/// Incidence angles of the albedo curves: `n` values evenly over 0°…89°.
+pub fn albedo_angles(n: usize) -> Vec<f64> {
+    if n == 1 {
+        return vec![0.0];
+    }
+    (0..n).map(|j| 89.0 * j as f64 / (n - 1) as f64).collect()
+}
+
+fn albedo_plot(
+    args: &PlotArgs,
+    s: &Surface,
+    specs: &[ModelSpec],
+    built: &[Box<dyn Bxdf>],
+    title: &str,
+) -> anyhow::Result<(Plot, String)> {
+    let mut csv = format!(
+        "surface,model,label,lambda_nm,theta_i_deg,lobe_rho,scattered_albedo,specular_weight,total_albedo,tis,{}\n",
+        csv_fields_header()
+    );
+    let mut p = Plot::new(format!("{title}, directional albedo"))
+        .x_axis(Axis::linear("θi [deg]").range(0.0, 90.0))
+        .y_axis(Axis::linear("albedo (solid) · TIS (dashed)").range(0.0, 1.05))
+        .legend(Legend::Outside);
+    let multi_lambda = args.lambda_nm.len() > 1;
+    for (mi, (spec, model)) in specs.iter().zip(built).enumerate() {
+        for (li, &lambda) in args.lambda_nm.iter().enumerate() {
+            let rho = spec.lobe_rho(lambda);
+            let (mut xs, mut total, mut tis) = (Vec::new(), Vec::new(), Vec::new());
+            for theta_i in albedo_angles(args.albedo_angles) {
+                let wi = direction(theta_i, 0.0);
+                let scattered = brdf::wave::energy::hemispherical_integral(wi, rho, |o| model.eval(wi, o, lambda));
+                let spec_w = model.specular(wi, lambda).weight;
+                let t = scattered + spec_w;
+                let r = if t > 0.0 { scattered / t } else { 0.0 };
+                writeln!(
+                    csv,
+                    "{},{},{},{lambda},{theta_i},{rho},{scattered},{spec_w},{t},{r},{}",
+                    s.name,
+                    spec.text("model"),
+                    quote(&spec.label),
+                    csv_fields(spec)
+                )?;
+                xs.push(theta_i);
+                total.push(t);
+                tis.push(r);
+            }
+            let suffix = if multi_lambda { format!(", {lambda} nm") } else { String::new() };
+            let marker = MARKERS[li % MARKERS.len()];
+            let every = (xs.len() / 8).max(1);
+            p = p.series(
+                Series::line(format!("{} albedo{suffix}", spec.label), &xs, &total)
+                    .color(Rgb::palette(mi))
+                    .marker(marker)
+                    .marker_every(every),
+            );
+            p = p.series(
+                Series::line(format!("{} TIS{suffix}", spec.label), &xs, &tis)
+                    .color(Rgb::palette(mi))
+                    .style(LineStyle::Dashed)
+                    .marker(marker)
+                    .marker_every(every),
+            );
+        }
+    }
+    Ok((p, csv))
+}

@@ -1,0 +1,247 @@
+//! `lustre compare`: renders one surface with each model at three viewing
+//! angles and assembles a labelled grid (rows = models, columns = views), like
+//! the paper's Fig. 1 and 4.
+//!
+//! Every cell is a scene with the geometry of `scenes/generate.py` (a 20 cm
+//! plate, the camera at θ from the normal, a small light in the mirror
+//! direction, a dim environment), rendered in-process by the `render` crate.
+//!
+//! Parameters per row:
+//! * paper sample (`--sample`): KC (σ, Lc, γ) and metal of physics.md §12;
+//!   GGX α by the slope-space identity 1/(2kLc) at 550 nm; two-scale at
+//!   Λ = m·550 nm: β from the KC slope variance below 2π/Λ (6β² = ⟨|∇h|²⟩),
+//!   micro scale = the sample's own KC (see `models::two_scale_beta`);
+//! * material file (`--material`, as written by `lustre fit`): included as is,
+//!   with `model` set per row and one two-scale row per `[two_scale.*]` table.
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use anyhow::{Context, anyhow, bail};
+use plot::ImageGrid;
+use render::{Film, RenderOptions};
+
+use crate::cmd_brdf_plot::parse_size;
+use crate::models::{self, Surface};
+
+/// Arguments of `lustre compare`.
+#[derive(clap::Args, Debug)]
+pub struct CompareArgs {
+    /// Paper sample: S808, S280, S138, S091 or S027 (default S280).
+    #[arg(long, conflicts_with = "material")]
+    pub sample: Option<String>,
+    /// Material file written by `lustre fit` instead of a paper sample.
+    #[arg(long)]
+    pub material: Option<PathBuf>,
+    /// Two-scale cutoffs as multiples of 550 nm (paper samples only; a material
+    /// file brings its own `[two_scale.*]` tables).
+    #[arg(long, value_delimiter = ',', default_value = "50,100,150")]
+    pub cutoffs: Vec<f64>,
+    /// Viewing angles from the normal in degrees (columns).
+    #[arg(long, value_delimiter = ',', default_value = "0,45,80")]
+    pub views: Vec<f64>,
+    /// Size of each cell in pixels, WIDTHxHEIGHT.
+    #[arg(long, default_value = "128x96")]
+    pub size: String,
+    /// Samples per pixel of each cell.
+    #[arg(long, default_value_t = 8)]
+    pub spp: u64,
+    /// Worker threads (default: all cores).
+    #[arg(long)]
+    pub threads: Option<usize>,
+    /// Output PNG (default out/compare/<sample>.png); the cell table goes beside it as `.cells.csv`.
+    #[arg(long, short)]
+    pub out: Option<PathBuf>,
+    /// Print nothing but errors.
+    #[arg(long, short)]
+    pub quiet: bool,
+}
+
+/// One grid row: its label and the `[materials.plate]` body of its scenes.
+struct Row {
+    label: String,
+    material: String,
+}
+
+fn sample_rows(s: &Surface, cutoffs: &[f64]) -> anyhow::Result<Vec<Row>> {
+    let kc = format!("sigma_um = {}\nlc_um = {}\ngamma = {}\n", s.sigma_um, s.lc_um, s.gamma);
+    let metal = format!("metal = \"{}\"\n", s.fresnel);
+    let mut rows = vec![
+        Row {
+            label: format!("GGX\nα {:.4}", s.alpha),
+            material: format!("model = \"ggx\"\n{metal}alpha = {}\n", s.alpha),
+        },
+        Row { label: "GHS SSA".into(), material: format!("model = \"ghs_ssa\"\n{metal}{kc}") },
+        Row { label: "full GHS".into(), material: format!("model = \"ghs\"\n{metal}{kc}energy = \"raw\"\n") },
+    ];
+    for &m in cutoffs {
+        if !(m.is_finite() && m > 0.0) {
+            bail!("--cutoffs {m}: must be positive multiples of the wavelength");
+        }
+        let spec = s.model("two_scale", m)?;
+        let beta = spec.num("beta");
+        rows.push(Row {
+            label: format!("two-scale {m}λ\nβ {beta:.4}"),
+            material: format!("model = \"two_scale\"\n{metal}{kc}beta = {beta}\n"),
+        });
+    }
+    Ok(rows)
+}
+
+/// Cutoff tables of a `lustre fit` file, ordered by their number (cutoff_50 < cutoff_100).
+fn material_rows(path: &Path) -> anyhow::Result<(String, Vec<Row>)> {
+    let text = std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
+    let doc: toml::Table = toml::from_str(&text).with_context(|| format!("parsing {}", path.display()))?;
+    let mat = doc
+        .get("material")
+        .and_then(toml::Value::as_table)
+        .ok_or_else(|| anyhow!("{}: no [material] table (expected a `lustre fit` material file)", path.display()))?;
+    let num = |t: &toml::Table, k: &str| t.get(k).and_then(toml::Value::as_float);
+    let abs = std::fs::canonicalize(path).with_context(|| format!("resolving {}", path.display()))?;
+    let include = format!("include = {}\n", toml::Value::String(abs.display().to_string()));
+    let mut rows = vec![
+        Row {
+            label: format!("GGX\nα {:.4}", num(mat, "alpha").unwrap_or(f64::NAN)),
+            material: format!("{include}model = \"ggx\"\n"),
+        },
+        Row { label: "GHS SSA".into(), material: format!("{include}model = \"ghs_ssa\"\n") },
+        Row { label: "full GHS".into(), material: format!("{include}model = \"ghs\"\nenergy = \"raw\"\n") },
+    ];
+    let mut cuts: Vec<(f64, String, f64)> = doc
+        .get("two_scale")
+        .and_then(toml::Value::as_table)
+        .map(|t| {
+            t.iter()
+                .filter_map(|(name, v)| {
+                    let t = v.as_table()?;
+                    let order = name.trim_start_matches(|c: char| !c.is_ascii_digit()).parse().unwrap_or(f64::MAX);
+                    Some((order, name.clone(), num(t, "beta").unwrap_or(f64::NAN)))
+                })
+                .collect()
+        })
+        .unwrap_or_default();
+    cuts.sort_by(|a, b| a.0.total_cmp(&b.0));
+    for (order, name, beta) in cuts {
+        let what = if order < f64::MAX { format!("{order}λ") } else { name.clone() };
+        rows.push(Row {
+            label: format!("two-scale {what}\nβ {beta:.4}"),
+            material: format!("{include}model = \"two_scale\"\ncutoff = \"{name}\"\n"),
+        });
+    }
+    let name = path.file_stem().map_or_else(|| "material".into(), |s| s.to_string_lossy().into_owned());
+    Ok((name, rows))
+}
+
+/// The scene of one cell: scenes/generate.py's plate, camera and lights.
+pub fn scene_text(view_deg: f64, width: u32, height: u32, spp: u64, material: &str) -> String {
+    let t = view_deg.to_radians();
+    let cam = [0.0, t.cos(), t.sin()];
+    // At normal view the light sits 1° further out so camera and light do not coincide.
+    let tl = view_deg.max(1.0).to_radians();
+    let light = [0.0, 1.2 * tl.cos(), -1.2 * tl.sin()];
+    let up = if view_deg < 1.0 { "[0.0, 0.0, -1.0]" } else { "[0.0, 1.0, 0.0]" };
+    let v = |p: [f64; 3]| format!("[{:.9}, {:.9}, {:.9}]", p[0], p[1], p[2]);
+    format!(
+        "[camera]\nlook_from = {}\nlook_at = [0.0, 0.0, 0.0]\nup = {up}\nfov_deg = 14.0\nresolution = [{width}, {height}]\n\n\
+         [film]\nspp = {spp}\nseed = 1\n\n[integrator]\nmax_depth = 3\nwavelengths = \"hero\"\n\n\
+         [materials.plate]\n{material}\n\
+         [[shapes]]\ntype = \"rectangle\"\nsize = [0.2, 0.2]\nmaterial = \"plate\"\ntransform = {{ rotate_deg = [-90.0, 0.0, 0.0] }}\n\n\
+         [[lights]]\ntype = \"sphere\"\ncenter = {}\nradius = 0.018\nradiance = 200.0\nspectrum = \"d65\"\n\n\
+         [[lights]]\ntype = \"environment\"\nradiance = 0.02\nspectrum = \"d65\"\n",
+        v(cam),
+        v(light)
+    )
+}
+
+/// Linear sRGB → 8-bit sRGB (IEC 61966-2-1 transfer curve, clamped).
+fn to_srgb8(v: f32) -> u8 {
+    let x = f64::from(v).clamp(0.0, 1.0);
+    let e = if x <= 0.003_130_8 { 12.92 * x } else { 1.055 * x.powf(1.0 / 2.4) - 0.055 };
+    (e * 255.0 + 0.5) as u8
+}
+
+/// Runs `lustre compare`.
+pub fn run(args: CompareArgs) -> anyhow::Result<()> {
+    let (w, h) = parse_size(&args.size)?;
+    if args.spp == 0 {
+        bail!("--spp must be ≥ 1");
+    }
+    if args.views.is_empty() || args.views.iter().any(|v| !(0.0..90.0).contains(v)) {
+        bail!("--views: give angles in [0, 90) degrees, e.g. 0,45,80");
+    }
+    let (name, title, rows, base) = match &args.material {
+        Some(path) => {
+            let (name, rows) = material_rows(path)?;
+            let title = format!("{name} (fitted material {})", path.display());
+            let base = path.parent().map_or_else(|| PathBuf::from("."), Path::to_path_buf);
+            (name, title, rows, base)
+        }
+        None => {
+            let s = Surface::from_sample(models::sample(args.sample.as_deref().unwrap_or("S280"))?)?;
+            let title = format!(
+                "{}: σ {} µm, Lc {} µm, γ {}, {}\n\
+                 GGX α = 1/(2kLc) at 550 nm; two-scale at Λ = m·550 nm: β from the KC slope variance below 2π/Λ, micro scale = the sample's KC",
+                s.name, s.sigma_um, s.lc_um, s.gamma, s.fresnel
+            );
+            (s.name.to_lowercase(), title, sample_rows(&s, &args.cutoffs)?, PathBuf::from("."))
+        }
+    };
+    let out = args.out.clone().unwrap_or_else(|| PathBuf::from(format!("out/compare/{name}.png")));
+    if let Some(dir) = out.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    }
+    let opts = RenderOptions { threads: args.threads, ..RenderOptions::default() };
+    let pool = render::render::thread_pool(args.threads)?;
+    let mut grid = ImageGrid::new(rows.len(), args.views.len())
+        .title(format!("{title}\n{w}×{h} px, {} spp per cell", args.spp))
+        .row_labels(rows.iter().map(|r| r.label.clone()))
+        .col_labels(args.views.iter().map(|v| match *v {
+            v if v == 0.0 => "normal (0°)".to_string(),
+            v if v >= 75.0 => format!("grazing ({v}°)"),
+            v => format!("{v}°"),
+        }));
+    let scene_path = base.join("compare.toml");
+    let start = Instant::now();
+    for (r, row) in rows.iter().enumerate() {
+        for (c, &view) in args.views.iter().enumerate() {
+            let text = scene_text(view, w, h, args.spp, &row.material);
+            let scene = render::load_str(&scene_path, &text)
+                .map_err(|e| anyhow!("{} at {view}°: {e}", row.label.replace('\n', ", ")))?;
+            let mut film = Film::new(w, h, scene.fingerprint, scene.settings.seed, scene.settings.exposure);
+            render::render_range_in(&pool, &scene, &mut film, 0..args.spp, &opts)?;
+            let px: Vec<u8> = film.rgb().iter().flat_map(|p| p.map(to_srgb8)).collect();
+            grid.set_rgb8(r, c, w, h, px)?;
+            if !args.quiet {
+                eprintln!(
+                    "  {} at {view}°: done ({:.1} s total)",
+                    row.label.replace('\n', ", "),
+                    start.elapsed().as_secs_f64()
+                );
+            }
+        }
+    }
+    let layout = grid.save_png(&out)?;
+    // The cell table: where each render sits in the grid and what it shows.
+    let mut cells = String::from("row,col,model,view_deg,x0,y0,x1,y1,grid_width,grid_height\n");
+    for (r, row) in rows.iter().enumerate() {
+        for (c, view) in args.views.iter().enumerate() {
+            let s = layout.slots[r * args.views.len() + c];
+            cells += &format!(
+                "{r},{c},\"{}\",{view},{},{},{},{},{},{}\n",
+                row.label.replace('\n', ", "),
+                s.x0,
+                s.y0,
+                s.x1,
+                s.y1,
+                layout.width,
+                layout.height
+            );
+        }
+    }
+    let cells_path = out.with_extension("cells.csv");
+    plot::write_atomic(&cells_path, cells.as_bytes())?;
+    if !args.quiet {
+        eprintln!("wrote {} ({}×{} px) and {}", out.display(), layout.width, layout.height, cells_path.display());
+    }
+    Ok(())
+}
