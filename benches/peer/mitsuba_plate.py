@@ -6,9 +6,13 @@ machine's LLVM works, llvm_ad_spectral), timing every render (scene loading is t
 separately and excluded), and measures RMSE against a cached high-spp Mitsuba reference.
 
 Outputs (in --out, default benches/peer/out/):
-  timings.csv            scene,variant,spp,load_s,render_s,render_cold_s,threads,loadavg_1min
-  rmse.csv               scene,variant,spp,render_s,rmse,rel_rmse,mse_ref_noise,
+  timings.csv            scene,variant,spp,load_s,render_s,render_cpu_s,render_cold_s,
+                         threads,loadavg_1min          (seconds; render_s = wall time)
+  rmse.csv               scene,variant,spp,time_s,wall_s,rmse,rel_rmse,mse_ref_noise,
                          rmse_corrected,efficiency
+                         time_s = CPU seconds of the render (all Mitsuba threads), the
+                         quantity benches/error_vs_time.rs compares with lustre's CPU time;
+                         rel_rmse = rmse / mean(reference); efficiency = 1/(time_s * rel_rmse^2)
   ref/<scene>.npy        reference image (linear sRGB, float32, H x W x 3) + .json metadata
   img/<scene>/<variant>_<spp>spp.{npy,exr}   every timed render (--no-images to skip)
   lustre_scenes/<scene>.toml   with --write-lustre-scenes: the same scenes for crates/render
@@ -31,10 +35,46 @@ from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
 
-# lustre metal names -> Mitsuba roughconductor `material` names.
-MITSUBA_METALS = {"cu": "Cu", "copper": "Cu", "au": "Au", "gold": "Au", "ag": "Ag",
-                  "silver": "Ag", "al": "Al", "aluminium": "Al", "aluminum": "Al",
-                  "cr": "Cr", "chromium": "Cr", "fe": "Fe", "iron": "Fe"}
+REPO = HERE.parent.parent
+
+# lustre metal names -> the repo's n,k tables (the same data lustre's brdf crate uses), so
+# both renderers see identical Fresnel. Values: wavelength_nm,n,k CSV files.
+METAL_TABLES = {
+    "cu": "ior_Cu.csv", "copper": "ior_Cu.csv", "au": "ior_Au.csv", "gold": "ior_Au.csv",
+    "ag": "ior_Ag.csv", "silver": "ior_Ag.csv", "al": "ior_Al.csv", "aluminium": "ior_Al.csv",
+    "aluminum": "ior_Al.csv", "cr": "ior_Cr.csv", "chromium": "ior_Cr.csv", "fe": "ior_Fe.csv",
+    "iron": "ior_Fe.csv", "brass": "ior_brass_Cu70Zn30.csv", "cu70zn30": "ior_brass_Cu70Zn30.csv",
+    "stainless_steel": "ior_stainless_steel_austenitic.csv",
+    "stainless": "ior_stainless_steel_austenitic.csv",
+    "steel": "ior_stainless_steel_austenitic.csv",
+    "stainless_steel_austenitic": "ior_stainless_steel_austenitic.csv",
+}
+
+
+class Unsupported(Exception):
+    """A scene feature the Mitsuba translation does not cover."""
+
+
+def metal_spectra(metal: str, where: str) -> tuple[dict, dict]:
+    name = METAL_TABLES.get(metal.lower())
+    if name is None:
+        raise Unsupported(f"{where}: metal {metal!r} unknown; known: {sorted(METAL_TABLES)}")
+    path = REPO / "data" / "spectra" / name
+    rows = []
+    with open(path) as f:
+        for line in f:
+            parts = line.strip().split(",")
+            if len(parts) == 3:
+                try:
+                    rows.append(tuple(float(x) for x in parts))
+                except ValueError:
+                    pass  # header
+    if len(rows) < 2:
+        raise Unsupported(f"{path}: no wavelength_nm,n,k rows")
+    wl = ", ".join(repr(r[0]) for r in rows)
+    eta = {"type": "irregular", "wavelengths": wl, "values": ", ".join(repr(r[1]) for r in rows)}
+    k = {"type": "irregular", "wavelengths": wl, "values": ", ".join(repr(r[2]) for r in rows)}
+    return eta, k
 
 
 def die(msg: str) -> None:
@@ -77,34 +117,41 @@ def shape_transform(mi, tr: dict | None):
 
 
 def spectrum(name: str, value: float, where: str) -> dict:
+    """lustre spectra are normalised to unit luminance; Mitsuba's uniform and d65 spectra
+    of value v give Y = v on its spectral film (checked: 1.0004 and 0.9992 at v = 1)."""
     if name == "constant":
         return {"type": "uniform", "value": float(value)}
-    if name.startswith("blackbody(") and name.endswith(")"):
-        # Not used by plate_scenes.toml; Mitsuba's blackbody is not luminance-normalised.
-        die(f"{where}: spectrum {name!r} has no luminance-matched Mitsuba equivalent; use 'constant'")
-    die(f"{where}: spectrum {name!r} not supported by the peer script (use 'constant')")
-    return {}
+    if name == "d65":
+        return {"type": "d65", "scale": float(value)}
+    raise Unsupported(f"{where}: spectrum {name!r} has no luminance-matched Mitsuba equivalent "
+                      "here (use 'constant' or 'd65')")
 
 
 def material(sc: dict, mname: str) -> dict:
     where = f"scene {sc['name']}, materials.{mname}"
     m = sc.get("materials", {}).get(mname)
     if m is None:
-        die(f"{where}: material not defined")
+        raise Unsupported(f"{where}: material not defined")
+    if "include" in m:
+        raise Unsupported(f"{where}: `include` (fitted material files) not supported by the peer script")
     model = m.get("model")
     if model not in ("ggx", "beckmann"):
-        die(f"{where}: model {model!r}: Mitsuba has only ggx and beckmann microfacets")
+        raise Unsupported(f"{where}: model {model!r}: Mitsuba has only ggx and beckmann microfacets")
     alpha = m.get("alpha_beckmann", m.get("alpha")) if model == "beckmann" else m.get("alpha")
     if not isinstance(alpha, (int, float)) or not 1e-4 <= alpha <= 1.0:
-        die(f"{where}: alpha must be a number in [1e-4, 1], got {alpha!r}")
+        raise Unsupported(f"{where}: alpha must be a number in [1e-4, 1] (anisotropic alpha_x/alpha_y "
+                          f"not translated), got {alpha!r}")
+    bsdf = {"type": "roughconductor", "distribution": model, "alpha": float(alpha),
+            "sample_visible": True}
     if m.get("fresnel", "conductor") == "one":
-        metal = "none"  # Mitsuba: eta = 0, k = 1 -> a 100 % reflecting conductor
+        bsdf["material"] = "none"  # Mitsuba: eta = 0, k = 1 -> a 100 % reflecting conductor
+    elif "nk" in m:
+        bsdf["eta"], bsdf["k"] = ({"type": "uniform", "value": float(v)} for v in m["nk"])
+    elif "metal" in m:
+        bsdf["eta"], bsdf["k"] = metal_spectra(str(m["metal"]), where)
     else:
-        metal = MITSUBA_METALS.get(str(m.get("metal", "")).lower())
-        if metal is None:
-            die(f"{where}: metal {m.get('metal')!r} has no Mitsuba table; known: {sorted(MITSUBA_METALS)}")
-    return {"type": "roughconductor", "distribution": model, "alpha": float(alpha),
-            "material": metal, "sample_visible": True}
+        raise Unsupported(f"{where}: needs metal, nk or fresnel = 'one' (nk_csv not translated)")
+    return bsdf
 
 
 def mitsuba_scene_dict(mi, sc: dict, spp: int, resolution=None) -> dict:
@@ -143,7 +190,7 @@ def mitsuba_scene_dict(mi, sc: dict, spp: int, resolution=None) -> dict:
             d[f"shape{i}"] = {"type": "sphere", "center": s["center"], "radius": s["radius"],
                               "bsdf": bsdf}
         else:
-            die(f"{where}: shape type {s['type']!r} not supported by the peer script")
+            raise Unsupported(f"{where}: shape type {s['type']!r} not supported by the peer script")
     for i, l in enumerate(sc.get("lights", [])):
         where = f"scene {sc['name']}, lights[{i}]"
         spec = l.get("spectrum", "d65")
@@ -154,8 +201,10 @@ def mitsuba_scene_dict(mi, sc: dict, spp: int, resolution=None) -> dict:
         elif l["type"] == "point":
             d[f"light{i}"] = {"type": "point", "position": l["position"],
                               "intensity": spectrum(spec, l["intensity"], where)}
+        elif l["type"] == "environment" and "file" not in l:
+            d[f"light{i}"] = {"type": "constant", "radiance": spectrum(spec, l["radiance"], where)}
         else:
-            die(f"{where}: light type {l['type']!r} not supported by the peer script")
+            raise Unsupported(f"{where}: light type {l['type']!r} not supported by the peer script")
     return d
 
 
@@ -213,13 +262,14 @@ def atomic_save_npy(np, path: Path, arr) -> None:
 
 
 def render_timed(mi, dr, np, scene, spp: int, seed: int):
-    """Renders and forces evaluation; returns (image as numpy HxWx3 float32, seconds)."""
-    t0 = time.perf_counter()
+    """Renders and forces evaluation; returns (image as numpy HxWx3 float32, wall seconds,
+    CPU seconds of the whole process, i.e. summed over Mitsuba's worker threads)."""
+    c0, t0 = time.process_time(), time.perf_counter()
     img = mi.render(scene, spp=spp, seed=seed)
     dr.eval(img)
     arr = np.array(img, dtype=np.float32)  # LLVM: waits for the kernel to finish
-    dt = time.perf_counter() - t0
-    return arr[..., :3], dt
+    dt, cpu = time.perf_counter() - t0, time.process_time() - c0
+    return arr[..., :3], dt, cpu
 
 
 def scene_hash(sc: dict, resolution) -> str:
@@ -234,7 +284,8 @@ def reference(mi, dr, np, sc, args, out: Path):
     ref_dir = out / "ref"
     ref_dir.mkdir(parents=True, exist_ok=True)
     npy, meta_path = ref_dir / f"{sc['name']}.npy", ref_dir / f"{sc['name']}.json"
-    key = {"hash": scene_hash(sc, args.resolution), "spp": args.ref_spp,
+    # "translation" changes whenever mitsuba_scene_dict changes what it renders.
+    key = {"hash": scene_hash(sc, args.resolution), "translation": 2, "spp": args.ref_spp,
            "variant": args.ref_variant, "mitsuba": mi.__version__}
     if npy.exists() and meta_path.exists() and not args.fresh_reference:
         meta = json.loads(meta_path.read_text())
@@ -246,7 +297,7 @@ def reference(mi, dr, np, sc, args, out: Path):
     scene = mi.load_dict(mitsuba_scene_dict(mi, sc, chunk, args.resolution))
     acc, acc2, total = None, None, 0.0
     for k in range(n):
-        img, dt = render_timed(mi, dr, np, scene, chunk, seed=10_000 + k)
+        img, dt, _ = render_timed(mi, dr, np, scene, chunk, seed=10_000 + k)
         img = img.astype(np.float64)
         acc = img if acc is None else acc + img
         acc2 = img * img if acc2 is None else acc2 + img * img
@@ -307,9 +358,26 @@ def main() -> None:
     ap.add_argument("--write-lustre-scenes", type=Path, metavar="DIR",
                     help="only write lustre scene TOML files for every scene to DIR and exit")
     ap.add_argument("--lustre-spp", type=int, default=64)
+    ap.add_argument("--lustre-scene", type=Path, nargs="+", metavar="TOML",
+                    help="render these lustre scene files (name = file stem) instead of --scenes; "
+                         "files using features Mitsuba lacks (GHS models, meshes, ...) are skipped")
+    ap.add_argument("--threads", type=int, help="Mitsuba worker threads (default: all cores)")
+    ap.add_argument("--tag", default="", help="prefix for the CSV file names (e.g. 's138_')")
     args = ap.parse_args()
 
-    scenes = load_scenes(args.scenes)
+    if args.lustre_scene:
+        scenes = []
+        for p in args.lustre_scene:
+            try:
+                with open(p, "rb") as f:
+                    sc = tomllib.load(f)
+            except (OSError, tomllib.TOMLDecodeError) as e:
+                die(f"cannot read lustre scene {p}: {e}")
+            sc["name"] = p.stem
+            sc.setdefault("integrator", {}).setdefault("max_depth", 8)
+            scenes.append(sc)
+    else:
+        scenes = load_scenes(args.scenes)
     if args.only:
         unknown = set(args.only) - {s["name"] for s in scenes}
         if unknown:
@@ -332,6 +400,21 @@ def main() -> None:
     except ImportError as e:
         die(f"{e}: run benches/peer/setup.sh first")
 
+    # Translate every scene once up front so unsupported features fail (or are skipped) early.
+    mi.set_variant("scalar_spectral")
+    usable = []
+    for sc in scenes:
+        try:
+            mitsuba_scene_dict(mi, sc, 1, args.resolution)
+            usable.append(sc)
+        except Unsupported as e:
+            if not args.lustre_scene:
+                die(str(e))
+            print(f"skipping {sc['name']}: {e}", file=sys.stderr)
+    scenes = usable
+    if not scenes:
+        die("no scene left to render")
+
     variants = [v for v in args.variants.split(",") if v]
     bad = [v for v in variants + [args.ref_variant] if v not in mi.variants()]
     if bad:
@@ -350,7 +433,9 @@ def main() -> None:
     out = args.out
     out.mkdir(parents=True, exist_ok=True)
     spps = [1 << k for k in range(int(math.log2(args.max_spp)) + 1)]
-    threads = os.cpu_count()
+    if args.threads:
+        dr.set_thread_count(args.threads)
+    threads = dr.thread_count()
     tim_rows, err_rows = [], []
     for sc in scenes:
         print(f"scene {sc['name']}", flush=True)
@@ -366,17 +451,19 @@ def main() -> None:
                 if variant.startswith("llvm"):
                     # First render of a kernel includes JIT compilation (or a kernel-cache
                     # lookup); report it, and time a second, warm render with another seed.
-                    _, cold = render_timed(mi, dr, np, scene, spp, seed=20_000 + spp)
-                img, dt = render_timed(mi, dr, np, scene, spp, seed=spp)
+                    _, cold, _ = render_timed(mi, dr, np, scene, spp, seed=20_000 + spp)
+                img, dt, cpu = render_timed(mi, dr, np, scene, spp, seed=spp)
                 mse = float(np.mean((img.astype(np.float64) - ref) ** 2))
                 rmse = math.sqrt(mse)
                 corr = math.sqrt(max(mse - mse_ref, 0.0)) if not math.isnan(mse_ref) else float("nan")
-                tim_rows.append([sc["name"], variant, spp, f"{load_s:.6f}", f"{dt:.6f}", f"{cold:.6f}",
-                                 threads, f"{os.getloadavg()[0]:.2f}"])
-                err_rows.append([sc["name"], variant, spp, f"{dt:.6f}", f"{rmse:.6e}",
+                tim_rows.append([sc["name"], variant, spp, f"{load_s:.6f}", f"{dt:.6f}", f"{cpu:.6f}",
+                                 f"{cold:.6f}", threads, f"{os.getloadavg()[0]:.2f}"])
+                rel_mse = (rmse / ref_mean) ** 2 if ref_mean > 0 else float("nan")
+                err_rows.append([sc["name"], variant, spp, f"{cpu:.6f}", f"{dt:.6f}", f"{rmse:.6e}",
                                  f"{rmse / ref_mean:.6e}", f"{mse_ref:.6e}", f"{corr:.6e}",
-                                 f"{1.0 / (dt * mse):.6e}" if mse > 0 and dt > 0 else "inf"])
-                print(f"  {variant:18s} {spp:4d} spp  load {load_s:6.3f} s  render {dt:8.3f} s"
+                                 f"{1.0 / (cpu * rel_mse):.6e}" if rel_mse > 0 and cpu > 0 else "inf"])
+                print(f"  {variant:18s} {spp:4d} spp  load {load_s:6.3f} s  render {dt:8.3f} s wall"
+                      f" {cpu:8.3f} s CPU"
                       f"  rmse {rmse:.4e} (rel {rmse / ref_mean:.4e})", flush=True)
                 if not args.no_images:
                     d = out / "img" / sc["name"]
@@ -384,11 +471,11 @@ def main() -> None:
                     atomic_save_npy(np, d / f"{variant}_{spp}spp.npy", img)
                     mi.util.write_bitmap(str(d / f"{variant}_{spp}spp.exr"), img)
         # Rewrite the CSVs after every scene so an interrupted run keeps what it measured.
-        write_csv(out / "timings.csv", ["scene", "variant", "spp", "load_s", "render_s",
-                                        "render_cold_s", "threads", "loadavg_1min"], tim_rows)
-        write_csv(out / "rmse.csv", ["scene", "variant", "spp", "render_s", "rmse", "rel_rmse",
-                                     "mse_ref_noise", "rmse_corrected", "efficiency"], err_rows)
-    print(f"wrote {out / 'timings.csv'} and {out / 'rmse.csv'}")
+        write_csv(out / f"{args.tag}timings.csv", ["scene", "variant", "spp", "load_s", "render_s",
+                  "render_cpu_s", "render_cold_s", "threads", "loadavg_1min"], tim_rows)
+        write_csv(out / f"{args.tag}rmse.csv", ["scene", "variant", "spp", "time_s", "wall_s", "rmse",
+                  "rel_rmse", "mse_ref_noise", "rmse_corrected", "efficiency"], err_rows)
+    print(f"wrote {out / (args.tag + 'timings.csv')} and {out / (args.tag + 'rmse.csv')}")
 
 
 def write_csv(path: Path, header: list[str], rows: list[list]) -> None:
