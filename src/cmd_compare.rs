@@ -68,7 +68,7 @@ fn sample_rows(s: &Surface, cutoffs: &[f64]) -> anyhow::Result<Vec<Row>> {
     let metal = format!("metal = \"{}\"\n", s.fresnel);
     let mut rows = vec![
         Row {
-            label: format!("GGX\nα {:.4}", s.alpha),
+            label: format!("GGX\nα {}", models::short(s.alpha)),
             material: format!("model = \"ggx\"\n{metal}alpha = {}\n", s.alpha),
         },
         Row { label: "GHS SSA".into(), material: format!("model = \"ghs_ssa\"\n{metal}{kc}") },
@@ -81,7 +81,7 @@ fn sample_rows(s: &Surface, cutoffs: &[f64]) -> anyhow::Result<Vec<Row>> {
         let spec = s.model("two_scale", m)?;
         let beta = spec.num("beta");
         rows.push(Row {
-            label: format!("two-scale {m}λ\nβ {beta:.4}"),
+            label: format!("two-scale {m}λ\nβ {}", models::short(beta)),
             material: format!("model = \"two_scale\"\n{metal}{kc}beta = {beta}\n"),
         });
     }
@@ -101,7 +101,7 @@ fn material_rows(path: &Path) -> anyhow::Result<(String, Vec<Row>)> {
     let include = format!("include = {}\n", toml::Value::String(abs.display().to_string()));
     let mut rows = vec![
         Row {
-            label: format!("GGX\nα {:.4}", num(mat, "alpha").unwrap_or(f64::NAN)),
+            label: format!("GGX\nα {}", models::short(num(mat, "alpha").unwrap_or(f64::NAN))),
             material: format!("{include}model = \"ggx\"\n"),
         },
         Row { label: "GHS SSA".into(), material: format!("{include}model = \"ghs_ssa\"\n") },
@@ -124,7 +124,7 @@ fn material_rows(path: &Path) -> anyhow::Result<(String, Vec<Row>)> {
     for (order, name, beta) in cuts {
         let what = if order < f64::MAX { format!("{order}λ") } else { name.clone() };
         rows.push(Row {
-            label: format!("two-scale {what}\nβ {beta:.4}"),
+            label: format!("two-scale {what}\nβ {}", models::short(beta)),
             material: format!("{include}model = \"two_scale\"\ncutoff = \"{name}\"\n"),
         });
     }
@@ -180,7 +180,10 @@ pub fn run(args: CompareArgs) -> anyhow::Result<()> {
             let s = Surface::from_sample(models::sample(args.sample.as_deref().unwrap_or("S280"))?)?;
             let title = format!(
                 "{}: σ {} µm, Lc {} µm, γ {}, {}\n\
-                 GGX α = 1/(2kLc) at 550 nm; two-scale at Λ = m·550 nm: β from the KC slope variance below 2π/Λ, micro scale = the sample's KC",
+                 GGX: α = 1/(2kLc) at 550 nm\n\
+                 two-scale at Λ = m·550 nm: β from the\n\
+                 KC slope variance below 2π/Λ;\n\
+                 micro scale = the sample's KC",
                 s.name, s.sigma_um, s.lc_um, s.gamma, s.fresnel
             );
             (s.name.to_lowercase(), title, sample_rows(&s, &args.cutoffs)?, PathBuf::from("."))

@@ -119,6 +119,11 @@ impl ModelSpec {
     }
 }
 
+/// Three significant digits for labels, in exponent form below 0.01.
+pub fn short(x: f64) -> String {
+    if x.abs() >= 0.01 || x == 0.0 { format!("{x:.3}") } else { format!("{x:.2e}") }
+}
+
 /// Model names `plot` and `compare` understand.
 pub const MODEL_NAMES: [&str; 5] = ["ggx", "beckmann", "ghs_ssa", "ghs", "two_scale"];
 
@@ -169,7 +174,7 @@ impl Surface {
             "ggx" | "beckmann" => {
                 let v = json!({"model": name, "alpha": self.alpha, "fresnel": self.fresnel});
                 let pretty = if name == "ggx" { "GGX" } else { "Beckmann" };
-                (format!("{pretty} (α {:.3})", self.alpha), v.as_object().cloned().unwrap_or_default())
+                (format!("{pretty} (α {})", short(self.alpha)), v.as_object().cloned().unwrap_or_default())
             }
             "ghs_ssa" => ("GHS SSA".to_string(), self.kc_fields(name)),
             "ghs" => ("full GHS".to_string(), self.kc_fields(name)),
@@ -178,7 +183,7 @@ impl Surface {
                 let beta = two_scale_beta(self.sigma_um, self.lc_um, self.gamma, cutoff_um);
                 let mut f = self.kc_fields(name);
                 f.insert("beta".into(), json!(beta));
-                (format!("two-scale {cutoff_multiple}λ (β {beta:.3})"), f)
+                (format!("two-scale {cutoff_multiple}λ (β {})", short(beta)), f)
             }
             other => {
                 return Err(anyhow!("unknown model {other:?}; use {}", MODEL_NAMES.join(", ")));
