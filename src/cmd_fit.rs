@@ -48,6 +48,9 @@ pub struct MaterialArgs {
     /// Stylus profile whose PSD replaces the scan's below the merge cutoff.
     #[arg(long)]
     pub stylus: Option<PathBuf>,
+    /// Welch segments for the stylus profile (more = smoother PSD, less low-frequency reach).
+    #[arg(long, default_value_t = 4)]
+    pub stylus_segments: usize,
     /// Two-scale cutoff periods as multiples of --lambda-nm.
     #[arg(long, value_delimiter = ',', default_values_t = vec![50.0, 100.0, 150.0])]
     pub cutoff: Vec<f64>,
@@ -179,6 +182,7 @@ fn material(args: MaterialArgs) -> anyhow::Result<()> {
         cutoff_multiples: args.cutoff.clone(),
         wavelength: args.lambda_nm * 1e-9,
         merge_cutoff: args.merge_cutoff * 1e6,
+        stylus_segments: args.stylus_segments,
         ..Options::default()
     };
     let analysis = pipeline::analyse(topo, stylus.as_ref().map(|s| s.1.clone()), &opts)?;

@@ -18,8 +18,11 @@ pub struct Options {
     pub wavelength: f64,
     /// AFM/stylus merge cutoff [rad/m] (default 1 rad/µm).
     pub merge_cutoff: f64,
-    /// Welch segment options.
+    /// Welch segment options of the scan.
     pub welch: WelchOptions,
+    /// The stylus profile is split into this many Welch segments (50 % overlap) to tame the
+    /// variance of a single-profile periodogram; 1 = whole profile.
+    pub stylus_segments: usize,
     /// NDF bins and Gaussian smoothing [rad].
     pub ndf_bins: usize,
     /// NDF smoothing standard deviation in bin widths.
@@ -33,6 +36,7 @@ impl Default for Options {
             wavelength: 550e-9,
             merge_cutoff: 1e6,
             welch: WelchOptions::default(),
+            stylus_segments: 4,
             ndf_bins: 90,
             ndf_smooth_bins: 1.0,
         }
@@ -105,7 +109,14 @@ pub fn analyse(
     let (stylus_psd, fit_psd, f_lo) = match stylus {
         Some(st) => {
             let (st, _) = prepare(st)?;
-            let sp = psd::welch(&st, &WelchOptions::default())?;
+            let nperseg = (st.nx / opts.stylus_segments.max(1)).max(8).min(st.nx);
+            let sp = psd::welch(
+                &st,
+                &WelchOptions {
+                    nperseg: Some(nperseg),
+                    noverlap: None,
+                },
+            )?;
             let f_lo = sp.f.get(3).copied().unwrap_or(0.0);
             let merged = psd::merge(&sp, &line_psd, f_merge);
             (Some(sp), merged, f_lo)
