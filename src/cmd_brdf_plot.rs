@@ -38,14 +38,24 @@ pub struct PlotArgs {
     #[arg(long, value_delimiter = ',')]
     pub samples: Vec<String>,
     /// Plot one custom K-correlation surface instead: SIGMA_UM,LC_UM,GAMMA.
-    #[arg(long, value_delimiter = ',', num_args = 1, value_name = "SIGMA,LC,GAMMA", conflicts_with = "samples")]
+    #[arg(
+        long,
+        value_delimiter = ',',
+        num_args = 1,
+        value_name = "SIGMA,LC,GAMMA",
+        conflicts_with = "samples"
+    )]
     pub kc: Option<Vec<f64>>,
     /// Fresnel: "none" (R = 1) or a metal name; default the sample's metal
     /// (stainless_steel for --kc).
     #[arg(long)]
     pub fresnel: Option<String>,
     /// Models, comma-separated: ggx, beckmann, ghs_ssa, ghs, two_scale.
-    #[arg(long, value_delimiter = ',', default_value = "ggx,ghs_ssa,ghs,two_scale")]
+    #[arg(
+        long,
+        value_delimiter = ',',
+        default_value = "ggx,ghs_ssa,ghs,two_scale"
+    )]
     pub models: Vec<String>,
     /// Wavelengths in nm, comma-separated.
     #[arg(long, value_delimiter = ',', default_value = "550")]
@@ -84,8 +94,14 @@ pub fn parse_size(s: &str) -> anyhow::Result<(u32, u32)> {
     let (w, h) = s
         .split_once(['x', 'X', '×'])
         .ok_or_else(|| anyhow!("size {s:?}: expected WIDTHxHEIGHT, e.g. 960x640"))?;
-    let w: u32 = w.trim().parse().with_context(|| format!("size {s:?}: bad width {w:?}"))?;
-    let h: u32 = h.trim().parse().with_context(|| format!("size {s:?}: bad height {h:?}"))?;
+    let w: u32 = w
+        .trim()
+        .parse()
+        .with_context(|| format!("size {s:?}: bad width {w:?}"))?;
+    let h: u32 = h
+        .trim()
+        .parse()
+        .with_context(|| format!("size {s:?}: bad height {h:?}"))?;
     if w == 0 || h == 0 {
         bail!("size {s:?}: width and height must be ≥ 1");
     }
@@ -96,7 +112,10 @@ fn surfaces(args: &PlotArgs) -> anyhow::Result<Vec<Surface>> {
     let mut out = Vec::new();
     if let Some(kc) = &args.kc {
         let [sigma, lc, gamma] = kc[..] else {
-            bail!("--kc needs three numbers SIGMA_UM,LC_UM,GAMMA, got {}", kc.len());
+            bail!(
+                "--kc needs three numbers SIGMA_UM,LC_UM,GAMMA, got {}",
+                kc.len()
+            );
         };
         brdf::wave::KcPsd::new(sigma, lc, gamma).context("--kc")?;
         out.push(Surface {
@@ -146,7 +165,10 @@ fn check_args(args: &PlotArgs) -> anyhow::Result<()> {
         bail!("--points {}: need at least 8", args.points);
     }
     if !(args.cutoff.is_finite() && args.cutoff > 0.0) {
-        bail!("--cutoff {}: must be a positive multiple of the wavelength", args.cutoff);
+        bail!(
+            "--cutoff {}: must be a positive multiple of the wavelength",
+            args.cutoff
+        );
     }
     Ok(())
 }
@@ -160,9 +182,15 @@ pub fn run(args: PlotArgs) -> anyhow::Result<()> {
         .with_context(|| format!("creating output directory {}", args.out.display()))?;
     let mut panel: Vec<(String, Vec<plot::RgbImage>)> = Vec::new();
     for s in &surfaces {
-        let specs: Vec<ModelSpec> =
-            args.models.iter().map(|m| s.model(m.trim(), args.cutoff)).collect::<anyhow::Result<_>>()?;
-        let built: Vec<Box<dyn Bxdf>> = specs.iter().map(ModelSpec::build).collect::<anyhow::Result<_>>()?;
+        let specs: Vec<ModelSpec> = args
+            .models
+            .iter()
+            .map(|m| s.model(m.trim(), args.cutoff))
+            .collect::<anyhow::Result<_>>()?;
+        let built: Vec<Box<dyn Bxdf>> = specs
+            .iter()
+            .map(ModelSpec::build)
+            .collect::<anyhow::Result<_>>()?;
         let title = format!(
             "{}: σ {} µm, Lc {} µm, γ {}, {}",
             s.name, s.sigma_um, s.lc_um, s.gamma, s.fresnel
@@ -173,7 +201,10 @@ pub fn run(args: PlotArgs) -> anyhow::Result<()> {
         let png = args.out.join(format!("{stem}_slices.png"));
         let (img, report) = slices.0.render(w, h)?;
         plot::save_png(&img, &png)?;
-        plot::write_atomic(&args.out.join(format!("{stem}_slices.csv")), slices.1.as_bytes())?;
+        plot::write_atomic(
+            &args.out.join(format!("{stem}_slices.csv")),
+            slices.1.as_bytes(),
+        )?;
         note(&args, &png, &report.skipped);
         images.push(img);
         if args.albedo_angles > 0 {
@@ -210,12 +241,25 @@ fn note(args: &PlotArgs, png: &Path, skipped: &[plot::Skipped]) {
     }
     eprintln!("wrote {} (+ .csv)", png.display());
     for s in skipped {
-        eprintln!("  {}: {} points ≤ 0 not drawn on the log axis (kept in the CSV)", s.label, s.count);
+        eprintln!(
+            "  {}: {} points ≤ 0 not drawn on the log axis (kept in the CSV)",
+            s.label, s.count
+        );
     }
 }
 
-const STYLES: [LineStyle; 4] = [LineStyle::Solid, LineStyle::Dashed, LineStyle::Dotted, LineStyle::DashDot];
-const MARKERS: [Marker; 4] = [Marker::None, Marker::Circle, Marker::Square, Marker::Triangle];
+const STYLES: [LineStyle; 4] = [
+    LineStyle::Solid,
+    LineStyle::Dashed,
+    LineStyle::Dotted,
+    LineStyle::DashDot,
+];
+const MARKERS: [Marker; 4] = [
+    Marker::None,
+    Marker::Circle,
+    Marker::Square,
+    Marker::Triangle,
+];
 
 /// Signed in-plane coordinates s = β (sinθo, positive on the specular side)
 /// for a slice at incidence `theta_i_deg`: half uniform in θo over ±89.5°, half
@@ -225,7 +269,11 @@ pub fn slice_positions(theta_i_deg: f64, points: usize) -> Vec<f64> {
     let s0 = theta_i_deg.to_radians().sin();
     let n_uni = points / 2;
     let mut s: Vec<f64> = (0..n_uni)
-        .map(|j| (-89.5 + 179.0 * j as f64 / (n_uni - 1) as f64).to_radians().sin())
+        .map(|j| {
+            (-89.5 + 179.0 * j as f64 / (n_uni - 1) as f64)
+                .to_radians()
+                .sin()
+        })
         .collect();
     let n_side = (points - n_uni) / 2;
     for j in 0..n_side {
@@ -241,7 +289,10 @@ pub fn slice_positions(theta_i_deg: f64, points: usize) -> Vec<f64> {
 
 /// Signed s → (θo in degrees, φo in degrees) as `brdf eval` takes them.
 pub fn in_plane_angles(s: f64) -> (f64, f64) {
-    (s.abs().asin().to_degrees(), if s >= 0.0 { 180.0 } else { 0.0 })
+    (
+        s.abs().asin().to_degrees(),
+        if s >= 0.0 { 180.0 } else { 0.0 },
+    )
 }
 
 fn direction(theta_deg: f64, phi_deg: f64) -> DVec3 {
@@ -255,7 +306,11 @@ fn csv_fields_header() -> &'static str {
 fn csv_fields(m: &ModelSpec) -> String {
     let f = |k: &str| {
         let v = m.num(k);
-        if v.is_nan() { String::new() } else { format!("{v}") }
+        if v.is_nan() {
+            String::new()
+        } else {
+            format!("{v}")
+        }
     };
     format!(
         "{},{},{},{},{},{}",
@@ -269,7 +324,11 @@ fn csv_fields(m: &ModelSpec) -> String {
 }
 
 fn quote(s: &str) -> String {
-    if s.contains([',', '"']) { format!("\"{}\"", s.replace('"', "\"\"")) } else { s.to_string() }
+    if s.contains([',', '"']) {
+        format!("\"{}\"", s.replace('"', "\"\""))
+    } else {
+        s.to_string()
+    }
 }
 
 fn slice_plot(
@@ -309,7 +368,11 @@ fn slice_plot(
                         quote(&spec.label),
                         csv_fields(spec)
                     )?;
-                    xs.push(if args.x == SliceAxis::Theta { signed } else { db });
+                    xs.push(if args.x == SliceAxis::Theta {
+                        signed
+                    } else {
+                        db
+                    });
                     ys.push(f);
                     y_max = y_max.max(if f.is_finite() { f } else { 0.0 });
                 }
@@ -321,14 +384,19 @@ fn slice_plot(
                     .color(Rgb::palette(mi))
                     .style(STYLES[ti % STYLES.len()]);
                 if li > 0 {
-                    ser = ser.marker(MARKERS[li % MARKERS.len()]).marker_every((xs.len() / 12).max(1));
+                    ser = ser
+                        .marker(MARKERS[li % MARKERS.len()])
+                        .marker_every((xs.len() / 12).max(1));
                 }
                 series.push(ser);
             }
         }
     }
     if !(y_max > 0.0) {
-        bail!("{}: every BRDF value is zero; nothing to plot on a log axis", s.name);
+        bail!(
+            "{}: every BRDF value is zero; nothing to plot on a log axis",
+            s.name
+        );
     }
     // Twelve decades below the highest peak: deeper tails are numerically
     // meaningless for the figure (they stay in the CSV).
@@ -372,7 +440,9 @@ fn albedo_plot(
             let (mut xs, mut total, mut tis) = (Vec::new(), Vec::new(), Vec::new());
             for theta_i in albedo_angles(args.albedo_angles) {
                 let wi = direction(theta_i, 0.0);
-                let scattered = brdf::wave::energy::hemispherical_integral(wi, rho, |o| model.eval(wi, o, lambda));
+                let scattered = brdf::wave::energy::hemispherical_integral(wi, rho, |o| {
+                    model.eval(wi, o, lambda)
+                });
                 let spec_w = model.specular(wi, lambda).weight;
                 let t = scattered + spec_w;
                 let r = if t > 0.0 { scattered / t } else { 0.0 };
@@ -388,7 +458,11 @@ fn albedo_plot(
                 total.push(t);
                 tis.push(r);
             }
-            let suffix = if multi_lambda { format!(", {lambda} nm") } else { String::new() };
+            let suffix = if multi_lambda {
+                format!(", {lambda} nm")
+            } else {
+                String::new()
+            };
             let marker = MARKERS[li % MARKERS.len()];
             let every = (xs.len() / 8).max(1);
             p = p.series(

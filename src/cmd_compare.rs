@@ -64,15 +64,24 @@ struct Row {
 }
 
 fn sample_rows(s: &Surface, cutoffs: &[f64]) -> anyhow::Result<Vec<Row>> {
-    let kc = format!("sigma_um = {}\nlc_um = {}\ngamma = {}\n", s.sigma_um, s.lc_um, s.gamma);
+    let kc = format!(
+        "sigma_um = {}\nlc_um = {}\ngamma = {}\n",
+        s.sigma_um, s.lc_um, s.gamma
+    );
     let metal = format!("metal = \"{}\"\n", s.fresnel);
     let mut rows = vec![
         Row {
             label: format!("GGX\nα {}", models::short(s.alpha)),
             material: format!("model = \"ggx\"\n{metal}alpha = {}\n", s.alpha),
         },
-        Row { label: "GHS SSA".into(), material: format!("model = \"ghs_ssa\"\n{metal}{kc}") },
-        Row { label: "full GHS".into(), material: format!("model = \"ghs\"\n{metal}{kc}energy = \"raw\"\n") },
+        Row {
+            label: "GHS SSA".into(),
+            material: format!("model = \"ghs_ssa\"\n{metal}{kc}"),
+        },
+        Row {
+            label: "full GHS".into(),
+            material: format!("model = \"ghs\"\n{metal}{kc}energy = \"raw\"\n"),
+        },
     ];
     for &m in cutoffs {
         if !(m.is_finite() && m > 0.0) {
@@ -90,22 +99,42 @@ fn sample_rows(s: &Surface, cutoffs: &[f64]) -> anyhow::Result<Vec<Row>> {
 
 /// Cutoff tables of a `lustre fit` file, ordered by their number (cutoff_50 < cutoff_100).
 fn material_rows(path: &Path) -> anyhow::Result<(String, Vec<Row>)> {
-    let text = std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
-    let doc: toml::Table = toml::from_str(&text).with_context(|| format!("parsing {}", path.display()))?;
+    let text =
+        std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
+    let doc: toml::Table =
+        toml::from_str(&text).with_context(|| format!("parsing {}", path.display()))?;
     let mat = doc
         .get("material")
         .and_then(toml::Value::as_table)
-        .ok_or_else(|| anyhow!("{}: no [material] table (expected a `lustre fit` material file)", path.display()))?;
+        .ok_or_else(|| {
+            anyhow!(
+                "{}: no [material] table (expected a `lustre fit` material file)",
+                path.display()
+            )
+        })?;
     let num = |t: &toml::Table, k: &str| t.get(k).and_then(toml::Value::as_float);
-    let abs = std::fs::canonicalize(path).with_context(|| format!("resolving {}", path.display()))?;
-    let include = format!("include = {}\n", toml::Value::String(abs.display().to_string()));
+    let abs =
+        std::fs::canonicalize(path).with_context(|| format!("resolving {}", path.display()))?;
+    let include = format!(
+        "include = {}\n",
+        toml::Value::String(abs.display().to_string())
+    );
     let mut rows = vec![
         Row {
-            label: format!("GGX\nα {}", models::short(num(mat, "alpha").unwrap_or(f64::NAN))),
+            label: format!(
+                "GGX\nα {}",
+                models::short(num(mat, "alpha").unwrap_or(f64::NAN))
+            ),
             material: format!("{include}model = \"ggx\"\n"),
         },
-        Row { label: "GHS SSA".into(), material: format!("{include}model = \"ghs_ssa\"\n") },
-        Row { label: "full GHS".into(), material: format!("{include}model = \"ghs\"\nenergy = \"raw\"\n") },
+        Row {
+            label: "GHS SSA".into(),
+            material: format!("{include}model = \"ghs_ssa\"\n"),
+        },
+        Row {
+            label: "full GHS".into(),
+            material: format!("{include}model = \"ghs\"\nenergy = \"raw\"\n"),
+        },
     ];
     let mut cuts: Vec<(f64, String, f64)> = doc
         .get("two_scale")
@@ -114,7 +143,10 @@ fn material_rows(path: &Path) -> anyhow::Result<(String, Vec<Row>)> {
             t.iter()
                 .filter_map(|(name, v)| {
                     let t = v.as_table()?;
-                    let order = name.trim_start_matches(|c: char| !c.is_ascii_digit()).parse().unwrap_or(f64::MAX);
+                    let order = name
+                        .trim_start_matches(|c: char| !c.is_ascii_digit())
+                        .parse()
+                        .unwrap_or(f64::MAX);
                     Some((order, name.clone(), num(t, "beta").unwrap_or(f64::NAN)))
                 })
                 .collect()
@@ -122,13 +154,19 @@ fn material_rows(path: &Path) -> anyhow::Result<(String, Vec<Row>)> {
         .unwrap_or_default();
     cuts.sort_by(|a, b| a.0.total_cmp(&b.0));
     for (order, name, beta) in cuts {
-        let what = if order < f64::MAX { format!("{order}λ") } else { name.clone() };
+        let what = if order < f64::MAX {
+            format!("{order}λ")
+        } else {
+            name.clone()
+        };
         rows.push(Row {
             label: format!("two-scale {what}\nβ {}", models::short(beta)),
             material: format!("{include}model = \"two_scale\"\ncutoff = \"{name}\"\n"),
         });
     }
-    let name = path.file_stem().map_or_else(|| "material".into(), |s| s.to_string_lossy().into_owned());
+    let name = path
+        .file_stem()
+        .map_or_else(|| "material".into(), |s| s.to_string_lossy().into_owned());
     Ok((name, rows))
 }
 
@@ -139,7 +177,11 @@ pub fn scene_text(view_deg: f64, width: u32, height: u32, spp: u64, material: &s
     // At normal view the light sits 1° further out so camera and light do not coincide.
     let tl = view_deg.max(1.0).to_radians();
     let light = [0.0, 1.2 * tl.cos(), -1.2 * tl.sin()];
-    let up = if view_deg < 1.0 { "[0.0, 0.0, -1.0]" } else { "[0.0, 1.0, 0.0]" };
+    let up = if view_deg < 1.0 {
+        "[0.0, 0.0, -1.0]"
+    } else {
+        "[0.0, 1.0, 0.0]"
+    };
     let v = |p: [f64; 3]| format!("[{:.9}, {:.9}, {:.9}]", p[0], p[1], p[2]);
     format!(
         "[camera]\nlook_from = {}\nlook_at = [0.0, 0.0, 0.0]\nup = {up}\nfov_deg = 14.0\nresolution = [{width}, {height}]\n\n\
@@ -156,7 +198,11 @@ pub fn scene_text(view_deg: f64, width: u32, height: u32, spp: u64, material: &s
 /// Linear sRGB → 8-bit sRGB (IEC 61966-2-1 transfer curve, clamped).
 fn to_srgb8(v: f32) -> u8 {
     let x = f64::from(v).clamp(0.0, 1.0);
-    let e = if x <= 0.003_130_8 { 12.92 * x } else { 1.055 * x.powf(1.0 / 2.4) - 0.055 };
+    let e = if x <= 0.003_130_8 {
+        12.92 * x
+    } else {
+        1.055 * x.powf(1.0 / 2.4) - 0.055
+    };
     (e * 255.0 + 0.5) as u8
 }
 
@@ -173,11 +219,14 @@ pub fn run(args: CompareArgs) -> anyhow::Result<()> {
         Some(path) => {
             let (name, rows) = material_rows(path)?;
             let title = format!("{name} (fitted material {})", path.display());
-            let base = path.parent().map_or_else(|| PathBuf::from("."), Path::to_path_buf);
+            let base = path
+                .parent()
+                .map_or_else(|| PathBuf::from("."), Path::to_path_buf);
             (name, title, rows, base)
         }
         None => {
-            let s = Surface::from_sample(models::sample(args.sample.as_deref().unwrap_or("S280"))?)?;
+            let s =
+                Surface::from_sample(models::sample(args.sample.as_deref().unwrap_or("S280"))?)?;
             let title = format!(
                 "{}: σ {} µm, Lc {} µm, γ {}, {}\n\
                  GGX: α = 1/(2kLc) at 550 nm\n\
@@ -186,14 +235,25 @@ pub fn run(args: CompareArgs) -> anyhow::Result<()> {
                  micro scale = the sample's KC",
                 s.name, s.sigma_um, s.lc_um, s.gamma, s.fresnel
             );
-            (s.name.to_lowercase(), title, sample_rows(&s, &args.cutoffs)?, PathBuf::from("."))
+            (
+                s.name.to_lowercase(),
+                title,
+                sample_rows(&s, &args.cutoffs)?,
+                PathBuf::from("."),
+            )
         }
     };
-    let out = args.out.clone().unwrap_or_else(|| PathBuf::from(format!("out/compare/{name}.png")));
+    let out = args
+        .out
+        .clone()
+        .unwrap_or_else(|| PathBuf::from(format!("out/compare/{name}.png")));
     if let Some(dir) = out.parent().filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
     }
-    let opts = RenderOptions { threads: args.threads, ..RenderOptions::default() };
+    let opts = RenderOptions {
+        threads: args.threads,
+        ..RenderOptions::default()
+    };
     let pool = render::render::thread_pool(args.threads)?;
     let mut grid = ImageGrid::new(rows.len(), args.views.len())
         .title(format!("{title}\n{w}×{h} px, {} spp per cell", args.spp))
@@ -210,7 +270,13 @@ pub fn run(args: CompareArgs) -> anyhow::Result<()> {
             let text = scene_text(view, w, h, args.spp, &row.material);
             let scene = render::load_str(&scene_path, &text)
                 .map_err(|e| anyhow!("{} at {view}°: {e}", row.label.replace('\n', ", ")))?;
-            let mut film = Film::new(w, h, scene.fingerprint, scene.settings.seed, scene.settings.exposure);
+            let mut film = Film::new(
+                w,
+                h,
+                scene.fingerprint,
+                scene.settings.seed,
+                scene.settings.exposure,
+            );
             render::render_range_in(&pool, &scene, &mut film, 0..args.spp, &opts)?;
             let px: Vec<u8> = film.rgb().iter().flat_map(|p| p.map(to_srgb8)).collect();
             grid.set_rgb8(r, c, w, h, px)?;
@@ -244,7 +310,13 @@ pub fn run(args: CompareArgs) -> anyhow::Result<()> {
     let cells_path = out.with_extension("cells.csv");
     plot::write_atomic(&cells_path, cells.as_bytes())?;
     if !args.quiet {
-        eprintln!("wrote {} ({}×{} px) and {}", out.display(), layout.width, layout.height, cells_path.display());
+        eprintln!(
+            "wrote {} ({}×{} px) and {}",
+            out.display(),
+            layout.width,
+            layout.height,
+            cells_path.display()
+        );
     }
     Ok(())
 }

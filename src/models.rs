@@ -29,19 +29,56 @@ pub struct Sample {
 
 /// The five samples of Avolio, d'Eon & Steinberg.
 pub const SAMPLES: [Sample; 5] = [
-    Sample { name: "S808", sigma_um: 0.808, lc_um: 10.0, gamma: 3.5, metal: "stainless_steel" },
-    Sample { name: "S280", sigma_um: 0.280, lc_um: 5.0, gamma: 3.0, metal: "brass" },
-    Sample { name: "S138", sigma_um: 0.138, lc_um: 2.0, gamma: 2.0, metal: "brass" },
-    Sample { name: "S091", sigma_um: 0.091, lc_um: 20.0, gamma: 1.5, metal: "brass" },
-    Sample { name: "S027", sigma_um: 0.027, lc_um: 1.0, gamma: 4.0, metal: "stainless_steel" },
+    Sample {
+        name: "S808",
+        sigma_um: 0.808,
+        lc_um: 10.0,
+        gamma: 3.5,
+        metal: "stainless_steel",
+    },
+    Sample {
+        name: "S280",
+        sigma_um: 0.280,
+        lc_um: 5.0,
+        gamma: 3.0,
+        metal: "brass",
+    },
+    Sample {
+        name: "S138",
+        sigma_um: 0.138,
+        lc_um: 2.0,
+        gamma: 2.0,
+        metal: "brass",
+    },
+    Sample {
+        name: "S091",
+        sigma_um: 0.091,
+        lc_um: 20.0,
+        gamma: 1.5,
+        metal: "brass",
+    },
+    Sample {
+        name: "S027",
+        sigma_um: 0.027,
+        lc_um: 1.0,
+        gamma: 4.0,
+        metal: "stainless_steel",
+    },
 ];
 
 /// Looks a sample up by name (case-insensitive), listing the valid names otherwise.
 pub fn sample(name: &str) -> anyhow::Result<Sample> {
-    SAMPLES.iter().copied().find(|s| s.name.eq_ignore_ascii_case(name)).ok_or_else(|| {
-        let names: Vec<&str> = SAMPLES.iter().map(|s| s.name).collect();
-        anyhow!("unknown sample {name:?}; the paper samples are {}", names.join(", "))
-    })
+    SAMPLES
+        .iter()
+        .copied()
+        .find(|s| s.name.eq_ignore_ascii_case(name))
+        .ok_or_else(|| {
+            let names: Vec<&str> = SAMPLES.iter().map(|s| s.name).collect();
+            anyhow!(
+                "unknown sample {name:?}; the paper samples are {}",
+                names.join(", ")
+            )
+        })
 }
 
 /// k = 2π/λ in rad/µm.
@@ -53,7 +90,11 @@ pub fn wavenumber(lambda_nm: f64) -> f64 {
 /// Lc = 1/(2kα cosθi), at `lambda_nm` and normal incidence: the α whose GGX
 /// lobe equals the SSA lobe at the mirror direction.
 pub fn ggx_alpha(lc_um: f64, lambda_nm: f64) -> anyhow::Result<f64> {
-    Ok(brdf::wave::ggx_kc::ggx_alpha_from_kc_slope_space(lc_um, wavenumber(lambda_nm), 1.0)?)
+    Ok(brdf::wave::ggx_kc::ggx_alpha_from_kc_slope_space(
+        lc_um,
+        wavenumber(lambda_nm),
+        1.0,
+    )?)
 }
 
 /// Exponential-NDF β of the large scale when a KC surface is split at cutoff
@@ -99,7 +140,10 @@ impl ModelSpec {
 
     /// A numeric field (NaN when absent), for CSV columns.
     pub fn num(&self, field: &str) -> f64 {
-        self.fields.get(field).and_then(Value::as_f64).unwrap_or(f64::NAN)
+        self.fields
+            .get(field)
+            .and_then(Value::as_f64)
+            .unwrap_or(f64::NAN)
     }
 
     /// A string field ("" when absent).
@@ -115,13 +159,21 @@ impl ModelSpec {
             "two_scale" => self.num("beta").max(wave),
             _ => wave,
         };
-        if rho.is_finite() && rho > 0.0 { rho.clamp(1e-6, 1.0) } else { 1e-3 }
+        if rho.is_finite() && rho > 0.0 {
+            rho.clamp(1e-6, 1.0)
+        } else {
+            1e-3
+        }
     }
 }
 
 /// Three significant digits for labels, in exponent form below 0.01.
 pub fn short(x: f64) -> String {
-    if x.abs() >= 0.01 || x == 0.0 { format!("{x:.3}") } else { format!("{x:.2e}") }
+    if x.abs() >= 0.01 || x == 0.0 {
+        format!("{x:.3}")
+    } else {
+        format!("{x:.2e}")
+    }
 }
 
 /// Model names `plot` and `compare` understand.
@@ -174,7 +226,10 @@ impl Surface {
             "ggx" | "beckmann" => {
                 let v = json!({"model": name, "alpha": self.alpha, "fresnel": self.fresnel});
                 let pretty = if name == "ggx" { "GGX" } else { "Beckmann" };
-                (format!("{pretty} (α {})", short(self.alpha)), v.as_object().cloned().unwrap_or_default())
+                (
+                    format!("{pretty} (α {})", short(self.alpha)),
+                    v.as_object().cloned().unwrap_or_default(),
+                )
             }
             "ghs_ssa" => ("GHS SSA".to_string(), self.kc_fields(name)),
             "ghs" => ("full GHS".to_string(), self.kc_fields(name)),
@@ -183,10 +238,16 @@ impl Surface {
                 let beta = two_scale_beta(self.sigma_um, self.lc_um, self.gamma, cutoff_um);
                 let mut f = self.kc_fields(name);
                 f.insert("beta".into(), json!(beta));
-                (format!("two-scale {cutoff_multiple}λ (β {})", short(beta)), f)
+                (
+                    format!("two-scale {cutoff_multiple}λ (β {})", short(beta)),
+                    f,
+                )
             }
             other => {
-                return Err(anyhow!("unknown model {other:?}; use {}", MODEL_NAMES.join(", ")));
+                return Err(anyhow!(
+                    "unknown model {other:?}; use {}",
+                    MODEL_NAMES.join(", ")
+                ));
             }
         };
         Ok(ModelSpec { label, fields })
@@ -218,7 +279,11 @@ mod tests {
                 let cut = m * 0.55;
                 let got = two_scale_beta(s.sigma_um, s.lc_um, s.gamma, cut);
                 let want = beta_closed(s.sigma_um, s.lc_um, s.gamma, cut);
-                assert!((got / want - 1.0).abs() < 1e-9, "{} {m}: {got} vs {want}", s.name);
+                assert!(
+                    (got / want - 1.0).abs() < 1e-9,
+                    "{} {m}: {got} vs {want}",
+                    s.name
+                );
             }
         }
     }

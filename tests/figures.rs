@@ -15,7 +15,8 @@ fn lustre() -> Command {
 }
 
 fn scratch(name: &str) -> PathBuf {
-    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("figures-{name}-{}", std::process::id()));
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .join(format!("figures-{name}-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();
     dir
@@ -31,7 +32,12 @@ fn run(cmd: &mut Command) -> String {
 /// Width and height from a PNG's IHDR chunk.
 fn png_size(path: &Path) -> (u32, u32) {
     let b = std::fs::read(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-    assert_eq!(&b[..8], b"\x89PNG\r\n\x1a\n", "{} is not a PNG", path.display());
+    assert_eq!(
+        &b[..8],
+        b"\x89PNG\r\n\x1a\n",
+        "{} is not a PNG",
+        path.display()
+    );
     assert_eq!(&b[12..16], b"IHDR");
     let be = |i: usize| u32::from_be_bytes([b[i], b[i + 1], b[i + 2], b[i + 3]]);
     (be(16), be(20))
@@ -39,7 +45,8 @@ fn png_size(path: &Path) -> (u32, u32) {
 
 /// RFC 4180 fields of one line (quotes only around fields that need them).
 fn fields(line: &str) -> Vec<String> {
-    let (mut out, mut cur, mut quoted, mut chars) = (Vec::new(), String::new(), false, line.chars().peekable());
+    let (mut out, mut cur, mut quoted, mut chars) =
+        (Vec::new(), String::new(), false, line.chars().peekable());
     while let Some(c) = chars.next() {
         match (c, quoted) {
             ('"', true) if chars.peek() == Some(&'"') => {
@@ -60,11 +67,15 @@ fn read_csv(path: &Path) -> Vec<HashMap<String, String>> {
     let text = std::fs::read_to_string(path).unwrap();
     let mut lines = text.lines();
     let head = fields(lines.next().unwrap());
-    lines.map(|l| head.iter().cloned().zip(fields(l)).collect()).collect()
+    lines
+        .map(|l| head.iter().cloned().zip(fields(l)).collect())
+        .collect()
 }
 
 fn num(row: &HashMap<String, String>, k: &str) -> f64 {
-    row[k].parse().unwrap_or_else(|e| panic!("column {k} = {:?}: {e}", row[k]))
+    row[k]
+        .parse()
+        .unwrap_or_else(|e| panic!("column {k} = {:?}: {e}", row[k]))
 }
 
 /// The model of a CSV row, built directly with the `brdf` crate.
@@ -74,7 +85,10 @@ fn model(row: &HashMap<String, String>) -> Box<dyn Bxdf> {
         m => Fresnel::conductor(Ior::metal(Metal::from_name(m).unwrap())),
     };
     let psd = || KcPsd::new(num(row, "sigma_um"), num(row, "lc_um"), num(row, "gamma")).unwrap();
-    let raw = GhsOptions { energy: Energy::Raw, ..GhsOptions::default() };
+    let raw = GhsOptions {
+        energy: Energy::Raw,
+        ..GhsOptions::default()
+    };
     match row["model"].as_str() {
         "ggx" => {
             let a = num(row, "alpha");
@@ -82,7 +96,9 @@ fn model(row: &HashMap<String, String>) -> Box<dyn Bxdf> {
         }
         "beckmann" => {
             let a = num(row, "alpha");
-            Box::new(MicrofacetConductor::new(Distribution::beckmann(a, a).unwrap(), fresnel).unwrap())
+            Box::new(
+                MicrofacetConductor::new(Distribution::beckmann(a, a).unwrap(), fresnel).unwrap(),
+            )
         }
         "ghs_ssa" => Box::new(GhsSsa::with_options(psd(), fresnel, raw).unwrap()),
         "ghs" => Box::new(GhsFull::with_options(psd(), fresnel, raw).unwrap()),
@@ -117,25 +133,47 @@ fn assert_rel(got: f64, want: f64, what: &str) {
 #[test]
 fn brdf_plot_pngs_have_the_requested_size_and_csv_equals_brdf() {
     let out = scratch("plot");
-    run(lustre().args([
-        "brdf", "plot", "--samples", "S027", "--theta-i", "30,80", "--points", "24", "--albedo-angles", "3",
-        "--size", "700x450", "--quiet", "--out",
-    ])
-    .arg(&out));
+    run(lustre()
+        .args([
+            "brdf",
+            "plot",
+            "--samples",
+            "S027",
+            "--theta-i",
+            "30,80",
+            "--points",
+            "24",
+            "--albedo-angles",
+            "3",
+            "--size",
+            "700x450",
+            "--quiet",
+            "--out",
+        ])
+        .arg(&out));
     for f in ["s027_slices.png", "s027_albedo.png"] {
         assert_eq!(png_size(&out.join(f)), (700, 450), "{f}");
     }
-    assert!(!out.join("panel.png").exists(), "one surface needs no panel");
+    assert!(
+        !out.join("panel.png").exists(),
+        "one surface needs no panel"
+    );
 
     let rows = read_csv(&out.join("s027_slices.csv"));
     let mut cache: HashMap<String, Box<dyn Bxdf>> = HashMap::new();
     let mut per_model: HashMap<String, usize> = HashMap::new();
     for row in &rows {
-        let m = cache.entry(row["model"].clone()).or_insert_with(|| model(row));
+        let m = cache
+            .entry(row["model"].clone())
+            .or_insert_with(|| model(row));
         let wi = dir(num(row, "theta_i_deg"), 0.0);
         let wo = dir(num(row, "theta_o_deg"), num(row, "phi_o_deg"));
         let want = m.eval(wi, wo, num(row, "lambda_nm"));
-        assert_rel(num(row, "brdf_per_sr"), want, &format!("{} at θo {}", row["model"], row["theta_o_deg"]));
+        assert_rel(
+            num(row, "brdf_per_sr"),
+            want,
+            &format!("{} at θo {}", row["model"], row["theta_o_deg"]),
+        );
         // β − β0 is the direction-cosine offset from the mirror direction.
         let db = -wo.x - wi.x;
         assert!((num(row, "beta_minus_beta0") - db).abs() <= 1e-15);
@@ -147,7 +185,10 @@ fn brdf_plot_pngs_have_the_requested_size_and_csv_equals_brdf() {
     assert!(per_model.values().all(|&n| n >= 2 * 20), "{per_model:?}");
     // The mirror direction itself is on every slice.
     for t in [30.0f64, 80.0] {
-        assert!(rows.iter().any(|r| num(r, "theta_i_deg") == t && num(r, "beta_minus_beta0").abs() < 1e-15));
+        assert!(
+            rows.iter()
+                .any(|r| num(r, "theta_i_deg") == t && num(r, "beta_minus_beta0").abs() < 1e-15)
+        );
     }
 
     let rows = read_csv(&out.join("s027_albedo.csv"));
@@ -156,7 +197,9 @@ fn brdf_plot_pngs_have_the_requested_size_and_csv_equals_brdf() {
         let m = &cache[&row["model"]];
         let lambda = num(row, "lambda_nm");
         let wi = dir(num(row, "theta_i_deg"), 0.0);
-        let scattered = brdf::wave::energy::hemispherical_integral(wi, num(row, "lobe_rho"), |o| m.eval(wi, o, lambda));
+        let scattered = brdf::wave::energy::hemispherical_integral(wi, num(row, "lobe_rho"), |o| {
+            m.eval(wi, o, lambda)
+        });
         let spec = m.specular(wi, lambda).weight;
         let what = format!("{} at θi {}", row["model"], row["theta_i_deg"]);
         assert_rel(num(row, "scattered_albedo"), scattered, &what);
@@ -170,12 +213,34 @@ fn brdf_plot_pngs_have_the_requested_size_and_csv_equals_brdf() {
 #[test]
 fn brdf_plot_panel_has_one_row_per_sample() {
     let out = scratch("panel");
-    run(lustre().args([
-        "brdf", "plot", "--samples", "S027,S280", "--models", "ggx,ghs_ssa", "--theta-i", "45", "--points", "16",
-        "--albedo-angles", "2", "--size", "600x400", "--x", "beta", "--quiet", "--out",
-    ])
-    .arg(&out));
-    for f in ["s027_slices.png", "s280_slices.png", "s027_albedo.png", "s280_albedo.png"] {
+    run(lustre()
+        .args([
+            "brdf",
+            "plot",
+            "--samples",
+            "S027,S280",
+            "--models",
+            "ggx,ghs_ssa",
+            "--theta-i",
+            "45",
+            "--points",
+            "16",
+            "--albedo-angles",
+            "2",
+            "--size",
+            "600x400",
+            "--x",
+            "beta",
+            "--quiet",
+            "--out",
+        ])
+        .arg(&out));
+    for f in [
+        "s027_slices.png",
+        "s280_slices.png",
+        "s027_albedo.png",
+        "s280_albedo.png",
+    ] {
         assert_eq!(png_size(&out.join(f)), (600, 400), "{f}");
     }
     let (w, h) = png_size(&out.join("panel.png"));
@@ -192,7 +257,12 @@ fn brdf_plot_rejects_bad_input_with_a_named_option() {
         (vec!["--size", "10"], "WIDTHxHEIGHT"),
         (vec!["--models", "phong"], "phong"),
     ] {
-        let out = lustre().args(["brdf", "plot", "--out"]).arg(scratch("bad")).args(&args).output().unwrap();
+        let out = lustre()
+            .args(["brdf", "plot", "--out"])
+            .arg(scratch("bad"))
+            .args(&args)
+            .output()
+            .unwrap();
         let err = String::from_utf8_lossy(&out.stderr);
         assert!(!out.status.success(), "{args:?} should fail");
         assert!(err.contains(needle), "{args:?}: {err}");
@@ -205,23 +275,47 @@ fn compare_grid_has_one_cell_per_model_and_view() {
     let png = out.join("grid.png");
     run(lustre()
         .args([
-            "compare", "--sample", "S027", "--cutoffs", "100", "--views", "0,80", "--size", "40x30", "--spp", "1",
-            "--threads", "2", "--quiet", "--out",
+            "compare",
+            "--sample",
+            "S027",
+            "--cutoffs",
+            "100",
+            "--views",
+            "0,80",
+            "--size",
+            "40x30",
+            "--spp",
+            "1",
+            "--threads",
+            "2",
+            "--quiet",
+            "--out",
         ])
         .arg(&png));
     let (w, h) = png_size(&png);
     let cells = read_csv(&out.join("grid.cells.csv"));
     // GGX, GHS SSA, full GHS, one two-scale row; two views.
     assert_eq!(cells.len(), 4 * 2);
-    let labels: Vec<&str> = cells.iter().filter(|c| c["col"] == "0").map(|c| c["model"].as_str()).collect();
+    let labels: Vec<&str> = cells
+        .iter()
+        .filter(|c| c["col"] == "0")
+        .map(|c| c["model"].as_str())
+        .collect();
     assert!(labels[0].starts_with("GGX") && labels[1] == "GHS SSA" && labels[2] == "full GHS");
     assert!(labels[3].starts_with("two-scale 100λ"), "{labels:?}");
     for c in &cells {
-        assert_eq!((num(c, "grid_width") as u32, num(c, "grid_height") as u32), (w, h));
+        assert_eq!(
+            (num(c, "grid_width") as u32, num(c, "grid_height") as u32),
+            (w, h)
+        );
         let (x0, y0, x1, y1) = (num(c, "x0"), num(c, "y0"), num(c, "x1"), num(c, "y1"));
         assert_eq!((x1 - x0, y1 - y0), (40.0, 30.0), "cell size");
         assert!(x0 >= 0.0 && y0 >= 0.0 && x1 <= f64::from(w) && y1 <= f64::from(h));
     }
-    let views: Vec<f64> = cells.iter().filter(|c| c["row"] == "0").map(|c| num(c, "view_deg")).collect();
+    let views: Vec<f64> = cells
+        .iter()
+        .filter(|c| c["row"] == "0")
+        .map(|c| num(c, "view_deg"))
+        .collect();
     assert_eq!(views, [0.0, 80.0]);
 }
