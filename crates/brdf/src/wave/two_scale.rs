@@ -52,8 +52,8 @@ use core::f64::consts::PI;
 use glam::DVec3;
 
 use crate::error::{BrdfError, check_range};
-use crate::fresnel::Fresnel;
 use crate::frame::reflect_z;
+use crate::fresnel::Fresnel;
 use crate::math::finite_nonneg;
 use crate::model::{Bxdf, BxdfSample, Specular, WAVELENGTH_MAX_NM, WAVELENGTH_MIN_NM};
 use crate::wave::epd::ExponentialNdf;
@@ -84,7 +84,10 @@ pub struct TableResolution {
 
 impl Default for TableResolution {
     fn default() -> Self {
-        TableResolution { w_nodes: 40, theta_nodes: 128 }
+        TableResolution {
+            w_nodes: 40,
+            theta_nodes: 128,
+        }
     }
 }
 
@@ -206,7 +209,12 @@ struct Convolver {
 
 impl Convolver {
     fn new(ndf: ExponentialNdf, nu: f64) -> Self {
-        Convolver { ndf, nu, outer: Vec::new(), inner: Vec::new() }
+        Convolver {
+            ndf,
+            nu,
+            outer: Vec::new(),
+            inner: Vec::new(),
+        }
     }
 
     /// K_w as a function of sin²ψ.
@@ -230,7 +238,11 @@ impl Convolver {
         panel_edges(
             0.0,
             tm_max,
-            &[(0.0, 0.25 * beta.min(eps)), (theta_h, 0.25 * eps), (kink, 1e-2)],
+            &[
+                (0.0, 0.25 * beta.min(eps)),
+                (theta_h, 0.25 * eps),
+                (kink, 1e-2),
+            ],
             &mut outer,
         );
         let mut total = 0.0;
@@ -250,14 +262,28 @@ impl Convolver {
 
     /// 2∫₀^{φmax} K_w(ψ(φ)) dφ over the ring of m at polar angle θm.
     #[allow(clippy::too_many_arguments)]
-    fn ring(&mut self, w: f64, eps: f64, th: f64, sh: f64, ch: f64, tm: f64, sm: f64, cm: f64) -> f64 {
+    fn ring(
+        &mut self,
+        w: f64,
+        eps: f64,
+        th: f64,
+        sh: f64,
+        ch: f64,
+        tm: f64,
+        sm: f64,
+        cm: f64,
+    ) -> f64 {
         let ss = sh * sm;
         // ψ < 90° ⇔ cosθh cosθm + sinθh sinθm cosφ > 0.
         let phi_max = if ss <= 0.0 {
             PI
         } else {
             let c = -ch * cm / ss;
-            if c <= -1.0 { PI } else { libm::acos(c.min(1.0)) }
+            if c <= -1.0 {
+                PI
+            } else {
+                libm::acos(c.min(1.0))
+            }
         };
         let sin_dt = libm::sin(tm - th);
         let sin2 = |phi: f64| {
@@ -350,7 +376,11 @@ impl EffTable {
         };
         for i in 0..nw {
             let w = libm::expm1(i as f64 * dx);
-            let tau = if w > 0.0 { libm::hypot(beta, 1.0 / w).min(1.0) } else { 1.0 };
+            let tau = if w > 0.0 {
+                libm::hypot(beta, 1.0 / w).min(1.0)
+            } else {
+                1.0
+            };
             let tau = tau.max(beta.min(1.0));
             let v_ext = libm::asinh(libm::tan(THETA_TOP) / (tau * SINH_A));
             t.tau.push(tau);
@@ -448,7 +478,11 @@ impl EffTable {
     fn d_eff(&self, w: f64, tan_t: f64) -> f64 {
         let (i, f) = self.w_bracket(w);
         let a = if f < 1.0 { self.d_node(i, tan_t) } else { 0.0 };
-        let b = if f > 0.0 { self.d_node(i + 1, tan_t) } else { 0.0 };
+        let b = if f > 0.0 {
+            self.d_node(i + 1, tan_t)
+        } else {
+            0.0
+        };
         (1.0 - f) * a + f * b
     }
 
@@ -470,8 +504,16 @@ impl EffTable {
         }
         let tan_t = libm::hypot(h.x, h.y) / h.z;
         let (i, f) = self.w_bracket(w);
-        let a = if f < 1.0 { self.pdf_node(i, tan_t, h.z) } else { 0.0 };
-        let b = if f > 0.0 { self.pdf_node(i + 1, tan_t, h.z) } else { 0.0 };
+        let a = if f < 1.0 {
+            self.pdf_node(i, tan_t, h.z)
+        } else {
+            0.0
+        };
+        let b = if f > 0.0 {
+            self.pdf_node(i + 1, tan_t, h.z)
+        } else {
+            0.0
+        };
         (1.0 - f) * a + f * b
     }
 
@@ -481,7 +523,11 @@ impl EffTable {
         // Last j with cdf[j] ≤ u1, among the nv − 1 bins.
         let j = cdf.partition_point(|&c| c <= u1).clamp(1, self.nv - 1) - 1;
         let width = cdf[j + 1] - cdf[j];
-        let f = if width > 0.0 { ((u1 - cdf[j]) / width).clamp(0.0, 1.0) } else { 0.5 };
+        let f = if width > 0.0 {
+            ((u1 - cdf[j]) / width).clamp(0.0, 1.0)
+        } else {
+            0.5
+        };
         let (t0, t1) = (self.tan2_at(i, j), self.tan2_at(i, j + 1));
         let tan2 = t0 + f * (t1 - t0);
         let cos_t = 1.0 / libm::sqrt(1.0 + tan2);
@@ -513,8 +559,15 @@ impl TwoScale {
     pub fn new(p: TwoScaleParams) -> Result<TwoScale, BrdfError> {
         let ndf = ExponentialNdf::new(p.beta)?;
         let psd = KcPsd::new(p.sigma_um, p.lc_um, p.gamma)?;
-        check_range("lc_um", p.lc_um, 1e-9, 1e5, "1e-9 ≤ lc_um ≤ 1e5 (µm) for the two-scale model")?;
-        p.fresnel.check_covers(WAVELENGTH_MIN_NM, WAVELENGTH_MAX_NM)?;
+        check_range(
+            "lc_um",
+            p.lc_um,
+            1e-9,
+            1e5,
+            "1e-9 ≤ lc_um ≤ 1e5 (µm) for the two-scale model",
+        )?;
+        p.fresnel
+            .check_covers(WAVELENGTH_MIN_NM, WAVELENGTH_MAX_NM)?;
         if p.resolution.w_nodes < 2 || p.resolution.theta_nodes < 8 {
             return Err(BrdfError::OutOfRange {
                 name: "resolution",
@@ -523,7 +576,13 @@ impl TwoScale {
             });
         }
         let table = EffTable::build(ndf, &psd, p.resolution);
-        Ok(TwoScale { ndf, psd, fresnel: p.fresnel, coherent: p.coherent, table })
+        Ok(TwoScale {
+            ndf,
+            psd,
+            fresnel: p.fresnel,
+            coherent: p.coherent,
+            table,
+        })
     }
 
     /// The macro NDF.
@@ -544,13 +603,18 @@ impl TwoScale {
     /// The same material under the other reading of §8.3, sharing no work
     /// with a rebuild: the D̃_eff table does not depend on the reading.
     pub fn with_coherent_part(&self, coherent: CoherentPart) -> TwoScale {
-        TwoScale { coherent, ..self.clone() }
+        TwoScale {
+            coherent,
+            ..self.clone()
+        }
     }
 
     /// Raw ∫D_eff cosθ dω at the table's w nodes, as (w, value) pairs,
     /// before renormalisation.
     pub fn raw_normalisation(&self) -> Vec<(f64, f64)> {
-        (0..self.table.nw).map(|i| (libm::expm1(i as f64 * self.table.dx), self.table.norm[i])).collect()
+        (0..self.table.nw)
+            .map(|i| (libm::expm1(i as f64 * self.table.dx), self.table.norm[i]))
+            .collect()
     }
 
     /// The renormalised D̃_eff(θh) at κ = 2k cosθd (rad/µm), from the table.
@@ -599,7 +663,9 @@ fn wavenumber(lambda_nm: f64) -> Option<f64> {
 
 impl Bxdf for TwoScale {
     fn eval(&self, wi: DVec3, wo: DVec3, lambda_nm: f64) -> f64 {
-        let Some(k) = wavenumber(lambda_nm) else { return 0.0 };
+        let Some(k) = wavenumber(lambda_nm) else {
+            return 0.0;
+        };
         if !(wi.z > 0.0 && wo.z > 0.0) {
             return 0.0;
         }
@@ -632,7 +698,9 @@ impl Bxdf for TwoScale {
     }
 
     fn pdf(&self, wi: DVec3, wo: DVec3, lambda_nm: f64) -> f64 {
-        let Some(k) = wavenumber(lambda_nm) else { return 0.0 };
+        let Some(k) = wavenumber(lambda_nm) else {
+            return 0.0;
+        };
         if !(wi.z > 0.0 && wo.z > 0.0) {
             return 0.0;
         }
@@ -679,7 +747,11 @@ impl Bxdf for TwoScale {
         let h = if u0 < w_d {
             self.ndf.sample([u[1], u[2]])
         } else {
-            let u0 = if w_d > 0.0 { ((u0 - w_d) / (1.0 - w_d)).clamp(0.0, 1.0) } else { u0 };
+            let u0 = if w_d > 0.0 {
+                ((u0 - w_d) / (1.0 - w_d)).clamp(0.0, 1.0)
+            } else {
+                u0
+            };
             self.table.sample(self.kappa_s(k, wi.z), u0, u[1], u[2])
         };
         let cos_d = wi.dot(h);
@@ -695,17 +767,27 @@ impl Bxdf for TwoScale {
         if !(pdf > 0.0 && f > 0.0) {
             return None;
         }
-        Some(BxdfSample { wo, weight: finite_nonneg(f * wo.z / pdf), pdf, is_delta: false })
+        Some(BxdfSample {
+            wo,
+            weight: finite_nonneg(f * wo.z / pdf),
+            pdf,
+            is_delta: false,
+        })
     }
 
     fn specular(&self, wi: DVec3, lambda_nm: f64) -> Specular {
-        let Some(k) = wavenumber(lambda_nm) else { return Specular::default() };
+        let Some(k) = wavenumber(lambda_nm) else {
+            return Specular::default();
+        };
         if self.coherent != CoherentPart::Delta || !(wi.z > 0.0) {
             return Specular::default();
         }
         let ci = wi.z.min(1.0);
         let (a, _) = self.coherent_fraction(k, ci);
         let (p_delta, _) = self.choice(k, ci);
-        Specular { weight: finite_nonneg(self.fresnel.reflectance(ci, lambda_nm) * a), probability: p_delta }
+        Specular {
+            weight: finite_nonneg(self.fresnel.reflectance(ci, lambda_nm) * a),
+            probability: p_delta,
+        }
     }
 }
