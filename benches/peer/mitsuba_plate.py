@@ -361,7 +361,7 @@ def main() -> None:
     ap.add_argument("--lustre-scene", type=Path, nargs="+", metavar="TOML",
                     help="render these lustre scene files (name = file stem) instead of --scenes; "
                          "files using features Mitsuba lacks (GHS models, meshes, ...) are skipped")
-    ap.add_argument("--threads", type=int, help="Mitsuba worker threads (default: all cores)")
+    ap.add_argument("--threads", type=int, help="Mitsuba worker threads (default: all cores; 1 hung scalar_spectral here)")
     ap.add_argument("--tag", default="", help="prefix for the CSV file names (e.g. 's138_')")
     args = ap.parse_args()
 
