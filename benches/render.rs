@@ -159,7 +159,8 @@ fn cpu(c: &mut Criterion<Cpu>) {
 
 fn startup(c: &mut Criterion<Cpu>) {
     let mut g = c.benchmark_group("startup");
-    g.sample_size(20);
+    // Table-building models take 0.1–0.3 s per load: 10 samples over 10 s.
+    g.sample_size(10).measurement_time(Duration::from_secs(10));
     for rel in [
         "scenes/default.toml",
         "scenes/samples/s138_ggx_45deg.toml",
