@@ -4,8 +4,11 @@
 //! own module and calls into the workspace crates.
 
 mod cmd_brdf;
+mod cmd_brdf_plot;
+mod cmd_compare;
 mod cmd_fit;
 mod cmd_render;
+mod models;
 
 use clap::{Parser, Subcommand};
 
@@ -30,6 +33,8 @@ enum Command {
     Brdf(cmd_brdf::BrdfCommand),
     /// Turn a measured surface scan into model parameters and a material file.
     Fit(cmd_fit::FitArgs),
+    /// Render one surface with every model at three viewing angles into a labelled image grid.
+    Compare(cmd_compare::CompareArgs),
 }
 
 fn main() -> std::process::ExitCode {
@@ -40,6 +45,7 @@ fn main() -> std::process::ExitCode {
         Some(Command::Merge(args)) => cmd_render::merge(args),
         Some(Command::Brdf(cmd)) => cmd_brdf::run(cmd),
         Some(Command::Fit(args)) => cmd_fit::run(args),
+        Some(Command::Compare(args)) => cmd_compare::run(args),
     };
     match result {
         Ok(()) => std::process::ExitCode::SUCCESS,
