@@ -83,6 +83,9 @@ pub fn write(a: &Analysis, material: &Path) -> Result<Vec<PathBuf>, FitError> {
             .map(|(t, d)| (t.to_degrees(), *d))
             .unzip();
         let (ag, ab) = (a.ndf.alpha_ggx.0, a.ndf.alpha_beckmann.0);
+        // Keep the axis on the measured data; model curves far below it are clipped.
+        let dmin = d.iter().copied().fold(f64::INFINITY, f64::min);
+        let dmax = d.iter().copied().fold(0.0, f64::max);
         let gg: Vec<f64> = th.iter().map(|t| ndf::ggx(ag, t.to_radians())).collect();
         let bb: Vec<f64> = th
             .iter()
@@ -90,7 +93,7 @@ pub fn write(a: &Analysis, material: &Path) -> Result<Vec<PathBuf>, FitError> {
             .collect();
         let ndf_plot = Plot::new("NDF of facet normals (projected-area weighted)")
             .x_axis(Axis::linear("θm [deg]"))
-            .y_axis(Axis::log("D(θm) [sr⁻¹]"))
+            .y_axis(Axis::log("D(θm) [sr⁻¹]").range(dmin / 100.0, dmax * 10.0))
             .series(
                 Series::points("measured", &th, &d)
                     .marker(Marker::Circle)
