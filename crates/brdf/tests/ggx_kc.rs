@@ -17,7 +17,10 @@ use serde_json::Value;
 use std::f64::consts::PI;
 
 fn reference() -> Value {
-    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../../data/reference/ghs_reference.json");
+    let path = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../data/reference/ghs_reference.json"
+    );
     let text = std::fs::read_to_string(path).expect("reference JSON in data/reference");
     serde_json::from_str(&text).expect("valid JSON")
 }
@@ -44,7 +47,12 @@ fn d_equals_p_and_lobe_matches_reference() {
         // Mapping parameters against the reference.
         let paper = kc_from_ggx(alpha, k, ti.cos()).unwrap();
         assert!(rel(paper.lc_um, row["Lc_um_paper_identity"].as_f64().unwrap()) < 1e-13);
-        assert!(rel(paper.sigma2, row["sigma2_formal_paper_identity"].as_f64().unwrap()) < 1e-13);
+        assert!(
+            rel(
+                paper.sigma2,
+                row["sigma2_formal_paper_identity"].as_f64().unwrap()
+            ) < 1e-13
+        );
         let slope = kc_from_ggx_slope_space(alpha, k, ti.cos()).unwrap();
         assert!(rel(slope.lc_um, row["Lc_um_slope_space"].as_f64().unwrap()) < 1e-13);
 
@@ -69,9 +77,15 @@ fn d_equals_p_and_lobe_matches_reference() {
             let (h, _) = half_vector(wi, wo).unwrap();
             let f_ggx = ggx_d(alpha, h) / (4.0 * wi.z * wo.z);
             let lobe = ssa_lobe_slope_space(alpha, k, wi, wo).unwrap();
-            let (rf, rl) = (p["f_ggx"].as_f64().unwrap(), p["k2_P_over_sigma2"].as_f64().unwrap());
+            let (rf, rl) = (
+                p["f_ggx"].as_f64().unwrap(),
+                p["k2_P_over_sigma2"].as_f64().unwrap(),
+            );
             worst_lobe = worst_lobe.max(rel(f_ggx, rf)).max(rel(lobe, rl));
-            assert!(rel(f_ggx, rf) < 1e-12 && rel(lobe, rl) < 1e-12, "α {alpha} Δ {dth}");
+            assert!(
+                rel(f_ggx, rf) < 1e-12 && rel(lobe, rl) < 1e-12,
+                "α {alpha} Δ {dth}"
+            );
             assert!((lobe / f_ggx - p["ratio"].as_f64().unwrap()).abs() < 1e-12);
             if dth == 0.0 {
                 // The slope-space identity is exact at the mirror.
@@ -111,8 +125,10 @@ fn exact_identity_holds_everywhere_paper_version_only_at_the_mirror() {
 #[test]
 fn error_table_of_physics_section_7() {
     // Rows of physics.md §7, to two significant digits.
-    let table: [(f64, [f64; 4]); 2] =
-        [(0.05, [1.2e-7, 1.1e-4, 1.2e-2, 0.23]), (0.2, [6.9e-9, 6.9e-6, 8.7e-4, 0.049])];
+    let table: [(f64, [f64; 4]); 2] = [
+        (0.05, [1.2e-7, 1.1e-4, 1.2e-2, 0.23]),
+        (0.2, [6.9e-9, 6.9e-6, 8.7e-4, 0.049]),
+    ];
     let dthetas = [1e-3, 1e-2, 5e-2, 0.2];
     let ti = 30f64.to_radians();
     let k = 2.0 * PI / 0.55;
@@ -123,11 +139,21 @@ fn error_table_of_physics_section_7() {
             // Independent path: the two KC evaluations divided by D.
             let (h, _) = half_vector(wi, wo).unwrap();
             let direct = ggx_d_via_kc_paper(alpha, k, wi, wo).unwrap() / ggx_d(alpha, h) - 1.0;
-            assert!((e - direct).abs() <= 1e-9 * direct.abs().max(1e-6), "{e} vs {direct}");
+            assert!(
+                (e - direct).abs() <= 1e-9 * direct.abs().max(1e-6),
+                "{e} vs {direct}"
+            );
             // Two significant digits: within half a unit of the second digit.
             let tol = 0.05 * 10f64.powf(want[j].log10().floor());
-            eprintln!("α = {alpha}, Δθo = {dth}: paper relative error {e:.3e} (table {})", want[j]);
-            assert!((e - want[j]).abs() <= tol, "α {alpha} Δθo {dth}: {e} vs {}", want[j]);
+            eprintln!(
+                "α = {alpha}, Δθo = {dth}: paper relative error {e:.3e} (table {})",
+                want[j]
+            );
+            assert!(
+                (e - want[j]).abs() <= tol,
+                "α {alpha} Δθo {dth}: {e} vs {}",
+                want[j]
+            );
         }
     }
 }
