@@ -38,6 +38,8 @@ use brdf::{BrdfError, Bxdf, DVec3, Distribution, Fresnel, Ior, Metal, Microfacet
 use serde_json::{Map, Value, json};
 
 /// BRDF subcommands.
+// Parsed once per run: the size of the argument variants is irrelevant.
+#[allow(clippy::large_enum_variant)]
 #[derive(clap::Subcommand)]
 pub enum BrdfCommand {
     /// Read JSON-lines queries on stdin, write one JSON result per line
@@ -105,7 +107,8 @@ fn answer(line: &str, cache: &mut HashMap<String, Box<dyn Bxdf>>) -> Result<Valu
         .as_object()
         .ok_or_else(|| QueryError::new("line", "a query must be a JSON object"))?;
     let lambda_nm = number(q, "lambda_nm")?;
-    if !(lambda_nm > 0.0) {
+    // `number` already rejected NaN and infinities.
+    if lambda_nm <= 0.0 {
         return Err(QueryError::new(
             "lambda_nm",
             format!("must be > 0 nm, got {lambda_nm}"),
