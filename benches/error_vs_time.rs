@@ -1,0 +1,752 @@
+//! Run time against error: how fast each model's image converges.
+//!
+//! Renders the paper-sample plate scenes (`scenes/samples/<sample>_<model>_<view>.toml`;
+//! models GGX, Beckmann, GHS-SSA, full GHS and two-scale; views normal, 45°, grazing) at
+//! a small resolution, in both wavelength modes (one λ per path, or four hero
+//! wavelengths), at doubling sample counts 1, 2, 4, … `EVT_MAX_SPP`. Each image is
+//! compared with a high-sample reference of the same scene (hero mode, an independent
+//! seed, `EVT_REF_SPP` spp), cached on disk under `out/error_vs_time/cache/` and keyed
+//! by a hash of the scene text and the reference settings.
+//!
+//! Error: RMSE over all pixels and linear-sRGB channels, divided by the reference's mean
+//! (so models and renderers are comparable). Time: **CPU time of the one render thread**
+//! (the machine is shared; wall time is recorded too). The film at 2n spp is the film at
+//! n spp plus samples n..2n, so time(2n) is cumulative. Efficiency = 1 / (time × relMSE):
+//! for a converging Monte Carlo estimator it is flat in spp and says how much error one
+//! CPU second buys.
+//!
+//! Outputs (`out/error_vs_time/`): `error_vs_time.csv` (one row per configuration and spp),
+//! `error_vs_time_<view>.png` (log-log relative RMSE against CPU time), `table.md`.
+//! If `benches/peer/out/*.csv` (Mitsuba 3 timings, see `benches/peer/`) exist, their
+//! series go on the same plots and the speed ratio at equal error is printed.
+//!
+//! Run: `cargo bench --bench error_vs_time` (about 5 CPU-minutes with defaults). Settings
+//! via environment: `EVT_RES=128x96`, `EVT_MAX_SPP=64`, `EVT_REF_SPP=1024`,
+//! `EVT_SAMPLE=s138`, `EVT_MODELS=ggx,beckmann,ghs_ssa,ghs,two_scale`,
+//! `EVT_VIEWS=normal,45deg,grazing`, `EVT_WORKERS=2` (concurrent single-thread renders).
+//! Without `--bench` (e.g. `cargo test --benches`) it runs a seconds-long smoke test
+//! writing nothing.
+
+use render::color::xyz_to_srgb;
+use render::scene::desc::WavelengthMode;
+use render::{Film, RenderOptions, Scene};
+use std::collections::BTreeMap;
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+use std::sync::Mutex;
+use std::time::{Duration, Instant};
+
+/// Seed of the reference renders: different from every scene's seed, so the reference's
+/// noise is independent of the images compared with it.
+const REF_SEED: u64 = 0x5EED_0F_2EF;
+
+struct Settings {
+    width: u32,
+    height: u32,
+    max_spp: u64,
+    ref_spp: u64,
+    sample: String,
+    models: Vec<String>,
+    views: Vec<String>,
+    workers: usize,
+    out: Option<PathBuf>,
+}
+
+fn env_or(name: &str, default: &str) -> String {
+    std::env::var(name).unwrap_or_else(|_| default.to_string())
+}
+
+fn parse_env<T: std::str::FromStr>(name: &str, default: &str) -> T {
+    let v = env_or(name, default);
+    v.parse()
+        .unwrap_or_else(|_| panic!("{name} = {v:?} is not valid (default {default})"))
+}
+
+impl Settings {
+    fn from_env(smoke: bool) -> Settings {
+        let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+        if smoke {
+            return Settings {
+                width: 16,
+                height: 12,
+                max_spp: 2,
+                ref_spp: 8,
+                sample: "s138".into(),
+                models: vec!["ggx".into(), "ghs_ssa".into()],
+                views: vec!["45deg".into()],
+                workers: 2,
+                out: None,
+            };
+        }
+        let res = env_or("EVT_RES", "128x96");
+        let (w, h) = res
+            .split_once('x')
+            .and_then(|(w, h)| Some((w.parse().ok()?, h.parse().ok()?)))
+            .unwrap_or_else(|| panic!("EVT_RES = {res:?}: expected WIDTHxHEIGHT"));
+        let list = |name: &str, default: &str| -> Vec<String> {
+            env_or(name, default)
+                .split(',')
+                .map(|s| s.trim().to_string())
+                .filter(|s| !s.is_empty())
+                .collect()
+        };
+        Settings {
+            width: w,
+            height: h,
+            max_spp: parse_env("EVT_MAX_SPP", "64"),
+            ref_spp: parse_env("EVT_REF_SPP", "1024"),
+            sample: env_or("EVT_SAMPLE", "s138"),
+            models: list("EVT_MODELS", "ggx,beckmann,ghs_ssa,ghs,two_scale"),
+            views: list("EVT_VIEWS", "normal,45deg,grazing"),
+            workers: parse_env("EVT_WORKERS", "2"),
+            out: Some(root.join("out/error_vs_time")),
+        }
+    }
+}
+
+/// Nanoseconds of CPU time consumed by the calling thread.
+#[cfg(target_os = "linux")]
+fn thread_cpu_s() -> f64 {
+    #[repr(C)]
+    struct Timespec {
+        tv_sec: i64,
+        tv_nsec: i64,
+    }
+    unsafe extern "C" {
+        fn clock_gettime(clock: i32, tp: *mut Timespec) -> i32;
+    }
+    const CLOCK_THREAD_CPUTIME_ID: i32 = 3;
+    let mut t = Timespec {
+        tv_sec: 0,
+        tv_nsec: 0,
+    };
+    // SAFETY: `t` is a valid, writable timespec; the clock id is a Linux constant.
+    let rc = unsafe { clock_gettime(CLOCK_THREAD_CPUTIME_ID, &mut t) };
+    assert_eq!(rc, 0, "clock_gettime(CLOCK_THREAD_CPUTIME_ID) failed");
+    t.tv_sec as f64 + t.tv_nsec as f64 * 1e-9
+}
+
+#[cfg(not(target_os = "linux"))]
+fn thread_cpu_s() -> f64 {
+    use std::sync::OnceLock;
+    static START: OnceLock<Instant> = OnceLock::new();
+    START.get_or_init(Instant::now).elapsed().as_secs_f64()
+}
+
+/// The scene text at `width`×`height` and `spp`, without image outputs.
+fn shrink(text: &str, width: u32, height: u32, spp: u64) -> String {
+    text.lines()
+        .filter_map(|line| {
+            let key = line.split('=').next().unwrap_or("").trim();
+            match key {
+                "resolution" => Some(format!("resolution = [{width}, {height}]")),
+                "spp" => Some(format!("spp = {spp}")),
+                "exr" | "png" => None,
+                _ => Some(line.to_string()),
+            }
+        })
+        .collect::<Vec<_>>()
+        .join("\n")
+}
+
+/// One scene file of the set.
+#[derive(Clone)]
+struct SceneSpec {
+    name: String,
+    model: String,
+    view: String,
+    path: PathBuf,
+    text: String,
+}
+
+impl SceneSpec {
+    fn load(&self, mode: WavelengthMode, seed: Option<u64>) -> Scene {
+        let mut scene = render::load_str(&self.path, &self.text)
+            .unwrap_or_else(|e| panic!("scene {}: {e}", self.name));
+        scene.settings.mode = mode;
+        if let Some(s) = seed {
+            scene.settings.seed = s;
+        }
+        scene
+    }
+}
+
+/// A single-thread pool; its worker's CPU clock times the renders.
+struct Worker {
+    pool: render::render::ThreadPool,
+}
+
+impl Worker {
+    fn new() -> Worker {
+        Worker {
+            pool: render::render::thread_pool(Some(1)).expect("thread pool"),
+        }
+    }
+
+    /// Adds samples `range` to `film`; returns (worker CPU seconds, wall seconds).
+    fn render(&self, scene: &Scene, film: &mut Film, range: std::ops::Range<u64>) -> (f64, f64) {
+        let opts = RenderOptions {
+            threads: Some(1),
+            pass_target: Duration::from_secs(3600),
+            ..RenderOptions::default()
+        };
+        let cpu0 = self.pool.install(thread_cpu_s);
+        let t0 = Instant::now();
+        let out = render::render_range_in(&self.pool, scene, film, range, &opts).expect("render");
+        let wall = t0.elapsed().as_secs_f64();
+        let cpu = self.pool.install(thread_cpu_s) - cpu0;
+        assert!(out.complete, "render stopped early");
+        (cpu, wall)
+    }
+}
+
+fn new_film(scene: &Scene) -> Film {
+    Film::new(
+        scene.camera.width,
+        scene.camera.height,
+        scene.fingerprint,
+        scene.settings.seed,
+        0.0,
+    )
+}
+
+/// Linear sRGB of every pixel, in f64.
+fn rgb(film: &Film) -> Vec<[f64; 3]> {
+    (0..film.sums.len())
+        .map(|i| xyz_to_srgb(film.xyz(i)))
+        .collect()
+}
+
+/// RMSE over pixels and channels; the same divided by the reference's mean; and that
+/// with the reference's own noise subtracted from the MSE.
+fn rmse(img: &[[f64; 3]], reference: &Reference) -> (f64, f64, f64) {
+    let (rel, mse_noise) = (&reference.rgb, reference.mse_noise);
+    let reference = rel;
+    let n = (img.len() * 3) as f64;
+    let mse = img
+        .iter()
+        .zip(reference)
+        .flat_map(|(a, b)| (0..3).map(move |c| (a[c] - b[c]).powi(2)))
+        .sum::<f64>()
+        / n;
+    let mean = reference.iter().flatten().sum::<f64>() / n;
+    let corrected = (mse - mse_noise).max(0.0).sqrt() / mean;
+    (mse.sqrt(), mse.sqrt() / mean, corrected)
+}
+
+/// Reference chunks: the spread of their means estimates the reference's own noise.
+const REF_CHUNKS: u64 = 8;
+
+/// A reference image and the MSE its own Monte Carlo noise adds to every comparison
+/// (estimated from the spread of `REF_CHUNKS` independent chunks).
+struct Reference {
+    rgb: Vec<[f64; 3]>,
+    mse_noise: f64,
+}
+
+/// The cached reference of `spec`, rendered if missing.
+fn reference(spec: &SceneSpec, s: &Settings, worker: &Worker, cache: Option<&Path>) -> Reference {
+    let key = format!(
+        "{}\nref_spp={} seed={REF_SEED} mode=hero chunks={REF_CHUNKS}",
+        spec.text, s.ref_spp
+    );
+    let hash = render::scene::fnv1a(key.as_bytes(), 0xcbf2_9ce4_8422_2325);
+    let file = cache.map(|c| c.join(format!("{}_{hash:016x}.film", spec.name)));
+    let noise_file = file.as_ref().map(|f| f.with_extension("noise"));
+    if let (Some(f), Some(nf)) = (&file, &noise_file)
+        && let Ok(film) = Film::load(f)
+        && film.spp() == s.ref_spp
+        && let Some(mse_noise) = std::fs::read_to_string(nf)
+            .ok()
+            .and_then(|t| t.trim().parse().ok())
+    {
+        return Reference {
+            rgb: rgb(&film),
+            mse_noise,
+        };
+    }
+    let scene = spec.load(WavelengthMode::Hero, Some(REF_SEED));
+    let chunk = (s.ref_spp / REF_CHUNKS).max(1);
+    let mut total = new_film(&scene);
+    let mut chunks = Vec::new();
+    let mut cpu = 0.0;
+    for c in 0..REF_CHUNKS {
+        let mut film = new_film(&scene);
+        cpu += worker
+            .render(&scene, &mut film, c * chunk..(c + 1) * chunk)
+            .0;
+        total.merge(&film).expect("merge reference chunks");
+        chunks.push(rgb(&film));
+    }
+    // Variance of the mean of K chunk means, averaged over pixels and channels.
+    let k = REF_CHUNKS as f64;
+    let mut acc = 0.0;
+    let n = chunks[0].len();
+    for i in 0..n {
+        for ch in 0..3 {
+            let m = chunks.iter().map(|c| c[i][ch]).sum::<f64>() / k;
+            let var = chunks.iter().map(|c| (c[i][ch] - m).powi(2)).sum::<f64>() / (k - 1.0);
+            acc += var / k;
+        }
+    }
+    let mse_noise = acc / (3 * n) as f64;
+    eprintln!(
+        "reference {} ({} spp, hero): {cpu:.1} CPU s, own noise rel. RMSE {:.4}",
+        spec.name,
+        total.spp(),
+        mse_noise.sqrt() / (rgb(&total).iter().flatten().sum::<f64>() / (3 * n) as f64)
+    );
+    if let (Some(f), Some(nf)) = (&file, &noise_file) {
+        total.save(f).expect("save reference film");
+        plot::write_atomic(nf, format!("{mse_noise:e}\n").as_bytes())
+            .expect("save reference noise");
+    }
+    Reference {
+        rgb: rgb(&total),
+        mse_noise,
+    }
+}
+
+/// One measured point.
+#[derive(Clone, Copy)]
+struct Point {
+    spp: u64,
+    cpu_s: f64,
+    wall_s: f64,
+    rmse: f64,
+    rel_rmse: f64,
+    /// Relative RMSE with the reference's own noise removed.
+    rel_corr: f64,
+}
+
+impl Point {
+    fn efficiency(&self) -> f64 {
+        1.0 / (self.cpu_s * self.rel_corr * self.rel_corr)
+    }
+}
+
+/// Renders `spec` in `mode` at 1, 2, 4, … max_spp, cumulatively.
+fn convergence(
+    spec: &SceneSpec,
+    mode: WavelengthMode,
+    s: &Settings,
+    worker: &Worker,
+    reference: &Reference,
+) -> Vec<Point> {
+    let scene = spec.load(mode, None);
+    let mut film = new_film(&scene);
+    let (mut cpu, mut wall) = (0.0, 0.0);
+    let mut points = Vec::new();
+    let mut done = 0;
+    let mut next = 1;
+    while next <= s.max_spp {
+        let (c, w) = worker.render(&scene, &mut film, done..next);
+        cpu += c;
+        wall += w;
+        done = next;
+        let (e, rel, rel_corr) = rmse(&rgb(&film), reference);
+        points.push(Point {
+            spp: done,
+            cpu_s: cpu,
+            wall_s: wall,
+            rmse: e,
+            rel_rmse: rel,
+            rel_corr,
+        });
+        next *= 2;
+    }
+    points
+}
+
+fn mode_name(m: WavelengthMode) -> &'static str {
+    match m {
+        WavelengthMode::Single => "single",
+        WavelengthMode::Hero => "hero",
+    }
+}
+
+/// The scenes of `benches/peer/plate_scenes.toml` (shared with the Mitsuba peer), at the
+/// resolution given there (the peer's default), as lustre scene texts.
+fn peer_scenes(root: &Path, spp: u64) -> Vec<SceneSpec> {
+    let path = root.join("benches/peer/plate_scenes.toml");
+    let Ok(text) = std::fs::read_to_string(&path) else {
+        eprintln!("no {}: peer scenes skipped", path.display());
+        return Vec::new();
+    };
+    let table: toml::Table =
+        toml::from_str(&text).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    let Some(toml::Value::Array(scenes)) = table.get("scene") else {
+        panic!("{}: expected [[scene]] entries", path.display());
+    };
+    let mut out = Vec::new();
+    for sc in scenes {
+        let Some(mut t) = sc.as_table().cloned() else {
+            continue;
+        };
+        let name = t
+            .remove("name")
+            .and_then(|v| v.as_str().map(String::from))
+            .unwrap_or_else(|| panic!("{}: a [[scene]] has no name", path.display()));
+        t.remove("description");
+        let mut film = toml::Table::new();
+        film.insert("spp".into(), toml::Value::Integer(spp as i64));
+        film.insert("seed".into(), toml::Value::Integer(1));
+        t.insert("film".into(), toml::Value::Table(film));
+        let model = t
+            .get("materials")
+            .and_then(|m| m.get("plate"))
+            .and_then(|p| p.get("model"))
+            .and_then(|v| v.as_str())
+            .unwrap_or("?")
+            .to_string();
+        let view = name.rsplit('_').next().unwrap_or("").to_string();
+        out.push(SceneSpec {
+            name,
+            model: format!("peer {model}"),
+            view: format!("peer_{view}"),
+            path: path.clone(),
+            text: t.to_string(),
+        });
+    }
+    out
+}
+
+/// Runs `jobs` on `workers` threads, each with its own single-thread render pool.
+fn run_parallel<J: Sync, R: Send>(
+    jobs: &[J],
+    workers: usize,
+    f: impl Fn(&J, &Worker) -> R + Sync,
+) -> Vec<R> {
+    let next = Mutex::new(0usize);
+    let results: Mutex<Vec<Option<R>>> = Mutex::new((0..jobs.len()).map(|_| None).collect());
+    std::thread::scope(|sc| {
+        for _ in 0..workers.max(1) {
+            sc.spawn(|| {
+                let worker = Worker::new();
+                loop {
+                    let i = {
+                        let mut n = next.lock().expect("job counter");
+                        let i = *n;
+                        *n += 1;
+                        i
+                    };
+                    if i >= jobs.len() {
+                        break;
+                    }
+                    let r = f(&jobs[i], &worker);
+                    results.lock().expect("results")[i] = Some(r);
+                }
+            });
+        }
+    });
+    results
+        .into_inner()
+        .expect("results")
+        .into_iter()
+        .map(|r| r.expect("job finished"))
+        .collect()
+}
+
+/// A peer renderer's convergence series read from `benches/peer/out/*.csv`.
+struct PeerSeries {
+    label: String,
+    scene: String,
+    points: Vec<(f64, f64)>,
+}
+
+/// Reads every `benches/peer/out/*.csv` with columns `scene`, `variant`, `spp`, `time_s`
+/// and `rel_rmse` (extra columns ignored; with `rmse` and `rmse_corrected` the relative
+/// error with the peer reference's noise removed is used); one series per (scene, variant).
+fn peer_series(root: &Path) -> Vec<PeerSeries> {
+    let dir = root.join("benches/peer/out");
+    let Ok(entries) = std::fs::read_dir(&dir) else {
+        return Vec::new();
+    };
+    let mut files: Vec<PathBuf> = entries
+        .flatten()
+        .map(|e| e.path())
+        .filter(|p| p.extension().is_some_and(|e| e == "csv"))
+        .collect();
+    files.sort();
+    let mut by_key: BTreeMap<(String, String), Vec<(f64, f64)>> = BTreeMap::new();
+    for f in files {
+        let Ok(text) = std::fs::read_to_string(&f) else {
+            continue;
+        };
+        let mut lines = text.lines();
+        let Some(header) = lines.next() else { continue };
+        let cols: Vec<&str> = header.split(',').map(str::trim).collect();
+        let idx = |name: &str| cols.iter().position(|c| *c == name);
+        let (Some(is), Some(iv), Some(it), Some(ie)) =
+            (idx("scene"), idx("variant"), idx("time_s"), idx("rel_rmse"))
+        else {
+            eprintln!(
+                "{}: skipped (needs columns scene, variant, time_s, rel_rmse)",
+                f.display()
+            );
+            continue;
+        };
+        for line in lines {
+            let v: Vec<&str> = line.split(',').map(str::trim).collect();
+            let get = |i: usize| v.get(i).copied().unwrap_or("");
+            let corrected = match (idx("rmse"), idx("rmse_corrected")) {
+                (Some(ir), Some(ic)) => get(ic)
+                    .parse::<f64>()
+                    .ok()
+                    .zip(get(ir).parse::<f64>().ok())
+                    .zip(get(ie).parse::<f64>().ok())
+                    .and_then(|((c, r), rel)| (r > 0.0).then(|| c * rel / r)),
+                _ => None,
+            };
+            if let (Ok(t), Ok(e)) = (get(it).parse::<f64>(), get(ie).parse::<f64>()) {
+                let e = corrected.unwrap_or(e);
+                by_key
+                    .entry((get(is).to_string(), get(iv).to_string()))
+                    .or_default()
+                    .push((t, e));
+            }
+        }
+    }
+    by_key
+        .into_iter()
+        .map(|((scene, variant), mut points)| {
+            points.sort_by(|a, b| a.0.total_cmp(&b.0));
+            PeerSeries {
+                label: format!("Mitsuba {variant}"),
+                scene,
+                points,
+            }
+        })
+        .collect()
+}
+
+/// Time to reach relative RMSE `target`, interpolating log-log between measured points
+/// (None outside the measured range).
+fn time_at_error(points: &[(f64, f64)], target: f64) -> Option<f64> {
+    points.windows(2).find_map(|w| {
+        let ((t0, e0), (t1, e1)) = (w[0], w[1]);
+        let (lo, hi) = (e0.min(e1), e0.max(e1));
+        if !(lo..=hi).contains(&target) || e0 == e1 {
+            return None;
+        }
+        let f = (target.ln() - e0.ln()) / (e1.ln() - e0.ln());
+        Some((t0.ln() + f * (t1.ln() - t0.ln())).exp())
+    })
+}
+
+fn main() {
+    let smoke = !std::env::args().any(|a| a == "--bench");
+    let s = Settings::from_env(smoke);
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let cache = s.out.as_ref().map(|o| o.join("cache"));
+    if let Some(c) = &cache {
+        std::fs::create_dir_all(c).expect("create out/error_vs_time/cache");
+    }
+
+    let mut specs = Vec::new();
+    for model in &s.models {
+        for view in &s.views {
+            let name = format!("{}_{model}_{view}", s.sample);
+            let path = root.join(format!("scenes/samples/{name}.toml"));
+            let text = std::fs::read_to_string(&path)
+                .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+            specs.push(SceneSpec {
+                name,
+                model: model.clone(),
+                view: view.clone(),
+                path,
+                text: shrink(&text, s.width, s.height, s.max_spp),
+            });
+        }
+    }
+    if !smoke && env_or("EVT_PEER", "1") == "1" {
+        specs.extend(peer_scenes(root, s.max_spp));
+    }
+    eprintln!(
+        "error_vs_time: {} scenes at {}×{}, 1..{} spp in single and hero modes, references {} spp; {} worker(s) of 1 thread",
+        specs.len(),
+        s.width,
+        s.height,
+        s.max_spp,
+        s.ref_spp,
+        s.workers
+    );
+
+    let refs = run_parallel(&specs, s.workers, |spec, w| {
+        reference(spec, &s, w, cache.as_deref())
+    });
+    let jobs: Vec<(usize, WavelengthMode)> = (0..specs.len())
+        .flat_map(|i| [(i, WavelengthMode::Single), (i, WavelengthMode::Hero)])
+        .collect();
+    let results = run_parallel(&jobs, s.workers, |&(i, mode), w| {
+        let p = convergence(&specs[i], mode, &s, w, &refs[i]);
+        eprintln!(
+            "{} {}: {} spp in {:.2} CPU s, rel. RMSE (ref. noise removed) {:.4}",
+            specs[i].name,
+            mode_name(mode),
+            s.max_spp,
+            p.last().map_or(0.0, |p| p.cpu_s),
+            p.last().map_or(0.0, |p| p.rel_corr)
+        );
+        p
+    });
+    if smoke {
+        for p in results.iter().flatten() {
+            assert!(p.rel_rmse.is_finite() && p.cpu_s >= 0.0);
+        }
+        eprintln!("error_vs_time: smoke run passed (run with `cargo bench` for measurements)");
+        return;
+    }
+    let out = s.out.as_ref().expect("output directory");
+
+    // CSV, one row per (scene, mode, spp).
+    let mut csv = String::from(
+        "scene,model,view,mode,spp,cpu_s,wall_s,rmse,rel_rmse,rel_rmse_corrected,efficiency\n",
+    );
+    for (&(i, mode), points) in jobs.iter().zip(&results) {
+        for p in points {
+            let _ = writeln!(
+                csv,
+                "{},{},{},{},{},{:.6},{:.6},{:.6e},{:.6e},{:.6e},{:.6e}",
+                specs[i].name,
+                specs[i].model,
+                specs[i].view,
+                mode_name(mode),
+                p.spp,
+                p.cpu_s,
+                p.wall_s,
+                p.rmse,
+                p.rel_rmse,
+                p.rel_corr,
+                p.efficiency()
+            );
+        }
+    }
+    plot::write_atomic(&out.join("error_vs_time.csv"), csv.as_bytes()).expect("write CSV");
+
+    // Summary table: per configuration, the top spp and the efficiency there.
+    let mut table = format!(
+        "Resolution {}×{}, reference {} spp (hero, independent seed); CPU seconds of one thread.\n\n\
+         Rel. RMSE = RMSE / mean of the reference; corrected = with the reference's own noise \
+         (from {REF_CHUNKS} chunks) subtracted from the MSE; efficiency uses the corrected value.\n\n\
+         | scene | mode | spp | CPU s | wall s | rel. RMSE | corrected | efficiency 1/(s·relMSE) |\n|---|---|---|---|---|---|---|---|\n",
+        s.width, s.height, s.ref_spp
+    );
+    for (&(i, mode), points) in jobs.iter().zip(&results) {
+        for p in points
+            .iter()
+            .filter(|p| p.spp == 1 || p.spp == s.max_spp || p.spp * 4 == s.max_spp)
+        {
+            let _ = writeln!(
+                table,
+                "| {} | {} | {} | {:.3} | {:.3} | {:.4} | {:.4} | {:.3e} |",
+                specs[i].name,
+                mode_name(mode),
+                p.spp,
+                p.cpu_s,
+                p.wall_s,
+                p.rel_rmse,
+                p.rel_corr,
+                p.efficiency()
+            );
+        }
+    }
+
+    // Peer comparison at equal error.
+    let peers = peer_series(root);
+    let mut peer_text = String::new();
+    for peer in &peers {
+        let Some(k) = specs.iter().position(|sp| sp.name == peer.scene) else {
+            let _ = writeln!(
+                peer_text,
+                "peer series {} for scene {}: no such scene here",
+                peer.label, peer.scene
+            );
+            continue;
+        };
+        for (&(i, mode), points) in jobs.iter().zip(&results) {
+            if i != k {
+                continue;
+            }
+            let ours: Vec<(f64, f64)> = points.iter().map(|p| (p.cpu_s, p.rel_corr)).collect();
+            for &(t_peer, e) in &peer.points {
+                if let Some(t_ours) = time_at_error(&ours, e) {
+                    let _ = writeln!(
+                        peer_text,
+                        "{} {} vs {}: rel. RMSE {e:.4}: lustre {t_ours:.3} s, peer {t_peer:.3} s, speed ratio {:.2}×",
+                        peer.scene,
+                        mode_name(mode),
+                        peer.label,
+                        t_peer / t_ours
+                    );
+                }
+            }
+        }
+    }
+    if peers.is_empty() {
+        peer_text.push_str("no peer CSVs in benches/peer/out/: Mitsuba comparison skipped\n");
+    }
+    table.push('\n');
+    table.push_str(&peer_text);
+    plot::write_atomic(&out.join("table.md"), table.as_bytes()).expect("write table");
+    println!("{table}");
+
+    // One log-log plot per view.
+    let mut models: Vec<&String> = Vec::new();
+    let mut views: Vec<&String> = Vec::new();
+    for sp in &specs {
+        if !models.contains(&&sp.model) {
+            models.push(&sp.model);
+        }
+        if !views.contains(&&sp.view) {
+            views.push(&sp.view);
+        }
+    }
+    for view in views {
+        let mut p = plot::Plot::new(format!("{view} view: error against CPU time"))
+            .x_axis(plot::Axis::log("CPU time of one thread [s]"))
+            .y_axis(plot::Axis::log("relative RMSE (reference noise removed)"))
+            .legend(plot::Legend::Outside);
+        for (&(i, mode), points) in jobs.iter().zip(&results) {
+            if &specs[i].view != view {
+                continue;
+            }
+            let m = models
+                .iter()
+                .position(|m| **m == specs[i].model)
+                .unwrap_or(0);
+            let xs: Vec<f64> = points.iter().map(|p| p.cpu_s).collect();
+            let ys: Vec<f64> = points.iter().map(|p| p.rel_corr).collect();
+            let (style, marker) = match mode {
+                WavelengthMode::Single => (plot::LineStyle::Dashed, plot::Marker::Square),
+                WavelengthMode::Hero => (plot::LineStyle::Solid, plot::Marker::Circle),
+            };
+            p = p.series(
+                plot::Series::line(format!("{} {}", specs[i].model, mode_name(mode)), &xs, &ys)
+                    .color(plot::Rgb::palette(m))
+                    .style(style)
+                    .marker(marker),
+            );
+        }
+        for (j, peer) in peers.iter().enumerate() {
+            if !specs
+                .iter()
+                .any(|sp| &sp.view == view && sp.name == peer.scene)
+            {
+                continue;
+            }
+            let xs: Vec<f64> = peer.points.iter().map(|p| p.0).collect();
+            let ys: Vec<f64> = peer.points.iter().map(|p| p.1).collect();
+            p = p.series(
+                plot::Series::line(format!("{} ({})", peer.label, peer.scene), &xs, &ys)
+                    .color(plot::Rgb::palette(models.len() + j))
+                    .style(plot::LineStyle::Dotted)
+                    .marker(plot::Marker::Triangle),
+            );
+        }
+        let file = out.join(format!("error_vs_time_{view}.png"));
+        p.save_png(&file, 1100, 650)
+            .unwrap_or_else(|e| panic!("{}: {e}", file.display()));
+        eprintln!("wrote {}", file.display());
+    }
+}
