@@ -38,7 +38,7 @@ use std::time::{Duration, Instant};
 
 /// Seed of the reference renders: different from every scene's seed, so the reference's
 /// noise is independent of the images compared with it.
-const REF_SEED: u64 = 0x5EED_0F_2EF;
+const REF_SEED: u64 = 0x0005_EED0_F2EF;
 
 struct Settings {
     width: u32,
