@@ -392,7 +392,8 @@ fn slice_plot(
             }
         }
     }
-    if !(y_max > 0.0) {
+    // NaN-safe: a NaN maximum is as unplottable as zero.
+    if y_max.is_nan() || y_max <= 0.0 {
         bail!(
             "{}: every BRDF value is zero; nothing to plot on a log axis",
             s.name

@@ -259,7 +259,7 @@ pub fn run(args: CompareArgs) -> anyhow::Result<()> {
         .title(format!("{title}\n{w}×{h} px, {} spp per cell", args.spp))
         .row_labels(rows.iter().map(|r| r.label.clone()))
         .col_labels(args.views.iter().map(|v| match *v {
-            v if v == 0.0 => "normal (0°)".to_string(),
+            0.0 => "normal (0°)".to_string(),
             v if v >= 75.0 => format!("grazing ({v}°)"),
             v => format!("{v}°"),
         }));

@@ -13,7 +13,12 @@ mod models;
 use clap::{Parser, Subcommand};
 
 #[derive(Parser)]
-#[command(name = "lustre", version, about, args_conflicts_with_subcommands = true)]
+#[command(
+    name = "lustre",
+    version,
+    about,
+    args_conflicts_with_subcommands = true
+)]
 struct Cli {
     #[command(subcommand)]
     command: Option<Command>,
