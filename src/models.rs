@@ -102,13 +102,14 @@ pub fn ggx_alpha(lc_um: f64, lambda_nm: f64) -> anyhow::Result<f64> {
 /// ζc = 2π/Λ, ⟨|∇h|²⟩ = ∫_{ζ<ζc} ζ² P(ζ) d²ζ, equals 6β² (as `fit`'s
 /// PSD branch). With P = σ²Lc²(γ−1)/(2π)·(1+Lc²ζ²)^−(γ+1)/2 and x = Lc²ζ²:
 /// ⟨|∇h|²⟩ = σ²(γ−1)/(2Lc²)·∫₀^X x(1+x)^−(γ+1)/2 dx, X = (Lc ζc)², integrated
-/// in s = ln(1+x) (integrand expm1(s)·e^{s(3−γ)/2}, no cancellation) by
+/// in s = ln(1+x) (integrand expm1(s)·e^{s(1−γ)/2}, no cancellation) by
 /// composite Simpson.
 pub fn two_scale_beta(sigma_um: f64, lc_um: f64, gamma: f64, cutoff_um: f64) -> f64 {
     let zc = 2.0 * std::f64::consts::PI / cutoff_um;
     let x_max = (lc_um * zc).powi(2);
     let s_max = x_max.ln_1p();
-    let c = (3.0 - gamma) * 0.5;
+    // x (1+x)^{-(γ+1)/2} dx with x = e^s − 1, dx = e^s ds: (e^s − 1) e^{s(1−γ)/2} ds.
+    let c = (1.0 - gamma) * 0.5;
     let g = |s: f64| s.exp_m1() * (c * s).exp();
     const N: usize = 4096;
     let h = s_max / N as f64;
