@@ -72,17 +72,22 @@ pub enum Spectrum {
         scale: f64,
     },
     /// Linear interpolation of `(λ nm, value)` rows; zero outside the table.
-    Table(Vec<[f64; 2]>),
+    Table(Table),
 }
 
 impl Spectrum {
+    /// A table spectrum from `(λ nm, value)` rows sorted by wavelength.
+    pub fn table(rows: Vec<[f64; 2]>) -> Spectrum {
+        Spectrum::Table(Table::new(rows))
+    }
+
     /// Value at `lambda` nm.
     #[inline]
     pub fn eval(&self, lambda: f64) -> f64 {
         match self {
             Spectrum::Constant(v) => *v,
             Spectrum::Blackbody { kelvin, scale } => scale * planck(lambda, *kelvin),
-            Spectrum::Table(rows) => interpolate(rows, lambda),
+            Spectrum::Table(t) => t.eval(lambda),
         }
     }
 
@@ -92,7 +97,8 @@ impl Spectrum {
         match self {
             Spectrum::Constant(v) => (*v != 0.0).then_some((LAMBDA_MIN, LAMBDA_MAX)),
             Spectrum::Blackbody { .. } => Some((LAMBDA_MIN, LAMBDA_MAX)),
-            Spectrum::Table(rows) => {
+            Spectrum::Table(t) => {
+                let rows = t.rows();
                 // A row with a nonzero value makes the segments on both sides nonzero.
                 let first = rows.iter().position(|r| r[1] != 0.0)?;
                 let last = rows.iter().rposition(|r| r[1] != 0.0)?;
@@ -112,9 +118,10 @@ impl Spectrum {
     pub fn luminance(&self) -> f64 {
         let cie = Cie::get();
         let mut nodes: Vec<f64> = (0..=470).map(|i| LAMBDA_MIN + i as f64).collect();
-        if let Spectrum::Table(rows) = self {
+        if let Spectrum::Table(t) = self {
             nodes.extend(
-                rows.iter()
+                t.rows()
+                    .iter()
                     .map(|r| r[0])
                     .filter(|l| (LAMBDA_MIN..=LAMBDA_MAX).contains(l)),
             );
@@ -148,8 +155,8 @@ impl Spectrum {
                 kelvin,
                 scale: scale * k,
             },
-            Spectrum::Table(rows) => {
-                Spectrum::Table(rows.into_iter().map(|[l, v]| [l, v * k]).collect())
+            Spectrum::Table(t) => {
+                Spectrum::table(t.rows.into_iter().map(|[l, v]| [l, v * k]).collect())
             }
         })
     }
@@ -164,7 +171,89 @@ fn planck(lambda_nm: f64, kelvin: f64) -> f64 {
     1.0 / (l.powi(5) * x.exp_m1())
 }
 
-/// Linear interpolation in rows sorted by wavelength; zero outside.
+/// Most cells of a [`Table`]'s guide (cells are 1 nm wide up to this many).
+/// Bundled and measured tables have rows ≥ 1 nm apart, so a cell holds at
+/// most about one row boundary and a lookup walks one or two rows.
+const GUIDE_CELLS_MAX: usize = 1 << 14;
+
+/// `(λ nm, value)` rows sorted by wavelength, interpolated linearly, zero
+/// outside. A guide table (per cell of ≈ 1 nm, the index of the first row
+/// beyond the cell's start) replaces the binary search: evaluation walks at
+/// most the rows inside one cell and then interpolates with exactly the same
+/// arithmetic as before, so the result is bit-identical to the binary search.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Table {
+    rows: Vec<[f64; 2]>,
+    guide: Vec<u32>,
+    cells_per_nm: f64,
+}
+
+impl Table {
+    /// Builds the guide for `rows` (sorted by wavelength).
+    pub fn new(rows: Vec<[f64; 2]>) -> Table {
+        let (lo, span) = match (rows.first(), rows.last()) {
+            (Some(a), Some(b)) if b[0] > a[0] => (a[0], b[0] - a[0]),
+            _ => (0.0, 0.0),
+        };
+        let cells = if span > 0.0 {
+            (span.ceil() as usize + 1).clamp(1, GUIDE_CELLS_MAX)
+        } else {
+            1
+        };
+        let cells_per_nm = if span > 0.0 { cells as f64 / span } else { 0.0 };
+        let guide = (0..cells)
+            .map(|c| {
+                let start = lo + c as f64 / cells_per_nm.max(f64::MIN_POSITIVE);
+                rows.partition_point(|r| r[0] <= start) as u32
+            })
+            .collect();
+        Table {
+            rows,
+            guide,
+            cells_per_nm,
+        }
+    }
+
+    /// The rows.
+    pub fn rows(&self) -> &[[f64; 2]] {
+        &self.rows
+    }
+
+    /// Linear interpolation at `lambda` nm; zero outside the rows.
+    #[inline]
+    pub fn eval(&self, lambda: f64) -> f64 {
+        let rows = &self.rows[..];
+        let (Some(first), Some(last)) = (rows.first(), rows.last()) else {
+            return 0.0;
+        };
+        if lambda < first[0] || lambda > last[0] {
+            return 0.0;
+        }
+        // `p` = number of rows with λᵢ ≤ lambda (what `partition_point` returns),
+        // found from the guide's estimate; the walks make it exact whatever
+        // the rounding of the cell index.
+        let cell = (((lambda - first[0]) * self.cells_per_nm) as usize).min(self.guide.len() - 1);
+        let mut p = self.guide[cell] as usize;
+        while p < rows.len() && rows[p][0] <= lambda {
+            p += 1;
+        }
+        while p > 0 && rows[p - 1][0] > lambda {
+            p -= 1;
+        }
+        let i = p.clamp(1, rows.len() - 1);
+        let (a, b) = (rows[i - 1], rows[i]);
+        let t = if b[0] > a[0] {
+            (lambda - a[0]) / (b[0] - a[0])
+        } else {
+            0.0
+        };
+        a[1] + t * (b[1] - a[1])
+    }
+}
+
+/// Linear interpolation in rows sorted by wavelength by binary search; the
+/// reference the guided [`Table::eval`] must reproduce bit for bit.
+#[cfg(test)]
 fn interpolate(rows: &[[f64; 2]], lambda: f64) -> f64 {
     let (Some(first), Some(last)) = (rows.first(), rows.last()) else {
         return 0.0;
@@ -226,7 +315,7 @@ pub fn read_spectrum_csv(path: &Path) -> Result<Spectrum, String> {
     if rows.iter().any(|r| r[1] < 0.0) {
         return Err(format!("{}: spectral values must be ≥ 0", path.display()));
     }
-    Ok(Spectrum::Table(
+    Ok(Spectrum::table(
         rows.into_iter().map(|r| [r[0], r[1]]).collect(),
     ))
 }
@@ -243,7 +332,7 @@ pub fn illuminant_a() -> Spectrum {
 
 fn bundled(csv: &str) -> Spectrum {
     let rows = parse_csv_rows(csv, 2).expect("bundled illuminant table is valid");
-    Spectrum::Table(rows.into_iter().map(|r| [r[0], r[1]]).collect())
+    Spectrum::table(rows.into_iter().map(|r| [r[0], r[1]]).collect())
 }
 
 /// Parses a spectrum description: `d65`, `a`, `constant`, `blackbody(T)` (T in K)
@@ -344,7 +433,7 @@ mod tests {
     fn narrow_band_luminance_is_exact() {
         // A 1.25 nm-wide trapezoid around 700 nm, between grid nodes: its
         // luminance is ȳ(700)·1.25/∫ȳ up to ȳ's curvature across the band.
-        let s = Spectrum::Table(vec![
+        let s = Spectrum::table(vec![
             [699.25, 0.0],
             [699.5, 1.0],
             [700.5, 1.0],
@@ -361,7 +450,7 @@ mod tests {
 
     #[test]
     fn table_support_and_interpolation() {
-        let s = Spectrum::Table(vec![
+        let s = Spectrum::table(vec![
             [500.0, 0.0],
             [520.0, 0.0],
             [530.0, 2.0],
@@ -371,5 +460,48 @@ mod tests {
         assert_eq!(s.support(), Some((520.0, 540.0)));
         assert_eq!(s.eval(525.0), 1.0);
         assert_eq!(s.eval(700.0), 0.0);
+    }
+
+    #[test]
+    fn guided_table_matches_binary_search_bit_for_bit() {
+        use crate::rng::Rng;
+        let mut tables: Vec<Vec<[f64; 2]>> = Vec::new();
+        for sp in [d65(), illuminant_a()] {
+            let Spectrum::Table(t) = sp else { panic!() };
+            tables.push(t.rows().to_vec());
+        }
+        // Irregular spacing, sub-nm rows, a single segment, a wide sparse table.
+        tables.push(vec![
+            [400.0, 1.0],
+            [400.3, 2.0],
+            [400.31, 0.5],
+            [401.9, 3.0],
+            [650.0, 0.0],
+        ]);
+        tables.push(vec![[500.0, 1.0], [501.0, 2.0]]);
+        tables.push(vec![[1.0, 1.0], [377.7, 2.5], [1e6, 3.0]]);
+        tables.push(
+            (0..50)
+                .map(|i| [360.0 + 9.4 * i as f64, (i % 7) as f64])
+                .collect(),
+        );
+        let mut rng = Rng::for_sample(7, 0, 0);
+        for rows in tables {
+            let t = Table::new(rows.clone());
+            let (lo, hi) = (rows[0][0], rows[rows.len() - 1][0]);
+            let mut probes: Vec<f64> = rows
+                .iter()
+                .flat_map(|r| {
+                    let l = r[0];
+                    [l, l.next_up(), l.next_down(), l + 0.5]
+                })
+                .collect();
+            probes.extend((0..20_000).map(|_| lo - 1.0 + (hi - lo + 2.0) * rng.uniform()));
+            probes.extend([f64::NAN, -1.0, 1e9, LAMBDA_MIN, LAMBDA_MAX]);
+            for l in probes {
+                let (got, want) = (t.eval(l), interpolate(&rows, l));
+                assert!(got.to_bits() == want.to_bits(), "λ = {l}: {got} vs {want}");
+            }
+        }
     }
 }
