@@ -89,6 +89,20 @@ impl Metal {
             .map(|&(_, m)| m)
     }
 
+    /// Row index guide: entry j is the interval holding λ = GUIDE_BASE_NM + j.
+    fn guide(self) -> &'static [u8; GUIDE_LEN] {
+        match self {
+            Metal::Cu => &GUIDE_CU,
+            Metal::Au => &GUIDE_AU,
+            Metal::Ag => &GUIDE_AG,
+            Metal::Al => &GUIDE_AL,
+            Metal::Fe => &GUIDE_FE,
+            Metal::Cr => &GUIDE_CR,
+            Metal::BrassCu70Zn30 => &GUIDE_BRASS,
+            Metal::StainlessSteel => &GUIDE_STAINLESSSTEEL,
+        }
+    }
+
     /// The measured table: rows of `[λ nm, n, κ]`, λ strictly increasing.
     pub fn table(self) -> &'static [[f64; 3]] {
         match self {
@@ -103,6 +117,35 @@ impl Metal {
         }
     }
 }
+
+const GUIDE_BASE_NM: usize = 200;
+const GUIDE_LEN: usize = 800;
+
+/// For each integer wavelength GUIDE_BASE_NM + j, the index of the last row
+/// at or below it (clamped to a valid interval start), computed at compile time.
+const fn build_guide<const N: usize>(rows: &[[f64; 3]; N]) -> [u8; GUIDE_LEN] {
+    let mut out = [0u8; GUIDE_LEN];
+    let mut j = 0;
+    while j < GUIDE_LEN {
+        let lambda = (GUIDE_BASE_NM + j) as f64;
+        let mut i = 0;
+        while i + 2 < N && rows[i + 1][0] <= lambda {
+            i += 1;
+        }
+        out[j] = i as u8;
+        j += 1;
+    }
+    out
+}
+
+static GUIDE_CU: [u8; GUIDE_LEN] = build_guide(&ior_data::CU);
+static GUIDE_AU: [u8; GUIDE_LEN] = build_guide(&ior_data::AU);
+static GUIDE_AG: [u8; GUIDE_LEN] = build_guide(&ior_data::AG);
+static GUIDE_AL: [u8; GUIDE_LEN] = build_guide(&ior_data::AL);
+static GUIDE_FE: [u8; GUIDE_LEN] = build_guide(&ior_data::FE);
+static GUIDE_CR: [u8; GUIDE_LEN] = build_guide(&ior_data::CR);
+static GUIDE_BRASS: [u8; GUIDE_LEN] = build_guide(&ior_data::BRASS);
+static GUIDE_STAINLESSSTEEL: [u8; GUIDE_LEN] = build_guide(&ior_data::STAINLESSSTEEL);
 
 /// A complex refractive index as a function of wavelength.
 #[derive(Clone, Debug, PartialEq)]
@@ -197,9 +240,11 @@ impl Ior {
     /// (n, κ) at `lambda_nm`, linearly interpolated; held constant beyond the
     /// ends of the table (never extrapolated). NaN input gives the first row.
     pub fn at(&self, lambda_nm: f64) -> (f64, f64) {
-        let rows = match self {
+        let (rows, guide) = match self {
             Ior::Constant { n, k } => return (*n, *k),
-            _ => self.rows().unwrap_or(&[]),
+            Ior::Metal(m) => (m.table(), Some(m.guide())),
+            #[cfg(feature = "alloc")]
+            Ior::Table(t) => (&t[..], None),
         };
         let last = rows.len() - 1;
         if lambda_nm.is_nan() || lambda_nm <= rows[0][0] {
@@ -208,11 +253,19 @@ impl Ior {
         if lambda_nm >= rows[last][0] {
             return (rows[last][1], rows[last][2]);
         }
-        // The tables are close to uniform in λ: guess the interval from the
-        // proportional position and walk the one or two steps to the right
-        // one, cheaper than a binary search. Ends: rows[0] < λ < rows[last].
-        let span = rows[last][0] - rows[0][0];
-        let mut lo = (((lambda_nm - rows[0][0]) / span * last as f64) as usize).min(last - 1);
+        // Built-in tables: a per-nanometre guide gives the interval of
+        // ⌊λ⌋ exactly, and at most one row lies in (⌊λ⌋, λ]. User tables: the
+        // tables are close to uniform in λ, so guess from the proportional
+        // position and walk. Either way rows[0] < λ < rows[last] here.
+        let mut lo = match guide {
+            Some(g) => {
+                g[((lambda_nm as usize).saturating_sub(GUIDE_BASE_NM)).min(GUIDE_LEN - 1)] as usize
+            }
+            None => {
+                let span = rows[last][0] - rows[0][0];
+                (((lambda_nm - rows[0][0]) / span * last as f64) as usize).min(last - 1)
+            }
+        };
         while lo > 0 && rows[lo][0] > lambda_nm {
             lo -= 1;
         }
@@ -256,6 +309,22 @@ mod tests {
         assert_eq!(ior.at(1.0), (t[0][1], t[0][2]));
         assert_eq!(ior.at(1e9), (t[t.len() - 1][1], t[t.len() - 1][2]));
         assert_eq!(ior.at(f64::NAN), (t[0][1], t[0][2]));
+    }
+
+    #[test]
+    fn guided_lookup_equals_binary_search() {
+        for m in Metal::ALL {
+            let rows = m.table();
+            let ior = Ior::metal(m);
+            for i in 0..60_000 {
+                let l = rows[0][0] + (rows[rows.len() - 1][0] - rows[0][0]) * i as f64 / 60_000.0;
+                let hi = rows.partition_point(|r| r[0] <= l).clamp(1, rows.len() - 1);
+                let (a, b) = (rows[hi - 1], rows[hi]);
+                let t = (l - a[0]) / (b[0] - a[0]);
+                let want = (a[1] + t * (b[1] - a[1]), a[2] + t * (b[2] - a[2]));
+                assert_eq!(ior.at(l), want, "{m:?} at {l} nm");
+            }
+        }
     }
 
     #[test]
