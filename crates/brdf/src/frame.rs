@@ -30,6 +30,17 @@ pub fn orthonormal_basis(n: DVec3) -> (DVec3, DVec3) {
     )
 }
 
+/// Half vector h = (i + o)/|i + o| and cosθd = i·h = |i + o|/2, or `None`
+/// when i and o are opposite. The length form of cosθd stays exact at
+/// grazing incidence, where the tangential parts of i + o cancel and i·h
+/// computed from the normalised h would lose every digit.
+#[inline]
+pub fn half_vector(wi: DVec3, wo: DVec3) -> Option<(DVec3, f64)> {
+    let v = wi + wo;
+    let len = v.length();
+    (len > 0.0 && len.is_finite()).then(|| (v / len, 0.5 * len))
+}
+
 /// sin²θ of a unit direction from its tangential components, without the
 /// cancellation of 1 − cos²θ near the normal.
 #[inline]

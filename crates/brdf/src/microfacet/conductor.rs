@@ -2,6 +2,7 @@
 
 use super::Distribution;
 use crate::error::BrdfError;
+use crate::frame::half_vector;
 use crate::fresnel::Fresnel;
 use crate::math::finite_nonneg;
 use crate::model::{Bxdf, BxdfSample, Specular, WAVELENGTH_MAX_NM, WAVELENGTH_MIN_NM};
@@ -33,17 +34,6 @@ impl MicrofacetConductor {
     pub fn fresnel(&self) -> &Fresnel {
         &self.fresnel
     }
-}
-
-/// Half vector h and cosθd = i·h = |i + o|/2, or `None` when i and o are
-/// opposite. The length form of cosθd stays exact at grazing incidence,
-/// where the tangential parts of i + o cancel and i·h computed from the
-/// normalised h would lose every digit.
-#[inline]
-fn half_vector(wi: DVec3, wo: DVec3) -> Option<(DVec3, f64)> {
-    let v = wi + wo;
-    let len = v.length();
-    (len > 0.0 && len.is_finite()).then(|| (v / len, 0.5 * len))
 }
 
 impl MicrofacetConductor {

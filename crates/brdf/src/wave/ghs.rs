@@ -292,27 +292,10 @@ impl<P: RadialPsd> Bxdf for GhsFull<P> {
         let kl = wavenumber(lambda_nm) * self.common.length;
         let uu = self.proposal_sample(gs, v, u[1]);
         let wo = direction_from_u(wi, kl, uu, 2.0 * core::f64::consts::PI * u[2])?;
-        let (f, pdf) = self.eval_pdf_impl(wi, wo, lambda_nm, true);
-        if !(f > 0.0 && pdf > 0.0) {
-            return None;
-        }
-        let weight = f * wo.z / pdf;
-        weight.is_finite().then_some(BxdfSample {
-            wo,
-            weight,
-            pdf,
-            is_delta: false,
-        })
+        super::glossy_sample(wo, self.eval_pdf_impl(wi, wo, lambda_nm, true))
     }
 
     fn specular(&self, wi: DVec3, lambda_nm: f64) -> Specular {
-        if !(wi.z > 0.0) {
-            return Specular::default();
-        }
-        let (weight, probability, _) = self.common.specular_and_choice(wi.z.min(1.0), lambda_nm);
-        Specular {
-            weight: finite_nonneg(weight),
-            probability,
-        }
+        self.common.specular(wi, lambda_nm)
     }
 }

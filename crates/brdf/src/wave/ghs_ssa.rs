@@ -78,6 +78,18 @@ impl GhsCommon {
 
     /// (specular weight R_s A_s, delta probability, g_s).
     #[inline]
+    /// The delta lobe at `wi` (zero below the horizon).
+    pub fn specular(&self, wi: DVec3, lambda_nm: f64) -> Specular {
+        if !(wi.z > 0.0) {
+            return Specular::default();
+        }
+        let (weight, probability, _) = self.specular_and_choice(wi.z.min(1.0), lambda_nm);
+        Specular {
+            weight: finite_nonneg(weight),
+            probability,
+        }
+    }
+
     pub fn specular_and_choice(&self, ci: f64, lambda_nm: f64) -> (f64, f64, f64) {
         let (p, gs) = self.choice(ci, lambda_nm);
         (self.fresnel.reflectance(ci, lambda_nm) * p, p, gs)
@@ -263,27 +275,10 @@ impl<P: RadialPsd> Bxdf for GhsSsa<P> {
         let kl = wavenumber(lambda_nm) * self.common.length;
         let uu = self.psd.sample_u(u[1]);
         let wo = direction_from_u(wi, kl, uu, 2.0 * core::f64::consts::PI * u[2])?;
-        let (f, pdf) = self.eval_pdf(wi, wo, lambda_nm);
-        if !(f > 0.0 && pdf > 0.0) {
-            return None;
-        }
-        let weight = f * wo.z / pdf;
-        weight.is_finite().then_some(BxdfSample {
-            wo,
-            weight,
-            pdf,
-            is_delta: false,
-        })
+        super::glossy_sample(wo, self.eval_pdf(wi, wo, lambda_nm))
     }
 
     fn specular(&self, wi: DVec3, lambda_nm: f64) -> Specular {
-        if !(wi.z > 0.0) {
-            return Specular::default();
-        }
-        let (weight, probability, _) = self.common.specular_and_choice(wi.z.min(1.0), lambda_nm);
-        Specular {
-            weight: finite_nonneg(weight),
-            probability,
-        }
+        self.common.specular(wi, lambda_nm)
     }
 }

@@ -107,6 +107,22 @@ pub(crate) fn wavenumber(lambda_nm: f64) -> f64 {
     }
 }
 
+/// The glossy sample for a drawn `wo` with its `(f, pdf)`, or `None` when it
+/// carries no energy.
+#[inline]
+pub(crate) fn glossy_sample(wo: DVec3, (f, pdf): (f64, f64)) -> Option<crate::BxdfSample> {
+    if !(f > 0.0 && pdf > 0.0) {
+        return None;
+    }
+    let weight = f * wo.z / pdf;
+    weight.is_finite().then_some(crate::BxdfSample {
+        wo,
+        weight,
+        pdf,
+        is_delta: false,
+    })
+}
+
 /// Outgoing direction for a frequency offset (u, φ) about the mirror
 /// direction: o⊥ = (u/(kL))(cosφ, sinφ) − i⊥. `None` if evanescent.
 #[inline]

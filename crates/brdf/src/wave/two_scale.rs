@@ -657,8 +657,10 @@ impl TwoScale {
 }
 
 #[inline]
+/// k = 2π/λ in rad/µm, `None` for a wavelength that is not positive and finite.
 fn wavenumber(lambda_nm: f64) -> Option<f64> {
-    (lambda_nm > 0.0 && lambda_nm.is_finite()).then(|| 2000.0 * PI / lambda_nm)
+    let k = super::wavenumber(lambda_nm);
+    (k > 0.0).then_some(k)
 }
 
 impl Bxdf for TwoScale {
@@ -669,13 +671,10 @@ impl Bxdf for TwoScale {
         if !(wi.z > 0.0 && wo.z > 0.0) {
             return 0.0;
         }
-        let sum = wi + wo;
-        let len = sum.length();
-        if !(len > 0.0) {
+        let Some((h, cos_d)) = crate::frame::half_vector(wi, wo) else {
             return 0.0;
-        }
-        let h = sum / len;
-        let cos_d = wi.dot(h).clamp(0.0, 1.0);
+        };
+        let cos_d = cos_d.min(1.0);
         let tan_h = libm::hypot(h.x, h.y) / h.z;
         let w = 2.0 * k * cos_d * self.psd.lc_um();
         let d_eff = self.table.d_eff(w, tan_h);
@@ -704,13 +703,9 @@ impl Bxdf for TwoScale {
         if !(wi.z > 0.0 && wo.z > 0.0) {
             return 0.0;
         }
-        let sum = wi + wo;
-        let len = sum.length();
-        if !(len > 0.0) {
+        let Some((h, cos_d)) = crate::frame::half_vector(wi, wo) else {
             return 0.0;
-        }
-        let h = sum / len;
-        let cos_d = wi.dot(h);
+        };
         if !(cos_d > 0.0) {
             return 0.0;
         }
