@@ -21,104 +21,14 @@ use std::time::Duration;
 use brdf::frame::spherical;
 use brdf::microfacet::{Distribution, MicrofacetConductor};
 use brdf::{Bxdf, DVec3, Fresnel, Ior, Metal};
-use criterion::measurement::{Measurement, ValueFormatter};
-use criterion::{Criterion, Throughput, criterion_group, criterion_main};
+use criterion::{Criterion, criterion_group, criterion_main};
 
 const RING: usize = 1024;
 
-/// Nanoseconds of CPU time consumed by the calling thread.
-#[cfg(target_os = "linux")]
-fn thread_cpu_ns() -> f64 {
-    #[repr(C)]
-    struct Timespec {
-        tv_sec: i64,
-        tv_nsec: i64,
-    }
-    unsafe extern "C" {
-        fn clock_gettime(clock: i32, tp: *mut Timespec) -> i32;
-    }
-    const CLOCK_THREAD_CPUTIME_ID: i32 = 3;
-    let mut t = Timespec {
-        tv_sec: 0,
-        tv_nsec: 0,
-    };
-    // SAFETY: `t` is a valid, writable timespec; the clock id is a Linux constant.
-    let rc = unsafe { clock_gettime(CLOCK_THREAD_CPUTIME_ID, &mut t) };
-    assert_eq!(rc, 0, "clock_gettime(CLOCK_THREAD_CPUTIME_ID) failed");
-    t.tv_sec as f64 * 1e9 + t.tv_nsec as f64
-}
+#[path = "support/cpu_time.rs"]
+mod cpu_time;
+use cpu_time::{Cpu as CpuTime, THREAD};
 
-#[cfg(not(target_os = "linux"))]
-fn thread_cpu_ns() -> f64 {
-    use std::sync::OnceLock;
-    static START: OnceLock<std::time::Instant> = OnceLock::new();
-    START
-        .get_or_init(std::time::Instant::now)
-        .elapsed()
-        .as_nanos() as f64
-}
-
-/// Criterion measurement: thread CPU time in ns.
-struct CpuTime;
-
-impl Measurement for CpuTime {
-    type Intermediate = f64;
-    type Value = f64;
-    fn start(&self) -> f64 {
-        thread_cpu_ns()
-    }
-    fn end(&self, start: f64) -> f64 {
-        thread_cpu_ns() - start
-    }
-    fn add(&self, a: &f64, b: &f64) -> f64 {
-        a + b
-    }
-    fn zero(&self) -> f64 {
-        0.0
-    }
-    fn to_f64(&self, v: &f64) -> f64 {
-        *v
-    }
-    fn formatter(&self) -> &dyn ValueFormatter {
-        &CpuTimeFormatter
-    }
-}
-
-struct CpuTimeFormatter;
-
-impl ValueFormatter for CpuTimeFormatter {
-    fn scale_values(&self, typical_ns: f64, values: &mut [f64]) -> &'static str {
-        let (factor, unit) = match typical_ns {
-            t if t < 1e3 => (1.0, "ns"),
-            t if t < 1e6 => (1e-3, "µs"),
-            t if t < 1e9 => (1e-6, "ms"),
-            _ => (1e-9, "s"),
-        };
-        values.iter_mut().for_each(|v| *v *= factor);
-        unit
-    }
-    fn scale_throughputs(
-        &self,
-        _typical: f64,
-        throughput: &Throughput,
-        values: &mut [f64],
-    ) -> &'static str {
-        let per_iter = match *throughput {
-            Throughput::Bytes(n)
-            | Throughput::BytesDecimal(n)
-            | Throughput::Elements(n)
-            | Throughput::Bits(n) => n as f64,
-            Throughput::ElementsAndBytes { elements, .. } => elements as f64,
-        };
-        values.iter_mut().for_each(|v| *v = per_iter * 1e9 / *v);
-        "elem/s (CPU)"
-    }
-    fn scale_for_machines(&self, _values: &mut [f64]) -> &'static str {
-        "ns"
-    }
-}
-
-/// Tiny xorshift generator: the bench must not depend on `brdf/testing`.
 struct XorShift(u64);
 impl XorShift {
     fn next(&mut self) -> f64 {
@@ -225,7 +135,7 @@ fn microfacet(c: &mut Criterion<CpuTime>) {
 
 fn config() -> Criterion<CpuTime> {
     Criterion::default()
-        .with_measurement(CpuTime)
+        .with_measurement(CpuTime(THREAD))
         .sample_size(30)
         .warm_up_time(Duration::from_millis(500))
         .measurement_time(Duration::from_secs(2))

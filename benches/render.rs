@@ -13,104 +13,16 @@
 //!
 //! `cargo bench --bench render`
 
-use criterion::measurement::{Measurement, ValueFormatter};
+use criterion::measurement::Measurement;
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use render::{Film, RenderOptions, Scene};
 use std::hint::black_box;
 use std::path::{Path, PathBuf};
 use std::time::Duration;
 
-/// Nanoseconds of CPU time of `clock` (Linux clock ids: 2 process, 3 thread).
-#[cfg(target_os = "linux")]
-fn cpu_ns(clock: i32) -> f64 {
-    #[repr(C)]
-    struct Timespec {
-        sec: i64,
-        nsec: i64,
-    }
-    unsafe extern "C" {
-        fn clock_gettime(clock: i32, tp: *mut Timespec) -> i32;
-    }
-    let mut t = Timespec { sec: 0, nsec: 0 };
-    // SAFETY: `t` is a valid, writable timespec and `clock` a Linux CPU-time clock id.
-    let rc = unsafe { clock_gettime(clock, &mut t) };
-    assert_eq!(rc, 0, "clock_gettime({clock}) failed");
-    t.sec as f64 * 1e9 + t.nsec as f64
-}
-
-/// Elsewhere, fall back to wall-clock time.
-#[cfg(not(target_os = "linux"))]
-fn cpu_ns(_clock: i32) -> f64 {
-    use std::sync::OnceLock;
-    static START: OnceLock<std::time::Instant> = OnceLock::new();
-    START
-        .get_or_init(std::time::Instant::now)
-        .elapsed()
-        .as_nanos() as f64
-}
-
-const PROCESS: i32 = 2;
-const THREAD: i32 = 3;
-
-/// A criterion measurement reading a CPU-time clock, in ns.
-struct Cpu(i32);
-
-impl Measurement for Cpu {
-    type Intermediate = f64;
-    type Value = f64;
-    fn start(&self) -> f64 {
-        cpu_ns(self.0)
-    }
-    fn end(&self, start: f64) -> f64 {
-        cpu_ns(self.0) - start
-    }
-    fn add(&self, a: &f64, b: &f64) -> f64 {
-        a + b
-    }
-    fn zero(&self) -> f64 {
-        0.0
-    }
-    fn to_f64(&self, v: &f64) -> f64 {
-        *v
-    }
-    fn formatter(&self) -> &dyn ValueFormatter {
-        &Ns
-    }
-}
-
-struct Ns;
-
-impl ValueFormatter for Ns {
-    fn scale_values(&self, typical: f64, values: &mut [f64]) -> &'static str {
-        let (k, unit) = match typical {
-            t if t < 1e3 => (1.0, "ns"),
-            t if t < 1e6 => (1e-3, "µs"),
-            t if t < 1e9 => (1e-6, "ms"),
-            _ => (1e-9, "s"),
-        };
-        values.iter_mut().for_each(|v| *v *= k);
-        unit
-    }
-    fn scale_throughputs(
-        &self,
-        _typical: f64,
-        throughput: &Throughput,
-        values: &mut [f64],
-    ) -> &'static str {
-        let n = match *throughput {
-            Throughput::Bytes(n)
-            | Throughput::BytesDecimal(n)
-            | Throughput::Elements(n)
-            | Throughput::Bits(n) => n as f64,
-            Throughput::ElementsAndBytes { elements, .. } => elements as f64,
-        };
-        values.iter_mut().for_each(|v| *v = n * 1e9 / *v);
-        "elem/s (CPU)"
-    }
-    fn scale_for_machines(&self, _values: &mut [f64]) -> &'static str {
-        "ns"
-    }
-}
+#[path = "support/cpu_time.rs"]
+mod cpu_time;
+use cpu_time::{Cpu, PROCESS, THREAD};
 
 fn scene_path(rel: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join(rel)
