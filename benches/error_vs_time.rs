@@ -2,11 +2,13 @@
 //!
 //! Renders the paper-sample plate scenes (`scenes/samples/<sample>_<model>_<view>.toml`;
 //! models GGX, Beckmann, GHS-SSA, full GHS and two-scale; views normal, 45°, grazing) at
-//! a small resolution, in both wavelength modes (one λ per path, or four hero
-//! wavelengths), at doubling sample counts 1, 2, 4, … `EVT_MAX_SPP`. Each image is
-//! compared with a high-sample reference of the same scene (hero mode, an independent
-//! seed, `EVT_REF_SPP` spp), cached on disk under `out/error_vs_time/cache/` and keyed
-//! by a hash of the scene text and the reference settings.
+//! a small resolution, in three configurations (`hero`: four hero wavelengths and the
+//! Sobol sampler, the defaults; `single`: one λ per path; `hero-independent`: white-noise
+//! samples, like the Mitsuba peer's `independent` sampler), at doubling sample counts
+//! 1, 2, 4, … `EVT_MAX_SPP`. Each image is compared with a high-sample reference of the
+//! same scene (defaults, `EVT_REF_SPP` spp in chunks with independent seeds), cached on
+//! disk under `out/error_vs_time/cache/` and keyed by a hash of the scene text and the
+//! reference settings.
 //!
 //! Error: RMSE over all pixels and linear-sRGB channels, divided by the reference's mean
 //! (so models and renderers are comparable). Time: **CPU time of the one render thread**
@@ -28,7 +30,7 @@
 //! writing nothing.
 
 use render::color::xyz_to_srgb;
-use render::scene::desc::WavelengthMode;
+use render::scene::desc::{SamplerKind, WavelengthMode};
 use render::{Film, RenderOptions, Scene};
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
@@ -139,10 +141,11 @@ struct SceneSpec {
 }
 
 impl SceneSpec {
-    fn load(&self, mode: WavelengthMode, seed: Option<u64>) -> Scene {
+    fn load(&self, cfg: Config, seed: Option<u64>) -> Scene {
         let mut scene = render::load_str(&self.path, &self.text)
             .unwrap_or_else(|e| panic!("scene {}: {e}", self.name));
-        scene.settings.mode = mode;
+        scene.settings.mode = cfg.0;
+        scene.settings.sampler = cfg.1;
         if let Some(s) = seed {
             scene.settings.seed = s;
         }
@@ -224,66 +227,93 @@ struct Reference {
 }
 
 /// The cached reference of `spec`, rendered if missing.
+///
+/// The chunks use distinct seeds (`REF_SEED + c`, samples 0..chunk each): with the
+/// Sobol sampler, consecutive sample ranges of one seed are not independent (they
+/// are complementary parts of one stratified sequence), so their spread would
+/// overstate the reference's noise. Distinct seeds scramble independently.
 fn reference(spec: &SceneSpec, s: &Settings, worker: &Worker, cache: Option<&Path>) -> Reference {
     let key = format!(
-        "{}\nref_spp={} seed={REF_SEED} mode=hero chunks={REF_CHUNKS}",
+        "{}\nref_spp={} seed={REF_SEED}+chunk mode=hero chunks={REF_CHUNKS} v2",
         spec.text, s.ref_spp
     );
     let hash = render::scene::fnv1a(key.as_bytes(), 0xcbf2_9ce4_8422_2325);
-    let file = cache.map(|c| c.join(format!("{}_{hash:016x}.film", spec.name)));
-    let noise_file = file.as_ref().map(|f| f.with_extension("noise"));
-    if let (Some(f), Some(nf)) = (&file, &noise_file)
-        && let Ok(film) = Film::load(f)
-        && film.spp() == s.ref_spp
-        && let Some(mse_noise) = std::fs::read_to_string(nf)
-            .ok()
-            .and_then(|t| t.trim().parse().ok())
+    let file = cache.map(|c| c.join(format!("{}_{hash:016x}.ref", spec.name)));
+    let pixels = spec_pixels(spec);
+    if let Some(f) = &file
+        && let Some(r) = load_reference(f, pixels)
     {
-        return Reference {
-            rgb: rgb(&film),
-            mse_noise,
-        };
+        return r;
     }
-    let scene = spec.load(WavelengthMode::Hero, Some(REF_SEED));
     let chunk = (s.ref_spp / REF_CHUNKS).max(1);
-    let mut total = new_film(&scene);
     let mut chunks = Vec::new();
     let mut cpu = 0.0;
     for c in 0..REF_CHUNKS {
+        let scene = spec.load(REF_CONFIG, Some(REF_SEED + c));
         let mut film = new_film(&scene);
-        cpu += worker
-            .render(&scene, &mut film, c * chunk..(c + 1) * chunk)
-            .0;
-        total.merge(&film).expect("merge reference chunks");
+        cpu += worker.render(&scene, &mut film, 0..chunk).0;
         chunks.push(rgb(&film));
     }
     // Variance of the mean of K chunk means, averaged over pixels and channels.
     let k = REF_CHUNKS as f64;
     let mut acc = 0.0;
     let n = chunks[0].len();
-    for i in 0..n {
+    let mut mean_img = vec![[0.0; 3]; n];
+    for (i, m_px) in mean_img.iter_mut().enumerate() {
         for ch in 0..3 {
             let m = chunks.iter().map(|c| c[i][ch]).sum::<f64>() / k;
             let var = chunks.iter().map(|c| (c[i][ch] - m).powi(2)).sum::<f64>() / (k - 1.0);
             acc += var / k;
+            m_px[ch] = m;
         }
     }
     let mse_noise = acc / (3 * n) as f64;
     eprintln!(
         "reference {} ({} spp, hero): {cpu:.1} CPU s, own noise rel. RMSE {:.4}",
         spec.name,
-        total.spp(),
-        mse_noise.sqrt() / (rgb(&total).iter().flatten().sum::<f64>() / (3 * n) as f64)
+        chunk * REF_CHUNKS,
+        mse_noise.sqrt() / (mean_img.iter().flatten().sum::<f64>() / (3 * n) as f64)
     );
-    if let (Some(f), Some(nf)) = (&file, &noise_file) {
-        total.save(f).expect("save reference film");
-        plot::write_atomic(nf, format!("{mse_noise:e}\n").as_bytes())
-            .expect("save reference noise");
-    }
-    Reference {
-        rgb: rgb(&total),
+    let r = Reference {
+        rgb: mean_img,
         mse_noise,
+    };
+    if let Some(f) = &file {
+        save_reference(f, &r);
     }
+    r
+}
+
+/// Pixel count of a scene spec (from its loaded camera).
+fn spec_pixels(spec: &SceneSpec) -> usize {
+    let scene = spec.load(REF_CONFIG, None);
+    (scene.camera.width * scene.camera.height) as usize
+}
+
+/// Reference cache file: the noise MSE, then the RGB image, as little-endian f64.
+fn save_reference(path: &Path, r: &Reference) {
+    let mut bytes = Vec::with_capacity(8 * (1 + 3 * r.rgb.len()));
+    bytes.extend_from_slice(&r.mse_noise.to_le_bytes());
+    for v in r.rgb.iter().flatten() {
+        bytes.extend_from_slice(&v.to_le_bytes());
+    }
+    plot::write_atomic(path, &bytes).expect("save reference");
+}
+
+fn load_reference(path: &Path, pixels: usize) -> Option<Reference> {
+    let bytes = std::fs::read(path).ok()?;
+    if bytes.len() != 8 * (1 + 3 * pixels) {
+        return None;
+    }
+    let mut vals = bytes
+        .chunks_exact(8)
+        .map(|c| f64::from_le_bytes(c.try_into().expect("8 bytes")));
+    let mse_noise = vals.next()?;
+    let flat: Vec<f64> = vals.collect();
+    Some(Reference {
+        rgb: flat.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect(),
+        mse_noise,
+    })
 }
 
 /// One measured point.
@@ -307,12 +337,12 @@ impl Point {
 /// Renders `spec` in `mode` at 1, 2, 4, … max_spp, cumulatively.
 fn convergence(
     spec: &SceneSpec,
-    mode: WavelengthMode,
+    cfg: Config,
     s: &Settings,
     worker: &Worker,
     reference: &Reference,
 ) -> Vec<Point> {
-    let scene = spec.load(mode, None);
+    let scene = spec.load(cfg, None);
     let mut film = new_film(&scene);
     let (mut cpu, mut wall) = (0.0, 0.0);
     let mut points = Vec::new();
@@ -337,10 +367,26 @@ fn convergence(
     points
 }
 
-fn mode_name(m: WavelengthMode) -> &'static str {
-    match m {
-        WavelengthMode::Single => "single",
-        WavelengthMode::Hero => "hero",
+/// A renderer configuration measured: wavelength mode and sampler.
+type Config = (WavelengthMode, SamplerKind);
+
+/// The configurations every scene is measured in: the defaults (hero, Sobol), one
+/// wavelength per path, and white-noise samples (what the Mitsuba peer uses).
+const CONFIGS: [Config; 3] = [
+    (WavelengthMode::Hero, SamplerKind::Sobol),
+    (WavelengthMode::Single, SamplerKind::Sobol),
+    (WavelengthMode::Hero, SamplerKind::Independent),
+];
+
+/// References: the defaults, with independent seeds per chunk.
+const REF_CONFIG: Config = (WavelengthMode::Hero, SamplerKind::Sobol);
+
+fn mode_name(cfg: Config) -> &'static str {
+    match cfg {
+        (WavelengthMode::Hero, SamplerKind::Sobol) => "hero",
+        (WavelengthMode::Single, SamplerKind::Sobol) => "single",
+        (WavelengthMode::Hero, SamplerKind::Independent) => "hero-independent",
+        (WavelengthMode::Single, SamplerKind::Independent) => "single-independent",
     }
 }
 
@@ -542,11 +588,12 @@ fn main() {
         specs.extend(peer_scenes(root, s.max_spp));
     }
     eprintln!(
-        "error_vs_time: {} scenes at {}×{}, 1..{} spp in single and hero modes, references {} spp; {} worker(s) of 1 thread",
+        "error_vs_time: {} scenes at {}×{}, 1..{} spp in {} configurations, references {} spp; {} worker(s) of 1 thread",
         specs.len(),
         s.width,
         s.height,
         s.max_spp,
+        CONFIGS.len(),
         s.ref_spp,
         s.workers
     );
@@ -554,8 +601,8 @@ fn main() {
     let refs = run_parallel(&specs, s.workers, |spec, w| {
         reference(spec, &s, w, cache.as_deref())
     });
-    let jobs: Vec<(usize, WavelengthMode)> = (0..specs.len())
-        .flat_map(|i| [(i, WavelengthMode::Single), (i, WavelengthMode::Hero)])
+    let jobs: Vec<(usize, Config)> = (0..specs.len())
+        .flat_map(|i| CONFIGS.map(|c| (i, c)))
         .collect();
     let results = run_parallel(&jobs, s.workers, |&(i, mode), w| {
         let p = convergence(&specs[i], mode, &s, w, &refs[i]);
@@ -697,8 +744,13 @@ fn main() {
             let xs: Vec<f64> = points.iter().map(|p| p.cpu_s).collect();
             let ys: Vec<f64> = points.iter().map(|p| p.rel_corr).collect();
             let (style, marker) = match mode {
-                WavelengthMode::Single => (plot::LineStyle::Dashed, plot::Marker::Square),
-                WavelengthMode::Hero => (plot::LineStyle::Solid, plot::Marker::Circle),
+                (WavelengthMode::Single, _) => (plot::LineStyle::Dashed, plot::Marker::Square),
+                (WavelengthMode::Hero, SamplerKind::Sobol) => {
+                    (plot::LineStyle::Solid, plot::Marker::Circle)
+                }
+                (WavelengthMode::Hero, SamplerKind::Independent) => {
+                    (plot::LineStyle::Dotted, plot::Marker::Triangle)
+                }
             };
             p = p.series(
                 plot::Series::line(format!("{} {}", specs[i].model, mode_name(mode)), &xs, &ys)

@@ -5,12 +5,11 @@
 //!
 //! The film and `sample_pixel` replace non-finite samples by zero, so a check
 //! on the image alone could never fail: these tests call the integrator's
-//! `trace` on every camera sample and inspect the raw per-wavelength estimate.
+//! `camera_sample` on every camera sample and inspect the raw per-wavelength
+//! estimate.
 
-use render::integrator::trace;
-use render::rng::Rng;
-use render::scene::desc::WavelengthMode;
-use render::wavelength::HERO_COUNT;
+use render::integrator::camera_sample;
+use render::scene::desc::{SamplerKind, WavelengthMode};
 use render::{Film, RenderOptions, Scene};
 use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::path::{Path, PathBuf};
@@ -70,23 +69,16 @@ fn load_small(path: &Path) -> Scene {
 /// returning the first raw estimate that is NaN, infinite or negative.
 fn first_bad_sample(scene: &Scene, spp: u64) -> Option<String> {
     let cam = &scene.camera;
-    let n = match scene.settings.mode {
-        WavelengthMode::Single => 1,
-        WavelengthMode::Hero => HERO_COUNT,
-    };
-    let wl = &scene.wavelengths;
     for y in 0..cam.height {
         for x in 0..cam.width {
-            let pixel = y as u64 * cam.width as u64 + x as u64;
             for s in 0..spp {
-                let mut rng = Rng::for_sample(scene.settings.seed, pixel, s);
-                let ray = cam.ray(x as f64 + rng.uniform(), y as f64 + rng.uniform());
-                let lambdas = wl.rotations(wl.sample(rng.uniform()), n);
-                let l = trace(scene, ray, &lambdas, n, &mut rng);
-                if let Some(j) = (0..n).find(|&j| !(l[j].is_finite() && l[j] >= 0.0)) {
+                let cs = camera_sample(scene, x, y, s);
+                if let Some(j) =
+                    (0..cs.n).find(|&j| !(cs.radiance[j].is_finite() && cs.radiance[j] >= 0.0))
+                {
                     return Some(format!(
-                        "pixel ({x}, {y}) sample {s}: radiance {} at λ = {:.3} nm (mode {:?})",
-                        l[j], lambdas[j], scene.settings.mode
+                        "pixel ({x}, {y}) sample {s}: radiance {} at λ = {:.3} nm (mode {:?}, sampler {:?})",
+                        cs.radiance[j], cs.lambdas[j], scene.settings.mode, scene.settings.sampler
                     ));
                 }
             }
@@ -99,8 +91,13 @@ fn first_bad_sample(scene: &Scene, spp: u64) -> Option<String> {
 fn check_scene(path: &Path) -> Vec<String> {
     let mut scene = load_small(path);
     let mut bad = Vec::new();
-    for mode in [WavelengthMode::Single, WavelengthMode::Hero] {
+    for (mode, sampler) in [
+        (WavelengthMode::Single, SamplerKind::Sobol),
+        (WavelengthMode::Hero, SamplerKind::Sobol),
+        (WavelengthMode::Hero, SamplerKind::Independent),
+    ] {
         scene.settings.mode = mode;
+        scene.settings.sampler = sampler;
         if let Some(m) = first_bad_sample(&scene, SPP) {
             bad.push(format!("{}: {m}", path.display()));
         }

@@ -154,7 +154,7 @@ def material(sc: dict, mname: str) -> dict:
     return bsdf
 
 
-def mitsuba_scene_dict(mi, sc: dict, spp: int, resolution=None) -> dict:
+def mitsuba_scene_dict(mi, sc: dict, spp: int, resolution=None, sampler: str = "independent") -> dict:
     T = mi.ScalarTransform4f
     cam = sc["camera"]
     w, h = resolution or cam["resolution"]
@@ -171,7 +171,7 @@ def mitsuba_scene_dict(mi, sc: dict, spp: int, resolution=None) -> dict:
                                     up=cam.get("up", [0.0, 1.0, 0.0])),
             "film": {"type": "hdrfilm", "width": int(w), "height": int(h),
                      "rfilter": {"type": "box"}, "pixel_format": "rgb"},
-            "sampler": {"type": "independent", "sample_count": int(spp)},
+            "sampler": {"type": sampler, "sample_count": int(spp)},
         },
     }
     for i, s in enumerate(sc.get("shapes", [])):
@@ -348,6 +348,9 @@ def main() -> None:
     ap.add_argument("--out", type=Path, default=HERE / "out")
     ap.add_argument("--only", nargs="*", help="scene names to run (default: all)")
     ap.add_argument("--variants", default="scalar_spectral,llvm_ad_spectral")
+    ap.add_argument("--samplers", default="independent",
+                    help="comma-separated Mitsuba samplers (independent, stratified, multijitter, "
+                         "orthogonal, ldsampler); non-default ones are labelled VARIANT+SAMPLER")
     ap.add_argument("--max-spp", type=int, default=256)
     ap.add_argument("--ref-spp", type=int, default=4096)
     ap.add_argument("--ref-chunk", type=int, default=256)
@@ -416,6 +419,7 @@ def main() -> None:
         die("no scene left to render")
 
     variants = [v for v in args.variants.split(",") if v]
+    samplers = [v for v in args.samplers.split(",") if v]
     bad = [v for v in variants + [args.ref_variant] if v not in mi.variants()]
     if bad:
         die(f"variant(s) {bad} not in this Mitsuba build: {mi.variants()}")
@@ -441,11 +445,12 @@ def main() -> None:
         print(f"scene {sc['name']}", flush=True)
         ref, mse_ref, meta = reference(mi, dr, np, sc, args, out)
         ref_mean = float(ref.mean())
-        for variant in variants:
+        for variant, sampler in [(v, smp) for v in variants for smp in samplers]:
             mi.set_variant(variant)
+            label = variant if sampler == "independent" else f"{variant}+{sampler}"
             for spp in spps:
                 t0 = time.perf_counter()
-                scene = mi.load_dict(mitsuba_scene_dict(mi, sc, spp, args.resolution))
+                scene = mi.load_dict(mitsuba_scene_dict(mi, sc, spp, args.resolution, sampler))
                 load_s = time.perf_counter() - t0
                 cold = float("nan")
                 if variant.startswith("llvm"):
@@ -456,20 +461,20 @@ def main() -> None:
                 mse = float(np.mean((img.astype(np.float64) - ref) ** 2))
                 rmse = math.sqrt(mse)
                 corr = math.sqrt(max(mse - mse_ref, 0.0)) if not math.isnan(mse_ref) else float("nan")
-                tim_rows.append([sc["name"], variant, spp, f"{load_s:.6f}", f"{dt:.6f}", f"{cpu:.6f}",
+                tim_rows.append([sc["name"], label, spp, f"{load_s:.6f}", f"{dt:.6f}", f"{cpu:.6f}",
                                  f"{cold:.6f}", threads, f"{os.getloadavg()[0]:.2f}"])
                 rel_mse = (rmse / ref_mean) ** 2 if ref_mean > 0 else float("nan")
-                err_rows.append([sc["name"], variant, spp, f"{cpu:.6f}", f"{dt:.6f}", f"{rmse:.6e}",
+                err_rows.append([sc["name"], label, spp, f"{cpu:.6f}", f"{dt:.6f}", f"{rmse:.6e}",
                                  f"{rmse / ref_mean:.6e}", f"{mse_ref:.6e}", f"{corr:.6e}",
                                  f"{1.0 / (cpu * rel_mse):.6e}" if rel_mse > 0 and cpu > 0 else "inf"])
-                print(f"  {variant:18s} {spp:4d} spp  load {load_s:6.3f} s  render {dt:8.3f} s wall"
+                print(f"  {label:30s} {spp:4d} spp  load {load_s:6.3f} s  render {dt:8.3f} s wall"
                       f" {cpu:8.3f} s CPU"
                       f"  rmse {rmse:.4e} (rel {rmse / ref_mean:.4e})", flush=True)
                 if not args.no_images:
                     d = out / "img" / sc["name"]
                     d.mkdir(parents=True, exist_ok=True)
-                    atomic_save_npy(np, d / f"{variant}_{spp}spp.npy", img)
-                    mi.util.write_bitmap(str(d / f"{variant}_{spp}spp.exr"), img)
+                    atomic_save_npy(np, d / f"{label}_{spp}spp.npy", img)
+                    mi.util.write_bitmap(str(d / f"{label}_{spp}spp.exr"), img)
         # Rewrite the CSVs after every scene so an interrupted run keeps what it measured.
         write_csv(out / f"{args.tag}timings.csv", ["scene", "variant", "spp", "load_s", "render_s",
                   "render_cpu_s", "render_cold_s", "threads", "loadavg_1min"], tim_rows)

@@ -56,6 +56,18 @@ pub trait Bxdf {
         (self.eval(wi, wo, lambda_nm), self.pdf(wi, wo, lambda_nm))
     }
 
+    /// [`Bxdf::eval_pdf`] at several wavelengths for one pair of directions:
+    /// `out[j] = eval_pdf(wi, wo, lambdas[j])` for `j < min(lambdas.len(),
+    /// out.len())`. Spectral renderers carry several wavelengths per path
+    /// (hero wavelengths); models whose geometry does not depend on λ (the
+    /// microfacet conductors) override this to compute it once.
+    #[inline]
+    fn eval_pdf_many(&self, wi: DVec3, wo: DVec3, lambdas: &[f64], out: &mut [(f64, f64)]) {
+        for (o, &l) in out.iter_mut().zip(lambdas) {
+            *o = self.eval_pdf(wi, wo, l);
+        }
+    }
+
     /// Draws an outgoing direction from three uniform numbers in [0, 1).
     /// Returns `None` when the sample carries no energy (below the horizon,
     /// evanescent, or zero weight).
@@ -78,6 +90,9 @@ impl<T: Bxdf + ?Sized> Bxdf for &T {
     fn eval_pdf(&self, wi: DVec3, wo: DVec3, lambda_nm: f64) -> (f64, f64) {
         (**self).eval_pdf(wi, wo, lambda_nm)
     }
+    fn eval_pdf_many(&self, wi: DVec3, wo: DVec3, lambdas: &[f64], out: &mut [(f64, f64)]) {
+        (**self).eval_pdf_many(wi, wo, lambdas, out)
+    }
     fn sample(&self, wi: DVec3, lambda_nm: f64, u: [f64; 3]) -> Option<BxdfSample> {
         (**self).sample(wi, lambda_nm, u)
     }
@@ -96,6 +111,9 @@ impl<T: Bxdf + ?Sized> Bxdf for alloc::boxed::Box<T> {
     }
     fn eval_pdf(&self, wi: DVec3, wo: DVec3, lambda_nm: f64) -> (f64, f64) {
         (**self).eval_pdf(wi, wo, lambda_nm)
+    }
+    fn eval_pdf_many(&self, wi: DVec3, wo: DVec3, lambdas: &[f64], out: &mut [(f64, f64)]) {
+        (**self).eval_pdf_many(wi, wo, lambdas, out)
     }
     fn sample(&self, wi: DVec3, lambda_nm: f64, u: [f64; 3]) -> Option<BxdfSample> {
         (**self).sample(wi, lambda_nm, u)

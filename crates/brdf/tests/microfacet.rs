@@ -677,3 +677,38 @@ fn fresnel_table_not_covering_the_visible_range_is_rejected() {
     let wide = Ior::table(vec![[300.0, 0.3, 3.0], [900.0, 0.2, 4.0]]).unwrap();
     assert!(MicrofacetConductor::new(dist, Fresnel::conductor(wide)).is_ok());
 }
+
+#[test]
+fn eval_pdf_many_equals_eval_pdf_per_wavelength_bit_for_bit() {
+    let lambdas = [360.0, 431.7, 550.0, 829.9, 612.25];
+    let mut rng = Pcg32::new(17, 3);
+    for (kind, alpha, _) in cases() {
+        for fresnel in [copper(), Fresnel::One] {
+            let m = model(kind, alpha, fresnel);
+            let boxed: Box<dyn Bxdf> = Box::new(m.clone());
+            for _ in 0..200 {
+                let wi = spherical(rng.next_f64() * 1.6, rng.next_f64() * 6.3);
+                let wo = spherical(rng.next_f64() * 1.6, rng.next_f64() * 6.3);
+                // One slot more than wavelengths: it must be left alone.
+                let mut out = [(-1.0, -1.0); 6];
+                boxed.eval_pdf_many(wi, wo, &lambdas, &mut out);
+                for (j, &l) in lambdas.iter().enumerate() {
+                    let (f, p) = m.eval_pdf(wi, wo, l);
+                    assert_eq!(out[j].0.to_bits(), f.to_bits(), "{kind:?} {alpha:?} λ {l}");
+                    assert_eq!(out[j].1.to_bits(), p.to_bits(), "{kind:?} {alpha:?} λ {l}");
+                }
+                assert_eq!(out[5], (-1.0, -1.0));
+            }
+        }
+    }
+    // Below the horizon every slot is zeroed.
+    let m = model(NdfKind::Ggx, (0.3, 0.3), copper());
+    let mut out = [(-1.0, -1.0); 2];
+    m.eval_pdf_many(
+        spherical(0.3, 0.0),
+        DVec3::new(0.0, 0.6, -0.8),
+        &lambdas[..2],
+        &mut out,
+    );
+    assert_eq!(out, [(0.0, 0.0); 2]);
+}

@@ -2,20 +2,23 @@
 //! combined by the balance heuristic, exact delta lobes, Russian roulette,
 //! and optional hero wavelengths with spectral MIS (Wilkie et al. 2014).
 //!
-//! Bookkeeping (one set for both modes; `n` = 1 or 4 wavelengths): with
-//! `P_k` the pdf of the path so far had wavelength k been the hero (its
-//! wavelength pdf included) and `F_j` the path's measurement product at λ_j,
-//! the tracer keeps `T_j = F_j / P_hero` and `Q_k = P_k / P_hero`. A complete
-//! path then contributes `T_j Le_j / Σ_k (Q_k + L_k p_light)`: the balance
-//! heuristic over every (wavelength, strategy) pair that could have produced
-//! it, where `L_k p_light` is the light-sampling strategy's density for the
-//! last edge relative to the BSDF one. Both the estimator and the Russian
-//! roulette probability (a function of `T_j / Σ Q_k` only) are symmetric in
-//! which wavelength was the hero, which makes hero sampling unbiased.
+//! Bookkeeping (one set for both modes; `n` = 1 or 4 wavelengths): the
+//! wavelengths are stratified in the wavelength CDF's primary space, so each
+//! has marginal density p(λ_j) whichever of them is the hero. With `P_k` the
+//! directional pdf of the path so far had wavelength k been the hero and
+//! `F_j` the path's measurement product at λ_j, the tracer keeps
+//! `T_j = F_j / (p(λ_j) P_hero)` and `Q_k = P_k / P_hero`. A complete path
+//! then contributes `T_j Le_j / Σ_k (Q_k + L_k p_light)`: the balance
+//! heuristic over every (hero, strategy) pair that could have produced it
+//! (p(λ_j) is common to all of them and cancels), where `L_k p_light` is the
+//! light-sampling strategy's density for the last edge relative to the BSDF
+//! one. Both the estimator and the Russian roulette probability (a function
+//! of `T_j / Σ Q_k` only) are symmetric in which wavelength was the hero,
+//! which makes hero sampling unbiased.
 
 use crate::geometry::Ray;
 use crate::light::Emission;
-use crate::rng::Rng;
+use crate::sampler::Sampler;
 use crate::scene::desc::WavelengthMode;
 use crate::scene::{Scene, Surface};
 use crate::spectrum::Cie;
@@ -62,26 +65,47 @@ fn offset(p: DVec3, n: DVec3, mesh: bool) -> DVec3 {
     p + n * (if mesh { 1e-5 } else { 1e-9 } * scale)
 }
 
-/// XYZ estimate (before the film's 1/∫ȳ normalisation) of one camera sample
-/// at pixel (`x`, `y`).
-pub fn sample_pixel(scene: &Scene, x: u32, y: u32, sample: u64) -> [f64; 3] {
+/// One camera sample: its wavelengths and spectral radiance estimates.
+#[derive(Clone, Copy, Debug)]
+pub struct CameraSample {
+    /// Number of wavelengths carried (1, or [`HERO_COUNT`] in hero mode).
+    pub n: usize,
+    /// The wavelengths in nm; the first `n` are used.
+    pub lambdas: [f64; N],
+    /// Radiance estimates at each wavelength, wavelength pdf included.
+    pub radiance: [f64; N],
+}
+
+/// Traces camera sample `sample` of pixel (`x`, `y`).
+pub fn camera_sample(scene: &Scene, x: u32, y: u32, sample: u64) -> CameraSample {
     let cam = &scene.camera;
     let pixel = y as u64 * cam.width as u64 + x as u64;
-    let mut rng = Rng::for_sample(scene.settings.seed, pixel, sample);
-    let ray = cam.ray(x as f64 + rng.uniform(), y as f64 + rng.uniform());
+    let mut sampler = Sampler::new(scene.settings.sampler, scene.settings.seed, pixel, sample);
+    let [ux, uy] = sampler.get_2d();
+    let ray = cam.ray(x as f64 + ux, y as f64 + uy);
     let n = match scene.settings.mode {
         WavelengthMode::Single => 1,
         WavelengthMode::Hero => N,
     };
-    let wl = &scene.wavelengths;
-    let lambdas = wl.rotations(wl.sample(rng.uniform()), n);
-    let radiance = trace(scene, ray, &lambdas, n, &mut rng);
+    let lambdas = scene.wavelengths.stratified(sampler.get_1d(), n);
+    let radiance = trace(scene, ray, &lambdas, n, &mut sampler);
+    CameraSample {
+        n,
+        lambdas,
+        radiance,
+    }
+}
+
+/// XYZ estimate (before the film's 1/∫ȳ normalisation) of one camera sample
+/// at pixel (`x`, `y`).
+pub fn sample_pixel(scene: &Scene, x: u32, y: u32, sample: u64) -> [f64; 3] {
+    let cs = camera_sample(scene, x, y, sample);
     let cie = Cie::get();
     let mut xyz = [0.0; 3];
-    for j in 0..n {
-        let c = cie.xyz(lambdas[j]);
+    for j in 0..cs.n {
+        let c = cie.xyz(cs.lambdas[j]);
         for k in 0..3 {
-            xyz[k] += radiance[j] * c[k];
+            xyz[k] += cs.radiance[j] * c[k];
         }
     }
     if xyz.iter().all(|v| v.is_finite()) {
@@ -92,7 +116,13 @@ pub fn sample_pixel(scene: &Scene, x: u32, y: u32, sample: u64) -> [f64; 3] {
 }
 
 /// Spectral radiance estimates (wavelength pdf included) along `ray` at each λ_j.
-pub fn trace(scene: &Scene, mut ray: Ray, lambdas: &[f64; N], n: usize, rng: &mut Rng) -> [f64; N] {
+pub fn trace(
+    scene: &Scene,
+    mut ray: Ray,
+    lambdas: &[f64; N],
+    n: usize,
+    sampler: &mut Sampler,
+) -> [f64; N] {
     let wl = &scene.wavelengths;
     let lights = &scene.lights;
     let settings = &scene.settings;
@@ -104,10 +134,11 @@ pub fn trace(scene: &Scene, mut ray: Ray, lambdas: &[f64; N], n: usize, rng: &mu
     let mut q = [0.0; N];
     let mut l_mis = [0.0; N];
     for k in 0..n {
-        t[k] = 1.0 / pl[0];
-        q[k] = pl[k] / pl[0];
+        t[k] = 1.0 / pl[k];
+        q[k] = 1.0;
     }
-    let m0 = 1.0 / pl[..n].iter().sum::<f64>();
+    // Russian roulette compares max_j T_j / Σ Q_k with its value at the camera.
+    let m0 = t[..n].iter().fold(0.0f64, |a, &v| a.max(v)) / n as f64;
     let mut out = [0.0; N];
 
     let add_emission = |out: &mut [f64; N],
@@ -158,7 +189,7 @@ pub fn trace(scene: &Scene, mut ray: Ray, lambdas: &[f64; N], n: usize, rng: &mu
         let p = offset(hit.geo.p, ng, hit.mesh);
 
         // Next-event estimation.
-        if let Some(ls) = lights.sample(p, [rng.uniform(), rng.uniform(), rng.uniform()]) {
+        if let Some(ls) = lights.sample(p, sampler.get_1d_2d()) {
             let wo = frame.to_local(ls.wi);
             if wo.z > 0.0 && ls.pdf > 0.0 {
                 let shadow = Ray { o: p, d: ls.wi };
@@ -169,22 +200,18 @@ pub fn trace(scene: &Scene, mut ray: Ray, lambdas: &[f64; N], n: usize, rng: &mu
                 };
                 // A delta light cannot be reached by BSDF sampling: its MIS
                 // denominator has no BSDF term, so the pdf is not needed.
-                let mut f = [0.0; N];
-                let mut pdf = [0.0; N];
-                let mut any = false;
-                for j in 0..n {
-                    (f[j], pdf[j]) = if ls.is_delta {
-                        (bxdf.eval(wi, wo, lambdas[j]), 0.0)
-                    } else {
-                        bxdf.eval_pdf(wi, wo, lambdas[j])
-                    };
-                    any |= f[j] > 0.0;
+                let mut fp = [(0.0, 0.0); N];
+                bxdf.eval_pdf_many(wi, wo, &lambdas[..n], &mut fp[..n]);
+                if ls.is_delta {
+                    for v in &mut fp[..n] {
+                        v.1 = 0.0;
+                    }
                 }
-                if any && !scene.occluded(&shadow, t_max) {
-                    let d: f64 = (0..n).map(|k| q[k] * (ls.pdf + pdf[k])).sum();
+                if fp[..n].iter().any(|v| v.0 > 0.0) && !scene.occluded(&shadow, t_max) {
+                    let d: f64 = (0..n).map(|k| q[k] * (ls.pdf + fp[k].1)).sum();
                     if d > 0.0 {
                         for j in 0..n {
-                            out[j] += t[j] * f[j] * wo.z * ls.emission.eval(lambdas[j]) / d;
+                            out[j] += t[j] * fp[j].0 * wo.z * ls.emission.eval(lambdas[j]) / d;
                         }
                     }
                 }
@@ -192,11 +219,7 @@ pub fn trace(scene: &Scene, mut ray: Ray, lambdas: &[f64; N], n: usize, rng: &mu
         }
 
         // BSDF sampling at the hero wavelength.
-        let Some(s) = bxdf.sample(
-            wi,
-            lambdas[0],
-            [rng.uniform(), rng.uniform(), rng.uniform()],
-        ) else {
+        let Some(s) = bxdf.sample(wi, lambdas[0], sampler.get_1d_2d()) else {
             break;
         };
         if s.pdf.is_nan() || s.pdf <= 0.0 || s.wo.z <= 0.0 {
@@ -215,10 +238,11 @@ pub fn trace(scene: &Scene, mut ray: Ray, lambdas: &[f64; N], n: usize, rng: &mu
             for k in 0..n {
                 l_mis[k] = q[k] / s.pdf;
             }
+            let mut fp = [(0.0, 0.0); N];
+            bxdf.eval_pdf_many(wi, s.wo, &lambdas[1..n], &mut fp[1..n]);
             for j in 1..n {
-                let (f, pdf) = bxdf.eval_pdf(wi, s.wo, lambdas[j]);
-                t[j] *= f * s.wo.z / s.pdf;
-                q[j] *= pdf / s.pdf;
+                t[j] *= fp[j].0 * s.wo.z / s.pdf;
+                q[j] *= fp[j].1 / s.pdf;
             }
         }
 
@@ -227,7 +251,7 @@ pub fn trace(scene: &Scene, mut ray: Ray, lambdas: &[f64; N], n: usize, rng: &mu
             let sum_q: f64 = q[..n].iter().sum();
             let m = t[..n].iter().fold(0.0f64, |a, v| a.max(v.abs())) / (sum_q * m0);
             let survive = m.min(1.0);
-            if survive.is_nan() || survive <= 0.0 || rng.uniform() >= survive {
+            if survive.is_nan() || survive <= 0.0 || sampler.get_1d() >= survive {
                 break;
             }
             for tj in t.iter_mut().take(n) {

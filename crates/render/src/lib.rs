@@ -29,6 +29,7 @@ pub mod mesh;
 pub mod output;
 pub mod render;
 pub mod rng;
+pub mod sampler;
 pub mod scene;
 pub mod spectrum;
 pub mod wavelength;

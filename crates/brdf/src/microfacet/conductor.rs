@@ -84,6 +84,24 @@ impl Bxdf for MicrofacetConductor {
     }
 
     #[inline]
+    fn eval_pdf_many(&self, wi: DVec3, wo: DVec3, lambdas: &[f64], out: &mut [(f64, f64)]) {
+        let Some((d, lambda_i, lambda_o, cos_ih)) = self.terms(wi, wo) else {
+            for o in out.iter_mut().take(lambdas.len()) {
+                *o = (0.0, 0.0);
+            }
+            return;
+        };
+        // Only Fresnel depends on λ; the expressions match `eval_pdf` term
+        // for term, so the results are bit-identical to it.
+        let g2 = 1.0 / (1.0 + lambda_i + lambda_o);
+        let pdf = finite_nonneg(d / ((1.0 + lambda_i) * 4.0 * wi.z));
+        for (o, &l) in out.iter_mut().zip(lambdas) {
+            let f = self.fresnel.reflectance(cos_ih, l) * d * g2 / (4.0 * wi.z * wo.z);
+            *o = (finite_nonneg(f), pdf);
+        }
+    }
+
+    #[inline]
     fn sample(&self, wi: DVec3, lambda_nm: f64, u: [f64; 3]) -> Option<BxdfSample> {
         if wi.z <= 0.0 {
             return None;

@@ -76,10 +76,21 @@ pub struct FilmDesc {
 #[serde(rename_all = "snake_case")]
 pub enum WavelengthMode {
     /// One wavelength per path.
-    #[default]
     Single,
     /// Four stratified wavelengths per path with spectral MIS (Wilkie et al. 2014).
+    #[default]
     Hero,
+}
+
+/// Where the random numbers of a camera sample come from (see `sampler.rs`).
+#[derive(Deserialize, Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum SamplerKind {
+    /// Owen-scrambled Sobol points, padded per draw (Burley 2020).
+    #[default]
+    Sobol,
+    /// Independent uniform numbers (white noise).
+    Independent,
 }
 
 /// `[integrator]`.
@@ -89,12 +100,15 @@ pub struct IntegratorDesc {
     /// Maximum number of scattering events along a path (default 8; 1 = direct light only).
     #[serde(default = "default_depth")]
     pub max_depth: Spanned<u32>,
-    /// `single` (default) or `hero`.
+    /// `hero` (default) or `single`.
     #[serde(default)]
     pub wavelengths: WavelengthMode,
     /// Bounces before Russian roulette may end a path (default 3).
     #[serde(default = "default_rr")]
     pub rr_depth: u32,
+    /// `sobol` (default) or `independent`.
+    #[serde(default)]
+    pub sampler: SamplerKind,
 }
 
 fn default_depth() -> Spanned<u32> {
@@ -109,8 +123,9 @@ impl Default for IntegratorDesc {
     fn default() -> Self {
         IntegratorDesc {
             max_depth: default_depth(),
-            wavelengths: WavelengthMode::Single,
+            wavelengths: WavelengthMode::Hero,
             rr_depth: 3,
+            sampler: SamplerKind::Sobol,
         }
     }
 }

@@ -10,7 +10,7 @@ use crate::material::{Material, build_material};
 use crate::mesh::{MeshAccel, load_obj};
 use crate::spectrum::{LAMBDA_MAX, LAMBDA_MIN, parse_spectrum};
 use crate::wavelength::WavelengthSampler;
-use desc::{LightDesc, SceneDesc, ShapeDesc, TransformDesc, WavelengthMode};
+use desc::{LightDesc, SamplerKind, SceneDesc, ShapeDesc, TransformDesc, WavelengthMode};
 use glam::DVec3;
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
@@ -49,6 +49,8 @@ pub struct Settings {
     pub rr_depth: u32,
     /// Wavelength sampling mode.
     pub mode: WavelengthMode,
+    /// Random-number source of camera samples.
+    pub sampler: SamplerKind,
     /// EXR output path.
     pub exr: Option<PathBuf>,
     /// PNG output path.
@@ -226,6 +228,7 @@ pub fn load_str(path: &Path, text: &str) -> Result<Scene, SceneError> {
         max_depth,
         rr_depth: desc.integrator.rr_depth,
         mode: desc.integrator.wavelengths,
+        sampler: desc.integrator.sampler,
         exr: film.exr.clone(),
         png: film.png.clone(),
         exposure: film.exposure,
@@ -440,7 +443,13 @@ pub fn load_str(path: &Path, text: &str) -> Result<Scene, SceneError> {
             film.remove(k);
         }
     }
-    let mut fingerprint = fnv1a(fp_table.to_string().as_bytes(), FNV_OFFSET);
+    // The estimator version: films rendered by an earlier estimator (other
+    // wavelength or random-number sampling) must not merge with new ones.
+    let mut fingerprint = fnv1a(
+        b"lustre estimator 2: sobol sampler, stratified hero",
+        FNV_OFFSET,
+    );
+    fingerprint = fnv1a(fp_table.to_string().as_bytes(), fingerprint);
     for f in &mesh_files {
         if let Ok(bytes) = std::fs::read(f) {
             fingerprint = fnv1a(&bytes, fingerprint);

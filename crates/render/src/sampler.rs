@@ -1,0 +1,353 @@
+//! The random numbers of one camera sample.
+//!
+//! Two samplers share one interface, a sequence of 1D and 2D draws:
+//!
+//! * `independent`: every number from a counter-seeded [`Rng`]. Unstructured
+//!   white noise; what Mitsuba's `independent` sampler does.
+//! * `sobol` (default): each draw of a camera sample is its own *padded*
+//!   dimension: a 2D draw takes point `i'` of the Sobol (0, 2)-sequence in
+//!   dimensions 0 and 1, a 1D draw its dimension 0, where `i'` is the sample
+//!   index shuffled by a nested uniform (Owen) scramble and every coordinate
+//!   is Owen-scrambled too, all with seeds hashed from (scene seed, pixel,
+//!   draw number) — Burley, "Practical Hash-based Owen Scrambling", JCGT 2020.
+//!   The first 2^k samples of a pixel are then, in every draw, a
+//!   (0, k, 2)-net (stratified in every elementary interval), while different
+//!   draws and different pixels stay statistically independent. Every point
+//!   is uniformly distributed, so estimates are unbiased for any sample
+//!   count and for any union of sample ranges (sharded or resumed renders);
+//!   the variance is lowest at powers of two.
+//!
+//! Like [`Rng`], the numbers depend only on (seed, pixel, sample index), never
+//! on threads or shards.
+
+use crate::rng::Rng;
+use crate::scene::desc::SamplerKind;
+
+/// Random numbers for one camera sample.
+#[derive(Clone, Debug)]
+pub struct Sampler {
+    kind: SamplerKind,
+    rng: Rng,
+    /// Sobol: the sample index within the pixel, bit-reversed.
+    index_rev: u32,
+    /// Sobol: per-pixel hash, mixed with the draw number into scramble seeds.
+    pixel_seed: u64,
+    /// Sobol: the next padded dimension to compute.
+    next_draw: u32,
+    /// Sobol: draws computed ahead, in blocks of [`BLOCK`]: the hash chains
+    /// of one draw are long and serial, those of a block run in parallel.
+    buf: [[f64; 2]; BLOCK],
+    /// Sobol: the next unused entry of `buf` (`BLOCK` = empty).
+    pos: usize,
+}
+
+/// Draws computed per refill: enough for a direct-lighting path (pixel, λ,
+/// light choice + point, lobe choice + direction).
+const BLOCK: usize = 6;
+
+/// Sobol generator matrix of dimension 1 (primitive polynomial x + 1) as
+/// byte-indexed XOR tables over the *bit-reversed* index, with bit-reversed
+/// output: `SOBOL1_REV[b][v]` = rev(C · rev(v · 2^(8b))). Working in the
+/// reversed domain saves two bit reversals per draw.
+static SOBOL1_REV: [[u32; 256]; 4] = sobol1_rev_tables();
+
+const fn reverse(x: u32) -> u32 {
+    x.reverse_bits()
+}
+
+const fn sobol1_rev_tables() -> [[u32; 256]; 4] {
+    // Direction numbers: v_0 = 2^31, v_j = v_{j−1} ⊕ (v_{j−1} >> 1).
+    let mut dir = [0u32; 32];
+    dir[0] = 1 << 31;
+    let mut j = 1;
+    while j < 32 {
+        dir[j] = dir[j - 1] ^ (dir[j - 1] >> 1);
+        j += 1;
+    }
+    let mut t = [[0u32; 256]; 4];
+    let mut b = 0;
+    while b < 4 {
+        let mut v = 0;
+        while v < 256 {
+            // Bit `bit` of byte b of the reversed index is index bit 31 − (8b + bit).
+            let mut acc = 0u32;
+            let mut bit = 0;
+            while bit < 8 {
+                if v & (1 << bit) != 0 {
+                    acc ^= dir[31 - (8 * b + bit)];
+                }
+                bit += 1;
+            }
+            t[b][v] = reverse(acc);
+            v += 1;
+        }
+        b += 1;
+    }
+    t
+}
+
+/// rev(Sobol dimension 1 of rev(`i_rev`)).
+#[inline]
+fn sobol1_rev(i_rev: u32) -> u32 {
+    SOBOL1_REV[0][(i_rev & 0xff) as usize]
+        ^ SOBOL1_REV[1][((i_rev >> 8) & 0xff) as usize]
+        ^ SOBOL1_REV[2][((i_rev >> 16) & 0xff) as usize]
+        ^ SOBOL1_REV[3][(i_rev >> 24) as usize]
+}
+
+/// Laine–Karras-style hash in which every bit depends only on itself and
+/// the bits below it: applied to bit-reversed values it is a nested uniform
+/// (Owen) scramble. Constants from Burley 2020.
+#[inline]
+fn lk_permute(mut x: u32, seed: u32) -> u32 {
+    x = x.wrapping_add(seed);
+    x ^= x.wrapping_mul(0x6c50_b47c);
+    x ^= x.wrapping_mul(0xb82f_1e52);
+    x ^= x.wrapping_mul(0xc7af_e638);
+    x ^= x.wrapping_mul(0x8d22_f6e6);
+    x
+}
+
+/// SplitMix64's finaliser.
+#[inline]
+fn mix(mut z: u64) -> u64 {
+    z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+    z ^ (z >> 31)
+}
+
+/// A 32-bit fraction to [0, 1); the 2^−33 offset centres the point in its
+/// 2^−32 cell so that 0 is never returned exactly.
+#[inline]
+fn to_unit(x: u32) -> f64 {
+    (x as f64 + 0.5) * (1.0 / 4_294_967_296.0)
+}
+
+/// Padded draw `draw` of the sample with reversed index `index_rev`.
+///
+/// In the reversed domain an Owen scramble is a single `lk_permute`:
+/// shuffled index i′ = owen(i) has rev(i′) = lk(rev(i)); dimension 0 of i′
+/// is rev(i′), whose scramble is rev(lk(i′)); dimension 1 is C·i′, whose
+/// scramble is rev(lk(rev(C·i′))).
+#[inline]
+fn sobol_draw(index_rev: u32, pixel_seed: u64, draw: u32) -> [f64; 2] {
+    let h = mix(pixel_seed ^ (draw as u64).wrapping_mul(0xd1b5_4a32_d192_ed03));
+    let h2 = mix(h);
+    let shuffled_rev = lk_permute(index_rev, h as u32);
+    let x = lk_permute(reverse(shuffled_rev), (h >> 32) as u32).reverse_bits();
+    let y = lk_permute(sobol1_rev(shuffled_rev), h2 as u32).reverse_bits();
+    [to_unit(x), to_unit(y)]
+}
+
+impl Sampler {
+    /// The sampler of sample `sample` of pixel `pixel` under `seed`.
+    #[inline]
+    pub fn new(kind: SamplerKind, seed: u64, pixel: u64, sample: u64) -> Sampler {
+        Sampler {
+            kind,
+            rng: Rng::for_sample(seed, pixel, sample),
+            index_rev: (sample as u32).reverse_bits(),
+            pixel_seed: mix(
+                mix(seed ^ 0x243f_6a88_85a3_08d3) ^ pixel.wrapping_mul(0x9e37_79b9_7f4a_7c15)
+            ),
+            next_draw: 0,
+            buf: [[0.0; 2]; BLOCK],
+            pos: BLOCK,
+        }
+    }
+
+    #[inline]
+    fn next_sobol(&mut self) -> [f64; 2] {
+        if self.pos == BLOCK {
+            for (k, b) in self.buf.iter_mut().enumerate() {
+                *b = sobol_draw(
+                    self.index_rev,
+                    self.pixel_seed,
+                    self.next_draw.wrapping_add(k as u32),
+                );
+            }
+            self.next_draw = self.next_draw.wrapping_add(BLOCK as u32);
+            self.pos = 0;
+        }
+        let v = self.buf[self.pos];
+        self.pos += 1;
+        v
+    }
+
+    /// One uniform number in [0, 1) (a padded dimension of its own).
+    #[inline]
+    pub fn get_1d(&mut self) -> f64 {
+        match self.kind {
+            SamplerKind::Independent => self.rng.uniform(),
+            SamplerKind::Sobol => self.next_sobol()[0],
+        }
+    }
+
+    /// Two uniform numbers in [0, 1)², stratified together.
+    #[inline]
+    pub fn get_2d(&mut self) -> [f64; 2] {
+        match self.kind {
+            SamplerKind::Independent => [self.rng.uniform(), self.rng.uniform()],
+            SamplerKind::Sobol => self.next_sobol(),
+        }
+    }
+
+    /// A 1D draw followed by a 2D draw, as `[u1d, u2d.0, u2d.1]` (the layout
+    /// of light and BSDF sampling: a discrete choice, then a direction).
+    #[inline]
+    pub fn get_1d_2d(&mut self) -> [f64; 3] {
+        let a = self.get_1d();
+        let [b, c] = self.get_2d();
+        [a, b, c]
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Plain Sobol dimension 1 by its definition, bit by bit.
+    fn sobol1_reference(mut i: u32) -> u32 {
+        let mut v = 1u32 << 31;
+        let mut r = 0;
+        while i != 0 {
+            if i & 1 != 0 {
+                r ^= v;
+            }
+            i >>= 1;
+            v ^= v >> 1;
+        }
+        r
+    }
+
+    #[test]
+    fn sobol_table_matches_the_definition_and_known_values() {
+        // First points of Sobol dimension 1 (Joe–Kuo dimension 2): 0, 1/2, 3/4, 1/4, 5/8, 1/8, 3/8, 7/8.
+        let want = [0.0, 0.5, 0.75, 0.25, 0.625, 0.125, 0.375, 0.875];
+        let sobol1 = |i: u32| sobol1_rev(i.reverse_bits()).reverse_bits();
+        for (i, w) in want.iter().enumerate() {
+            assert_eq!(sobol1(i as u32) as f64 / 4_294_967_296.0, *w);
+        }
+        let mut r = Rng::for_sample(1, 2, 3);
+        for _ in 0..10_000 {
+            let i = r.next_u64() as u32;
+            assert_eq!(sobol1(i), sobol1_reference(i));
+        }
+    }
+
+    #[test]
+    fn owen_scramble_is_a_nested_permutation() {
+        // Bits above position b of the output depend only on bits above b of
+        // the input: the top k bits of 2^k inputs differing only there
+        // form a permutation.
+        for seed in [0u32, 1, 0xdead_beef, 77] {
+            for k in [1u32, 3, 6, 10] {
+                let mut seen = vec![false; 1 << k];
+                for top in 0..(1u32 << k) {
+                    let x = (top << (32 - k)) | 0x0012_3456 & ((1u32 << (32 - k)) - 1);
+                    let y = lk_permute(x.reverse_bits(), seed).reverse_bits() >> (32 - k);
+                    assert!(!seen[y as usize], "seed {seed} k {k}: not a permutation");
+                    seen[y as usize] = true;
+                }
+            }
+        }
+    }
+
+    /// Count of the first 2^k points of a draw in every elementary interval
+    /// of shape 2^−a × 2^−(k−a).
+    fn check_net(points: &[[f64; 2]], k: u32) {
+        for a in 0..=k {
+            let (nx, ny) = (1usize << a, 1usize << (k - a));
+            let mut cells = vec![0u32; nx * ny];
+            for p in points {
+                let cx = (p[0] * nx as f64) as usize;
+                let cy = (p[1] * ny as f64) as usize;
+                cells[cy * nx + cx] += 1;
+            }
+            assert!(
+                cells.iter().all(|&c| c == 1),
+                "2^{k} points are not a (0,{k},2)-net for intervals {nx}×{ny}"
+            );
+        }
+    }
+
+    #[test]
+    fn every_draw_of_the_first_power_of_two_samples_is_a_net() {
+        for pixel in [0u64, 5, 123_456] {
+            for k in [0u32, 1, 4, 8] {
+                let n = 1u64 << k;
+                // Draws 0..6, alternating 2D and 1D as the integrator does.
+                let mut per_draw: Vec<Vec<[f64; 2]>> = vec![Vec::new(); 3];
+                let mut per_1d: Vec<Vec<f64>> = vec![Vec::new(); 3];
+                for s in 0..n {
+                    let mut sm = Sampler::new(SamplerKind::Sobol, 9, pixel, s);
+                    for d in 0..3 {
+                        per_1d[d].push(sm.get_1d());
+                        per_draw[d].push(sm.get_2d());
+                    }
+                }
+                for d in 0..3 {
+                    check_net(&per_draw[d], k);
+                    let mut strata = vec![0u32; n as usize];
+                    for &u in &per_1d[d] {
+                        assert!((0.0..1.0).contains(&u));
+                        strata[(u * n as f64) as usize] += 1;
+                    }
+                    assert!(strata.iter().all(|&c| c == 1), "1D draw {d} at 2^{k}");
+                }
+                // The next block of 2^k samples is a net on its own too.
+                if k > 0 {
+                    let pts: Vec<[f64; 2]> = (n..2 * n)
+                        .map(|s| Sampler::new(SamplerKind::Sobol, 9, pixel, s).get_2d())
+                        .collect();
+                    check_net(&pts, k);
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn draws_are_uniform_and_mutually_uncorrelated_across_pixels() {
+        // One sample per pixel over many pixels: each draw is uniform, and
+        // pairs of different draws are uncorrelated (the scrambles are
+        // independent), for both samplers.
+        for kind in [SamplerKind::Sobol, SamplerKind::Independent] {
+            let n = 40_000;
+            let mut sums = [0.0; 4];
+            let mut sq = [0.0; 4];
+            let mut cross = [0.0; 3];
+            let mut hist = [[0u32; 16]; 4];
+            for p in 0..n {
+                let mut sm = Sampler::new(kind, 3, p, 1);
+                let [a, b] = sm.get_2d();
+                let c = sm.get_1d();
+                let [d, _] = sm.get_2d();
+                let v = [a, b, c, d];
+                for j in 0..4 {
+                    sums[j] += v[j];
+                    sq[j] += v[j] * v[j];
+                    hist[j][(v[j] * 16.0) as usize] += 1;
+                }
+                cross[0] += (a - 0.5) * (c - 0.5);
+                cross[1] += (a - 0.5) * (d - 0.5);
+                cross[2] += (b - 0.5) * (c - 0.5);
+            }
+            let nf = n as f64;
+            for j in 0..4 {
+                assert!((sums[j] / nf - 0.5).abs() < 0.006, "{kind:?} draw {j} mean");
+                assert!(
+                    (sq[j] / nf - 1.0 / 3.0).abs() < 0.006,
+                    "{kind:?} draw {j} E[x²]"
+                );
+                // χ² with 15 degrees of freedom; 37.7 is the 0.001 quantile.
+                let e = nf / 16.0;
+                let chi2: f64 = hist[j].iter().map(|&h| (h as f64 - e).powi(2) / e).sum();
+                assert!(chi2 < 37.7, "{kind:?} draw {j}: χ² {chi2}");
+            }
+            for (j, c) in cross.iter().enumerate() {
+                // Correlation of two independent uniforms: sd 1/(12 √n) ≈ 4.2e-4.
+                assert!((c / nf).abs() < 2.5e-3, "{kind:?} pair {j}: {}", c / nf);
+            }
+        }
+    }
+}
