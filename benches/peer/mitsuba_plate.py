@@ -286,7 +286,7 @@ def reference(mi, dr, np, sc, args, out: Path):
     npy, meta_path = ref_dir / f"{sc['name']}.npy", ref_dir / f"{sc['name']}.json"
     # "translation" changes whenever mitsuba_scene_dict changes what it renders.
     key = {"hash": scene_hash(sc, args.resolution), "translation": 2, "spp": args.ref_spp,
-           "variant": args.ref_variant, "mitsuba": mi.__version__}
+           "variant": args.ref_variant, "sampler": args.ref_sampler, "mitsuba": mi.__version__}
     if npy.exists() and meta_path.exists() and not args.fresh_reference:
         meta = json.loads(meta_path.read_text())
         if all(meta.get(k) == v for k, v in key.items()):
@@ -294,7 +294,7 @@ def reference(mi, dr, np, sc, args, out: Path):
     mi.set_variant(args.ref_variant)
     chunk = min(args.ref_chunk, args.ref_spp)
     n = max(1, args.ref_spp // chunk)
-    scene = mi.load_dict(mitsuba_scene_dict(mi, sc, chunk, args.resolution))
+    scene = mi.load_dict(mitsuba_scene_dict(mi, sc, chunk, args.resolution, args.ref_sampler))
     acc, acc2, total = None, None, 0.0
     for k in range(n):
         img, dt, _ = render_timed(mi, dr, np, scene, chunk, seed=10_000 + k)
@@ -355,6 +355,9 @@ def main() -> None:
     ap.add_argument("--ref-spp", type=int, default=4096)
     ap.add_argument("--ref-chunk", type=int, default=256)
     ap.add_argument("--ref-variant", default="llvm_ad_spectral")
+    ap.add_argument("--ref-sampler", default="ldsampler",
+                    help="sampler of the reference chunks (each chunk has its own seed, so chunks stay "
+                         "independent and their spread estimates the reference's noise)")
     ap.add_argument("--fresh-reference", action="store_true")
     ap.add_argument("--resolution", type=int, nargs=2, metavar=("W", "H"))
     ap.add_argument("--no-images", action="store_true", help="do not save every timed render")

@@ -8,18 +8,23 @@
 //! directional pdf of the path so far had wavelength k been the hero and
 //! `F_j` the path's measurement product at λ_j, the tracer keeps
 //! `T_j = F_j / (p(λ_j) P_hero)` and `Q_k = P_k / P_hero`. A complete path
-//! then contributes `T_j Le_j / Σ_k (Q_k + L_k p_light)`: the balance
-//! heuristic over every (hero, strategy) pair that could have produced it
-//! (p(λ_j) is common to all of them and cancels), where `L_k p_light` is the
-//! light-sampling strategy's density for the last edge relative to the BSDF
-//! one. Both the estimator and the Russian roulette probability (a function
-//! of `T_j / Σ Q_k` only) are symmetric in which wavelength was the hero,
-//! which makes hero sampling unbiased.
+//! is then weighted with B = Σ_k Q_k (BSDF sampling, summed over which
+//! wavelength was the hero) and A = Σ_k L_k p_light (light sampling, where
+//! `L_k p_light` is that strategy's density for the last edge relative to the
+//! BSDF one): the balance heuristic over heroes (p(λ_j) is common to all of
+//! them and cancels) inside, and between the two strategies the power
+//! heuristic by default, `T_j Le_j B / (A² + B²)` for a BSDF-sampled hit and
+//! the mirror image for a light sample (or the balance heuristic,
+//! `T_j Le_j / (A + B)`). The weights sum to one for every path and depend
+//! only on the path and the set of wavelengths, so both the estimator and
+//! the Russian roulette probability (a function of `T_j / Σ Q_k` only) are
+//! symmetric in which wavelength was the hero, which makes hero sampling
+//! unbiased.
 
 use crate::geometry::Ray;
 use crate::light::Emission;
 use crate::sampler::Sampler;
-use crate::scene::desc::WavelengthMode;
+use crate::scene::desc::{MisHeuristic, WavelengthMode};
 use crate::scene::{Scene, Surface};
 use crate::spectrum::Cie;
 use crate::wavelength::HERO_COUNT;
@@ -63,6 +68,26 @@ impl Frame {
 fn offset(p: DVec3, n: DVec3, mesh: bool) -> DVec3 {
     let scale = 1.0f64.max(p.abs().max_element());
     p + n * (if mesh { 1e-5 } else { 1e-9 } * scale)
+}
+
+/// MIS weight of the strategy that produced a sample, divided by that
+/// strategy's (relative) density `own`, given the other strategy's `other`:
+/// balance 1/(own + other), power own/(own² + other²), written as
+/// 1/(own (1 + r²)) with r = other/own so that neither squares overflows.
+#[inline]
+fn mis_over_pdf(mis: MisHeuristic, own: f64, other: f64) -> f64 {
+    // NaN-safe: a NaN density gives no contribution either.
+    if own.is_nan() || own <= 0.0 {
+        return 0.0;
+    }
+    let w = match mis {
+        MisHeuristic::Balance => 1.0 / (own + other),
+        MisHeuristic::Power => {
+            let r = other / own;
+            1.0 / (own * (1.0 + r * r))
+        }
+    };
+    if w.is_finite() { w } else { 0.0 }
 }
 
 /// One camera sample: its wavelengths and spectral radiance estimates.
@@ -139,6 +164,7 @@ pub fn trace(
     }
     // Russian roulette compares max_j T_j / Σ Q_k with its value at the camera.
     let m0 = t[..n].iter().fold(0.0f64, |a, &v| a.max(v)) / n as f64;
+    let mis = settings.mis;
     let mut out = [0.0; N];
 
     let add_emission = |out: &mut [f64; N],
@@ -150,10 +176,12 @@ pub fn trace(
         if matches!(em, Emission::None) {
             return;
         }
-        let d: f64 = (0..n).map(|k| q[k] + l_mis[k] * pdf_l).sum();
-        if d > 0.0 {
+        let own: f64 = q[..n].iter().sum();
+        let other: f64 = l_mis[..n].iter().sum::<f64>() * pdf_l;
+        let w = mis_over_pdf(mis, own, other);
+        if w > 0.0 {
             for j in 0..n {
-                out[j] += t[j] * em.eval(lambdas[j]) / d;
+                out[j] += t[j] * em.eval(lambdas[j]) * w;
             }
         }
     };
@@ -208,10 +236,12 @@ pub fn trace(
                     }
                 }
                 if fp[..n].iter().any(|v| v.0 > 0.0) && !scene.occluded(&shadow, t_max) {
-                    let d: f64 = (0..n).map(|k| q[k] * (ls.pdf + fp[k].1)).sum();
-                    if d > 0.0 {
+                    let own: f64 = q[..n].iter().sum::<f64>() * ls.pdf;
+                    let other: f64 = (0..n).map(|k| q[k] * fp[k].1).sum();
+                    let w = mis_over_pdf(mis, own, other);
+                    if w > 0.0 {
                         for j in 0..n {
-                            out[j] += t[j] * fp[j].0 * wo.z * ls.emission.eval(lambdas[j]) / d;
+                            out[j] += t[j] * fp[j].0 * wo.z * ls.emission.eval(lambdas[j]) * w;
                         }
                     }
                 }

@@ -2,7 +2,6 @@
 
 use super::Distribution;
 use crate::error::BrdfError;
-use crate::frame::half_vector;
 use crate::fresnel::Fresnel;
 use crate::math::finite_nonneg;
 use crate::model::{Bxdf, BxdfSample, Specular, WAVELENGTH_MAX_NM, WAVELENGTH_MIN_NM};
@@ -36,20 +35,36 @@ impl MicrofacetConductor {
     }
 }
 
+/// The λ-independent part of a rough-conductor evaluation.
+struct Geometry {
+    /// f / F: D G2 / (4 cosθi cosθo).
+    f_over_fresnel: f64,
+    /// Solid-angle pdf of sampling `wo`.
+    pdf: f64,
+    /// cosθd = wi·h, the Fresnel angle.
+    cos_ih: f64,
+}
+
 impl MicrofacetConductor {
-    /// D(h), Λ(wi), Λ(wo) and i·h for a valid pair, shared by eval and pdf.
+    /// D, G2 and the pdf at (wi, wo) with three divisions in all: with
+    /// Λ = a/d, G2 = di do / (di do + ai do + ao di) and
+    /// G1(i) = di / (di + ai).
     #[inline]
-    fn terms(&self, wi: DVec3, wo: DVec3) -> Option<(f64, f64, f64, f64)> {
+    fn geometry(&self, wi: DVec3, wo: DVec3) -> Option<Geometry> {
         if wi.z <= 0.0 || wo.z <= 0.0 {
             return None;
         }
-        let (h, cos_ih) = half_vector(wi, wo)?;
-        Some((
-            self.dist.d(h),
-            self.dist.lambda(wi),
-            self.dist.lambda(wo),
+        let (d, cos_ih) = self.dist.d_half(wi, wo)?;
+        let (ai, di) = self.dist.lambda_frac(wi);
+        let (ao, do_) = self.dist.lambda_frac(wo);
+        let g2_den = di * do_ + ai * do_ + ao * di;
+        Some(Geometry {
+            f_over_fresnel: finite_nonneg(d * (di * do_) / (g2_den * (4.0 * wi.z * wo.z))),
+            // Visible-normal density G1(i)(i·h)D(h)/cosθi times the
+            // reflection Jacobian 1/(4 o·h), with o·h = i·h cancelling.
+            pdf: finite_nonneg(d * di / ((di + ai) * (4.0 * wi.z))),
             cos_ih,
-        ))
+        })
     }
 }
 
@@ -64,40 +79,35 @@ impl Bxdf for MicrofacetConductor {
         if wi.z <= 0.0 || wo.z <= 0.0 {
             return 0.0;
         }
-        let Some((h, _)) = half_vector(wi, wo) else {
+        let Some((d, _)) = self.dist.d_half(wi, wo) else {
             return 0.0;
         };
-        // Visible-normal density G1(i)(i·h)D(h)/cosθi times the reflection
-        // Jacobian 1/(4 o·h), with o·h = i·h cancelling.
-        finite_nonneg(self.dist.d(h) / ((1.0 + self.dist.lambda(wi)) * 4.0 * wi.z))
+        let (ai, di) = self.dist.lambda_frac(wi);
+        finite_nonneg(d * di / ((di + ai) * (4.0 * wi.z)))
     }
 
     #[inline]
     fn eval_pdf(&self, wi: DVec3, wo: DVec3, lambda_nm: f64) -> (f64, f64) {
-        let Some((d, lambda_i, lambda_o, cos_ih)) = self.terms(wi, wo) else {
+        let Some(g) = self.geometry(wi, wo) else {
             return (0.0, 0.0);
         };
-        let g2 = 1.0 / (1.0 + lambda_i + lambda_o);
-        let f = self.fresnel.reflectance(cos_ih, lambda_nm) * d * g2 / (4.0 * wi.z * wo.z);
-        let pdf = d / ((1.0 + lambda_i) * 4.0 * wi.z);
-        (finite_nonneg(f), finite_nonneg(pdf))
+        let f = self.fresnel.reflectance(g.cos_ih, lambda_nm) * g.f_over_fresnel;
+        (finite_nonneg(f), g.pdf)
     }
 
     #[inline]
     fn eval_pdf_many(&self, wi: DVec3, wo: DVec3, lambdas: &[f64], out: &mut [(f64, f64)]) {
-        let Some((d, lambda_i, lambda_o, cos_ih)) = self.terms(wi, wo) else {
+        let Some(g) = self.geometry(wi, wo) else {
             for o in out.iter_mut().take(lambdas.len()) {
                 *o = (0.0, 0.0);
             }
             return;
         };
-        // Only Fresnel depends on λ; the expressions match `eval_pdf` term
-        // for term, so the results are bit-identical to it.
-        let g2 = 1.0 / (1.0 + lambda_i + lambda_o);
-        let pdf = finite_nonneg(d / ((1.0 + lambda_i) * 4.0 * wi.z));
+        // Only Fresnel depends on λ; the same expressions as `eval_pdf`, so
+        // the results are bit-identical to it.
         for (o, &l) in out.iter_mut().zip(lambdas) {
-            let f = self.fresnel.reflectance(cos_ih, l) * d * g2 / (4.0 * wi.z * wo.z);
-            *o = (finite_nonneg(f), pdf);
+            let f = self.fresnel.reflectance(g.cos_ih, l) * g.f_over_fresnel;
+            *o = (finite_nonneg(f), g.pdf);
         }
     }
 
@@ -115,12 +125,12 @@ impl Bxdf for MicrofacetConductor {
         if wo.z <= 0.0 {
             return None;
         }
-        let lambda_i = self.dist.lambda(wi);
-        let lambda_o = self.dist.lambda(wo);
-        // G2/G1(i) = (1 + Λi)/(1 + Λi + Λo).
-        let weight = self.fresnel.reflectance(cos_ih, lambda_nm) * (1.0 + lambda_i)
-            / (1.0 + lambda_i + lambda_o);
-        let pdf = self.dist.d(h) / ((1.0 + lambda_i) * 4.0 * wi.z);
+        let (ai, di) = self.dist.lambda_frac(wi);
+        let (ao, do_) = self.dist.lambda_frac(wo);
+        // G2/G1(i) = (di + ai) do / (di do + ai do + ao di).
+        let weight = self.fresnel.reflectance(cos_ih, lambda_nm) * ((di + ai) * do_)
+            / (di * do_ + ai * do_ + ao * di);
+        let pdf = self.dist.d(h) * di / ((di + ai) * (4.0 * wi.z));
         if !(weight > 0.0 && weight.is_finite() && pdf > 0.0 && pdf.is_finite()) {
             return None;
         }

@@ -37,6 +37,10 @@ pub struct Distribution {
     kind: NdfKind,
     alpha_x: f64,
     alpha_y: f64,
+    /// 1/αx, 1/αy and 1/(π αx αy): evaluation multiplies instead of dividing.
+    inv_alpha_x: f64,
+    inv_alpha_y: f64,
+    d_scale: f64,
 }
 
 impl Distribution {
@@ -48,6 +52,9 @@ impl Distribution {
             kind,
             alpha_x,
             alpha_y,
+            inv_alpha_x: 1.0 / alpha_x,
+            inv_alpha_y: 1.0 / alpha_y,
+            d_scale: 1.0 / (core::f64::consts::PI * alpha_x * alpha_y),
         })
     }
 
@@ -84,8 +91,52 @@ impl Distribution {
             return 0.0;
         }
         match self.kind {
-            NdfKind::Ggx => ggx::d(h, self.alpha_x, self.alpha_y),
+            NdfKind::Ggx => ggx::d(h, self.inv_alpha_x, self.inv_alpha_y, self.d_scale),
             NdfKind::Beckmann => beckmann::d(h, self.alpha_x, self.alpha_y),
+        }
+    }
+
+    /// D at the half vector of `wi` and `wo` (both with z > 0), and
+    /// cosθd = wi·h = |wi + wo|/2 (exact, never 0/0 at grazing).
+    ///
+    /// GGX is homogeneous of degree 0 in h up to the factor |v|⁴, so it is
+    /// evaluated on the unnormalised v = wi + wo: one square root and one
+    /// division for both results.
+    #[inline]
+    pub(crate) fn d_half(&self, wi: DVec3, wo: DVec3) -> Option<(f64, f64)> {
+        let v = wi + wo;
+        let len2 = v.length_squared();
+        if !(len2 > 0.0 && len2.is_finite() && v.z > 0.0) {
+            return None;
+        }
+        let len = libm::sqrt(len2);
+        let d = match self.kind {
+            NdfKind::Ggx => {
+                let x = v.x * self.inv_alpha_x;
+                let y = v.y * self.inv_alpha_y;
+                let r = len2 / (x * x + y * y + v.z * v.z);
+                self.d_scale * r * r
+            }
+            NdfKind::Beckmann => beckmann::d(v * (1.0 / len), self.alpha_x, self.alpha_y),
+        };
+        Some((d, 0.5 * len))
+    }
+
+    /// Smith Λ(w) as a fraction (num, den), Λ = num/den with den > 0 for
+    /// w.z > 0, so that callers combine Λi, Λo, G1 and G2 with one division.
+    /// GGX: Λ = (√(1 + a/z²) − 1)/2 with a = αx²x² + αy²y², rationalised to
+    /// a / (2z(z + √(a + z²))): no cancellation, no division.
+    #[inline]
+    pub(crate) fn lambda_frac(&self, w: DVec3) -> (f64, f64) {
+        match self.kind {
+            NdfKind::Ggx => {
+                let ax = self.alpha_x * w.x;
+                let ay = self.alpha_y * w.y;
+                let a = ax * ax + ay * ay;
+                let z = w.z;
+                (a, 2.0 * z * (z + libm::sqrt(a + z * z)))
+            }
+            NdfKind::Beckmann => (self.lambda(w), 1.0),
         }
     }
 
@@ -145,7 +196,7 @@ impl Distribution {
 pub(crate) fn normalize_or_none(v: DVec3) -> Option<DVec3> {
     let l2 = v.length_squared();
     if l2 > 0.0 && l2.is_finite() {
-        Some(v / libm::sqrt(l2))
+        Some(v * (1.0 / libm::sqrt(l2)))
     } else {
         None
     }

@@ -93,6 +93,18 @@ pub enum SamplerKind {
     Independent,
 }
 
+/// How next-event estimation and BSDF sampling are weighted (Veach 1997).
+#[derive(Deserialize, Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum MisHeuristic {
+    /// w_s = p_s² / Σ p². Near-zero weight for the rare BSDF hits on small
+    /// lights, whose balance-heuristic weight would leave visible noise.
+    #[default]
+    Power,
+    /// w_s = p_s / Σ p.
+    Balance,
+}
+
 /// `[integrator]`.
 #[derive(Deserialize, Debug)]
 #[serde(deny_unknown_fields)]
@@ -109,6 +121,9 @@ pub struct IntegratorDesc {
     /// `sobol` (default) or `independent`.
     #[serde(default)]
     pub sampler: SamplerKind,
+    /// `power` (default) or `balance`.
+    #[serde(default)]
+    pub mis: MisHeuristic,
 }
 
 fn default_depth() -> Spanned<u32> {
@@ -126,6 +141,7 @@ impl Default for IntegratorDesc {
             wavelengths: WavelengthMode::Hero,
             rr_depth: 3,
             sampler: SamplerKind::Sobol,
+            mis: MisHeuristic::Power,
         }
     }
 }

@@ -10,7 +10,9 @@ use crate::material::{Material, build_material};
 use crate::mesh::{MeshAccel, load_obj};
 use crate::spectrum::{LAMBDA_MAX, LAMBDA_MIN, parse_spectrum};
 use crate::wavelength::WavelengthSampler;
-use desc::{LightDesc, SamplerKind, SceneDesc, ShapeDesc, TransformDesc, WavelengthMode};
+use desc::{
+    LightDesc, MisHeuristic, SamplerKind, SceneDesc, ShapeDesc, TransformDesc, WavelengthMode,
+};
 use glam::DVec3;
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
@@ -51,6 +53,8 @@ pub struct Settings {
     pub mode: WavelengthMode,
     /// Random-number source of camera samples.
     pub sampler: SamplerKind,
+    /// Weighting of light and BSDF sampling.
+    pub mis: MisHeuristic,
     /// EXR output path.
     pub exr: Option<PathBuf>,
     /// PNG output path.
@@ -229,6 +233,7 @@ pub fn load_str(path: &Path, text: &str) -> Result<Scene, SceneError> {
         rr_depth: desc.integrator.rr_depth,
         mode: desc.integrator.wavelengths,
         sampler: desc.integrator.sampler,
+        mis: desc.integrator.mis,
         exr: film.exr.clone(),
         png: film.png.clone(),
         exposure: film.exposure,
@@ -446,7 +451,7 @@ pub fn load_str(path: &Path, text: &str) -> Result<Scene, SceneError> {
     // The estimator version: films rendered by an earlier estimator (other
     // wavelength or random-number sampling) must not merge with new ones.
     let mut fingerprint = fnv1a(
-        b"lustre estimator 2: sobol sampler, stratified hero",
+        b"lustre estimator 3: sobol sampler, stratified hero, power MIS",
         FNV_OFFSET,
     );
     fingerprint = fnv1a(fp_table.to_string().as_bytes(), fingerprint);
