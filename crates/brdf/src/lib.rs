@@ -33,6 +33,8 @@ mod ior_data;
 pub mod math;
 pub mod microfacet;
 mod model;
+#[cfg(feature = "alloc")]
+mod parallel;
 #[cfg(feature = "testing")]
 pub mod testing;
 pub mod wave;

@@ -197,8 +197,9 @@ pub struct GhsTable {
 impl GhsTable {
     /// Builds the table for a surface with correlation `c`, covering
     /// u ∈ [0, u_max] (use 2·k_max·L, the hemisphere at the shortest
-    /// wavelength).
-    pub fn build<C: Correlation + ?Sized>(
+    /// wavelength). With the `std` feature the rows are built on all cores;
+    /// the table is bit-identical to a one-thread build.
+    pub fn build<C: Correlation + Sync + ?Sized>(
         c: &C,
         u_max: f64,
         res: TableResolution,
@@ -251,10 +252,10 @@ impl GhsTable {
         let ln_g0 = libm::log(G_MIN) - d_g;
         let n_g = libm::ceil((libm::log(G_MAX) - libm::log(G_MIN)) / d_g) as usize + 3;
         let plan = FftLog::new(res.fft_n, res.fft_dt);
-        let mut scratch = (Vec::new(), Vec::new());
-        let rows: Vec<Row> = (0..n_g)
-            .map(|r| Row::build(c, &plan, libm::exp(ln_g0 + r as f64 * d_g), &mut scratch))
-            .collect();
+        let rows: Vec<Row> = crate::parallel::map_rows(n_g, |r| {
+            let mut scratch = (Vec::new(), Vec::new());
+            Row::build(c, &plan, libm::exp(ln_g0 + r as f64 * d_g), &mut scratch)
+        });
         // Columns start where every row is flat to ~1e−7: w ≤ 1e−3/(ℓW). For
         // heavy-tailed surfaces (small ν) the core is far narrower than W.
         let w_lo = rows

@@ -362,7 +362,28 @@ impl EffTable {
         let w_max = 2.0 * k_max * psd.lc_um();
         let dx = libm::log1p(w_max) / (nw - 1) as f64;
         let beta = ndf.beta();
-        let mut conv = Convolver::new(ndf, psd.nu());
+        let nu = psd.nu();
+        // The convolutions (nearly all of the build time) row by row, on all
+        // cores with `std`; each row has its own quadrature scratch space.
+        let rows: Vec<(f64, f64, Vec<f64>)> = crate::parallel::map_rows(nw, |i| {
+            let mut conv = Convolver::new(ndf, nu);
+            let w = libm::expm1(i as f64 * dx);
+            let tau = if w > 0.0 {
+                libm::hypot(beta, 1.0 / w).min(1.0)
+            } else {
+                1.0
+            };
+            let tau = tau.max(beta.min(1.0));
+            let v_ext = libm::asinh(libm::tan(THETA_TOP) / (tau * SINH_A));
+            let log_d = (0..nv)
+                .map(|j| {
+                    let v = j as f64 / (nv - 1) as f64;
+                    let theta = libm::atan(tau * SINH_A * libm::sinh(v * v_ext));
+                    libm::log(conv.d_eff(theta, w).max(1e-300))
+                })
+                .collect();
+            (tau, v_ext, log_d)
+        });
         let mut t = EffTable {
             dx,
             nw,
@@ -374,24 +395,11 @@ impl EffTable {
             cdf: Vec::with_capacity(nw * nv),
             norm: Vec::with_capacity(nw),
         };
-        for i in 0..nw {
-            let w = libm::expm1(i as f64 * dx);
-            let tau = if w > 0.0 {
-                libm::hypot(beta, 1.0 / w).min(1.0)
-            } else {
-                1.0
-            };
-            let tau = tau.max(beta.min(1.0));
-            let v_ext = libm::asinh(libm::tan(THETA_TOP) / (tau * SINH_A));
+        for (i, (tau, v_ext, log_d)) in rows.into_iter().enumerate() {
             t.tau.push(tau);
             t.v_extent.push(v_ext);
             let start = t.log_d.len();
-            for j in 0..nv {
-                let v = j as f64 / (nv - 1) as f64;
-                let theta = libm::atan(tau * SINH_A * libm::sinh(v * v_ext));
-                let d = conv.d_eff(theta, w);
-                t.log_d.push(libm::log(d.max(1e-300)));
-            }
+            t.log_d.extend(log_d);
             // Bin masses of D̃ cosθ dω in T = tan²θ from the interpolant.
             let mut masses = Vec::with_capacity(nv - 1);
             for j in 0..nv - 1 {
