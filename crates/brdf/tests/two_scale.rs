@@ -462,12 +462,16 @@ fn furnace(which: &[usize], angles: &[(f64, f64)]) {
                         s.mean,
                         s.std_error
                     );
-                    // Known excess at oblique incidence: G₂ is the Smith term
-                    // of D, and D̃_eff is broader than D (much broader for
-                    // heavy tails, γ = 1.5), so masking is underestimated.
-                    // Measured maximum 1.072 (β 0.05, Lc 0.5 µm, γ 1.5,
-                    // θi = 88°); ≤ 1 at normal incidence. Bound it.
-                    let bound = if th_deg == 0.0 { 1.0 + 1e-4 } else { 1.08 };
+                    // G₂ uses the Smith Λ of the lobe's own NDF (A·D +
+                    // (1 − A)·D̃_eff at the pair's w = 2k cosθd Lc). With Λ
+                    // of D alone the albedo reached 1.072 (β 0.05, Lc
+                    // 0.5 µm, γ 1.5, θi = 88°). What is left above 1 comes
+                    // from the NDF itself changing with θd across the
+                    // lobe (w small, heavy tail): measured 1.0050 at θi =
+                    // 75° and 1.0368 at 88° (same material; every other
+                    // case ≤ 1). 1e−3 at normal incidence covers the
+                    // cubature and the tables' interpolation.
+                    let bound = if th_deg == 0.0 { 1.0 + 1e-3 } else { 1.04 };
                     assert!(q.value <= bound, "albedo {} > {bound}", q.value);
                     assert!(
                         (s.mean - q.value).abs() <= 5.0 * s.std_error + 1e-3,

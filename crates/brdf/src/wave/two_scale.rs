@@ -119,7 +119,15 @@ pub struct TwoScale {
     fresnel: Fresnel,
     coherent: CoherentPart,
     table: EffTable,
+    /// ln(1 + Λ) of the macro NDF at tanθ = β a sinh(v V_m), v on
+    /// [`MACRO_LAMBDA_NODES`] points: the closed form (physics.md §8.2)
+    /// costs a Bessel quadrature, too slow for every evaluation.
+    macro_log1p_lambda: Vec<f64>,
+    macro_v_extent: f64,
 }
+
+/// Points of the macro NDF's Λ table.
+const MACRO_LAMBDA_NODES: usize = 128;
 
 /// Gauss–Legendre 8-point nodes and weights on [−1, 1] (positive half).
 const GL8_X: [f64; 4] = [
@@ -346,6 +354,51 @@ struct EffTable {
     cdf: Vec<f64>,
     /// Raw normalisation ∫ D_eff cosθ dω per node (diagnostics).
     norm: Vec<f64>,
+    /// ln(1 + Λ) of the normalised D̃_eff at (node, l) for tanθ on the
+    /// node's own sinh grid with [`LAMBDA_NODES`] points.
+    log1p_lambda: Vec<f64>,
+}
+
+/// Points of the Smith Λ tables in v (θ = atan(τ a sinh(vV))).
+const LAMBDA_NODES: usize = 64;
+
+/// ∫₀^{2π} max(0, ω·m) dφ for ω, m at polar angles θ, θm (cosines `c`,
+/// `cm`, sines `s`, `sm`), φ the azimuth between them.
+#[inline]
+fn ring_projection(c: f64, s: f64, cm: f64, sm: f64) -> f64 {
+    let a = s * sm;
+    let b = c * cm;
+    if b >= a {
+        2.0 * PI * b
+    } else {
+        // ω·m > 0 for |φ| < φ0 = acos(−b/a).
+        let phi0 = libm::acos((-b / a).clamp(-1.0, 1.0));
+        2.0 * (b * phi0 + libm::sqrt((a * a - b * b).max(0.0)))
+    }
+}
+
+/// Smith 1 + Λ(θ) = (1/cosθ) ∫ D(m) max(0, ω·m) dω_m of an isotropic,
+/// normalised NDF given as ln D on a sinh grid in tanθm (`row`, scale
+/// `tau_a` = τ·a, extent `v_ext`), by 4-point Gauss–Legendre per bin with
+/// the same Catmull–Rom interpolant the table evaluates.
+fn one_plus_lambda(row: &[f64], tau_a: f64, v_ext: f64, tan_t: f64) -> f64 {
+    let nv = row.len();
+    let c = 1.0 / libm::sqrt(1.0 + tan_t * tan_t);
+    let s = tan_t * c;
+    let mut sum = 0.0;
+    for j in 0..nv - 1 {
+        sum += gl4(0.0, 1.0, |f| {
+            let v = (j as f64 + f) / (nv - 1) as f64;
+            let tm = tau_a * libm::sinh(v * v_ext);
+            let cm = 1.0 / libm::sqrt(1.0 + tm * tm);
+            let sm = tm * cm;
+            // dθm/dv = τ a V cosh(vV) cos²θm; dv/df = 1/(nv − 1).
+            let dth = tau_a * v_ext * libm::cosh(v * v_ext) * cm * cm / (nv - 1) as f64;
+            let d = libm::exp(catmull_rom(row, j, f));
+            d * sm * ring_projection(c, s, cm, sm) * dth
+        });
+    }
+    sum / c
 }
 
 /// t = a sinh(vV) is linear near the pole; a fixes where logarithmic
@@ -394,6 +447,7 @@ impl EffTable {
             dens_t: Vec::with_capacity(nw * nv),
             cdf: Vec::with_capacity(nw * nv),
             norm: Vec::with_capacity(nw),
+            log1p_lambda: Vec::with_capacity(nw * LAMBDA_NODES),
         };
         for (i, (tau, v_ext, log_d)) in rows.into_iter().enumerate() {
             t.tau.push(tau);
@@ -434,7 +488,60 @@ impl EffTable {
             let last = t.cdf.len() - 1;
             t.cdf[last] = 1.0;
         }
+        // Smith Λ of each normalised row, again row by row on all cores.
+        let lambda_rows: Vec<Vec<f64>> = crate::parallel::map_rows(nw, |i| {
+            let row = &t.log_d[i * nv..(i + 1) * nv];
+            let tau_a = t.tau[i] * SINH_A;
+            (0..LAMBDA_NODES)
+                .map(|l| {
+                    let v = l as f64 / (LAMBDA_NODES - 1) as f64;
+                    let tan_t = tau_a * libm::sinh(v * t.v_extent[i]);
+                    let q = one_plus_lambda(row, tau_a, t.v_extent[i], tan_t);
+                    // Λ ≥ 0; quadrature round-off near the pole can dip below.
+                    libm::log(q.max(1.0))
+                })
+                .collect()
+        });
+        for r in lambda_rows {
+            t.log1p_lambda.extend(r);
+        }
         t
+    }
+
+    /// Smith Λ of the normalised D̃_eff at node i for tanθ.
+    #[inline]
+    fn lambda_node(&self, i: usize, tan_t: f64) -> f64 {
+        let row = &self.log1p_lambda[i * LAMBDA_NODES..(i + 1) * LAMBDA_NODES];
+        let x = libm::asinh(tan_t / (self.tau[i] * SINH_A)) / self.v_extent[i]
+            * (LAMBDA_NODES - 1) as f64;
+        let ln1p = if !(x >= 0.0) {
+            row[0]
+        } else if x >= (LAMBDA_NODES - 1) as f64 {
+            row[LAMBDA_NODES - 1]
+        } else {
+            let j = x as usize;
+            catmull_rom(row, j, x - j as f64)
+        };
+        libm::expm1(ln1p).max(0.0)
+    }
+
+    /// Smith Λ of the w-interpolated D̃_eff: the table mixes the two
+    /// bracketing (normalised) rows linearly, and Λ of a mixture of NDFs
+    /// is the same mixture of their Λs (∫D max(0, ω·m) dω is linear in D).
+    #[inline]
+    fn lambda(&self, w: f64, tan_t: f64) -> f64 {
+        let (i, f) = self.w_bracket(w);
+        let a = if f < 1.0 {
+            self.lambda_node(i, tan_t)
+        } else {
+            0.0
+        };
+        let b = if f > 0.0 {
+            self.lambda_node(i + 1, tan_t)
+        } else {
+            0.0
+        };
+        (1.0 - f) * a + f * b
     }
 
     /// tan²θ at node (i, j).
@@ -584,12 +691,26 @@ impl TwoScale {
             });
         }
         let table = EffTable::build(ndf, &psd, p.resolution);
+        let beta = ndf.beta();
+        let macro_v_extent = libm::asinh(libm::tan(THETA_TOP) / (beta * SINH_A));
+        let macro_log1p_lambda = crate::parallel::map_rows(MACRO_LAMBDA_NODES, |l| {
+            let v = l as f64 / (MACRO_LAMBDA_NODES - 1) as f64;
+            let tan_t = beta * SINH_A * libm::sinh(v * macro_v_extent);
+            let lam = if tan_t > 0.0 {
+                crate::wave::bessel01::smith_lambda_exp(1.0 / (beta * tan_t))
+            } else {
+                0.0
+            };
+            libm::log1p(finite_nonneg(lam))
+        });
         Ok(TwoScale {
             ndf,
             psd,
             fresnel: p.fresnel,
             coherent: p.coherent,
             table,
+            macro_log1p_lambda,
+            macro_v_extent,
         })
     }
 
@@ -659,6 +780,40 @@ impl TwoScale {
         }
     }
 
+    /// Smith Λ of the macro NDF at tanθ (table, Catmull–Rom in v).
+    #[inline]
+    fn macro_lambda(&self, tan_t: f64) -> f64 {
+        let n = MACRO_LAMBDA_NODES;
+        let x =
+            libm::asinh(tan_t / (self.ndf.beta() * SINH_A)) / self.macro_v_extent * (n - 1) as f64;
+        let row = &self.macro_log1p_lambda;
+        let ln1p = if !(x >= 0.0) {
+            row[0]
+        } else if x >= (n - 1) as f64 {
+            row[n - 1]
+        } else {
+            let j = x as usize;
+            catmull_rom(row, j, x - j as f64)
+        };
+        libm::expm1(ln1p).max(0.0)
+    }
+
+    /// Smith Λ of the lobe's own microfacet distribution at direction `w`:
+    /// MacroNdf reading, the mixture A·D + (1 − A)·D̃_eff, whose Λ is
+    /// A·Λ_D + (1 − A)·Λ_eff; Delta reading, D̃_eff alone. With Λ of the
+    /// macro NDF alone (HP17's reading of G₂) the wider D̃_eff lobe is
+    /// under-shadowed and the albedo exceeded 1 by up to 7 % at oblique
+    /// incidence; with the lobe's own Λ, single scattering conserves energy.
+    #[inline]
+    fn lobe_lambda(&self, w_dir: DVec3, kappa_lc: f64, a: f64) -> f64 {
+        let tan_t = libm::hypot(w_dir.x, w_dir.y) / w_dir.z;
+        let eff = self.table.lambda(kappa_lc, tan_t);
+        match self.coherent {
+            CoherentPart::MacroNdf => a * self.macro_lambda(tan_t) + (1.0 - a) * eff,
+            CoherentPart::Delta => eff,
+        }
+    }
+
     fn kappa_s(&self, k: f64, ci: f64) -> f64 {
         2.0 * k * ci * self.psd.lc_um()
     }
@@ -686,11 +841,9 @@ impl Bxdf for TwoScale {
         let tan_h = libm::hypot(h.x, h.y) / h.z;
         let w = 2.0 * k * cos_d * self.psd.lc_um();
         let d_eff = self.table.d_eff(w, tan_h);
+        let (a_d, one_minus_a_d) = self.coherent_fraction(k, cos_d);
         let lobe = match self.coherent {
-            CoherentPart::MacroNdf => {
-                let (a, one_minus_a) = self.coherent_fraction(k, cos_d);
-                a * self.ndf.d(h) + one_minus_a * d_eff
-            }
+            CoherentPart::MacroNdf => a_d * self.ndf.d(h) + one_minus_a_d * d_eff,
             CoherentPart::Delta => {
                 // The delta takes A(θi); the glossy part takes what the
                 // less-coherent of the two directions leaves, 1 − A(min(cosθi,
@@ -699,8 +852,8 @@ impl Bxdf for TwoScale {
                 one_minus_a * d_eff
             }
         };
-        let f = self.fresnel.reflectance(cos_d, lambda_nm) * self.ndf.g2(wi, wo) * lobe
-            / (4.0 * wi.z * wo.z);
+        let g2 = 1.0 / (1.0 + self.lobe_lambda(wi, w, a_d) + self.lobe_lambda(wo, w, a_d));
+        let f = self.fresnel.reflectance(cos_d, lambda_nm) * g2 * lobe / (4.0 * wi.z * wo.z);
         finite_nonneg(f)
     }
 
