@@ -39,6 +39,19 @@ pub fn exp(x: f64) -> f64 {
     }
 }
 
+/// xʸ: the platform's version with `std`, libm's without.
+#[inline]
+pub fn powf(x: f64, y: f64) -> f64 {
+    #[cfg(feature = "std")]
+    {
+        x.powf(y)
+    }
+    #[cfg(not(feature = "std"))]
+    {
+        libm::pow(x, y)
+    }
+}
+
 /// (sin 2πu, cos 2πu) for `u` ∈ [0, 1], without a libm call.
 ///
 /// Samplers draw azimuths as 2πu, where the general-purpose `sincos` (argument
