@@ -39,6 +39,19 @@ pub fn exp(x: f64) -> f64 {
     }
 }
 
+/// ln x: the platform's version with `std`, libm's without.
+#[inline]
+pub fn ln(x: f64) -> f64 {
+    #[cfg(feature = "std")]
+    {
+        x.ln()
+    }
+    #[cfg(not(feature = "std"))]
+    {
+        libm::log(x)
+    }
+}
+
 /// xʸ: the platform's version with `std`, libm's without.
 #[inline]
 pub fn powf(x: f64, y: f64) -> f64 {

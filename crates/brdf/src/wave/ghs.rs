@@ -148,7 +148,7 @@ impl<P: RadialPsd> GhsFull<P> {
     #[inline]
     fn ln_u(geo: &Geometry) -> f64 {
         if geo.u2 > 0.0 {
-            0.5 * libm::log(geo.u2)
+            0.5 * crate::math::ln(geo.u2)
         } else {
             f64::NEG_INFINITY
         }
@@ -175,7 +175,7 @@ impl<P: RadialPsd> GhsFull<P> {
     #[inline]
     pub fn proposal_density(&self, gs: f64, u: f64) -> f64 {
         let ln_u = if u > 0.0 {
-            libm::log(u)
+            crate::math::ln(u)
         } else {
             f64::NEG_INFINITY
         };

@@ -73,7 +73,7 @@ impl GhsCommon {
     pub fn choice(&self, ci: f64, lambda_nm: f64) -> (f64, f64) {
         let t = 2.0 * wavenumber(lambda_nm) * self.sigma_eff(ci, lambda_nm) * ci;
         let gs = t * t;
-        (libm::exp(-gs), gs)
+        (crate::math::exp(-gs), gs)
     }
 
     /// (specular weight R_s A_s, delta probability, g_s).

@@ -88,7 +88,7 @@ impl Row {
         };
         let n = plan.len();
         let dt = plan.dt();
-        let t0 = libm::log(1e-12 * (1.0 / w).min(eps));
+        let t0 = crate::math::ln(1e-12 * (1.0 / w).min(eps));
         // Past these points the kernel and the subtracted Matérn are below
         // 1e−25 of A: treat as zero.
         let x_h = first_below(|x| kernel(c, x, g), 1e-25 * a, t0, dt, n);
@@ -96,7 +96,7 @@ impl Row {
         let mut f = vec![0.0; n];
         let (mut m0, mut m2) = (0.0, 0.0);
         for (i, slot) in f.iter_mut().enumerate() {
-            let x = libm::exp(t0 + i as f64 * dt);
+            let x = crate::math::exp(t0 + i as f64 * dt);
             let h = if i < x_h { kernel(c, x, g) } else { 0.0 };
             let s = if i < x_e { a * c.m(x / eps) } else { 0.0 };
             if i >= x_h && i >= x_e {
@@ -126,7 +126,7 @@ impl Row {
         let analytic = self.a * self.eps * self.eps * c.unit_psd_u(self.eps * u);
         // Far below 1/ℓ the output F·u^q is at round-off and dividing by u^q
         // amplifies it; S̃ is flat there to O(u²ℓ²) < 1e−12, so hold the value.
-        let pos = (libm::log(u.max(1e-6 / self.ell)) - self.s0) / self.dt;
+        let pos = (crate::math::ln(u.max(1e-6 / self.ell)) - self.s0) / self.dt;
         let n = self.rem.len();
         let i = (libm::floor(pos) as isize).clamp(1, n as isize - 3) as usize;
         let t = pos - i as f64;
@@ -139,7 +139,7 @@ impl Row {
 /// Index of the first grid point at which the decreasing `f` drops below
 /// `level` (bisection over the grid), or n.
 fn first_below(f: impl Fn(f64) -> f64, level: f64, t0: f64, dt: f64, n: usize) -> usize {
-    let at = |i: usize| f(libm::exp(t0 + i as f64 * dt));
+    let at = |i: usize| f(crate::math::exp(t0 + i as f64 * dt));
     if at(n - 1) > level {
         return n;
     }
@@ -249,12 +249,12 @@ impl GhsTable {
         // Heavy tails (ν < 0.4) change shape quickly with g on the way to
         // their stable law: rows are densified by 0.4/ν there (at most 4×).
         let d_g = ln10 / (res.rows_per_decade * (0.4 / nu).clamp(1.0, 4.0));
-        let ln_g0 = libm::log(G_MIN) - d_g;
-        let n_g = libm::ceil((libm::log(G_MAX) - libm::log(G_MIN)) / d_g) as usize + 3;
+        let ln_g0 = crate::math::ln(G_MIN) - d_g;
+        let n_g = libm::ceil((crate::math::ln(G_MAX) - crate::math::ln(G_MIN)) / d_g) as usize + 3;
         let plan = FftLog::new(res.fft_n, res.fft_dt);
         let rows: Vec<Row> = crate::parallel::map_rows(n_g, |r| {
             let mut scratch = (Vec::new(), Vec::new());
-            Row::build(c, &plan, libm::exp(ln_g0 + r as f64 * d_g), &mut scratch)
+            Row::build(c, &plan, crate::math::exp(ln_g0 + r as f64 * d_g), &mut scratch)
         });
         // Columns start where every row is flat to ~1e−7: w ≤ 1e−3/(ℓW). For
         // heavy-tailed surfaces (small ν) the core is far narrower than W.
@@ -263,19 +263,19 @@ impl GhsTable {
             .fold(W_MIN, |acc, r| acc.min(W_MIN / (r.ell * r.w)));
         let d_w = ln10 / res.cols_per_decade;
         let w_hi = u_max.max(10.0 * w_lo);
-        let ln_w0 = libm::log(w_lo) - d_w;
-        let n_w = libm::ceil((libm::log(w_hi) - libm::log(w_lo)) / d_w) as usize + 3;
+        let ln_w0 = crate::math::ln(w_lo) - d_w;
+        let n_w = libm::ceil((crate::math::ln(w_hi) - crate::math::ln(w_lo)) / d_w) as usize + 3;
         let mut ln_width = Vec::with_capacity(n_g);
         let mut values = Vec::with_capacity(n_g * n_w);
         for row in &rows {
-            ln_width.push(libm::log(row.w));
+            ln_width.push(crate::math::ln(row.w));
             for k in 0..n_w {
-                let u = row.w * libm::exp(ln_w0 + k as f64 * d_w);
+                let u = row.w * crate::math::exp(ln_w0 + k as f64 * d_w);
                 let s = row.s_tilde(c, u);
                 // ln(S̃W²): the factor A = 1 − e^{−g} is kept inside (it is
                 // smooth in ln g), which saves an expm1 per evaluation.
                 let v = s * row.w * row.w;
-                values.push(libm::log(v.max(1e-300)));
+                values.push(crate::math::ln(v.max(1e-300)));
             }
         }
         let mut t = GhsTable {
@@ -325,7 +325,7 @@ impl GhsTable {
     /// rows, where W is a power law of g).
     #[inline]
     pub fn ln_width(&self, g: f64) -> f64 {
-        let lg = libm::log(g);
+        let lg = crate::math::ln(g);
         let (i, wg) = self.row_weights(lg);
         let f = (lg - self.ln_g0) / self.d_g;
         if f > (self.n_g - 2) as f64 {
@@ -345,7 +345,7 @@ impl GhsTable {
     #[inline]
     pub fn s_tilde(&self, u: f64, g: f64) -> Option<f64> {
         let ln_u = if u > 0.0 {
-            libm::log(u)
+            crate::math::ln(u)
         } else {
             f64::NEG_INFINITY
         };
@@ -359,7 +359,7 @@ impl GhsTable {
         if !(g >= G_MIN) {
             return None;
         }
-        let lg = libm::log(g.min(1e300));
+        let lg = crate::math::ln(g.min(1e300));
         let (i, wg) = self.row_weights(lg.min(LN_G_MAX));
         let ln_w_g = if g > G_MAX {
             self.ln_width(g)
@@ -394,7 +394,7 @@ impl GhsTable {
             }
             acc
         };
-        Some(libm::exp(v - 2.0 * ln_w_g))
+        Some(crate::math::exp(v - 2.0 * ln_w_g))
     }
 
     /// Per-row proposal densities for sampling: in each row the density in
@@ -408,8 +408,8 @@ impl GhsTable {
         for r in 0..n_g {
             let vals = &self.values[r * n_w..(r + 1) * n_w];
             let mut cum = Vec::with_capacity(n_w + 1);
-            let w0 = libm::exp(self.ln_w0);
-            let mut acc = PI * w0 * w0 * libm::exp(vals[0]);
+            let w0 = crate::math::exp(self.ln_w0);
+            let mut acc = PI * w0 * w0 * crate::math::exp(vals[0]);
             cum.push(acc);
             for k in 0..n_w - 1 {
                 acc += self.cell_mass(vals, k);
@@ -435,9 +435,9 @@ impl GhsTable {
 
     /// ∫ over cell k of 2π w ρ(w) dw with ρ = ρ_k (w/w_k)^β.
     fn cell_mass(&self, vals: &[f64], k: usize) -> f64 {
-        let wk = libm::exp(self.ln_w0 + k as f64 * self.d_w);
+        let wk = crate::math::exp(self.ln_w0 + k as f64 * self.d_w);
         let b2 = self.cell_beta(vals, k) + 2.0;
-        2.0 * PI * libm::exp(vals[k]) * wk * wk * expm1_over(b2, self.d_w)
+        2.0 * PI * crate::math::exp(vals[k]) * wk * wk * expm1_over(b2, self.d_w)
     }
 
     /// Tail slope (kept below −2.01 so the tail mass is finite).
@@ -446,9 +446,9 @@ impl GhsTable {
     }
 
     fn tail_mass(&self, vals: &[f64]) -> f64 {
-        let wl = libm::exp(self.ln_w0 + (self.n_w - 1) as f64 * self.d_w);
+        let wl = crate::math::exp(self.ln_w0 + (self.n_w - 1) as f64 * self.d_w);
         let b2 = self.tail_beta(vals) + 2.0;
-        2.0 * PI * libm::exp(vals[self.n_w - 1]) * wl * wl / (-b2)
+        2.0 * PI * crate::math::exp(vals[self.n_w - 1]) * wl * wl / (-b2)
     }
 
     /// Rows and probabilities of the sampling mixture for g: two adjacent
@@ -456,7 +456,7 @@ impl GhsTable {
     /// ends one row, stretched to the extrapolated width.
     #[inline]
     pub(crate) fn proposal_rows(&self, g: f64) -> [(usize, f64, f64); 2] {
-        let lg = libm::log(g);
+        let lg = crate::math::ln(g);
         let f = (lg - self.ln_g0) / self.d_g;
         let lo_f = 1.0;
         let hi_f = (self.n_g - 2) as f64;
@@ -493,7 +493,7 @@ impl GhsTable {
             let t = fw - k as f64;
             vals[k] + t * (vals[k + 1] - vals[k])
         };
-        libm::exp(v - 2.0 * ln_w) / self.mass[r]
+        crate::math::exp(v - 2.0 * ln_w) / self.mass[r]
     }
 
     /// Draws u from the row-r proposal stretched to width e^{ln_w}.
@@ -503,18 +503,18 @@ impl GhsTable {
         let xi = xi.clamp(0.0, 1.0);
         let total = self.mass[r];
         let w = if xi < cum[0] {
-            libm::exp(self.ln_w0) * libm::sqrt(xi / cum[0])
+            crate::math::exp(self.ln_w0) * libm::sqrt(xi / cum[0])
         } else if xi >= cum[self.n_w - 1] {
-            let wl = libm::exp(self.ln_w0 + (self.n_w - 1) as f64 * self.d_w);
+            let wl = crate::math::exp(self.ln_w0 + (self.n_w - 1) as f64 * self.d_w);
             let b2 = self.tail_beta(vals) + 2.0;
-            let rho = libm::exp(vals[self.n_w - 1]);
+            let rho = crate::math::exp(vals[self.n_w - 1]);
             let target = (xi - cum[self.n_w - 1]) * total;
             // ∫_{wl}^{w} 2πρ (w'/wl)^β w' dw' = 2πρ wl²((w/wl)^{b2} − 1)/b2
             let z = 1.0 + target * b2 / (2.0 * PI * rho * wl * wl);
             if z <= 0.0 {
                 f64::INFINITY
             } else {
-                wl * libm::exp(libm::log(z) / b2)
+                wl * crate::math::exp(crate::math::ln(z) / b2)
             }
         } else {
             // binary search: cum[k] ≤ xi < cum[k+1] → cell k
@@ -524,9 +524,9 @@ impl GhsTable {
                 if cum[mid] <= xi { lo = mid } else { hi = mid }
             }
             let k = lo;
-            let wk = libm::exp(self.ln_w0 + k as f64 * self.d_w);
+            let wk = crate::math::exp(self.ln_w0 + k as f64 * self.d_w);
             let b2 = self.cell_beta(vals, k) + 2.0;
-            let rho = libm::exp(vals[k]);
+            let rho = crate::math::exp(vals[k]);
             let target = (xi - cum[k]) * total / (2.0 * PI * rho * wk * wk);
             // (w/wk)^{b2} = 1 + b2·target  (or e^{target} when b2 → 0)
             let ln_ratio = if libm::fabs(b2) < 1e-9 {
@@ -534,9 +534,9 @@ impl GhsTable {
             } else {
                 libm::log1p(b2 * target) / b2
             };
-            wk * libm::exp(ln_ratio.clamp(0.0, self.d_w))
+            wk * crate::math::exp(ln_ratio.clamp(0.0, self.d_w))
         };
-        w * libm::exp(ln_w)
+        w * crate::math::exp(ln_w)
     }
 
     /// Largest relative error of the table against freshly transformed rows
@@ -564,20 +564,20 @@ impl GhsTable {
         let plan = FftLog::new(res.fft_n, res.fft_dt);
         let mut scratch = (Vec::new(), Vec::new());
         let mut at = (0.0, 0.0, 0.0, 0.0);
-        let lo = libm::log(G_MIN);
-        let hi = libm::log(G_MAX);
+        let lo = crate::math::ln(G_MIN);
+        let hi = crate::math::ln(G_MAX);
         for r in 0..self.n_g {
             let lg = self.ln_g0 + (r as f64 + row_offset) * self.d_g;
             if lg < lo || lg > hi {
                 continue;
             }
-            let g = libm::exp(lg);
+            let g = crate::math::exp(lg);
             let row = Row::build(c, &plan, g, &mut scratch);
             let peak = row.s_tilde(c, 0.0);
             let lw = self.ln_width(g);
             for k in 0..2 * self.n_w {
-                let u = libm::exp(lw + self.ln_w0 + (k as f64 * 0.5 + 0.25) * self.d_w);
-                if u > self.u_max || u < libm::exp(lw + self.ln_w0 + self.d_w) {
+                let u = crate::math::exp(lw + self.ln_w0 + (k as f64 * 0.5 + 0.25) * self.d_w);
+                if u > self.u_max || u < crate::math::exp(lw + self.ln_w0 + self.d_w) {
                     continue;
                 }
                 let want = row.s_tilde(c, u);

@@ -55,9 +55,9 @@ impl Correlation for Matern {
 #[inline]
 pub fn kernel<C: Correlation + ?Sized>(c: &C, x: f64, g: f64) -> f64 {
     if g < 1.0 {
-        libm::exp(-g) * libm::expm1(g * c.m(x))
+        crate::math::exp(-g) * libm::expm1(g * c.m(x))
     } else {
-        libm::exp(-g * c.one_minus_m(x)) - libm::exp(-g)
+        crate::math::exp(-g * c.one_minus_m(x)) - crate::math::exp(-g)
     }
 }
 
@@ -65,7 +65,7 @@ pub fn kernel<C: Correlation + ?Sized>(c: &C, x: f64, g: f64) -> f64 {
 #[inline]
 pub fn cusp_params(nu: f64, g: f64) -> (f64, f64) {
     let a = -libm::expm1(-g);
-    let eps = libm::exp(libm::log(a / g) / (2.0 * nu));
+    let eps = crate::math::exp(crate::math::ln(a / g) / (2.0 * nu));
     (a, eps)
 }
 
@@ -79,12 +79,12 @@ pub fn kernel_width<C: Correlation + ?Sized>(c: &C, g: f64) -> f64 {
     let target = -libm::expm1(-g) / g;
     // 1 − M increases from 0 to 1; bracket in ln x.
     let (mut lo, mut hi) = (-700.0f64, 8.0f64);
-    if c.one_minus_m(libm::exp(hi)) < target {
-        return libm::exp(hi);
+    if c.one_minus_m(crate::math::exp(hi)) < target {
+        return crate::math::exp(hi);
     }
     for _ in 0..200 {
         let mid = 0.5 * (lo + hi);
-        if c.one_minus_m(libm::exp(mid)) < target {
+        if c.one_minus_m(crate::math::exp(mid)) < target {
             lo = mid;
         } else {
             hi = mid;
@@ -93,7 +93,7 @@ pub fn kernel_width<C: Correlation + ?Sized>(c: &C, g: f64) -> f64 {
             break;
         }
     }
-    libm::exp(0.5 * (lo + hi))
+    crate::math::exp(0.5 * (lo + hi))
 }
 
 /// Lobe width W(g) in u used to scale tables: sqrt(1 + 1/x_s²).
@@ -323,7 +323,7 @@ mod fftlog {
                 let li = w * core::f64::consts::LN_2 + a_i - b_i;
                 // phase e^{−2πi m/N}
                 let ph = li - 2.0 * PI * m as f64 / n as f64;
-                let mag = libm::exp(lr) / n as f64;
+                let mag = crate::math::exp(lr) / n as f64;
                 let (s, c) = libm::sincos(ph);
                 *slot = (mag * c, mag * s);
             }
@@ -361,7 +361,7 @@ mod fftlog {
             im.resize(n, 0.0);
             for i in 0..n {
                 let t = t0 + i as f64 * self.dt;
-                re[i] = f[i] * libm::exp((2.0 - self.q) * t);
+                re[i] = f[i] * crate::math::exp((2.0 - self.q) * t);
             }
             self.fft.run(re, im);
             for m in 0..n {
@@ -374,7 +374,7 @@ mod fftlog {
             let s0 = -(t0 + (n - 1) as f64 * self.dt);
             for (j, v) in re.iter_mut().enumerate() {
                 let s = s0 + j as f64 * self.dt;
-                *v *= libm::exp(-self.q * s);
+                *v *= crate::math::exp(-self.q * s);
             }
         }
     }
@@ -389,7 +389,7 @@ mod tests {
         let (lo, hi) = super::super::poisson::term_range(g, 1e-18);
         let mut s = 0.0;
         for m in lo..=hi {
-            let w = libm::exp(super::super::poisson::log_weight(m, g));
+            let w = crate::math::exp(super::super::poisson::log_weight(m, g));
             let mf = m as f64;
             s += w * mf / (2.0 * PI * libm::pow(mf * mf + u * u, 1.5));
         }
@@ -432,14 +432,14 @@ mod tests {
         let plan = FftLog::new(n, dt);
         let t0 = -45.0;
         let f: Vec<f64> = (0..n)
-            .map(|i| libm::exp(-libm::exp(t0 + i as f64 * dt)))
+            .map(|i| crate::math::exp(-crate::math::exp(t0 + i as f64 * dt)))
             .collect();
         let (mut re, mut im) = (Vec::new(), Vec::new());
         plan.transform(t0, &f, &mut re, &mut im);
         let s0 = -(t0 + (n - 1) as f64 * dt);
         let mut worst: f64 = 0.0;
         for (j, v) in re.iter().enumerate() {
-            let u = libm::exp(s0 + j as f64 * dt);
+            let u = crate::math::exp(s0 + j as f64 * dt);
             if (1e-4..1e4).contains(&u) {
                 let want = libm::pow(1.0 + u * u, -1.5);
                 worst = worst.max((v / want - 1.0).abs());
@@ -448,16 +448,16 @@ mod tests {
         assert!(worst < 1e-8, "exp: {worst}");
         let f: Vec<f64> = (0..n)
             .map(|i| {
-                let x = libm::exp(t0 + i as f64 * dt);
-                libm::exp(-0.5 * x * x)
+                let x = crate::math::exp(t0 + i as f64 * dt);
+                crate::math::exp(-0.5 * x * x)
             })
             .collect();
         plan.transform(t0, &f, &mut re, &mut im);
         let mut worst: f64 = 0.0;
         for (j, v) in re.iter().enumerate() {
-            let u = libm::exp(s0 + j as f64 * dt);
+            let u = crate::math::exp(s0 + j as f64 * dt);
             if (1e-4..6.0).contains(&u) {
-                let want = libm::exp(-0.5 * u * u);
+                let want = crate::math::exp(-0.5 * u * u);
                 worst = worst.max((v - want).abs() / want.max(1e-6));
             }
         }

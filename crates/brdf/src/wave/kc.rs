@@ -137,7 +137,7 @@ impl KcPsd {
         let log_norm = libm::lgamma(0.5 * g) - libm::lgamma(0.5 * (g - 1.0));
         let bf = b * f;
         let log_shape = -0.5 * g * libm::log1p(bf * bf);
-        2.0 * self.sigma_um * self.sigma_um * b / libm::sqrt(PI) * libm::exp(log_norm + log_shape)
+        2.0 * self.sigma_um * self.sigma_um * b / libm::sqrt(PI) * crate::math::exp(log_norm + log_shape)
     }
 
     /// 2-D PSD in the cycles convention, µm⁴ (per (cycle/µm)²):
@@ -166,7 +166,7 @@ pub(crate) fn p1(nu: f64, u: f64) -> f64 {
     if !u2.is_finite() {
         return 0.0;
     }
-    nu / PI * libm::exp(-(nu + 1.0) * libm::log1p(u2))
+    nu / PI * crate::math::exp(-(nu + 1.0) * libm::log1p(u2))
 }
 
 /// Radial CDF of p₁ in u: 1 − (1+u²)^{−ν}, via expm1 so small u keeps its

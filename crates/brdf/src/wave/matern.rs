@@ -79,14 +79,14 @@ impl Matern {
     /// done on the Matérn functions themselves (no overflow for large ν).
     fn bessel_form(&self, x: f64) -> f64 {
         let nu = self.nu;
-        if x > 745.0 + 2.0 * nu * libm::log(x.max(1.0)) + 50.0 {
+        if x > 745.0 + 2.0 * nu * crate::math::ln(x.max(1.0)) + 50.0 {
             return 0.0;
         }
         if nu < 1.5 {
             let (mu, which) = if nu <= 0.5 { (nu, 0) } else { (nu - 1.0, 1) };
             let (k0, k1) = bessel_k_pair_scaled(mu, x);
             let k = if which == 0 { k0 } else { k1 };
-            return libm::exp(self.log_norm + nu * libm::log(x) + libm::log(k) - x);
+            return crate::math::exp(self.log_norm + nu * crate::math::ln(x) + crate::math::ln(k) - x);
         }
         // a ∈ [½, 3/2): M_a and M_{a+1} directly, then
         // M_{μ+1} = M_μ + x²/(4μ(μ−1)) M_{μ−1}, a sum of positive terms.
@@ -99,12 +99,12 @@ impl Matern {
         } else {
             (k1, 2.0 * (mu + 1.0) / x * k1 + k0)
         };
-        let lx = libm::log(x);
+        let lx = crate::math::ln(x);
         let m_of = |order: f64, k: f64| {
-            libm::exp(
+            crate::math::exp(
                 (1.0 - order) * core::f64::consts::LN_2 - libm::lgamma(order)
                     + order * lx
-                    + libm::log(k)
+                    + crate::math::ln(k)
                     - x,
             )
         };
@@ -126,7 +126,7 @@ impl Matern {
         let nu = self.nu;
         let t = 0.25 * x * x;
         // first sum
-        let mut term = libm::exp(nu * libm::log(t) - libm::lgamma(1.0 + nu));
+        let mut term = crate::math::exp(nu * crate::math::ln(t) - libm::lgamma(1.0 + nu));
         let mut s1 = term;
         let mut k = 1.0;
         while k < 60.0 {
@@ -159,7 +159,7 @@ impl Matern {
         let n = libm::round(self.nu);
         let x2 = x * x;
         if n <= 1.0 {
-            0.25 * x2 * (libm::log(4.0 / x2) + 1.0 - 2.0 * EULER_GAMMA)
+            0.25 * x2 * (crate::math::ln(4.0 / x2) + 1.0 - 2.0 * EULER_GAMMA)
         } else {
             x2 / (4.0 * (self.nu - 1.0))
         }
@@ -173,7 +173,7 @@ mod tests {
     #[test]
     fn closed_forms() {
         for &x in &[1e-8, 1e-3, 0.2, 0.999, 1.0, 1.5, 4.0, 20.0, 200.0] {
-            let e = libm::exp(-x);
+            let e = crate::math::exp(-x);
             let m12 = Matern::new(0.5);
             let m32 = Matern::new(1.5);
             let m52 = Matern::new(2.5);

@@ -13,14 +13,14 @@ pub fn log_weight(m: u64, g: f64) -> f64 {
         return -g;
     }
     let x = m as f64;
-    -0.5 * libm::log(2.0 * core::f64::consts::PI * x) - stirling_error(x) - bd0(x, g)
+    -0.5 * crate::math::ln(2.0 * core::f64::consts::PI * x) - stirling_error(x) - bd0(x, g)
 }
 
 /// ln Γ(n+1) − [(n+½) ln n − n + ½ ln 2π].
 fn stirling_error(n: f64) -> f64 {
     if n < 16.0 {
         return libm::lgamma(n + 1.0)
-            - ((n + 0.5) * libm::log(n) - n + 0.5 * libm::log(2.0 * core::f64::consts::PI));
+            - ((n + 0.5) * crate::math::ln(n) - n + 0.5 * crate::math::ln(2.0 * core::f64::consts::PI));
     }
     let n2 = 1.0 / (n * n);
     (1.0 / 12.0 - n2 * (1.0 / 360.0 - n2 * (1.0 / 1260.0 - n2 * (1.0 / 1680.0 - n2 / 1188.0)))) / n
@@ -44,13 +44,13 @@ fn bd0(x: f64, g: f64) -> f64 {
             j += 1.0;
         }
     }
-    x * libm::log(x / g) + g - x
+    x * crate::math::ln(x / g) + g - x
 }
 
 /// ln(1 − e^{−g}), the log of the mass of all orders m ≥ 1.
 #[inline]
 pub fn log_scattered_mass(g: f64) -> f64 {
-    libm::log(-libm::expm1(-g))
+    crate::math::ln(-libm::expm1(-g))
 }
 
 /// ln of the weight conditioned on m ≥ 1: w_m/(1 − e^{−g}) = g^m/(m! expm1(g)).
@@ -76,17 +76,17 @@ pub fn term_range(g: f64, eps: f64) -> (u64, u64) {
     if !(g > 0.0) {
         return (1, 1);
     }
-    let stop = libm::log(eps) - 3.0;
+    let stop = crate::math::ln(eps) - 3.0;
     let m0 = mode(g);
     let lw0 = log_conditioned_weight(m0, g);
-    let lg = libm::log(g);
+    let lg = crate::math::ln(g);
     let mut lo = m0;
     let mut lw = lw0;
     while lo > 1 {
         if lw < stop {
             break;
         }
-        lw += libm::log(lo as f64) - lg;
+        lw += crate::math::ln(lo as f64) - lg;
         lo -= 1;
     }
     let mut hi = m0;
@@ -95,7 +95,7 @@ pub fn term_range(g: f64, eps: f64) -> (u64, u64) {
         if lw < stop {
             break;
         }
-        lw += lg - libm::log((hi + 1) as f64);
+        lw += lg - crate::math::ln((hi + 1) as f64);
         hi += 1;
     }
     (lo, hi)
@@ -174,14 +174,14 @@ mod tests {
         for &g in &[1e-6, 1e-3, 0.5, 3.0, 40.0, 700.0, 710.0, 1e4] {
             let (lo, hi) = term_range(g, 1e-17);
             let s: f64 = (lo..=hi)
-                .map(|m| libm::exp(log_conditioned_weight(m, g)))
+                .map(|m| crate::math::exp(log_conditioned_weight(m, g)))
                 .sum();
             assert!((s - 1.0).abs() < 1e-13, "g={g}: {s}");
         }
         // Direct formula where it is safe.
         let g: f64 = 2.5;
-        let direct = libm::exp(-g) * g.powi(3) / 6.0 / (1.0 - libm::exp(-g));
-        assert!((libm::exp(log_conditioned_weight(3, g)) / direct - 1.0).abs() < 1e-14);
+        let direct = crate::math::exp(-g) * g.powi(3) / 6.0 / (1.0 - crate::math::exp(-g));
+        assert!((crate::math::exp(log_conditioned_weight(3, g)) / direct - 1.0).abs() < 1e-14);
     }
 
     #[test]
@@ -221,7 +221,7 @@ mod tests {
                 let p = if g < 1e-12 {
                     if m == 1 { 1.0 } else { 0.0 }
                 } else {
-                    libm::exp(log_conditioned_weight(m, g))
+                    crate::math::exp(log_conditioned_weight(m, g))
                 };
                 let f = counts[m as usize] as f64 / n as f64;
                 assert!((f - p).abs() < 2.0 / n as f64, "g={g} m={m}: {f} vs {p}");
