@@ -7,18 +7,11 @@ use brdf::wave::{GhsSsa, KcPsd};
 use brdf::{Bxdf, Distribution, Fresnel, Ior, Metal, MicrofacetConductor};
 use glam::DVec3;
 use render::integrator::sample_pixel;
-use std::path::PathBuf;
 
-fn read_csv(name: &str) -> Vec<Vec<f64>> {
-    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("data/spectra")
-        .join(name);
-    let text = std::fs::read_to_string(path).unwrap();
-    text.lines()
-        .skip(1)
-        .map(|l| l.split(',').map(|v| v.trim().parse().unwrap()).collect())
-        .collect()
-}
+#[path = "support/spectral_reference.rs"]
+mod spectral_reference;
+use spectral_reference::Spectra;
+use std::path::PathBuf;
 
 const LIGHT: [f64; 3] = [0.3, 1.2, -0.8];
 const INTENSITY: f64 = 5.0;
@@ -61,24 +54,7 @@ spectrum = "d65"
 
 /// Reference luminance at world point `p` seen from `eye`.
 fn reference(model: &dyn Bxdf, p: DVec3, eye: DVec3) -> f64 {
-    let cie = read_csv("cie1931_2deg_xyz.csv");
-    let d65 = read_csv("illuminant_D65.csv");
-    let d65_at = |l: f64| d65.iter().find(|r| r[0] == l).unwrap()[1];
-    let y_int: f64 = cie.windows(2).map(|w| 0.5 * (w[0][2] + w[1][2])).sum();
-    // Unit-luminance D65 (trapezoid rule, as the renderer documents).
-    let weight = |i: usize| {
-        if i == 0 || i == cie.len() - 1 {
-            0.5
-        } else {
-            1.0
-        }
-    };
-    let d65_lum: f64 = cie
-        .iter()
-        .enumerate()
-        .map(|(i, r)| weight(i) * d65_at(r[0]) * r[2])
-        .sum::<f64>()
-        / y_int;
+    let sp = Spectra::load();
     let to_light = DVec3::from(LIGHT) - p;
     let d2 = to_light.length_squared();
     // Plate normal +y; local frame (x, z, y) → (t, b, n) matches the renderer's
@@ -87,12 +63,12 @@ fn reference(model: &dyn Bxdf, p: DVec3, eye: DVec3) -> f64 {
     let wi = local(to_light.normalize());
     let wo = local((eye - p).normalize());
     let mut sum = 0.0;
-    for (i, r) in cie.iter().enumerate() {
+    for (i, r) in sp.cie.iter().enumerate() {
         let l = r[0];
         let f = model.eval(wi, wo, l);
-        sum += weight(i) * f * wi.z * INTENSITY * d65_at(l) / d65_lum / d2 * r[2];
+        sum += sp.trapezoid_weight(i) * f * wi.z * INTENSITY * sp.d65(l) / d2 * r[2];
     }
-    sum / y_int
+    sum / sp.y_int
 }
 
 fn check(model_name: &str, material: &str, model: &dyn Bxdf, mode: &str, samples: u64) {

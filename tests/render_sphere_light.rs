@@ -9,21 +9,14 @@ use glam::DVec3;
 use render::integrator::sample_pixel;
 use std::path::PathBuf;
 
+#[path = "support/spectral_reference.rs"]
+mod spectral_reference;
+use spectral_reference::Spectra;
+
 const CENTER: [f64; 3] = [0.0, 1.1, -1.0];
 const RADIUS: f64 = 0.35;
 const RADIANCE: f64 = 2.0;
 const ALPHA: f64 = 0.15;
-
-fn read_csv(name: &str) -> Vec<Vec<f64>> {
-    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("data/spectra")
-        .join(name);
-    let text = std::fs::read_to_string(path).unwrap();
-    text.lines()
-        .skip(1)
-        .map(|l| l.split(',').map(|v| v.trim().parse().unwrap()).collect())
-        .collect()
-}
 
 fn scene_text(mode: &str, sampler: &str, mis: &str) -> String {
     format!(
@@ -68,23 +61,7 @@ spectrum = "d65"
 /// Reference luminance at plate point `p` seen from `eye`, by midpoint
 /// quadrature over the light's cone (uniform in cosθ and φ about its axis).
 fn reference(model: &dyn Bxdf, p: DVec3, eye: DVec3) -> f64 {
-    let cie = read_csv("cie1931_2deg_xyz.csv");
-    let d65 = read_csv("illuminant_D65.csv");
-    let d65_at = |l: f64| d65.iter().find(|r| r[0] == l).unwrap()[1];
-    let y_int: f64 = cie.windows(2).map(|w| 0.5 * (w[0][2] + w[1][2])).sum();
-    let weight = |i: usize| {
-        if i == 0 || i == cie.len() - 1 {
-            0.5
-        } else {
-            1.0
-        }
-    };
-    let d65_lum: f64 = cie
-        .iter()
-        .enumerate()
-        .map(|(i, r)| weight(i) * d65_at(r[0]) * r[2])
-        .sum::<f64>()
-        / y_int;
+    let sp = Spectra::load();
     // Plate normal +y; local frame (x, −z, y), as the renderer's rectangle.
     let local = |w: DVec3| DVec3::new(w.x, -w.z, w.y);
     let wo = local((eye - p).normalize());
@@ -109,7 +86,7 @@ fn reference(model: &dyn Bxdf, p: DVec3, eye: DVec3) -> f64 {
         }
     }
     let mut sum = 0.0;
-    for (i, r) in cie.iter().enumerate().step_by(2) {
+    for (i, r) in sp.cie.iter().enumerate().step_by(2) {
         let l = r[0];
         let e: f64 = dirs
             .iter()
@@ -117,14 +94,14 @@ fn reference(model: &dyn Bxdf, p: DVec3, eye: DVec3) -> f64 {
             .sum::<f64>()
             * d_omega;
         // Every other nanometre: a 2 nm trapezoid rule (ends halved).
-        let wt = if i == 0 || i + 2 >= cie.len() {
+        let wt = if i == 0 || i + 2 >= sp.cie.len() {
             1.0
         } else {
             2.0
         };
-        sum += wt * e * RADIANCE * d65_at(l) / d65_lum * r[2];
+        sum += wt * e * RADIANCE * sp.d65(l) * r[2];
     }
-    sum / y_int
+    sum / sp.y_int
 }
 
 #[test]

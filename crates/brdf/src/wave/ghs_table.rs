@@ -254,7 +254,12 @@ impl GhsTable {
         let plan = FftLog::new(res.fft_n, res.fft_dt);
         let rows: Vec<Row> = crate::parallel::map_rows(n_g, |r| {
             let mut scratch = (Vec::new(), Vec::new());
-            Row::build(c, &plan, crate::math::exp(ln_g0 + r as f64 * d_g), &mut scratch)
+            Row::build(
+                c,
+                &plan,
+                crate::math::exp(ln_g0 + r as f64 * d_g),
+                &mut scratch,
+            )
         });
         // Columns start where every row is flat to ~1e−7: w ≤ 1e−3/(ℓW). For
         // heavy-tailed surfaces (small ν) the core is far narrower than W.

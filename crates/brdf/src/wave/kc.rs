@@ -137,7 +137,8 @@ impl KcPsd {
         let log_norm = libm::lgamma(0.5 * g) - libm::lgamma(0.5 * (g - 1.0));
         let bf = b * f;
         let log_shape = -0.5 * g * libm::log1p(bf * bf);
-        2.0 * self.sigma_um * self.sigma_um * b / libm::sqrt(PI) * crate::math::exp(log_norm + log_shape)
+        2.0 * self.sigma_um * self.sigma_um * b / libm::sqrt(PI)
+            * crate::math::exp(log_norm + log_shape)
     }
 
     /// 2-D PSD in the cycles convention, µm⁴ (per (cycle/µm)²):

@@ -86,7 +86,9 @@ impl Matern {
             let (mu, which) = if nu <= 0.5 { (nu, 0) } else { (nu - 1.0, 1) };
             let (k0, k1) = bessel_k_pair_scaled(mu, x);
             let k = if which == 0 { k0 } else { k1 };
-            return crate::math::exp(self.log_norm + nu * crate::math::ln(x) + crate::math::ln(k) - x);
+            return crate::math::exp(
+                self.log_norm + nu * crate::math::ln(x) + crate::math::ln(k) - x,
+            );
         }
         // a ∈ [½, 3/2): M_a and M_{a+1} directly, then
         // M_{μ+1} = M_μ + x²/(4μ(μ−1)) M_{μ−1}, a sum of positive terms.

@@ -58,7 +58,10 @@ impl TabulatedPsd {
                 });
             }
         }
-        let ln_zeta: Vec<f64> = zeta_rad_per_um.iter().map(|z| crate::math::ln(*z)).collect();
+        let ln_zeta: Vec<f64> = zeta_rad_per_um
+            .iter()
+            .map(|z| crate::math::ln(*z))
+            .collect();
         let ln_p: Vec<f64> = psd_um4.iter().map(|p| crate::math::ln(*p)).collect();
         let slope_hi = (ln_p[n - 1] - ln_p[n - 2]) / (ln_zeta[n - 1] - ln_zeta[n - 2]);
         if !(slope_hi < -2.02) {
@@ -217,8 +220,8 @@ impl TabulatedPsd {
         let j = lo;
         let zj = crate::math::exp(self.ln_zeta[j]);
         let b2 = self.seg_slope(j) + 2.0;
-        let target =
-            (xi - self.cum[j]) * self.sigma2 / (2.0 * PI * crate::math::exp(self.ln_p[j]) * zj * zj);
+        let target = (xi - self.cum[j]) * self.sigma2
+            / (2.0 * PI * crate::math::exp(self.ln_p[j]) * zj * zj);
         let ln_ratio = if libm::fabs(b2) < 1e-9 {
             target
         } else {
@@ -306,7 +309,8 @@ impl TabulatedCorrelation {
         let nl = p.ln_zeta.len();
         // tail amplitude in u: p(u) = B u^{slope} for u ≥ u_last
         let u_last = crate::math::exp(p.ln_zeta[nl - 1]) * p.length;
-        let b = p.unit_psd_u_inner(u_last) * crate::math::exp(-p.slope_hi * crate::math::ln(u_last));
+        let b =
+            p.unit_psd_u_inner(u_last) * crate::math::exp(-p.slope_hi * crate::math::ln(u_last));
         let c = PI * b / nu;
         let plan = FftLog::with_bias(n, dt, 0.5);
         let tu0 = -51.0;
@@ -331,7 +335,11 @@ impl TabulatedCorrelation {
             }
             m2 += fi * u * u * u * u * dt;
         }
-        m2 += 2.0 * PI * b * (nu + 1.0) * crate::math::exp((p.slope_hi + 2.0) * crate::math::ln(u_last))
+        m2 += 2.0
+            * PI
+            * b
+            * (nu + 1.0)
+            * crate::math::exp((p.slope_hi + 2.0) * crate::math::ln(u_last))
             / (-(p.slope_hi + 2.0));
         // switch where the quadratic form reaches 1e−6
         let x_switch = libm::sqrt(4e-6 / m2.abs().max(1e-300));
@@ -430,7 +438,8 @@ mod tests {
         let z: Vec<f64> = (0..n)
             .map(|i| {
                 crate::math::exp(
-                    crate::math::ln(lo) + (crate::math::ln(hi) - crate::math::ln(lo)) * i as f64 / (n - 1) as f64,
+                    crate::math::ln(lo)
+                        + (crate::math::ln(hi) - crate::math::ln(lo)) * i as f64 / (n - 1) as f64,
                 )
             })
             .collect();

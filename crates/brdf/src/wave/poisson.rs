@@ -20,7 +20,8 @@ pub fn log_weight(m: u64, g: f64) -> f64 {
 fn stirling_error(n: f64) -> f64 {
     if n < 16.0 {
         return libm::lgamma(n + 1.0)
-            - ((n + 0.5) * crate::math::ln(n) - n + 0.5 * crate::math::ln(2.0 * core::f64::consts::PI));
+            - ((n + 0.5) * crate::math::ln(n) - n
+                + 0.5 * crate::math::ln(2.0 * core::f64::consts::PI));
     }
     let n2 = 1.0 / (n * n);
     (1.0 / 12.0 - n2 * (1.0 / 360.0 - n2 * (1.0 / 1260.0 - n2 * (1.0 / 1680.0 - n2 / 1188.0)))) / n

@@ -406,6 +406,23 @@ fn ring_nodes(row: &[f64], tau_a: f64, v_ext: f64) -> Vec<(f64, f64, f64)> {
     out
 }
 
+/// Λ from a row of ln(1 + Λ) on the uniform v grid of tanθ = scale·sinh(vV),
+/// given `t` = tanθ/scale: Catmull–Rom in v, held at the ends.
+#[inline]
+fn lambda_from_log1p_row(row: &[f64], t: f64, v_ext: f64) -> f64 {
+    let n = row.len();
+    let x = libm::asinh(t) / v_ext * (n - 1) as f64;
+    let ln1p = if !(x >= 0.0) {
+        row[0]
+    } else if x >= (n - 1) as f64 {
+        row[n - 1]
+    } else {
+        let j = x as usize;
+        catmull_rom(row, j, x - j as f64)
+    };
+    libm::expm1(ln1p).max(0.0)
+}
+
 /// Smith 1 + Λ(θ) = (1/cosθ) ∫ D(m) max(0, ω·m) dω_m from [`ring_nodes`].
 fn one_plus_lambda(nodes: &[(f64, f64, f64)], tan_t: f64) -> f64 {
     let c = 1.0 / libm::sqrt(1.0 + tan_t * tan_t);
@@ -529,17 +546,7 @@ impl EffTable {
     #[inline]
     fn lambda_node(&self, i: usize, tan_t: f64) -> f64 {
         let row = &self.log1p_lambda[i * LAMBDA_NODES..(i + 1) * LAMBDA_NODES];
-        let x = libm::asinh(tan_t / (self.tau[i] * SINH_A)) / self.v_extent[i]
-            * (LAMBDA_NODES - 1) as f64;
-        let ln1p = if !(x >= 0.0) {
-            row[0]
-        } else if x >= (LAMBDA_NODES - 1) as f64 {
-            row[LAMBDA_NODES - 1]
-        } else {
-            let j = x as usize;
-            catmull_rom(row, j, x - j as f64)
-        };
-        libm::expm1(ln1p).max(0.0)
+        lambda_from_log1p_row(row, tan_t / (self.tau[i] * SINH_A), self.v_extent[i])
     }
 
     /// Smith Λ of the w-interpolated D̃_eff: the table mixes the two
@@ -800,19 +807,11 @@ impl TwoScale {
     /// Smith Λ of the macro NDF at tanθ (table, Catmull–Rom in v).
     #[inline]
     fn macro_lambda(&self, tan_t: f64) -> f64 {
-        let n = MACRO_LAMBDA_NODES;
-        let x =
-            libm::asinh(tan_t / (self.ndf.beta() * SINH_A)) / self.macro_v_extent * (n - 1) as f64;
-        let row = &self.macro_log1p_lambda;
-        let ln1p = if !(x >= 0.0) {
-            row[0]
-        } else if x >= (n - 1) as f64 {
-            row[n - 1]
-        } else {
-            let j = x as usize;
-            catmull_rom(row, j, x - j as f64)
-        };
-        libm::expm1(ln1p).max(0.0)
+        lambda_from_log1p_row(
+            &self.macro_log1p_lambda,
+            tan_t / (self.ndf.beta() * SINH_A),
+            self.macro_v_extent,
+        )
     }
 
     /// Smith Λ of the lobe's own microfacet distribution at direction `w`:
