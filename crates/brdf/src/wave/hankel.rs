@@ -220,6 +220,9 @@ mod fftlog {
     /// In-place iterative radix-2 FFT, X_k = Σ x_n e^{−2πikn/N}.
     struct Fft {
         n: usize,
+        /// Twiddles e^{−2πik/len} for every stage len = 2, 4, …, n,
+        /// concatenated (stage len starts at len/2 − 1): each stage reads a
+        /// contiguous run instead of every (n/len)-th entry of one table.
         twiddle: Vec<(f64, f64)>,
         rev: Vec<usize>,
     }
@@ -237,17 +240,23 @@ mod fftlog {
                     }
                 })
                 .collect();
-            let twiddle = (0..n / 2)
-                .map(|k| {
-                    let (s, c) = libm::sincos(-2.0 * PI * k as f64 / n as f64);
-                    (c, s)
-                })
-                .collect();
+            let mut twiddle = Vec::with_capacity(n.saturating_sub(1));
+            let mut len = 2;
+            while len <= n {
+                // The same angles as one table of n/2 entries read with
+                // stride n/len: k·(n/len)/n = k/len exactly.
+                for k in 0..len / 2 {
+                    let (s, c) = libm::sincos(-2.0 * PI * (k * (n / len)) as f64 / n as f64);
+                    twiddle.push((c, s));
+                }
+                len *= 2;
+            }
             Fft { n, twiddle, rev }
         }
 
         fn run(&self, re: &mut [f64], im: &mut [f64]) {
             let n = self.n;
+            let (re, im) = (&mut re[..n], &mut im[..n]);
             for i in 0..n {
                 let j = self.rev[i];
                 if j > i {
@@ -258,18 +267,23 @@ mod fftlog {
             let mut len = 2;
             while len <= n {
                 let half = len / 2;
-                let step = n / len;
-                for start in (0..n).step_by(len) {
-                    for k in 0..half {
-                        let (wr, wi) = self.twiddle[k * step];
-                        let a = start + k;
-                        let b = a + half;
-                        let tr = re[b] * wr - im[b] * wi;
-                        let ti = re[b] * wi + im[b] * wr;
-                        re[b] = re[a] - tr;
-                        im[b] = im[a] - ti;
-                        re[a] += tr;
-                        im[a] += ti;
+                let tw = &self.twiddle[half - 1..len - 1];
+                for (block_re, block_im) in re.chunks_exact_mut(len).zip(im.chunks_exact_mut(len)) {
+                    let (a_re, b_re) = block_re.split_at_mut(half);
+                    let (a_im, b_im) = block_im.split_at_mut(half);
+                    for ((((ar, ai), br), bi), &(wr, wi)) in a_re
+                        .iter_mut()
+                        .zip(a_im.iter_mut())
+                        .zip(b_re.iter_mut())
+                        .zip(b_im.iter_mut())
+                        .zip(tw)
+                    {
+                        let tr = *br * wr - *bi * wi;
+                        let ti = *br * wi + *bi * wr;
+                        *br = *ar - tr;
+                        *bi = *ai - ti;
+                        *ar += tr;
+                        *ai += ti;
                     }
                 }
                 len *= 2;
@@ -293,6 +307,10 @@ mod fftlog {
         fft: Fft,
         /// K(q + iω_m)·e^{−2πim/N}/N for each FFT bin.
         kernel: Vec<(f64, f64)>,
+        /// e^{(2−q)iΔ} and e^{−qjΔ}: the bias weights x^{2−q}, u^{−q} up to
+        /// a factor per transform, so a transform costs no exponentials.
+        bias_in: Vec<f64>,
+        bias_out: Vec<f64>,
     }
 
     impl FftLog {
@@ -333,6 +351,12 @@ mod fftlog {
                 q,
                 fft: Fft::new(n),
                 kernel,
+                bias_in: (0..n)
+                    .map(|i| crate::math::exp((2.0 - q) * i as f64 * dt))
+                    .collect(),
+                bias_out: (0..n)
+                    .map(|j| crate::math::exp(-q * j as f64 * dt))
+                    .collect(),
             }
         }
 
@@ -359,9 +383,9 @@ mod fftlog {
             im.clear();
             re.resize(n, 0.0);
             im.resize(n, 0.0);
-            for i in 0..n {
-                let t = t0 + i as f64 * self.dt;
-                re[i] = f[i] * crate::math::exp((2.0 - self.q) * t);
+            let scale_in = crate::math::exp((2.0 - self.q) * t0);
+            for ((r, &fi), &b) in re.iter_mut().zip(f).zip(&self.bias_in) {
+                *r = fi * scale_in * b;
             }
             self.fft.run(re, im);
             for m in 0..n {
@@ -372,9 +396,9 @@ mod fftlog {
             }
             self.fft.run(re, im);
             let s0 = -(t0 + (n - 1) as f64 * self.dt);
-            for (j, v) in re.iter_mut().enumerate() {
-                let s = s0 + j as f64 * self.dt;
-                *v *= crate::math::exp(-self.q * s);
+            let scale_out = crate::math::exp(-self.q * s0);
+            for (v, &b) in re.iter_mut().zip(&self.bias_out) {
+                *v *= scale_out * b;
             }
         }
     }
