@@ -1,6 +1,7 @@
 //! The spectral path tracer: next-event estimation and BSDF sampling
-//! combined by the balance heuristic, exact delta lobes, Russian roulette,
-//! and optional hero wavelengths with spectral MIS (Wilkie et al. 2014).
+//! combined by multiple importance sampling (power heuristic by default),
+//! exact delta lobes, Russian roulette, and hero wavelengths with spectral
+//! MIS (Wilkie et al. 2014).
 //!
 //! Bookkeeping (one set for both modes; `n` = 1 or 4 wavelengths): the
 //! wavelengths are stratified in the wavelength CDF's primary space, so each

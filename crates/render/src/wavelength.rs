@@ -34,8 +34,8 @@ pub struct WavelengthSampler {
     guide: Vec<u32>,
 }
 
-/// Guide cells per wavelength bin: the densest bin (x̄+ȳ+z̄ near 445 nm) holds
-/// ≈ 3× the mean probability, so with 4 cells per bin a cell spans at most
+/// Guide cells per wavelength bin: the densest bin (|r̄|+|ḡ|+|b̄| near 596 nm)
+/// holds ≈ 2.7× the mean probability, so with 4 cells per bin a cell spans at most
 /// about one CDF step and the search walks one or two entries.
 const GUIDE_CELLS_PER_BIN: usize = 4;
 
