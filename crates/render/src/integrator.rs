@@ -210,7 +210,17 @@ pub fn trace(
         } else {
             hit.geo.n
         };
-        let frame = Frame::new(ng, hit.geo.tangent);
+        // Smooth-shaded meshes: the BSDF frame follows the interpolated
+        // normal, turned to the viewer's side of the triangle; directions
+        // must still leave on the geometric side, or light would leak
+        // through the surface.
+        let smooth = hit.shading_n.is_some();
+        let ns = match hit.shading_n {
+            Some(s) if s.dot(ng) < 0.0 => -s,
+            Some(s) => s,
+            None => ng,
+        };
+        let frame = Frame::new(ns, hit.geo.tangent);
         let wi = frame.to_local(-ray.d);
         if wi.z <= 0.0 {
             break;
@@ -220,7 +230,7 @@ pub fn trace(
         // Next-event estimation.
         if let Some(ls) = lights.sample(p, sampler.get_1d_2d()) {
             let wo = frame.to_local(ls.wi);
-            if wo.z > 0.0 && ls.pdf > 0.0 {
+            if wo.z > 0.0 && ls.pdf > 0.0 && (!smooth || ls.wi.dot(ng) > 0.0) {
                 let shadow = Ray { o: p, d: ls.wi };
                 let t_max = if ls.dist.is_finite() {
                     ls.dist * (1.0 - 1e-7)
@@ -289,10 +299,11 @@ pub fn trace(
                 *tj /= survive;
             }
         }
-        ray = Ray {
-            o: p,
-            d: frame.to_world(s.wo).normalize(),
-        };
+        let d = frame.to_world(s.wo).normalize();
+        if smooth && d.dot(ng) <= 0.0 {
+            break;
+        }
+        ray = Ray { o: p, d };
     }
     out
 }

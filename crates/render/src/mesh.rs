@@ -2,8 +2,9 @@
 //!
 //! The BVH is traversed in f32 (obvhs's only precision); the hit triangle is
 //! then re-intersected in f64 so that hit points and normals keep the
-//! accuracy of the analytic shapes. Barycentrics are not needed: metals are
-//! shaded with the geometric normal (OBJ vertex normals are ignored).
+//! accuracy of the analytic shapes. When the OBJ file has vertex normals
+//! (`vn`), the hit also carries the shading normal interpolated from them
+//! with f64 barycentrics; otherwise triangles are shaded flat.
 
 use crate::geometry::{HitGeometry, Ray, Transform};
 use glam::{DVec3, Vec3A};
@@ -18,6 +19,8 @@ use std::time::Duration;
 pub struct MeshSource {
     /// Triangle vertices in world space.
     pub triangles: Vec<[DVec3; 3]>,
+    /// Unit vertex normals in world space, per triangle, where the file has them.
+    pub normals: Vec<Option<[DVec3; 3]>>,
     /// Surface id given to every triangle of this mesh.
     pub surface: u32,
 }
@@ -34,8 +37,17 @@ pub fn load_obj(path: &Path, xf: &Transform, surface: u32) -> Result<MeshSource,
         other => format!("cannot parse OBJ file {}: {other}", path.display()),
     })?;
     let mut triangles = Vec::new();
+    let mut normals = Vec::new();
     for m in &models {
         let pos = &m.mesh.positions;
+        let nrm = &m.mesh.normals;
+        // single_index: normals (when present) share the position indices.
+        let normal = |i: u32| -> Option<DVec3> {
+            let i = 3 * i as usize;
+            let v = nrm.get(i..i + 3)?;
+            xf.direction(DVec3::new(v[0] as f64, v[1] as f64, v[2] as f64))
+                .try_normalize()
+        };
         let vertex = |i: u32| -> Option<DVec3> {
             let i = 3 * i as usize;
             let p = pos.get(i..i + 3)?;
@@ -53,6 +65,10 @@ pub fn load_obj(path: &Path, xf: &Transform, surface: u32) -> Result<MeshSource,
             // Degenerate triangles have no normal; dropping them changes nothing visible.
             if (b - a).cross(c - a).length_squared() > 0.0 {
                 triangles.push([a, b, c]);
+                normals.push(match (normal(tri[0]), normal(tri[1]), normal(tri[2])) {
+                    (Some(x), Some(y), Some(z)) => Some([x, y, z]),
+                    _ => None,
+                });
             }
         }
     }
@@ -62,7 +78,11 @@ pub fn load_obj(path: &Path, xf: &Transform, surface: u32) -> Result<MeshSource,
             path.display()
         ));
     }
-    Ok(MeshSource { triangles, surface })
+    Ok(MeshSource {
+        triangles,
+        normals,
+        surface,
+    })
 }
 
 /// All mesh triangles of a scene in one BVH, stored in leaf order.
@@ -70,6 +90,7 @@ pub struct MeshAccel {
     bvh: CwBvh,
     rt: Vec<RtTriangle>,
     tris: Vec<[DVec3; 3]>,
+    normals: Vec<Option<[DVec3; 3]>>,
     surface: Vec<u32>,
 }
 
@@ -81,10 +102,12 @@ impl MeshAccel {
     /// Builds the BVH over all sources.
     pub fn build(sources: Vec<MeshSource>) -> MeshAccel {
         let mut tris = Vec::new();
+        let mut normals = Vec::new();
         let mut surface = Vec::new();
         for s in sources {
             surface.extend(std::iter::repeat_n(s.surface, s.triangles.len()));
             tris.extend(s.triangles);
+            normals.extend(s.normals);
         }
         let f32_tris: Vec<Triangle> = tris
             .iter()
@@ -107,10 +130,12 @@ impl MeshAccel {
             .collect();
         let tris_leaf = order.iter().map(|&i| tris[i]).collect();
         let surface_leaf = order.iter().map(|&i| surface[i]).collect();
+        let normals_leaf = order.iter().map(|&i| normals[i]).collect();
         MeshAccel {
             bvh,
             rt,
             tris: tris_leaf,
+            normals: normals_leaf,
             surface: surface_leaf,
         }
     }
@@ -134,8 +159,14 @@ impl MeshAccel {
         BvhRay::new(to_f32(ray.o), to_f32(ray.d), t_min as f32, t_max)
     }
 
-    /// Nearest hit in `(t_min, t_max)` and its surface id.
-    pub fn intersect(&self, ray: &Ray, t_min: f64, t_max: f64) -> Option<(HitGeometry, u32)> {
+    /// Nearest hit in `(t_min, t_max)`, its surface id and, for triangles
+    /// with vertex normals, the interpolated unit shading normal.
+    pub fn intersect(
+        &self,
+        ray: &Ray,
+        t_min: f64,
+        t_max: f64,
+    ) -> Option<(HitGeometry, u32, Option<DVec3>)> {
         let mut hit = RayHit::none();
         let r = Self::bvh_ray(ray, t_min, t_max);
         if !self
@@ -160,15 +191,17 @@ impl MeshAccel {
             hit.t as f64
         };
         let tangent = (b - a).normalize();
-        Some((
-            HitGeometry {
-                t,
-                p: ray.at(t),
-                n,
-                tangent,
-            },
-            self.surface[id],
-        ))
+        let p = ray.at(t);
+        let shading = self.normals[id].and_then(|[na, nb, nc]| {
+            // Barycentrics of p from sub-triangle areas (p lies in the plane).
+            let area = (b - a).cross(c - a);
+            let inv = 1.0 / area.length_squared();
+            let w1 = (p - a).cross(c - a).dot(area) * inv;
+            let w2 = (b - a).cross(p - a).dot(area) * inv;
+            let w0 = 1.0 - w1 - w2;
+            (w0 * na + w1 * nb + w2 * nc).try_normalize()
+        });
+        Some((HitGeometry { t, p, n, tangent }, self.surface[id], shading))
     }
 
     /// Whether anything blocks the segment `(t_min, t_max)` of `ray`.
@@ -201,13 +234,20 @@ mod tests {
                 ],
             ]
         };
+        // The far quad has vertex normals from a linear field, (0.1x, 0.1y, 1):
+        // barycentric interpolation must reproduce it exactly at any point.
+        let field = |v: DVec3| DVec3::new(0.1 * v.x, 0.1 * v.y, 1.0);
+        let far = quad(-2.0);
+        let far_normals = far.iter().map(|t| Some(t.map(field))).collect();
         let accel = MeshAccel::build(vec![
             MeshSource {
                 triangles: quad(0.0),
+                normals: vec![None; 2],
                 surface: 7,
             },
             MeshSource {
-                triangles: quad(-2.0),
+                triangles: far,
+                normals: far_normals,
                 surface: 9,
             },
         ]);
@@ -216,13 +256,19 @@ mod tests {
             o: DVec3::new(0.3, 0.2, 5.0),
             d: DVec3::NEG_Z,
         };
-        let (h, s) = accel.intersect(&ray, 1e-6, f64::INFINITY).unwrap();
+        let (h, s, shading) = accel.intersect(&ray, 1e-6, f64::INFINITY).unwrap();
         assert_eq!(s, 7);
+        assert_eq!(shading, None);
         assert!((h.t - 5.0).abs() < 1e-9 && (h.n.z.abs() - 1.0).abs() < 1e-12);
         assert!(accel.occluded(&ray, 1e-6, 6.0));
         assert!(!accel.occluded(&ray, 1e-6, 4.9));
-        let (h2, s2) = accel.intersect(&ray, 5.5, f64::INFINITY).unwrap();
+        let (h2, s2, shading2) = accel.intersect(&ray, 5.5, f64::INFINITY).unwrap();
         assert_eq!(s2, 9);
         assert!((h2.t - 7.0).abs() < 1e-9);
+        let want = field(DVec3::new(0.3, 0.2, -2.0)).normalize();
+        assert!(
+            (shading2.unwrap() - want).length() < 1e-12,
+            "{shading2:?} vs {want}"
+        );
     }
 }

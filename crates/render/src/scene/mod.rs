@@ -36,6 +36,9 @@ pub struct Hit {
     pub surface: Surface,
     /// Whether it is a mesh triangle (traversed in f32: needs a larger ray offset).
     pub mesh: bool,
+    /// Interpolated vertex normal of a smooth-shaded mesh triangle (same
+    /// orientation convention as `geo.n`); `None`: shade with `geo.n`.
+    pub shading_n: Option<DVec3>,
 }
 
 /// Render settings from `[film]` and `[integrator]`.
@@ -520,6 +523,7 @@ impl Scene {
                     geo: g,
                     surface: *s,
                     mesh: false,
+                    shading_n: None,
                 });
             }
         }
@@ -530,16 +534,18 @@ impl Scene {
                     geo: g,
                     surface: *s,
                     mesh: false,
+                    shading_n: None,
                 });
             }
         }
         if let Some(m) = &self.mesh
-            && let Some((g, mat)) = m.intersect(ray, 0.0, t_max)
+            && let Some((g, mat, shading_n)) = m.intersect(ray, 0.0, t_max)
         {
             best = Some(Hit {
                 geo: g,
                 surface: Surface::Material(mat),
                 mesh: true,
+                shading_n,
             });
         }
         best
