@@ -18,54 +18,20 @@
 use std::hint::black_box;
 use std::time::Duration;
 
-use brdf::frame::spherical;
 use brdf::microfacet::{Distribution, MicrofacetConductor};
-use brdf::{Bxdf, DVec3, Fresnel, Ior, Metal};
+use brdf::{Bxdf, Fresnel, Ior, Metal};
 use criterion::{Criterion, criterion_group, criterion_main};
-
-const RING: usize = 1024;
 
 #[path = "support/cpu_time.rs"]
 mod cpu_time;
 use cpu_time::{Cpu as CpuTime, THREAD};
 
-struct XorShift(u64);
-impl XorShift {
-    fn next(&mut self) -> f64 {
-        self.0 ^= self.0 << 13;
-        self.0 ^= self.0 >> 7;
-        self.0 ^= self.0 << 17;
-        (self.0 >> 11) as f64 / (1u64 << 53) as f64
-    }
-}
-
-struct Input {
-    wi: DVec3,
-    wo: DVec3,
-    lambda: f64,
-    u: [f64; 3],
-}
-
-fn inputs(model: &MicrofacetConductor) -> Vec<Input> {
-    let mut rng = XorShift(0x9E37_79B9_7F4A_7C15);
-    let mut out = Vec::with_capacity(RING);
-    while out.len() < RING {
-        let wi = spherical(rng.next().acos(), std::f64::consts::TAU * rng.next());
-        let lambda = 360.0 + 470.0 * rng.next();
-        let u = [rng.next(), rng.next(), rng.next()];
-        // Evaluate where the model actually puts its samples (the renderer's
-        // case), falling back to a uniform direction when the sample is lost.
-        let wo = model
-            .sample(wi, lambda, u)
-            .map(|s| s.wo)
-            .unwrap_or_else(|| spherical(rng.next().acos(), std::f64::consts::TAU * rng.next()));
-        out.push(Input { wi, wo, lambda, u });
-    }
-    out
-}
+#[path = "support/ring.rs"]
+mod ring;
+use ring::{RING, XorShift, inputs};
 
 fn bench_model(c: &mut Criterion<CpuTime>, name: &str, model: MicrofacetConductor) {
-    let ring = inputs(&model);
+    let ring = inputs(&model, None);
     let mut g = c.benchmark_group(name);
     g.bench_function("eval+pdf", |b| {
         let mut i = 0;

@@ -16,54 +16,20 @@
 use std::hint::black_box;
 use std::time::{Duration, Instant};
 
-use brdf::frame::spherical;
 use brdf::microfacet::{Distribution, MicrofacetConductor};
 use brdf::wave::ghs::hemisphere_u_max;
 use brdf::wave::ghs_table::{GhsTable, TableResolution};
 use brdf::wave::matern::Matern;
 use brdf::wave::{GhsFull, GhsOptions, GhsSsa, KcPsd};
-use brdf::{Bxdf, DVec3, Fresnel, Ior, Metal};
+use brdf::{Bxdf, Fresnel, Ior, Metal};
 use criterion::{Criterion, criterion_group, criterion_main};
 
-const RING: usize = 1024;
-
-struct XorShift(u64);
-impl XorShift {
-    fn next(&mut self) -> f64 {
-        self.0 ^= self.0 << 13;
-        self.0 ^= self.0 >> 7;
-        self.0 ^= self.0 << 17;
-        (self.0 >> 11) as f64 / (1u64 << 53) as f64
-    }
-}
-
-struct Input {
-    wi: DVec3,
-    wo: DVec3,
-    lambda: f64,
-    u: [f64; 3],
-}
-
-fn inputs(model: &dyn Bxdf) -> Vec<Input> {
-    let mut rng = XorShift(0x9E37_79B9_7F4A_7C15);
-    let mut out = Vec::with_capacity(RING);
-    while out.len() < RING {
-        let wi = spherical(rng.next().acos(), std::f64::consts::TAU * rng.next());
-        let lambda = 360.0 + 470.0 * rng.next();
-        let u = [rng.next(), rng.next(), rng.next()];
-        // Glossy samples only (u[0] → 1 skips the delta lobe); lost samples
-        // fall back to a uniform direction.
-        let wo = model
-            .sample(wi, lambda, [0.999_999, u[1], u[2]])
-            .map(|s| s.wo)
-            .unwrap_or_else(|| spherical(rng.next().acos(), std::f64::consts::TAU * rng.next()));
-        out.push(Input { wi, wo, lambda, u });
-    }
-    out
-}
+#[path = "support/ring.rs"]
+mod ring;
+use ring::{Input, RING, inputs};
 
 fn bench_model(c: &mut Criterion, name: &str, model: &dyn Bxdf) {
-    let ring = inputs(model);
+    let ring = inputs(model, Some(0.999_999));
     let mut g = c.benchmark_group(name);
     g.bench_function("eval", |b| {
         let mut i = 0;
@@ -150,7 +116,7 @@ fn resolution_table() {
             let model =
                 GhsFull::with_table(psd, cu(), GhsOptions::default(), std::sync::Arc::new(table))
                     .unwrap();
-            let ring = inputs(&model);
+            let ring = inputs(&model, Some(0.999_999));
             let ns = mean_eval_ns(&model, &ring);
             println!(
                 "{rows:>5} {cols:>9} {n:>6} {dt:>7} | {gamma:>5} {build:>9.1} {mem:>9.0} {err:>9.2e} {ns:>10.1}"
@@ -158,7 +124,7 @@ fn resolution_table() {
         }
     }
     let ggx = MicrofacetConductor::new(Distribution::ggx(0.2, 0.2).unwrap(), cu()).unwrap();
-    let ring = inputs(&ggx);
+    let ring = inputs(&ggx, Some(0.999_999));
     println!(
         "GGX (α = 0.2, Cu) eval for comparison: {:.1} ns\n",
         mean_eval_ns(&ggx, &ring)

@@ -554,17 +554,17 @@ impl EffTable {
     /// is the same mixture of their Λs (∫D max(0, ω·m) dω is linear in D).
     #[inline]
     fn lambda(&self, w: f64, tan_t: f64) -> f64 {
+        self.mix_nodes(w, |i| self.lambda_node(i, tan_t))
+    }
+
+    /// (1 − f)·value(i) + f·value(i + 1) for the nodes bracketing w: the
+    /// table's linear mixture in w of every per-node quantity (a node with
+    /// zero weight is not evaluated).
+    #[inline]
+    fn mix_nodes(&self, w: f64, value: impl Fn(usize) -> f64) -> f64 {
         let (i, f) = self.w_bracket(w);
-        let a = if f < 1.0 {
-            self.lambda_node(i, tan_t)
-        } else {
-            0.0
-        };
-        let b = if f > 0.0 {
-            self.lambda_node(i + 1, tan_t)
-        } else {
-            0.0
-        };
+        let a = if f < 1.0 { value(i) } else { 0.0 };
+        let b = if f > 0.0 { value(i + 1) } else { 0.0 };
         (1.0 - f) * a + f * b
     }
 
@@ -615,14 +615,7 @@ impl EffTable {
     /// D̃_eff(h) for w = κ·Lc, tanθh given.
     #[inline]
     fn d_eff(&self, w: f64, tan_t: f64) -> f64 {
-        let (i, f) = self.w_bracket(w);
-        let a = if f < 1.0 { self.d_node(i, tan_t) } else { 0.0 };
-        let b = if f > 0.0 {
-            self.d_node(i + 1, tan_t)
-        } else {
-            0.0
-        };
-        (1.0 - f) * a + f * b
+        self.mix_nodes(w, |i| self.d_node(i, tan_t))
     }
 
     /// Solid-angle density of [`EffTable::sample_node`] at node i.
@@ -642,18 +635,7 @@ impl EffTable {
             return 0.0;
         }
         let tan_t = libm::hypot(h.x, h.y) / h.z;
-        let (i, f) = self.w_bracket(w);
-        let a = if f < 1.0 {
-            self.pdf_node(i, tan_t, h.z)
-        } else {
-            0.0
-        };
-        let b = if f > 0.0 {
-            self.pdf_node(i + 1, tan_t, h.z)
-        } else {
-            0.0
-        };
-        (1.0 - f) * a + f * b
+        self.mix_nodes(w, |i| self.pdf_node(i, tan_t, h.z))
     }
 
     /// Draws h at node i from two uniforms.
