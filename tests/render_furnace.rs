@@ -1,7 +1,10 @@
 //! White-furnace and environment-lighting checks of the path tracer.
 
+#[path = "support/scene_fixtures.rs"]
+mod scene_fixtures;
 use render::integrator::sample_pixel;
 use render::{Film, RenderOptions};
+use scene_fixtures::plate_at_60deg;
 use std::path::PathBuf;
 
 fn scene_path(name: &str) -> PathBuf {
@@ -120,36 +123,12 @@ fn ggx_albedo(theta_o: f64) -> f64 {
 /// its MIS combination with BSDF sampling against an independent quadrature.
 #[test]
 fn rough_plate_in_environment_shows_its_albedo() {
-    let text = r#"
-[camera]
-look_from = [0.0, 50.0, 86.60254037844386]
-look_at = [0.0, 0.0, 0.0]
-fov_deg = 0.5
-resolution = [4, 4]
-
-[film]
-spp = 1
-
-[integrator]
-max_depth = 1
-
-[materials.m]
-model = "ggx"
-fresnel = "one"
-alpha = 0.3
-
-[[shapes]]
-type = "rectangle"
-size = [10.0, 10.0]
-material = "m"
-transform = { rotate_deg = [-90.0, 0.0, 0.0] }
-
-[[lights]]
-type = "environment"
-radiance = 1.0
-spectrum = "constant"
-"#;
-    let scene = render::load_str(&scene_path("env_plate.toml"), text).unwrap();
+    let text = plate_at_60deg(
+        0.3,
+        4,
+        "[[lights]]\ntype = \"environment\"\nradiance = 1.0\nspectrum = \"constant\"",
+    );
+    let scene = render::load_str(&scene_path("env_plate.toml"), &text).unwrap();
     let want = ggx_albedo(60f64.to_radians());
     let cie_y = render::spectrum::Cie::get().y_integral();
     let n = 40_000u64;

@@ -2,14 +2,10 @@
 //! interpolated normals must look like the analytic sphere, and much more so
 //! than the same mesh shaded flat (its `vn` lines removed).
 
+#[path = "support/scene_fixtures.rs"]
+mod scene_fixtures;
 use render::{Film, RenderOptions};
-use std::path::PathBuf;
-
-fn temp_dir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("lustre-{name}-{}", std::process::id()));
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
+use scene_fixtures::temp_dir;
 
 /// A UV sphere of radius `r` at the origin, faces wound outward; with
 /// `normals`, exact unit vertex normals (`f v//vn`).

@@ -1,15 +1,12 @@
 //! OBJ meshes in the BVH and EXR environment maps, end to end.
 
+#[path = "support/scene_fixtures.rs"]
+mod scene_fixtures;
 use render::integrator::sample_pixel;
 use render::{Film, RenderOptions};
+use scene_fixtures::{plate_at_60deg, temp_dir};
 use std::f64::consts::PI;
 use std::path::{Path, PathBuf};
-
-fn temp_dir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("lustre-{name}-{}", std::process::id()));
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
 
 /// A unit cube as 12 triangles (faces wound outward).
 const CUBE_OBJ: &str = "v -0.5 -0.5 -0.5\nv 0.5 -0.5 -0.5\nv 0.5 0.5 -0.5\nv -0.5 0.5 -0.5\n\
@@ -161,36 +158,12 @@ file = "sky.exr"
     }
 
     // 2. A rough Fresnel = 1 plate lit by the map: Y against a quadrature of f·cos·Y_env.
-    let plate = r#"
-[camera]
-look_from = [0.0, 50.0, 86.60254037844386]
-look_at = [0.0, 0.0, 0.0]
-fov_deg = 0.5
-resolution = [3, 3]
-
-[film]
-spp = 1
-
-[integrator]
-max_depth = 1
-
-[materials.m]
-model = "ggx"
-fresnel = "one"
-alpha = 0.4
-
-[[shapes]]
-type = "rectangle"
-size = [10.0, 10.0]
-material = "m"
-transform = { rotate_deg = [-90.0, 0.0, 0.0] }
-
-[[lights]]
-type = "environment"
-radiance = 1.0
-file = "sky.exr"
-"#;
-    let scene = render::load_str(&dir.join("plate.toml"), plate).unwrap();
+    let plate = plate_at_60deg(
+        0.4,
+        3,
+        "[[lights]]\ntype = \"environment\"\nradiance = 1.0\nfile = \"sky.exr\"",
+    );
+    let scene = render::load_str(&dir.join("plate.toml"), &plate).unwrap();
     use brdf::{Bxdf, Distribution, Fresnel, MicrofacetConductor};
     let m = MicrofacetConductor::new(Distribution::ggx(0.4, 0.4).unwrap(), Fresnel::One).unwrap();
     // Plate local frame: t = +x, b = −z, n = +y (see the rectangle's transform).

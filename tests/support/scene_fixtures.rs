@@ -1,0 +1,48 @@
+//! Scene texts and scratch folders shared by the render integration tests.
+
+// Each test crate includes this module and uses only part of it.
+#![allow(dead_code)]
+
+use std::path::PathBuf;
+
+/// A fresh scratch folder under the system temp dir, unique per test process.
+pub fn temp_dir(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("lustre-{name}-{}", std::process::id()));
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+/// A 10 m GGX plate with Fresnel = 1 and roughness `alpha`, seen at 60° from
+/// the normal through a 0.5° camera of `res`×`res` pixels (every pixel sees
+/// the same direction), direct light only, lit by the `[[lights]]` table
+/// `light` (TOML text).
+pub fn plate_at_60deg(alpha: f64, res: u32, light: &str) -> String {
+    format!(
+        r#"
+[camera]
+look_from = [0.0, 50.0, 86.60254037844386]
+look_at = [0.0, 0.0, 0.0]
+fov_deg = 0.5
+resolution = [{res}, {res}]
+
+[film]
+spp = 1
+
+[integrator]
+max_depth = 1
+
+[materials.m]
+model = "ggx"
+fresnel = "one"
+alpha = {alpha}
+
+[[shapes]]
+type = "rectangle"
+size = [10.0, 10.0]
+material = "m"
+transform = {{ rotate_deg = [-90.0, 0.0, 0.0] }}
+
+{light}
+"#
+    )
+}
