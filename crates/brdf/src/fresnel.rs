@@ -30,6 +30,31 @@ impl Fresnel {
         }
     }
 
+    /// Reflectance from cos²θ (clamped to [0, 1]) instead of cosθ; equal to
+    /// [`Fresnel::reflectance`] at √(cos²θ) to round-off.
+    #[inline]
+    pub fn reflectance_cos2(&self, cos2_theta: f64, lambda_nm: f64) -> f64 {
+        match self {
+            Fresnel::One => 1.0,
+            Fresnel::Conductor(ior) => {
+                let (n, k) = ior.at(lambda_nm);
+                conductor_reflectance_cos2(cos2_theta, n, k)
+            }
+        }
+    }
+
+    /// Reflectance for cos²θ = `num` / `den` (see [`conductor_reflectance_ratio`]).
+    #[inline]
+    pub fn reflectance_ratio(&self, num: f64, den: f64, lambda_nm: f64) -> f64 {
+        match self {
+            Fresnel::One => 1.0,
+            Fresnel::Conductor(ior) => {
+                let (n, k) = ior.at(lambda_nm);
+                conductor_reflectance_ratio(num, den, n, k)
+            }
+        }
+    }
+
     /// Checks that the data cover `[lo, hi]` nm (always true for [`Fresnel::One`]).
     pub fn check_covers(&self, lo_nm: f64, hi_nm: f64) -> Result<(), crate::BrdfError> {
         match self {
@@ -53,20 +78,49 @@ pub fn conductor_reflectance(cos_theta: f64, n: f64, k: f64) -> f64 {
     } else {
         0.0
     };
-    let c2 = c * c;
-    let s2 = 1.0 - c2;
+    conductor_reflectance_cos2(c * c, n, k)
+}
+
+/// [`conductor_reflectance`] from cos²θ ∈ [0, 1] (clamped).
+#[inline]
+pub fn conductor_reflectance_cos2(cos2_theta: f64, n: f64, k: f64) -> f64 {
+    let c2 = if cos2_theta > 0.0 {
+        cos2_theta.min(1.0)
+    } else {
+        0.0
+    };
+    conductor_reflectance_ratio(c2, 1.0, n, k)
+}
+
+/// [`conductor_reflectance`] for cos²θ = `num` / `den` (0 ≤ num ≤ den, den > 0),
+/// without forming the quotient.
+///
+/// The cosine enters only squared and in the product c·a (taken as √(c²a²)),
+/// and written in C = cos²θ·Q, S = sin²θ·Q and Q the reflectance is a ratio of
+/// homogeneous polynomials in which Q cancels. A microfacet sampler that
+/// knows wi·h and |h|² of an unnormalised h thus pays no division and no
+/// square root before the Fresnel chain (its critical path).
+#[inline]
+pub fn conductor_reflectance_ratio(num: f64, den: f64, n: f64, k: f64) -> f64 {
+    let c = num.max(0.0);
+    let s = (den - c).max(0.0);
     let n2 = n * n;
-    let k2 = k * k;
-    let t0 = n2 - k2 - s2;
-    let a2b2 = libm::sqrt(t0 * t0 + 4.0 * n2 * k2);
-    let a = libm::sqrt((0.5 * (a2b2 + t0)).max(0.0));
-    let t1 = a2b2 + c2;
-    let t2 = 2.0 * c * a;
-    let t3 = c2 * a2b2 + s2 * s2;
-    let t4 = t2 * s2;
-    // R_s = (t1 − t2)/(t1 + t2) and R_p = R_s (t3 − t4)/(t3 + t4), so
-    // ½(R_s + R_p) = (t1 − t2) t3 / ((t1 + t2)(t3 + t4)): one division.
-    let r = (t1 - t2) * t3 / ((t1 + t2) * (t3 + t4));
+    // λ-only terms, off the critical path.
+    let e = n2 - k * k - 1.0;
+    let nk4 = 4.0 * n2 * (k * k);
+    // The textbook quantities times powers of Q: t0 = (n² − κ² − sin²θ)·Q,
+    // a2b2 = (a² + b²)·Q, t2 = 2ca·Q with a² = ½(a² + b² + t0); the
+    // expressions are arranged for the shortest dependent chain.
+    let t0 = e * den + c;
+    let a2b2 = libm::sqrt(t0 * t0 + nk4 * (den * den));
+    let t2_sq = 2.0 * c * (a2b2 + t0);
+    let t2 = libm::sqrt(t2_sq);
+    let t1 = a2b2 + c;
+    let t3 = c * a2b2 + s * s;
+    // R_s = (t1 − t2)/(t1 + t2) and R_p = R_s (t3 − t2 s)/(t3 + t2 s), so
+    // ½(R_s + R_p) = (t1 − t2) t3 / ((t1 + t2)(t3 + t2 s)): one division,
+    // its denominator expanded so that only one product waits for t2.
+    let r = (t1 * t3 - t2 * t3) / (t1 * t3 + s * t2_sq + t2 * (t1 * s + t3));
     // n = 1, κ = 0 at normal incidence is 0/0; a matched interface reflects nothing.
     if r.is_finite() {
         r.clamp(0.0, 1.0)
@@ -135,6 +189,11 @@ mod tests {
                 let a = conductor_reflectance(c, n, k);
                 let b = if c == 0.0 { 1.0 } else { complex_form(c, n, k) };
                 assert!((a - b).abs() < 1e-13, "n={n} k={k} c={c}: {a} vs {b}");
+                // The unnormalised form at any scale of (cos², 1).
+                for q in [1e-30, 1e-8, 0.25, 3.0, 1e12] {
+                    let r = conductor_reflectance_ratio(c * c * q, q, n, k);
+                    assert!((r - b).abs() < 1e-13, "n={n} k={k} c={c} q={q}: {r} vs {b}");
+                }
             }
         }
     }

@@ -89,17 +89,28 @@ impl Metal {
             .map(|&(_, m)| m)
     }
 
-    /// Row index guide: entry j is the interval holding λ = GUIDE_BASE_NM + j.
-    fn guide(self) -> &'static [u8; GUIDE_LEN] {
+    /// The table, its guide and its slopes, resolved with one dispatch.
+    #[inline]
+    fn lookup(
+        self,
+    ) -> (
+        &'static [[f64; 3]],
+        &'static [u8; GUIDE_LEN],
+        &'static [[f64; 2]],
+    ) {
         match self {
-            Metal::Cu => &GUIDE_CU,
-            Metal::Au => &GUIDE_AU,
-            Metal::Ag => &GUIDE_AG,
-            Metal::Al => &GUIDE_AL,
-            Metal::Fe => &GUIDE_FE,
-            Metal::Cr => &GUIDE_CR,
-            Metal::BrassCu70Zn30 => &GUIDE_BRASS,
-            Metal::StainlessSteel => &GUIDE_STAINLESSSTEEL,
+            Metal::Cu => (&ior_data::CU, &GUIDE_CU, &SLOPES_CU),
+            Metal::Au => (&ior_data::AU, &GUIDE_AU, &SLOPES_AU),
+            Metal::Ag => (&ior_data::AG, &GUIDE_AG, &SLOPES_AG),
+            Metal::Al => (&ior_data::AL, &GUIDE_AL, &SLOPES_AL),
+            Metal::Fe => (&ior_data::FE, &GUIDE_FE, &SLOPES_FE),
+            Metal::Cr => (&ior_data::CR, &GUIDE_CR, &SLOPES_CR),
+            Metal::BrassCu70Zn30 => (&ior_data::BRASS, &GUIDE_BRASS, &SLOPES_BRASS),
+            Metal::StainlessSteel => (
+                &ior_data::STAINLESSSTEEL,
+                &GUIDE_STAINLESSSTEEL,
+                &SLOPES_STAINLESSSTEEL,
+            ),
         }
     }
 
@@ -137,6 +148,32 @@ const fn build_guide<const N: usize>(rows: &[[f64; 3]; N]) -> [u8; GUIDE_LEN] {
     }
     out
 }
+
+/// Per-interval slopes (dn/dλ, dκ/dλ) of a table, so that interpolation
+/// needs no division (the lookup sits at the head of the Fresnel chain).
+const fn build_slopes<const N: usize>(rows: &[[f64; 3]; N]) -> [[f64; 2]; N] {
+    let mut out = [[0.0; 2]; N];
+    let mut i = 0;
+    while i + 1 < N {
+        let dl = rows[i + 1][0] - rows[i][0];
+        out[i] = [
+            (rows[i + 1][1] - rows[i][1]) / dl,
+            (rows[i + 1][2] - rows[i][2]) / dl,
+        ];
+        i += 1;
+    }
+    out
+}
+
+static SLOPES_CU: [[f64; 2]; ior_data::CU.len()] = build_slopes(&ior_data::CU);
+static SLOPES_AU: [[f64; 2]; ior_data::AU.len()] = build_slopes(&ior_data::AU);
+static SLOPES_AG: [[f64; 2]; ior_data::AG.len()] = build_slopes(&ior_data::AG);
+static SLOPES_AL: [[f64; 2]; ior_data::AL.len()] = build_slopes(&ior_data::AL);
+static SLOPES_FE: [[f64; 2]; ior_data::FE.len()] = build_slopes(&ior_data::FE);
+static SLOPES_CR: [[f64; 2]; ior_data::CR.len()] = build_slopes(&ior_data::CR);
+static SLOPES_BRASS: [[f64; 2]; ior_data::BRASS.len()] = build_slopes(&ior_data::BRASS);
+static SLOPES_STAINLESSSTEEL: [[f64; 2]; ior_data::STAINLESSSTEEL.len()] =
+    build_slopes(&ior_data::STAINLESSSTEEL);
 
 static GUIDE_CU: [u8; GUIDE_LEN] = build_guide(&ior_data::CU);
 static GUIDE_AU: [u8; GUIDE_LEN] = build_guide(&ior_data::AU);
@@ -239,43 +276,59 @@ impl Ior {
 
     /// (n, κ) at `lambda_nm`, linearly interpolated; held constant beyond the
     /// ends of the table (never extrapolated). NaN input gives the first row.
+    #[inline]
     pub fn at(&self, lambda_nm: f64) -> (f64, f64) {
-        let (rows, guide) = match self {
-            Ior::Constant { n, k } => return (*n, *k),
-            Ior::Metal(m) => (m.table(), Some(m.guide())),
+        match self {
+            Ior::Constant { n, k } => (*n, *k),
+            Ior::Metal(m) => {
+                let (rows, guide, slopes) = m.lookup();
+                let last = rows.len() - 1;
+                if lambda_nm.is_nan() || lambda_nm <= rows[0][0] {
+                    return (rows[0][1], rows[0][2]);
+                }
+                if lambda_nm >= rows[last][0] {
+                    return (rows[last][1], rows[last][2]);
+                }
+                // The guide gives the interval of ⌊λ⌋ exactly, and at most one
+                // row lies in (⌊λ⌋, λ], so one branch-free step finishes the
+                // search (a data-dependent branch here mispredicts for random
+                // λ and cost more than the rest of the lookup).
+                let j = ((lambda_nm as usize).saturating_sub(GUIDE_BASE_NM)).min(GUIDE_LEN - 1);
+                let lo = guide[j] as usize;
+                let lo = lo + usize::from(rows[lo + 1][0] <= lambda_nm);
+                let (a, s) = (rows[lo], slopes[lo]);
+                let dl = lambda_nm - a[0];
+                (a[1] + dl * s[0], a[2] + dl * s[1])
+            }
             #[cfg(feature = "alloc")]
-            Ior::Table(t) => (&t[..], None),
-        };
-        let last = rows.len() - 1;
-        if lambda_nm.is_nan() || lambda_nm <= rows[0][0] {
-            return (rows[0][1], rows[0][2]);
+            Ior::Table(rows) => table_at(rows, lambda_nm),
         }
-        if lambda_nm >= rows[last][0] {
-            return (rows[last][1], rows[last][2]);
-        }
-        // Built-in tables: a per-nanometre guide gives the interval of
-        // ⌊λ⌋ exactly, and at most one row lies in (⌊λ⌋, λ]. User tables: the
-        // tables are close to uniform in λ, so guess from the proportional
-        // position and walk. Either way rows[0] < λ < rows[last] here.
-        let mut lo = match guide {
-            Some(g) => {
-                g[((lambda_nm as usize).saturating_sub(GUIDE_BASE_NM)).min(GUIDE_LEN - 1)] as usize
-            }
-            None => {
-                let span = rows[last][0] - rows[0][0];
-                (((lambda_nm - rows[0][0]) / span * last as f64) as usize).min(last - 1)
-            }
-        };
-        while lo > 0 && rows[lo][0] > lambda_nm {
-            lo -= 1;
-        }
-        while lo + 1 < last && rows[lo + 1][0] <= lambda_nm {
-            lo += 1;
-        }
-        let (a, b) = (rows[lo], rows[lo + 1]);
-        let t = (lambda_nm - a[0]) / (b[0] - a[0]);
-        (a[1] + t * (b[1] - a[1]), a[2] + t * (b[2] - a[2]))
     }
+}
+
+/// Linear interpolation in a user table (at least two rows, λ increasing):
+/// the tables are close to uniform in λ, so guess from the proportional
+/// position and walk.
+#[cfg(feature = "alloc")]
+fn table_at(rows: &[[f64; 3]], lambda_nm: f64) -> (f64, f64) {
+    let last = rows.len() - 1;
+    if lambda_nm.is_nan() || lambda_nm <= rows[0][0] {
+        return (rows[0][1], rows[0][2]);
+    }
+    if lambda_nm >= rows[last][0] {
+        return (rows[last][1], rows[last][2]);
+    }
+    let span = rows[last][0] - rows[0][0];
+    let mut lo = (((lambda_nm - rows[0][0]) / span * last as f64) as usize).min(last - 1);
+    while lo > 0 && rows[lo][0] > lambda_nm {
+        lo -= 1;
+    }
+    while lo + 1 < last && rows[lo + 1][0] <= lambda_nm {
+        lo += 1;
+    }
+    let (a, b) = (rows[lo], rows[lo + 1]);
+    let t = (lambda_nm - a[0]) / (b[0] - a[0]);
+    (a[1] + t * (b[1] - a[1]), a[2] + t * (b[2] - a[2]))
 }
 
 #[cfg(test)]
@@ -320,8 +373,11 @@ mod tests {
                 let l = rows[0][0] + (rows[rows.len() - 1][0] - rows[0][0]) * i as f64 / 60_000.0;
                 let hi = rows.partition_point(|r| r[0] <= l).clamp(1, rows.len() - 1);
                 let (a, b) = (rows[hi - 1], rows[hi]);
-                let t = (l - a[0]) / (b[0] - a[0]);
-                let want = (a[1] + t * (b[1] - a[1]), a[2] + t * (b[2] - a[2]));
+                // The same operations as the precomputed slopes: bit-equal
+                // exactly when the guide picked the right interval.
+                let dl = b[0] - a[0];
+                let s = ((b[1] - a[1]) / dl, (b[2] - a[2]) / dl);
+                let want = (a[1] + (l - a[0]) * s.0, a[2] + (l - a[0]) * s.1);
                 assert_eq!(ior.at(l), want, "{m:?} at {l} nm");
             }
         }

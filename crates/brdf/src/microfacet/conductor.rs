@@ -1,6 +1,6 @@
 //! Rough and smooth conductors built on a microfacet distribution.
 
-use super::Distribution;
+use super::{Distribution, NdfKind};
 use crate::error::BrdfError;
 use crate::fresnel::Fresnel;
 use crate::math::finite_nonneg;
@@ -41,29 +41,58 @@ struct Geometry {
     f_over_fresnel: f64,
     /// Solid-angle pdf of sampling `wo`.
     pdf: f64,
-    /// cosθd = wi·h, the Fresnel angle.
-    cos_ih: f64,
+    /// |wi + wo|² = 4 cos²θd, for the Fresnel term (as the ratio |wi + wo|²/4,
+    /// which skips a product and the clamps on the Fresnel chain).
+    len2: f64,
 }
 
 impl MicrofacetConductor {
-    /// D, G2 and the pdf at (wi, wo) with three divisions in all: with
-    /// Λ = a/d, G2 = di do / (di do + ai do + ao di) and
-    /// G1(i) = di / (di + ai).
+    /// D, G2 and the pdf at (wi, wo), instantiated per distribution (no
+    /// dispatch inside the arithmetic).
     #[inline]
     fn geometry(&self, wi: DVec3, wo: DVec3) -> Option<Geometry> {
+        let d = &self.dist;
+        match d.kind() {
+            NdfKind::Ggx => Self::geometry_with(
+                wi,
+                wo,
+                |v, q| d.ggx_d_unnormalised(v, q),
+                |w| d.ggx_lambda_frac(w),
+            ),
+            NdfKind::Beckmann => {
+                Self::geometry_with(wi, wo, |v, q| d.d_unnormalised(v, q), |w| d.lambda_frac(w))
+            }
+        }
+    }
+
+    /// The geometry with three divisions in all: D on the unnormalised half
+    /// vector v = wi + wo, cos²θd = |v|²/4, and with Λ = a/d,
+    /// G2 = di do / (di do + ai do + ao di) and G1(i) = di / (di + ai).
+    #[inline(always)]
+    fn geometry_with(
+        wi: DVec3,
+        wo: DVec3,
+        d: impl Fn(DVec3, f64) -> f64,
+        lambda_frac: impl Fn(DVec3) -> (f64, f64),
+    ) -> Option<Geometry> {
         if wi.z <= 0.0 || wo.z <= 0.0 {
             return None;
         }
-        let (d, cos_ih) = self.dist.d_half(wi, wo)?;
-        let (ai, di) = self.dist.lambda_frac(wi);
-        let (ao, do_) = self.dist.lambda_frac(wo);
+        let v = wi + wo;
+        let len2 = v.length_squared();
+        if !(len2 > 0.0 && len2.is_finite()) {
+            return None;
+        }
+        let d = d(v, len2);
+        let (ai, di) = lambda_frac(wi);
+        let (ao, do_) = lambda_frac(wo);
         let g2_den = di * do_ + ai * do_ + ao * di;
         Some(Geometry {
             f_over_fresnel: finite_nonneg(d * (di * do_) / (g2_den * (4.0 * wi.z * wo.z))),
             // Visible-normal density G1(i)(i·h)D(h)/cosθi times the
             // reflection Jacobian 1/(4 o·h), with o·h = i·h cancelling.
             pdf: finite_nonneg(d * di / ((di + ai) * (4.0 * wi.z))),
-            cos_ih,
+            len2,
         })
     }
 }
@@ -76,6 +105,7 @@ impl Bxdf for MicrofacetConductor {
 
     #[inline]
     fn pdf(&self, wi: DVec3, wo: DVec3, _lambda_nm: f64) -> f64 {
+        // Only G1(i) and D: cheaper than the full geometry.
         if wi.z <= 0.0 || wo.z <= 0.0 {
             return 0.0;
         }
@@ -91,7 +121,7 @@ impl Bxdf for MicrofacetConductor {
         let Some(g) = self.geometry(wi, wo) else {
             return (0.0, 0.0);
         };
-        let f = self.fresnel.reflectance(g.cos_ih, lambda_nm) * g.f_over_fresnel;
+        let f = self.fresnel.reflectance_ratio(g.len2, 4.0, lambda_nm) * g.f_over_fresnel;
         (finite_nonneg(f), g.pdf)
     }
 
@@ -106,31 +136,82 @@ impl Bxdf for MicrofacetConductor {
         // Only Fresnel depends on λ; the same expressions as `eval_pdf`, so
         // the results are bit-identical to it.
         for (o, &l) in out.iter_mut().zip(lambdas) {
-            let f = self.fresnel.reflectance(g.cos_ih, l) * g.f_over_fresnel;
+            let f = self.fresnel.reflectance_ratio(g.len2, 4.0, l) * g.f_over_fresnel;
             *o = (finite_nonneg(f), g.pdf);
         }
     }
 
     #[inline]
     fn sample(&self, wi: DVec3, lambda_nm: f64, u: [f64; 3]) -> Option<BxdfSample> {
+        let d = &self.dist;
+        // One body, instantiated per distribution so that the GGX path has
+        // no per-step dispatch (measured 59 → 33 ns per call with F = 1).
+        match d.kind() {
+            NdfKind::Ggx => self.sample_with(
+                wi,
+                lambda_nm,
+                u,
+                |wi, u| d.ggx_sample_visible_unnormalised(wi, u),
+                |w| d.ggx_lambda_frac(w),
+                |h, q| d.ggx_d_unnormalised(h, q),
+                true,
+            ),
+            NdfKind::Beckmann => self.sample_with(
+                wi,
+                lambda_nm,
+                u,
+                |wi, u| d.sample_visible_unnormalised(wi, u),
+                |w| d.lambda_frac(w),
+                |h, q| d.d_unnormalised(h, q),
+                false,
+            ),
+        }
+    }
+}
+
+impl MicrofacetConductor {
+    /// Visible-normal sampling given the distribution's pieces: `visible`
+    /// draws h up to a positive factor, `lambda_frac` is Smith Λ as a
+    /// fraction, `d` is D(h/|h|) from h and |h|², and `homogeneous` says
+    /// that `lambda_frac` accepts an unnormalised direction.
+    ///
+    /// The cost of a sample is the latency of one dependent chain of square
+    /// roots and divisions, so the chain is kept free of normalisations:
+    /// with p = wi·h, q = |h|² the mirror direction is v/q for
+    /// v = 2p h − q wi (|v| = q exactly), and Fresnel takes cos²θd as the
+    /// unformed ratio p²/q.
+    #[inline(always)]
+    #[allow(clippy::too_many_arguments)]
+    fn sample_with(
+        &self,
+        wi: DVec3,
+        lambda_nm: f64,
+        u: [f64; 3],
+        visible: impl Fn(DVec3, [f64; 2]) -> DVec3,
+        lambda_frac: impl Fn(DVec3) -> (f64, f64),
+        d: impl Fn(DVec3, f64) -> f64,
+        homogeneous: bool,
+    ) -> Option<BxdfSample> {
         if wi.z <= 0.0 {
             return None;
         }
-        let h = self.dist.sample_visible(wi, [u[1], u[2]]);
-        let cos_ih = wi.dot(h);
-        if cos_ih <= 0.0 {
+        let h = visible(wi, [u[1], u[2]]);
+        let p = wi.dot(h);
+        let q = h.length_squared();
+        if !(p > 0.0 && q > 0.0 && q.is_finite()) {
             return None;
         }
-        let wo = 2.0 * cos_ih * h - wi;
-        if wo.z <= 0.0 {
+        let v = 2.0 * p * h - q * wi;
+        if v.z <= 0.0 {
             return None;
         }
-        let (ai, di) = self.dist.lambda_frac(wi);
-        let (ao, do_) = self.dist.lambda_frac(wo);
+        let wo = v * (1.0 / q);
+        let (ai, di) = lambda_frac(wi);
+        let (ao, do_) = lambda_frac(if homogeneous { v } else { wo });
         // G2/G1(i) = (di + ai) do / (di do + ai do + ao di).
-        let weight = self.fresnel.reflectance(cos_ih, lambda_nm) * ((di + ai) * do_)
+        let weight = self.fresnel.reflectance_ratio(p * p, q, lambda_nm) * ((di + ai) * do_)
             / (di * do_ + ai * do_ + ao * di);
-        let pdf = self.dist.d(h) * di / ((di + ai) * (4.0 * wi.z));
+        let pdf = d(h, q) * di / ((di + ai) * (4.0 * wi.z));
         if !(weight > 0.0 && weight.is_finite() && pdf > 0.0 && pdf.is_finite()) {
             return None;
         }

@@ -24,13 +24,25 @@ pub(super) fn lambda(t: f64) -> f64 {
 /// Benyoub 2023): in the stretched configuration the visible normals are the
 /// normalised sum of the view direction and a uniform point on the spherical
 /// cap below it, which needs no branch and no tangent frame.
+///
+/// Returns the normal up to a positive factor. The stretched view direction
+/// s = (αx x, αy y, z) is not normalised: with L = |s| and A = L + s_z, the
+/// cap point scaled by L has height Lz = (1 − u)A − s_z, so the normal's
+/// height is Lz + s_z = (1 − u)A and the cap radius is
+/// L sinθ = √((L − Lz)(L + Lz)) = √(uA (2L − uA)): one square root and no
+/// division before the normal (the sampler's critical path), and no
+/// cancellation near the cap's edges.
 #[inline]
-pub(super) fn sample_visible(wi: DVec3, ax: f64, ay: f64, u: [f64; 2]) -> DVec3 {
-    let ws = DVec3::new(ax * wi.x, ay * wi.y, wi.z).normalize();
-    let z = (1.0 - u[1]) * (1.0 + ws.z) - ws.z;
-    let sin_t = libm::sqrt((1.0 - z * z).max(0.0));
+pub(super) fn sample_visible_unnormalised(wi: DVec3, ax: f64, ay: f64, u: [f64; 2]) -> DVec3 {
+    let s = DVec3::new(ax * wi.x, ay * wi.y, wi.z);
+    let l = libm::sqrt(s.length_squared());
+    let a = l + s.z;
+    let ua = u[1] * a;
+    let l_sin = libm::sqrt((ua * (2.0 * l - ua)).max(0.0));
     let (sp, cp) = crate::math::sincos_2pi(u[0]);
-    let hs = DVec3::new(sin_t * cp, sin_t * sp, z) + ws;
-    let h = DVec3::new(ax * hs.x, ay * hs.y, hs.z.max(0.0));
-    super::normalize_or_none(h).unwrap_or(DVec3::Z)
+    DVec3::new(
+        ax * (l_sin * cp + s.x),
+        ay * (l_sin * sp + s.y),
+        ((1.0 - u[1]) * a).max(0.0),
+    )
 }

@@ -97,11 +97,11 @@ impl Distribution {
     }
 
     /// D at the half vector of `wi` and `wo` (both with z > 0), and
-    /// cosθd = wi·h = |wi + wo|/2 (exact, never 0/0 at grazing).
+    /// cos²θd = (wi·h)² = |wi + wo|²/4 (exact, never 0/0 at grazing).
     ///
     /// GGX is homogeneous of degree 0 in h up to the factor |v|⁴, so it is
-    /// evaluated on the unnormalised v = wi + wo: one square root and one
-    /// division for both results.
+    /// evaluated on the unnormalised v = wi + wo, and Fresnel takes cos²θd
+    /// (as the ratio |v|²/4): no square root on the path.
     #[inline]
     pub(crate) fn d_half(&self, wi: DVec3, wo: DVec3) -> Option<(f64, f64)> {
         let v = wi + wo;
@@ -109,35 +109,50 @@ impl Distribution {
         if !(len2 > 0.0 && len2.is_finite() && v.z > 0.0) {
             return None;
         }
-        let len = libm::sqrt(len2);
-        let d = match self.kind {
-            NdfKind::Ggx => {
-                let x = v.x * self.inv_alpha_x;
-                let y = v.y * self.inv_alpha_y;
-                let r = len2 / (x * x + y * y + v.z * v.z);
-                self.d_scale * r * r
+        Some((self.d_unnormalised(v, len2), 0.25 * len2))
+    }
+
+    /// D(v/|v|) for v with v.z > 0 and `len2` = |v|² > 0.
+    #[inline]
+    pub(crate) fn d_unnormalised(&self, v: DVec3, len2: f64) -> f64 {
+        match self.kind {
+            NdfKind::Ggx => self.ggx_d_unnormalised(v, len2),
+            NdfKind::Beckmann => {
+                beckmann::d(v * (1.0 / libm::sqrt(len2)), self.alpha_x, self.alpha_y)
             }
-            NdfKind::Beckmann => beckmann::d(v * (1.0 / len), self.alpha_x, self.alpha_y),
-        };
-        Some((d, 0.5 * len))
+        }
+    }
+
+    /// [`Distribution::d_unnormalised`] for a GGX distribution.
+    #[inline(always)]
+    pub(crate) fn ggx_d_unnormalised(&self, v: DVec3, len2: f64) -> f64 {
+        let x = v.x * self.inv_alpha_x;
+        let y = v.y * self.inv_alpha_y;
+        let r = len2 / (x * x + y * y + v.z * v.z);
+        self.d_scale * r * r
     }
 
     /// Smith Λ(w) as a fraction (num, den), Λ = num/den with den > 0 for
     /// w.z > 0, so that callers combine Λi, Λo, G1 and G2 with one division.
     /// GGX: Λ = (√(1 + a/z²) − 1)/2 with a = αx²x² + αy²y², rationalised to
-    /// a / (2z(z + √(a + z²))): no cancellation, no division.
+    /// a / (2z(z + √(a + z²))): no cancellation, no division. Both parts are
+    /// homogeneous of degree 2 in w, so for GGX `w` need not be normalised.
     #[inline]
     pub(crate) fn lambda_frac(&self, w: DVec3) -> (f64, f64) {
         match self.kind {
-            NdfKind::Ggx => {
-                let ax = self.alpha_x * w.x;
-                let ay = self.alpha_y * w.y;
-                let a = ax * ax + ay * ay;
-                let z = w.z;
-                (a, 2.0 * z * (z + libm::sqrt(a + z * z)))
-            }
+            NdfKind::Ggx => self.ggx_lambda_frac(w),
             NdfKind::Beckmann => (self.lambda(w), 1.0),
         }
+    }
+
+    /// [`Distribution::lambda_frac`] for a GGX distribution.
+    #[inline(always)]
+    pub(crate) fn ggx_lambda_frac(&self, w: DVec3) -> (f64, f64) {
+        let ax = self.alpha_x * w.x;
+        let ay = self.alpha_y * w.y;
+        let a = ax * ax + ay * ay;
+        let z = w.z;
+        (a, 2.0 * z * (z + libm::sqrt(a + z * z)))
     }
 
     /// Smith Λ(w): G1(w) = 1 / (1 + Λ(w)). Infinite at and below the horizon.
@@ -172,9 +187,31 @@ impl Distribution {
     #[inline]
     pub fn sample_visible(&self, wi: DVec3, u: [f64; 2]) -> DVec3 {
         match self.kind {
-            NdfKind::Ggx => ggx::sample_visible(wi, self.alpha_x, self.alpha_y, u),
+            NdfKind::Ggx => normalize_or_none(ggx::sample_visible_unnormalised(
+                wi,
+                self.alpha_x,
+                self.alpha_y,
+                u,
+            ))
+            .unwrap_or(DVec3::Z),
             NdfKind::Beckmann => beckmann::sample_visible(wi, self.alpha_x, self.alpha_y, u),
         }
+    }
+
+    /// [`Distribution::sample_visible`] up to a positive factor (z ≥ 0, may be
+    /// zero for degenerate input): GGX skips two divisions and a square root.
+    #[inline]
+    pub(crate) fn sample_visible_unnormalised(&self, wi: DVec3, u: [f64; 2]) -> DVec3 {
+        match self.kind {
+            NdfKind::Ggx => self.ggx_sample_visible_unnormalised(wi, u),
+            NdfKind::Beckmann => beckmann::sample_visible(wi, self.alpha_x, self.alpha_y, u),
+        }
+    }
+
+    /// [`Distribution::sample_visible_unnormalised`] for a GGX distribution.
+    #[inline(always)]
+    pub(crate) fn ggx_sample_visible_unnormalised(&self, wi: DVec3, u: [f64; 2]) -> DVec3 {
+        ggx::sample_visible_unnormalised(wi, self.alpha_x, self.alpha_y, u)
     }
 
     /// Density (per solid angle of `h`) of [`Distribution::sample_visible`].

@@ -13,6 +13,8 @@
 // the out-of-range values, which `x <= 0.0` would let through.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
+#[cfg(feature = "alloc")]
+mod albedo_cap;
 pub mod bessel01;
 pub mod energy;
 pub mod epd;

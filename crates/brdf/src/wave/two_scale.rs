@@ -35,6 +35,13 @@
 //! the values linearly in ln(1 + w). Wavelengths below 360 nm use the last
 //! node (w beyond the table, where D̃_eff ≈ D).
 //!
+//! **Energy.** Even with G₂ from the lobe's own Smith Λ, the albedo can
+//! exceed 1 at grazing incidence (1.037 at 88° for β 0.05, Lc 0.5 µm,
+//! γ 1.5), because the NDF changes with θd across the lobe. Such materials
+//! get the reciprocal cap of [`super::albedo_cap`]: the glossy part is
+//! divided by max(1, C(θi), C(θo)) with C = E/(1 − S) tabulated at
+//! construction; [`TwoScale::is_energy_capped`] says whether it was needed.
+//!
 //! **Sampling** draws the half vector from a mixture: D cosθ_h (exact
 //! inversion, [`super::epd::ExponentialNdf::sample`]) with probability w_D,
 //! and otherwise the tabulated D̃_eff cosθ_h at the fixed κ_s = 2k cosθ_i:
@@ -56,6 +63,7 @@ use crate::frame::reflect_z;
 use crate::fresnel::Fresnel;
 use crate::math::finite_nonneg;
 use crate::model::{Bxdf, BxdfSample, Specular, WAVELENGTH_MAX_NM, WAVELENGTH_MIN_NM};
+use crate::wave::albedo_cap::{self, AlbedoCap};
 use crate::wave::epd::ExponentialNdf;
 use crate::wave::kc::KcPsd;
 
@@ -124,6 +132,9 @@ pub struct TwoScale {
     /// costs a Bessel quadrature, too slow for every evaluation.
     macro_log1p_lambda: Vec<f64>,
     macro_v_extent: f64,
+    /// Reciprocal energy cap where the albedo would exceed 1 (`None` when
+    /// it never does, the common case).
+    cap: Option<AlbedoCap>,
 }
 
 /// Points of the macro NDF's Λ table.
@@ -709,7 +720,7 @@ impl TwoScale {
             };
             libm::log1p(finite_nonneg(lam))
         });
-        Ok(TwoScale {
+        let mut m = TwoScale {
             ndf,
             psd,
             fresnel: p.fresnel,
@@ -717,6 +728,29 @@ impl TwoScale {
             table,
             macro_log1p_lambda,
             macro_v_extent,
+            cap: None,
+        };
+        m.cap = m.build_cap();
+        Ok(m)
+    }
+
+    /// The energy cap of [`super::albedo_cap`] for this material and reading:
+    /// C(μ, k) = E/(1 − S) from the uncapped glossy part with F = 1.
+    fn build_cap(&self) -> Option<AlbedoCap> {
+        let k_lo = super::wavenumber(WAVELENGTH_MAX_NM);
+        let k_hi = super::wavenumber(WAVELENGTH_MIN_NM);
+        // The lobe's angular scale: the macro NDF's, widened by the KC lobe
+        // at small w.
+        let width = self.ndf.beta().clamp(1e-3, 1.0);
+        AlbedoCap::build(k_lo, k_hi, |mu, k| {
+            let mu = mu.max(1e-3);
+            let wi = DVec3::new(libm::sqrt(1.0 - mu * mu), 0.0, mu);
+            let e = albedo_cap::albedo(mu, width, |wo| self.glossy_unit(wi, wo, k));
+            let s = match self.coherent {
+                CoherentPart::MacroNdf => 0.0,
+                CoherentPart::Delta => self.coherent_fraction(k, mu).0,
+            };
+            e / (1.0 - s).max(1e-12)
         })
     }
 
@@ -738,10 +772,19 @@ impl TwoScale {
     /// The same material under the other reading of §8.3, sharing no work
     /// with a rebuild: the D̃_eff table does not depend on the reading.
     pub fn with_coherent_part(&self, coherent: CoherentPart) -> TwoScale {
-        TwoScale {
+        let mut m = TwoScale {
             coherent,
+            cap: None,
             ..self.clone()
-        }
+        };
+        m.cap = m.build_cap();
+        m
+    }
+
+    /// Whether this material needed the energy cap (its uncapped albedo
+    /// exceeds 1 somewhere).
+    pub fn is_energy_capped(&self) -> bool {
+        self.cap.is_some()
     }
 
     /// Raw ∫D_eff cosθ dω at the table's w nodes, as (w, value) pairs,
@@ -812,6 +855,37 @@ impl TwoScale {
         }
     }
 
+    /// The glossy BRDF without Fresnel and without the cap, and cosθd.
+    fn glossy(&self, wi: DVec3, wo: DVec3, k: f64) -> Option<(f64, f64)> {
+        if !(wi.z > 0.0 && wo.z > 0.0) {
+            return None;
+        }
+        let (h, cos_d) = crate::frame::half_vector(wi, wo)?;
+        let cos_d = cos_d.min(1.0);
+        let tan_h = libm::hypot(h.x, h.y) / h.z;
+        let w = 2.0 * k * cos_d * self.psd.lc_um();
+        let d_eff = self.table.d_eff(w, tan_h);
+        let (a_d, one_minus_a_d) = self.coherent_fraction(k, cos_d);
+        let lobe = match self.coherent {
+            CoherentPart::MacroNdf => a_d * self.ndf.d(h) + one_minus_a_d * d_eff,
+            CoherentPart::Delta => {
+                // The delta takes A(θi); the glossy part takes what the
+                // less-coherent of the two directions leaves, 1 − A(min(cosθi,
+                // cosθo)) ≤ 1 − A(θi): reciprocal, and A(θi) + glossy ≤ 1.
+                let (_, one_minus_a) = self.coherent_fraction(k, wi.z.min(wo.z));
+                one_minus_a * d_eff
+            }
+        };
+        let g2 = 1.0 / (1.0 + self.lobe_lambda(wi, w, a_d) + self.lobe_lambda(wo, w, a_d));
+        Some((g2 * lobe / (4.0 * wi.z * wo.z), cos_d))
+    }
+
+    /// [`TwoScale::glossy`] as a plain value (0 where undefined).
+    fn glossy_unit(&self, wi: DVec3, wo: DVec3, k: f64) -> f64 {
+        self.glossy(wi, wo, k)
+            .map_or(0.0, |(f, _)| finite_nonneg(f))
+    }
+
     fn kappa_s(&self, k: f64, ci: f64) -> f64 {
         2.0 * k * ci * self.psd.lc_um()
     }
@@ -829,30 +903,14 @@ impl Bxdf for TwoScale {
         let Some(k) = wavenumber(lambda_nm) else {
             return 0.0;
         };
-        if !(wi.z > 0.0 && wo.z > 0.0) {
-            return 0.0;
-        }
-        let Some((h, cos_d)) = crate::frame::half_vector(wi, wo) else {
+        let Some((f, cos_d)) = self.glossy(wi, wo, k) else {
             return 0.0;
         };
-        let cos_d = cos_d.min(1.0);
-        let tan_h = libm::hypot(h.x, h.y) / h.z;
-        let w = 2.0 * k * cos_d * self.psd.lc_um();
-        let d_eff = self.table.d_eff(w, tan_h);
-        let (a_d, one_minus_a_d) = self.coherent_fraction(k, cos_d);
-        let lobe = match self.coherent {
-            CoherentPart::MacroNdf => a_d * self.ndf.d(h) + one_minus_a_d * d_eff,
-            CoherentPart::Delta => {
-                // The delta takes A(θi); the glossy part takes what the
-                // less-coherent of the two directions leaves, 1 − A(min(cosθi,
-                // cosθo)) ≤ 1 − A(θi): reciprocal, and A(θi) + glossy ≤ 1.
-                let (_, one_minus_a) = self.coherent_fraction(k, wi.z.min(wo.z));
-                one_minus_a * d_eff
-            }
+        let cap = match &self.cap {
+            Some(c) => c.at(wi.z, k).max(c.at(wo.z, k)),
+            None => 1.0,
         };
-        let g2 = 1.0 / (1.0 + self.lobe_lambda(wi, w, a_d) + self.lobe_lambda(wo, w, a_d));
-        let f = self.fresnel.reflectance(cos_d, lambda_nm) * g2 * lobe / (4.0 * wi.z * wo.z);
-        finite_nonneg(f)
+        finite_nonneg(self.fresnel.reflectance(cos_d, lambda_nm) * f / cap)
     }
 
     fn pdf(&self, wi: DVec3, wo: DVec3, lambda_nm: f64) -> f64 {
