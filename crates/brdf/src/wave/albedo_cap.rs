@@ -83,6 +83,11 @@ impl AlbedoCap {
         Some(AlbedoCap { mu, k_lo, k_hi, c })
     }
 
+    /// The largest tabulated C.
+    pub(crate) fn peak(&self) -> f64 {
+        self.c.iter().fold(1.0, |a, &b| a.max(b))
+    }
+
     /// C at incidence cosine `cos` and wavenumber `k` (clamped to the table).
     pub(crate) fn at(&self, cos: f64, k: f64) -> f64 {
         let n = self.mu.len();

@@ -787,6 +787,12 @@ impl TwoScale {
         self.cap.is_some()
     }
 
+    /// The largest factor the energy cap divides by (1 when uncapped): the
+    /// uncapped albedo's excess E/(1 − S) at its worst angle and wavelength.
+    pub fn energy_cap_peak(&self) -> f64 {
+        self.cap.as_ref().map_or(1.0, |c| c.peak())
+    }
+
     /// Raw ∫D_eff cosθ dω at the table's w nodes, as (w, value) pairs,
     /// before renormalisation.
     pub fn raw_normalisation(&self) -> Vec<(f64, f64)> {
