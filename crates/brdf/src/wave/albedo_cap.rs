@@ -36,7 +36,7 @@ const GL4_X: [f64; 2] = [0.339_981_043_584_856_3, 0.861_136_311_594_052_6];
 const GL4_W: [f64; 2] = [0.652_145_154_862_546_1, 0.347_854_845_137_453_9];
 
 /// Ratio of successive panel widths away from the mirror direction.
-const GRADING: f64 = 2.0;
+const GRADING: f64 = 2.5;
 
 /// The tabulated cap C(μ, k) ≥ 1.
 #[derive(Clone, Debug, PartialEq)]
@@ -76,8 +76,16 @@ impl AlbedoCap {
         }
         let n = mu.len();
         let c = crate::parallel::map_rows(K_NODES * n, |j| {
-            let k = k_lo + (k_hi - k_lo) * (j / n) as f64 / (K_NODES - 1) as f64;
-            let r = ratio(mu[j % n], k);
+            let (ik, im) = (j / n, j % n);
+            // The screened entries are reused.
+            let screened = SCREEN.iter().position(|&s| s == im).and_then(|p| match ik {
+                0 => Some(screen[p]),
+                _ if ik == K_NODES - 1 => Some(screen[SCREEN.len() + p]),
+                _ => None,
+            });
+            let r = screened.unwrap_or_else(|| {
+                ratio(mu[im], k_lo + (k_hi - k_lo) * ik as f64 / (K_NODES - 1) as f64)
+            });
             if r.is_finite() { r.max(1.0) } else { 1.0 }
         });
         Some(AlbedoCap { mu, k_lo, k_hi, c })
