@@ -168,8 +168,10 @@ fn scattered_fraction_falls_toward_grazing_and_with_wavelength() {
 #[test]
 fn gamma_2_orders_are_kc_with_lc_over_m() {
     // S̃(u; g) = Σ w_m p_m(u) with p_m = KC(γ = 2, Lc/m) exactly; u within
-    // the hemisphere of this surface (u ≤ 2k(360 nm)Lc ≈ 35).
-    let psd = KcPsd::new(0.2, 1.0, 2.0).unwrap();
+    // the hemisphere of this surface (u ≤ 2k(360 nm)Lc ≈ 35). S̃ does not
+    // depend on σ, but the model's table only holds the g its surface can
+    // reach, (2k(360 nm)σ)²: σ = 3 µm puts that above every g checked.
+    let psd = KcPsd::new(3.0, 1.0, 2.0).unwrap();
     let full = GhsFull::new(psd, Fresnel::One).unwrap();
     let mut worst: f64 = 0.0;
     for &g in &[1e-4, 3e-3, 0.2, 1.0, 7.0, 60.0, 900.0, 9000.0] {

@@ -59,3 +59,42 @@ fn table_matches_direct_transform() {
         }
     }
 }
+
+#[test]
+fn truncated_table_agrees_and_is_guarded() {
+    // A model's table stops at the g its surface reaches, (2k(360 nm)σ)²;
+    // inside that range it is the full table (same rows), and a shared table
+    // too short for a rougher surface is refused.
+    use brdf::Fresnel;
+    use brdf::wave::GhsOptions;
+    use brdf::wave::ghs::{GhsFull, hemisphere_g_max};
+    use brdf::wave::kc::KcPsd;
+    use std::sync::Arc;
+    let res = TableResolution::default();
+    let m = Matern::new(0.75);
+    let full = GhsTable::build(&m, hemisphere_u_max(3.0), res).unwrap();
+    let g_max = hemisphere_g_max(0.1);
+    let cut = GhsTable::build_up_to(&m, hemisphere_u_max(3.0), g_max, res).unwrap();
+    assert!(
+        cut.shape().0 < full.shape().0,
+        "{:?} vs {:?}",
+        cut.shape(),
+        full.shape()
+    );
+    assert!((cut.g_max() - g_max).abs() < 1e-12 * g_max);
+    for g in [1e-4, 2e-3, 0.3, 0.5 * g_max, g_max] {
+        for u in [0.0, 0.3, 3.0, 30.0] {
+            let (a, b) = (cut.s_tilde(u, g).unwrap(), full.s_tilde(u, g).unwrap());
+            assert!((a / b - 1.0).abs() < 1e-9, "g {g} u {u}: {a} vs {b}");
+        }
+    }
+    let cut = Arc::new(cut);
+    let psd = |sigma| KcPsd::new(sigma, 3.0, 2.5).unwrap();
+    assert!(
+        GhsFull::with_table(psd(0.1), Fresnel::One, GhsOptions::default(), cut.clone()).is_ok()
+    );
+    let err = GhsFull::with_table(psd(0.5), Fresnel::One, GhsOptions::default(), cut)
+        .err()
+        .expect("a table for σ = 0.1 µm must not serve σ = 0.5 µm");
+    assert!(err.to_string().contains("g_max"), "{err}");
+}

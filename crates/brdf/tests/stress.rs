@@ -242,6 +242,7 @@ fn full_suite(cases: u32, tables: usize) {
         let table = Arc::new(
             big.build_table(
                 brdf::wave::ghs::hemisphere_u_max(1000.0),
+                brdf::wave::ghs_table::G_MAX,
                 Default::default(),
             )
             .unwrap(),

@@ -84,7 +84,10 @@ impl AlbedoCap {
                 _ => None,
             });
             let r = screened.unwrap_or_else(|| {
-                ratio(mu[im], k_lo + (k_hi - k_lo) * ik as f64 / (K_NODES - 1) as f64)
+                ratio(
+                    mu[im],
+                    k_lo + (k_hi - k_lo) * ik as f64 / (K_NODES - 1) as f64,
+                )
             });
             if r.is_finite() { r.max(1.0) } else { 1.0 }
         });

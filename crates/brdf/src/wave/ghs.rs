@@ -46,6 +46,14 @@ pub fn hemisphere_u_max(length_um: f64) -> f64 {
     2.0 * wavenumber(WAVELENGTH_MIN_NM) * length_um * 1.001
 }
 
+/// The largest g = (kσ(cosθi + cosθo))² a surface of rms height `sigma_um`
+/// reaches at the shortest supported wavelength, (2 k_max σ)² (with the
+/// same 0.1 % margin as [`hemisphere_u_max`]).
+pub fn hemisphere_g_max(sigma_um: f64) -> f64 {
+    let x = 2.0 * wavenumber(WAVELENGTH_MIN_NM) * sigma_um * 1.001;
+    x * x
+}
+
 impl<P: RadialPsd> GhsFull<P> {
     /// Raw energy, halfway Fresnel angle, default table resolution.
     pub fn new(psd: P, fresnel: Fresnel) -> Result<Self, BrdfError> {
@@ -65,13 +73,17 @@ impl<P: RadialPsd> GhsFull<P> {
         opts: GhsOptions,
         res: TableResolution,
     ) -> Result<Self, BrdfError> {
-        let table = psd.build_table(hemisphere_u_max(psd.length_um()), res)?;
+        let table = psd.build_table(
+            hemisphere_u_max(psd.length_um()),
+            hemisphere_g_max(psd.sigma_um()),
+            res,
+        )?;
         Self::with_table(psd, fresnel, opts, Arc::new(table))
     }
 
     /// Shares an existing table (it depends only on the correlation shape and
-    /// the u range, not on σ, Lc or λ). Fails if the table does not cover
-    /// the hemisphere for this surface.
+    /// the u and g ranges, not on σ, Lc or λ). Fails if the table does not
+    /// cover the hemisphere, or the g range, of this surface.
     pub fn with_table(
         psd: P,
         fresnel: Fresnel,
@@ -85,6 +97,14 @@ impl<P: RadialPsd> GhsFull<P> {
                 name: "table u_max",
                 value: table.u_max(),
                 valid: "≥ 2·k(360 nm)·L of the surface: build the table for this surface",
+            });
+        }
+        let need_g = hemisphere_g_max(psd.sigma_um()) / 1.002;
+        if table.g_max() < need_g.min(super::ghs_table::G_MAX) {
+            return Err(BrdfError::OutOfRange {
+                name: "table g_max",
+                value: table.g_max(),
+                valid: "≥ (2·k(360 nm)·σ)² of the surface: build the table for this σ or larger",
             });
         }
         let common = GhsCommon {

@@ -26,7 +26,6 @@ pub const G_MIN: f64 = 1e-4;
 /// Largest g held by the table; above it the g = 1e4 shape is stretched by
 /// the extrapolated width W(g).
 pub const G_MAX: f64 = 1e4;
-const LN_G_MAX: f64 = 9.210_340_371_976_184;
 /// Smallest tail exponent ν = (γ − 1)/2 a table accepts (γ ≥ 1.05).
 pub const NU_MIN: f64 = 0.025;
 /// Largest first column in w; lowered for surfaces whose core is narrower
@@ -192,6 +191,9 @@ pub struct GhsTable {
     /// Total (unnormalised) proposal mass per row.
     mass: Vec<f64>,
     u_max: f64,
+    /// Largest g the rows cover (≤ [`G_MAX`]), and its logarithm.
+    g_hi: f64,
+    ln_g_hi: f64,
 }
 
 impl GhsTable {
@@ -204,7 +206,27 @@ impl GhsTable {
         u_max: f64,
         res: TableResolution,
     ) -> Result<Self, BrdfError> {
+        Self::build_up_to(c, u_max, G_MAX, res)
+    }
+
+    /// [`GhsTable::build`] with rows only up to g = `g_max` (clamped to
+    /// [`G_MIN`, `G_MAX`]): a surface of rms height σ never reaches
+    /// g > (2 k_max σ)² in the visible range ([`hemisphere_g_max`]), and rows
+    /// it cannot use are most of the build time for smooth surfaces. Above
+    /// `g_max` the last rows' shape is stretched by the extrapolated width,
+    /// as above [`G_MAX`] in a full table.
+    pub fn build_up_to<C: Correlation + Sync + ?Sized>(
+        c: &C,
+        u_max: f64,
+        g_max: f64,
+        res: TableResolution,
+    ) -> Result<Self, BrdfError> {
         crate::error::check_range("u_max", u_max, 1e-6, 1e12, "1e-6 ≤ u_max ≤ 1e12")?;
+        let g_hi = if g_max.is_nan() {
+            G_MAX
+        } else {
+            g_max.clamp(G_MIN, G_MAX)
+        };
         crate::error::check_range(
             "rows_per_decade",
             res.rows_per_decade,
@@ -250,7 +272,10 @@ impl GhsTable {
         // their stable law: rows are densified by 0.4/ν there (at most 4×).
         let d_g = ln10 / (res.rows_per_decade * (0.4 / nu).clamp(1.0, 4.0));
         let ln_g0 = crate::math::ln(G_MIN) - d_g;
-        let n_g = libm::ceil((crate::math::ln(G_MAX) - crate::math::ln(G_MIN)) / d_g) as usize + 3;
+        let ln_g_hi = crate::math::ln(g_hi);
+        // At least 5 rows, so that 4-point interpolation always has a
+        // complete stencil.
+        let n_g = (libm::ceil((ln_g_hi - crate::math::ln(G_MIN)) / d_g) as usize + 3).max(5);
         let plan = FftLog::new(res.fft_n, res.fft_dt);
         let rows: Vec<Row> = crate::parallel::map_rows(n_g, |r| {
             let mut scratch = (Vec::new(), Vec::new());
@@ -297,6 +322,8 @@ impl GhsTable {
             cdf: Vec::new(),
             mass: Vec::new(),
             u_max,
+            g_hi,
+            ln_g_hi,
         };
         t.build_cdfs();
         Ok(t)
@@ -305,6 +332,11 @@ impl GhsTable {
     /// Largest u the table was built for.
     pub fn u_max(&self) -> f64 {
         self.u_max
+    }
+
+    /// The largest g the rows cover (above it the shape is extrapolated).
+    pub fn g_max(&self) -> f64 {
+        self.g_hi
     }
 
     /// Bytes of heap memory held.
@@ -365,8 +397,8 @@ impl GhsTable {
             return None;
         }
         let lg = crate::math::ln(g.min(1e300));
-        let (i, wg) = self.row_weights(lg.min(LN_G_MAX));
-        let ln_w_g = if g > G_MAX {
+        let (i, wg) = self.row_weights(lg.min(self.ln_g_hi));
+        let ln_w_g = if g > self.g_hi {
             self.ln_width(g)
         } else {
             wg[0] * self.ln_width[i - 1]
@@ -570,7 +602,7 @@ impl GhsTable {
         let mut scratch = (Vec::new(), Vec::new());
         let mut at = (0.0, 0.0, 0.0, 0.0);
         let lo = crate::math::ln(G_MIN);
-        let hi = crate::math::ln(G_MAX);
+        let hi = self.ln_g_hi;
         for r in 0..self.n_g {
             let lg = self.ln_g0 + (r as f64 + row_offset) * self.d_g;
             if lg < lo || lg > hi {

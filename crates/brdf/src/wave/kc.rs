@@ -220,9 +220,15 @@ impl super::RadialPsd for KcPsd {
     fn build_table(
         &self,
         u_max: f64,
+        g_max: f64,
         res: super::ghs_table::TableResolution,
     ) -> Result<super::ghs_table::GhsTable, BrdfError> {
-        super::ghs_table::GhsTable::build(&super::matern::Matern::new(self.nu()), u_max, res)
+        super::ghs_table::GhsTable::build_up_to(
+            &super::matern::Matern::new(self.nu()),
+            u_max,
+            g_max,
+            res,
+        )
     }
 }
 

@@ -268,9 +268,14 @@ impl RadialPsd for TabulatedPsd {
     fn sample_u(&self, xi: f64) -> f64 {
         self.sample_zeta(xi) * self.length
     }
-    fn build_table(&self, u_max: f64, res: TableResolution) -> Result<GhsTable, BrdfError> {
+    fn build_table(
+        &self,
+        u_max: f64,
+        g_max: f64,
+        res: TableResolution,
+    ) -> Result<GhsTable, BrdfError> {
         let c = TabulatedCorrelation::new(self);
-        GhsTable::build(&c, u_max, res)
+        GhsTable::build_up_to(&c, u_max, g_max, res)
     }
 }
 

@@ -58,11 +58,12 @@ pub trait RadialPsd {
     fn cdf_u(&self, u: f64) -> f64;
     /// Inverse of [`RadialPsd::cdf_u`] (may return +∞).
     fn sample_u(&self, xi: f64) -> f64;
-    /// Builds the full-GHS table of S̃(u; g) for u ≤ `u_max`.
+    /// Builds the full-GHS table of S̃(u; g) for u ≤ `u_max` and g ≤ `g_max`.
     #[cfg(feature = "alloc")]
     fn build_table(
         &self,
         u_max: f64,
+        g_max: f64,
         res: ghs_table::TableResolution,
     ) -> Result<ghs_table::GhsTable, crate::BrdfError>;
 }
