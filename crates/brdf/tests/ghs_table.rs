@@ -93,8 +93,8 @@ fn truncated_table_agrees_and_is_guarded() {
     assert!(
         GhsFull::with_table(psd(0.1), Fresnel::One, GhsOptions::default(), cut.clone()).is_ok()
     );
-    let err = GhsFull::with_table(psd(0.5), Fresnel::One, GhsOptions::default(), cut)
-        .err()
-        .expect("a table for σ = 0.1 µm must not serve σ = 0.5 µm");
+    let Err(err) = GhsFull::with_table(psd(0.5), Fresnel::One, GhsOptions::default(), cut) else {
+        panic!("a table for σ = 0.1 µm must not serve σ = 0.5 µm");
+    };
     assert!(err.to_string().contains("g_max"), "{err}");
 }
