@@ -56,23 +56,26 @@ impl MicrofacetConductor {
             NdfKind::Ggx => Self::geometry_with(
                 wi,
                 wo,
-                |v, q| d.ggx_d_unnormalised(v, q),
+                |v, q| d.ggx_d_fraction(v, q),
                 |w| d.ggx_lambda_frac(w),
             ),
-            NdfKind::Beckmann => {
-                Self::geometry_with(wi, wo, |v, q| d.d_unnormalised(v, q), |w| d.lambda_frac(w))
-            }
+            NdfKind::Beckmann => Self::geometry_with(
+                wi,
+                wo,
+                |v, q| (d.d_unnormalised(v, q), 1.0),
+                |w| d.lambda_frac(w),
+            ),
         }
     }
 
-    /// The geometry with three divisions in all: D on the unnormalised half
-    /// vector v = wi + wo, cos²θd = |v|²/4, and with Λ = a/d,
+    /// The geometry with two divisions in all: D on the unnormalised half
+    /// vector v = wi + wo (as a fraction whose division joins the others), cos²θd = |v|²/4, and with Λ = a/d,
     /// G2 = di do / (di do + ai do + ao di) and G1(i) = di / (di + ai).
     #[inline(always)]
     fn geometry_with(
         wi: DVec3,
         wo: DVec3,
-        d: impl Fn(DVec3, f64) -> f64,
+        d: impl Fn(DVec3, f64) -> (f64, f64),
         lambda_frac: impl Fn(DVec3) -> (f64, f64),
     ) -> Option<Geometry> {
         if wi.z <= 0.0 || wo.z <= 0.0 {
@@ -83,15 +86,17 @@ impl MicrofacetConductor {
         if !(len2 > 0.0 && len2.is_finite()) {
             return None;
         }
-        let d = d(v, len2);
+        let (d_num, d_den) = d(v, len2);
         let (ai, di) = lambda_frac(wi);
         let (ao, do_) = lambda_frac(wo);
         let g2_den = di * do_ + ai * do_ + ao * di;
         Some(Geometry {
-            f_over_fresnel: finite_nonneg(d * (di * do_) / (g2_den * (4.0 * wi.z * wo.z))),
+            f_over_fresnel: finite_nonneg(
+                d_num * (di * do_) / (d_den * g2_den * (4.0 * wi.z * wo.z)),
+            ),
             // Visible-normal density G1(i)(i·h)D(h)/cosθi times the
             // reflection Jacobian 1/(4 o·h), with o·h = i·h cancelling.
-            pdf: finite_nonneg(d * di / ((di + ai) * (4.0 * wi.z))),
+            pdf: finite_nonneg(d_num * di / (d_den * (di + ai) * (4.0 * wi.z))),
             len2,
         })
     }
@@ -153,7 +158,7 @@ impl Bxdf for MicrofacetConductor {
                 u,
                 |wi, u| d.ggx_sample_visible_unnormalised(wi, u),
                 |w| d.ggx_lambda_frac(w),
-                |h, q| d.ggx_d_unnormalised(h, q),
+                |h, q| d.ggx_d_fraction(h, q),
                 true,
             ),
             NdfKind::Beckmann => self.sample_with(
@@ -162,7 +167,7 @@ impl Bxdf for MicrofacetConductor {
                 u,
                 |wi, u| d.sample_visible_unnormalised(wi, u),
                 |w| d.lambda_frac(w),
-                |h, q| d.d_unnormalised(h, q),
+                |h, q| (d.d_unnormalised(h, q), 1.0),
                 false,
             ),
         }
@@ -172,7 +177,8 @@ impl Bxdf for MicrofacetConductor {
 impl MicrofacetConductor {
     /// Visible-normal sampling given the distribution's pieces: `visible`
     /// draws h up to a positive factor, `lambda_frac` is Smith Λ as a
-    /// fraction, `d` is D(h/|h|) from h and |h|², and `homogeneous` says
+    /// fraction, `d` is D(h/|h|) from h and |h|² as a fraction (its division
+    /// joins the pdf's), and `homogeneous` says
     /// that `lambda_frac` accepts an unnormalised direction.
     ///
     /// The cost of a sample is the latency of one dependent chain of square
@@ -189,7 +195,7 @@ impl MicrofacetConductor {
         u: [f64; 3],
         visible: impl Fn(DVec3, [f64; 2]) -> DVec3,
         lambda_frac: impl Fn(DVec3) -> (f64, f64),
-        d: impl Fn(DVec3, f64) -> f64,
+        d: impl Fn(DVec3, f64) -> (f64, f64),
         homogeneous: bool,
     ) -> Option<BxdfSample> {
         if wi.z <= 0.0 {
@@ -211,7 +217,8 @@ impl MicrofacetConductor {
         // G2/G1(i) = (di + ai) do / (di do + ai do + ao di).
         let weight = self.fresnel.reflectance_ratio(p * p, q, lambda_nm) * ((di + ai) * do_)
             / (di * do_ + ai * do_ + ao * di);
-        let pdf = d(h, q) * di / ((di + ai) * (4.0 * wi.z));
+        let (d_num, d_den) = d(h, q);
+        let pdf = d_num * di / (d_den * (di + ai) * (4.0 * wi.z));
         if !(weight > 0.0 && weight.is_finite() && pdf > 0.0 && pdf.is_finite()) {
             return None;
         }

@@ -123,6 +123,16 @@ impl Distribution {
         }
     }
 
+    /// [`Distribution::d_unnormalised`] for a GGX distribution, as an unformed
+    /// fraction (numerator, denominator > 0).
+    #[inline(always)]
+    pub(crate) fn ggx_d_fraction(&self, v: DVec3, len2: f64) -> (f64, f64) {
+        let x = v.x * self.inv_alpha_x;
+        let y = v.y * self.inv_alpha_y;
+        let s = x * x + y * y + v.z * v.z;
+        (self.d_scale * (len2 * len2), s * s)
+    }
+
     /// [`Distribution::d_unnormalised`] for a GGX distribution.
     #[inline(always)]
     pub(crate) fn ggx_d_unnormalised(&self, v: DVec3, len2: f64) -> f64 {
