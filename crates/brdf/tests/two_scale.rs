@@ -482,9 +482,10 @@ fn furnace(which: &[usize], angles: &[(f64, f64)]) {
                     // of D alone the albedo reached 1.072 (β 0.05, Lc
                     // 0.5 µm, γ 1.5, θi = 88°); with it, 1.0368, because
                     // the NDF itself changes with θd across the lobe. The
-                    // reciprocal energy cap removes the rest; 1e−3 covers
-                    // the cubature and the tables' interpolation.
-                    let bound = 1.0 + 1e-3;
+                    // reciprocal energy cap removes the rest (its table
+                    // inflated by 1e−3 for its own error); 2e−4 covers the
+                    // cubature here.
+                    let bound = 1.0 + 2e-4;
                     assert!(q.value <= bound, "albedo {} > {bound}", q.value);
                     assert!(
                         (s.mean - q.value).abs() <= 5.0 * s.std_error + 1e-3,
