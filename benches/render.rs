@@ -9,7 +9,9 @@
 //! * `cpu/*`: CPU time of the whole process (all render threads), so
 //!   samples per CPU-second; the 1- vs 2-thread ratio of this measure shows
 //!   the parallel overhead (spinning, synchronisation) even under load;
-//! * `startup/*`: CPU time of the loading thread.
+//! * `startup_wall/*`: wall-clock time to load a scene (the ≤ 50 ms target:
+//!   table rows are built on all cores, so on an idle machine this is what a
+//!   user waits); `startup_cpu/*`: CPU time of the whole process for it.
 //!
 //! `cargo bench --bench render`
 
@@ -22,7 +24,7 @@ use std::time::Duration;
 
 #[path = "support/cpu_time.rs"]
 mod cpu_time;
-use cpu_time::{Cpu, PROCESS, THREAD};
+use cpu_time::{Cpu, PROCESS};
 
 fn scene_path(rel: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join(rel)
@@ -69,9 +71,9 @@ fn cpu(c: &mut Criterion<Cpu>) {
     throughput(c, "cpu");
 }
 
-fn startup(c: &mut Criterion<Cpu>) {
-    let mut g = c.benchmark_group("startup");
-    // Table-building models take 0.1–0.3 s per load: 10 samples over 10 s.
+fn startup<M: Measurement>(c: &mut Criterion<M>, group: &str) {
+    let mut g = c.benchmark_group(group);
+    // Table-building models take 20–60 ms per load: 10 samples over 10 s.
     g.sample_size(10).measurement_time(Duration::from_secs(10));
     for rel in [
         "scenes/default.toml",
@@ -93,7 +95,15 @@ fn startup(c: &mut Criterion<Cpu>) {
     g.finish();
 }
 
-criterion_group!(wall_clock, wall);
+fn startup_wall(c: &mut Criterion) {
+    startup(c, "startup_wall");
+}
+
+fn startup_cpu(c: &mut Criterion<Cpu>) {
+    startup(c, "startup_cpu");
+}
+
+criterion_group!(wall_clock, wall, startup_wall);
 criterion_group! {
     name = cpu_time;
     config = Criterion::default().with_measurement(Cpu(PROCESS));
@@ -101,7 +111,7 @@ criterion_group! {
 }
 criterion_group! {
     name = startup_time;
-    config = Criterion::default().with_measurement(Cpu(THREAD));
-    targets = startup
+    config = Criterion::default().with_measurement(Cpu(PROCESS));
+    targets = startup_cpu
 }
 criterion_main!(wall_clock, cpu_time, startup_time);
