@@ -23,6 +23,11 @@ pub struct Matern {
     log_norm: f64,
     /// Γ(1 − ν) for the series (unused near integers).
     gamma_1m_nu: f64,
+    /// ln Γ(1 + ν) and Γ(2 − ν), the series' other constants: evaluated
+    /// per call they were most of its cost (the S̃ tables call it millions of
+    /// times).
+    lgamma_1p_nu: f64,
+    gamma_2m_nu: f64,
     near_integer: bool,
 }
 
@@ -38,6 +43,8 @@ impl Matern {
             } else {
                 libm::tgamma(1.0 - nu)
             },
+            lgamma_1p_nu: libm::lgamma(1.0 + nu),
+            gamma_2m_nu: libm::tgamma(2.0 - nu),
             near_integer,
         }
     }
@@ -128,7 +135,7 @@ impl Matern {
         let nu = self.nu;
         let t = 0.25 * x * x;
         // first sum
-        let mut term = crate::math::exp(nu * crate::math::ln(t) - libm::lgamma(1.0 + nu));
+        let mut term = crate::math::exp(nu * crate::math::ln(t) - self.lgamma_1p_nu);
         let mut s1 = term;
         let mut k = 1.0;
         while k < 60.0 {
@@ -140,7 +147,7 @@ impl Matern {
             k += 1.0;
         }
         // second sum: t^k/(k! Γ(k+1−ν)) via the recurrence of 1/Γ.
-        let mut term2 = t / libm::tgamma(2.0 - nu);
+        let mut term2 = t / self.gamma_2m_nu;
         let mut s2 = term2;
         let mut k = 2.0;
         while k < 60.0 {
