@@ -8,8 +8,11 @@ use brdf::{Bxdf, Distribution, Fresnel, Ior, Metal, MicrofacetConductor};
 use glam::DVec3;
 use render::integrator::sample_pixel;
 
+#[path = "support/scene_fixtures.rs"]
+mod scene_fixtures;
 #[path = "support/spectral_reference.rs"]
 mod spectral_reference;
+use scene_fixtures::{EYE_45DEG, plate_at_45deg};
 use spectral_reference::Spectra;
 use std::path::PathBuf;
 
@@ -17,38 +20,14 @@ const LIGHT: [f64; 3] = [0.3, 1.2, -0.8];
 const INTENSITY: f64 = 5.0;
 
 fn scene_text(material: &str, mode: &str) -> String {
-    format!(
-        r#"
-[camera]
-look_from = [0.0, 0.7071067811865476, 0.7071067811865476]
-look_at = [0.0, 0.0, 0.0]
-fov_deg = 2.0
-resolution = [16, 16]
-
-[film]
-spp = 1
-
-[integrator]
-max_depth = 1
-wavelengths = "{mode}"
-
-[materials.m]
-metal = "stainless_steel"
-{material}
-
-[[shapes]]
-type = "rectangle"
-size = [2.0, 2.0]
-material = "m"
-transform = {{ rotate_deg = [-90.0, 0.0, 0.0] }}
-
-[[lights]]
-type = "point"
-position = [{}, {}, {}]
-intensity = {INTENSITY}
-spectrum = "d65"
-"#,
-        LIGHT[0], LIGHT[1], LIGHT[2]
+    plate_at_45deg(
+        &format!("wavelengths = \"{mode}\""),
+        &format!("metal = \"stainless_steel\"\n{material}"),
+        &format!(
+            "[[lights]]\ntype = \"point\"\nposition = [{}, {}, {}]\n\
+             intensity = {INTENSITY}\nspectrum = \"d65\"",
+            LIGHT[0], LIGHT[1], LIGHT[2]
+        ),
     )
 }
 
@@ -74,11 +53,7 @@ fn reference(model: &dyn Bxdf, p: DVec3, eye: DVec3) -> f64 {
 fn check(model_name: &str, material: &str, model: &dyn Bxdf, mode: &str, samples: u64) {
     let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/point_light.toml");
     let scene = render::load_str(&path, &scene_text(material, mode)).unwrap();
-    let eye = DVec3::new(
-        0.0,
-        std::f64::consts::FRAC_1_SQRT_2,
-        std::f64::consts::FRAC_1_SQRT_2,
-    );
+    let eye = DVec3::from(EYE_45DEG);
     let cie_y = render::spectrum::Cie::get().y_integral();
     for &(px, py) in &[(8u32, 8u32), (2, 3), (13, 12)] {
         // A pixel spans 2 mm of the plate, over which f is linear to < 0.1 %: use its centre.

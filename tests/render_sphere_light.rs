@@ -9,8 +9,11 @@ use glam::DVec3;
 use render::integrator::sample_pixel;
 use std::path::PathBuf;
 
+#[path = "support/scene_fixtures.rs"]
+mod scene_fixtures;
 #[path = "support/spectral_reference.rs"]
 mod spectral_reference;
+use scene_fixtures::{EYE_45DEG, plate_at_45deg};
 use spectral_reference::Spectra;
 
 const CENTER: [f64; 3] = [0.0, 1.1, -1.0];
@@ -19,42 +22,14 @@ const RADIANCE: f64 = 2.0;
 const ALPHA: f64 = 0.15;
 
 fn scene_text(mode: &str, sampler: &str, mis: &str) -> String {
-    format!(
-        r#"
-[camera]
-look_from = [0.0, 0.7071067811865476, 0.7071067811865476]
-look_at = [0.0, 0.0, 0.0]
-fov_deg = 2.0
-resolution = [16, 16]
-
-[film]
-spp = 1
-
-[integrator]
-max_depth = 1
-wavelengths = "{mode}"
-sampler = "{sampler}"
-mis = "{mis}"
-
-[materials.m]
-model = "ggx"
-alpha = {ALPHA}
-metal = "au"
-
-[[shapes]]
-type = "rectangle"
-size = [2.0, 2.0]
-material = "m"
-transform = {{ rotate_deg = [-90.0, 0.0, 0.0] }}
-
-[[lights]]
-type = "sphere"
-center = [{}, {}, {}]
-radius = {RADIUS}
-radiance = {RADIANCE}
-spectrum = "d65"
-"#,
-        CENTER[0], CENTER[1], CENTER[2]
+    plate_at_45deg(
+        &format!("wavelengths = \"{mode}\"\nsampler = \"{sampler}\"\nmis = \"{mis}\""),
+        &format!("model = \"ggx\"\nalpha = {ALPHA}\nmetal = \"au\""),
+        &format!(
+            "[[lights]]\ntype = \"sphere\"\ncenter = [{}, {}, {}]\nradius = {RADIUS}\n\
+             radiance = {RADIANCE}\nspectrum = \"d65\"",
+            CENTER[0], CENTER[1], CENTER[2]
+        ),
     )
 }
 
@@ -111,11 +86,7 @@ fn sphere_light_direct_lighting_is_unbiased_for_every_mis_and_sampler() {
         Fresnel::conductor(Ior::metal(Metal::Au)),
     )
     .unwrap();
-    let eye = DVec3::new(
-        0.0,
-        std::f64::consts::FRAC_1_SQRT_2,
-        std::f64::consts::FRAC_1_SQRT_2,
-    );
+    let eye = DVec3::from(EYE_45DEG);
     let cie_y = render::spectrum::Cie::get().y_integral();
     let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/sphere_light.toml");
     let pixels = [(8u32, 8u32), (3, 12), (13, 2)];

@@ -46,3 +46,43 @@ transform = {{ rotate_deg = [-90.0, 0.0, 0.0] }}
 "#
     )
 }
+
+/// The eye of [`plate_at_45deg`].
+pub const EYE_45DEG: [f64; 3] = [
+    0.0,
+    std::f64::consts::FRAC_1_SQRT_2,
+    std::f64::consts::FRAC_1_SQRT_2,
+];
+
+/// A 2 m plate (material `m`, TOML body `material`) seen at 45° through a
+/// 2° camera of 16×16 pixels, one bounce, with `integrator` lines added to
+/// `[integrator]` and the `[[lights]]` table `light` (TOML text).
+pub fn plate_at_45deg(integrator: &str, material: &str, light: &str) -> String {
+    format!(
+        r#"
+[camera]
+look_from = [0.0, 0.7071067811865476, 0.7071067811865476]
+look_at = [0.0, 0.0, 0.0]
+fov_deg = 2.0
+resolution = [16, 16]
+
+[film]
+spp = 1
+
+[integrator]
+max_depth = 1
+{integrator}
+
+[materials.m]
+{material}
+
+[[shapes]]
+type = "rectangle"
+size = [2.0, 2.0]
+material = "m"
+transform = {{ rotate_deg = [-90.0, 0.0, 0.0] }}
+
+{light}
+"#
+    )
+}

@@ -21,26 +21,8 @@ impl Fresnel {
     /// reflecting normal, at `lambda_nm`. `cos_theta` is clamped to [0, 1].
     #[inline]
     pub fn reflectance(&self, cos_theta: f64, lambda_nm: f64) -> f64 {
-        match self {
-            Fresnel::One => 1.0,
-            Fresnel::Conductor(ior) => {
-                let (n, k) = ior.at(lambda_nm);
-                conductor_reflectance(cos_theta, n, k)
-            }
-        }
-    }
-
-    /// Reflectance from cos²θ (clamped to [0, 1]) instead of cosθ; equal to
-    /// [`Fresnel::reflectance`] at √(cos²θ) to round-off.
-    #[inline]
-    pub fn reflectance_cos2(&self, cos2_theta: f64, lambda_nm: f64) -> f64 {
-        match self {
-            Fresnel::One => 1.0,
-            Fresnel::Conductor(ior) => {
-                let (n, k) = ior.at(lambda_nm);
-                conductor_reflectance_cos2(cos2_theta, n, k)
-            }
-        }
+        let c = clamp_cos(cos_theta);
+        self.reflectance_ratio(c * c, 1.0, lambda_nm)
     }
 
     /// Reflectance for cos²θ = `num` / `den` (see [`conductor_reflectance_ratio`]).
@@ -73,23 +55,14 @@ impl Fresnel {
 /// incidence exact. Equal to the complex form to round-off (tested).
 #[inline]
 pub fn conductor_reflectance(cos_theta: f64, n: f64, k: f64) -> f64 {
-    let c = if cos_theta > 0.0 {
-        cos_theta.min(1.0)
-    } else {
-        0.0
-    };
-    conductor_reflectance_cos2(c * c, n, k)
+    let c = clamp_cos(cos_theta);
+    conductor_reflectance_ratio(c * c, 1.0, n, k)
 }
 
-/// [`conductor_reflectance`] from cos²θ ∈ [0, 1] (clamped).
+/// cosθ clamped to [0, 1], NaN to 0.
 #[inline]
-pub fn conductor_reflectance_cos2(cos2_theta: f64, n: f64, k: f64) -> f64 {
-    let c2 = if cos2_theta > 0.0 {
-        cos2_theta.min(1.0)
-    } else {
-        0.0
-    };
-    conductor_reflectance_ratio(c2, 1.0, n, k)
+fn clamp_cos(c: f64) -> f64 {
+    if c > 0.0 { c.min(1.0) } else { 0.0 }
 }
 
 /// [`conductor_reflectance`] for cos²θ = `num` / `den` (0 ≤ num ≤ den, den > 0),

@@ -116,7 +116,10 @@ impl Distribution {
     #[inline]
     pub(crate) fn d_unnormalised(&self, v: DVec3, len2: f64) -> f64 {
         match self.kind {
-            NdfKind::Ggx => self.ggx_d_unnormalised(v, len2),
+            NdfKind::Ggx => {
+                let (num, den) = self.ggx_d_fraction(v, len2);
+                num / den
+            }
             NdfKind::Beckmann => {
                 beckmann::d(v * (1.0 / libm::sqrt(len2)), self.alpha_x, self.alpha_y)
             }
@@ -131,15 +134,6 @@ impl Distribution {
         let y = v.y * self.inv_alpha_y;
         let s = x * x + y * y + v.z * v.z;
         (self.d_scale * (len2 * len2), s * s)
-    }
-
-    /// [`Distribution::d_unnormalised`] for a GGX distribution.
-    #[inline(always)]
-    pub(crate) fn ggx_d_unnormalised(&self, v: DVec3, len2: f64) -> f64 {
-        let x = v.x * self.inv_alpha_x;
-        let y = v.y * self.inv_alpha_y;
-        let r = len2 / (x * x + y * y + v.z * v.z);
-        self.d_scale * r * r
     }
 
     /// Smith Λ(w) as a fraction (num, den), Λ = num/den with den > 0 for

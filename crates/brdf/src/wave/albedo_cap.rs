@@ -19,6 +19,8 @@ use core::f64::consts::PI;
 
 use glam::DVec3;
 
+use super::quadrature::{gl4_nodes, panel_edges};
+
 /// Incidence angles of the table, degrees: denser towards grazing, where
 /// the excess lives. C is smooth and slowly rising below 60° (measured
 /// 0.984, 0.989, 0.996, 1.000 at 0°, 30°, 50°, 60° in the worst material;
@@ -37,10 +39,6 @@ const SCREEN: [usize; 3] = [5, 7, 8];
 /// C is close to linear in k (4 nodes changed no capped albedo by more
 /// than 1e−3 in the furnace tests, and cost a third more).
 const K_NODES: usize = 3;
-
-/// 4-point Gauss–Legendre on [−1, 1] (positive half).
-const GL4_X: [f64; 2] = [0.339_981_043_584_856_3, 0.861_136_311_594_052_6];
-const GL4_W: [f64; 2] = [0.652_145_154_862_546_1, 0.347_854_845_137_453_9];
 
 /// Ratio of successive panel widths away from the mirror direction.
 const GRADING: f64 = 2.5;
@@ -110,16 +108,27 @@ impl AlbedoCap {
         self.c.iter().fold(1.0, |a, &b| a.max(b))
     }
 
-    /// C at incidence cosine `cos` and wavenumber `k` (clamped to the table).
-    pub(crate) fn at(&self, cos: f64, k: f64) -> f64 {
+    /// max(C(cos_a, k), C(cos_b, k)), the divisor of a reciprocal BRDF, with
+    /// the wavenumber bracket found once.
+    pub(crate) fn max_at(&self, cos_a: f64, cos_b: f64, k: f64) -> f64 {
+        let kb = self.k_bracket(k);
+        self.at_bracket(cos_a, kb).max(self.at_bracket(cos_b, kb))
+    }
+
+    /// The wavenumber interval and the position in it.
+    fn k_bracket(&self, k: f64) -> (usize, f64) {
+        let xk = ((k - self.k_lo) / (self.k_hi - self.k_lo)).clamp(0.0, 1.0) * (K_NODES - 1) as f64;
+        let ik = (xk as usize).min(K_NODES - 2);
+        (ik, xk - ik as f64)
+    }
+
+    /// C at incidence cosine `cos` (clamped to the table) in a wavenumber bracket.
+    fn at_bracket(&self, cos: f64, (ik, tk): (usize, f64)) -> f64 {
         let n = self.mu.len();
         // μ nodes descend; find the interval [μ_{i+1}, μ_i] holding cos.
         let cos = cos.clamp(self.mu[n - 1], 1.0);
         let i = self.mu[1..].iter().position(|&m| cos >= m).unwrap_or(n - 2);
         let tm = (self.mu[i] - cos) / (self.mu[i] - self.mu[i + 1]);
-        let xk = ((k - self.k_lo) / (self.k_hi - self.k_lo)).clamp(0.0, 1.0) * (K_NODES - 1) as f64;
-        let ik = (xk as usize).min(K_NODES - 2);
-        let tk = xk - ik as f64;
         let row = |ik: usize| {
             let r = &self.c[ik * n..(ik + 1) * n];
             r[i] + tm * (r[i + 1] - r[i])
@@ -138,8 +147,8 @@ pub(crate) fn albedo(mu: f64, width: f64, f: impl Fn(DVec3) -> f64) -> f64 {
     // ≈ sinθ·width, in φ about width/sinθ around the mirror azimuth π.
     let hz = (0.25 * width * sin_i.max(width)).max(1e-6);
     let hp = (0.25 * width / sin_i.max(width)).clamp(1e-6, 0.5);
-    let zs = nodes(&edges(0.0, 1.0, mu, hz));
-    let ps: Vec<(f64, f64, f64)> = nodes(&edges(0.0, PI, PI, hp))
+    let zs = gl4_nodes(&edges(0.0, 1.0, mu, hz));
+    let ps: Vec<(f64, f64, f64)> = gl4_nodes(&edges(0.0, PI, PI, hp))
         .into_iter()
         .map(|(phi, w)| {
             let (s, c) = libm::sincos(phi);
@@ -162,36 +171,10 @@ pub(crate) fn albedo(mu: f64, width: f64, f: impl Fn(DVec3) -> f64) -> f64 {
     2.0 * sum
 }
 
-/// 4-point Gauss–Legendre nodes and weights on every panel.
-fn nodes(edges: &[f64]) -> Vec<(f64, f64)> {
-    let mut out = Vec::with_capacity(4 * edges.len());
-    for e in edges.windows(2) {
-        let (c, r) = (0.5 * (e[0] + e[1]), 0.5 * (e[1] - e[0]));
-        for j in 0..2 {
-            out.push((c - r * GL4_X[j], r * GL4_W[j]));
-            out.push((c + r * GL4_X[j], r * GL4_W[j]));
-        }
-    }
-    out
-}
-
 /// Panel edges on [lo, hi] graded geometrically away from `focus`.
 fn edges(lo: f64, hi: f64, focus: f64, first: f64) -> Vec<f64> {
-    let mut out = alloc::vec![lo, hi];
-    if focus > lo && focus < hi {
-        out.push(focus);
-    }
-    let mut d = first;
-    while d < hi - lo {
-        for x in [focus - d, focus + d] {
-            if x > lo && x < hi {
-                out.push(x);
-            }
-        }
-        d *= GRADING;
-    }
-    out.sort_by(|a, b| a.total_cmp(b));
-    out.dedup_by(|b, a| (*b - *a).abs() <= 1e-12);
+    let mut out = Vec::new();
+    panel_edges(lo, hi, &[(focus, first)], GRADING, &mut out);
     out
 }
 
@@ -236,13 +219,16 @@ mod tests {
             let mu = libm::cos(t.to_radians());
             for k in [7.0, 17.0] {
                 let want = (ratio(mu, k) * (1.0 + MARGIN)).max(1.0);
-                assert!((cap.at(mu, k) - want).abs() < 1e-12, "node {i} k {k}");
+                assert!(
+                    (cap.max_at(mu, mu, k) - want).abs() < 1e-12,
+                    "node {i} k {k}"
+                );
             }
         }
         // Linear in μ and k, so exact between nodes too where above 1.
-        assert!((cap.at(0.05, 12.0) - ratio(0.05, 12.0) * (1.0 + MARGIN)).abs() < 1e-12);
+        assert!((cap.max_at(0.05, 0.05, 12.0) - ratio(0.05, 12.0) * (1.0 + MARGIN)).abs() < 1e-12);
         // Clamped outside the table, never below 1.
-        assert!(cap.at(0.0, 30.0) >= 1.0 && cap.at(1.0, 1.0) == 1.0);
+        assert!(cap.max_at(0.0, 0.0, 30.0) >= 1.0 && cap.max_at(1.0, 1.0, 1.0) == 1.0);
         assert!(AlbedoCap::build(7.0, 17.0, |_, _| 0.99).is_none());
         assert!(AlbedoCap::build(7.0, 17.0, |_, _| 0.9995).is_some());
     }

@@ -30,6 +30,8 @@ pub mod matern;
 #[cfg(feature = "alloc")]
 pub mod measured_psd;
 pub mod poisson;
+#[cfg(feature = "alloc")]
+mod quadrature;
 pub mod special;
 #[cfg(feature = "alloc")]
 pub mod two_scale;

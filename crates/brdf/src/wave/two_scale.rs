@@ -66,6 +66,7 @@ use crate::model::{Bxdf, BxdfSample, Specular, WAVELENGTH_MAX_NM, WAVELENGTH_MIN
 use crate::wave::albedo_cap::{self, AlbedoCap};
 use crate::wave::epd::ExponentialNdf;
 use crate::wave::kc::KcPsd;
+use crate::wave::quadrature::{GL4_W, GL4_X, gl4, panel_edges};
 
 /// Where the coherent (specular) fraction A of each microfacet goes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Default)]
@@ -140,55 +141,12 @@ pub struct TwoScale {
 /// Points of the macro NDF's Λ table.
 const MACRO_LAMBDA_NODES: usize = 128;
 
-/// Gauss–Legendre 4-point.
-const GL4_X: [f64; 2] = [0.339_981_043_584_856_3, 0.861_136_311_594_052_6];
-const GL4_W: [f64; 2] = [0.652_145_154_862_546_1, 0.347_854_845_137_453_9];
-
 /// Ratio of successive panel widths away from a focus. With 4-point
 /// Gauss–Legendre per panel in both nested integrals, 3 keeps the
 /// convolution within 1e−4 of an adaptive cubature (measured ≤ 6.8e−5,
 /// tested at 2e−4), 40× below the table's interpolation error; 8-point
 /// rules (1e−6) tripled the build time for no visible gain.
 const GRADING: f64 = 3.0;
-
-/// ∫_a^b f by 4-point Gauss–Legendre.
-#[inline]
-fn gl4(a: f64, b: f64, mut f: impl FnMut(f64) -> f64) -> f64 {
-    let (c, r) = (0.5 * (a + b), 0.5 * (b - a));
-    let mut s = 0.0;
-    for j in 0..2 {
-        s += GL4_W[j] * (f(c - r * GL4_X[j]) + f(c + r * GL4_X[j]));
-    }
-    s * r
-}
-
-/// Sorted panel edges on [lo, hi]: the ends and geometric sequences
-/// `center ± scale·GRADING^j` for every (center, scale) in `foci`.
-fn panel_edges(lo: f64, hi: f64, foci: &[(f64, f64)], out: &mut Vec<f64>) {
-    out.clear();
-    out.push(lo);
-    out.push(hi);
-    for &(c, scale) in foci {
-        if !(scale > 0.0) {
-            continue;
-        }
-        if c > lo && c < hi {
-            out.push(c);
-        }
-        let mut d = scale;
-        while d < hi - lo {
-            for x in [c - d, c + d] {
-                if x > lo && x < hi {
-                    out.push(x);
-                }
-            }
-            d *= GRADING;
-        }
-    }
-    out.sort_by(|a, b| a.total_cmp(b));
-    let span = hi - lo;
-    out.dedup_by(|b, a| (*b - *a).abs() <= 1e-9 * span);
-}
 
 /// The convolution D_eff(θh) = ∫ K_w(h·m) D(m) dω_m (not normalised), for
 /// K_w(cosψ) = w²ν/(π(1 + w² sin²ψ)^{ν+1}) on ψ < 90°.
@@ -243,6 +201,7 @@ impl Convolver {
                 (theta_h, 0.25 * eps),
                 (kink, 1e-2),
             ],
+            GRADING,
             &mut outer,
         );
         let mut total = 0.0;
@@ -301,7 +260,13 @@ impl Convolver {
         let delta0 = (tm - th).abs();
         let scale = 0.5 * eps.max(delta0) / libm::sqrt(ss.max(1e-300));
         let mut inner = core::mem::take(&mut self.inner);
-        panel_edges(0.0, phi_max, &[(0.0, scale.min(phi_max))], &mut inner);
+        panel_edges(
+            0.0,
+            phi_max,
+            &[(0.0, scale.min(phi_max))],
+            GRADING,
+            &mut inner,
+        );
         let mut s = 0.0;
         for p in inner.windows(2) {
             s += gl4(p[0], p[1], |phi| self.kernel(w, sin2(phi)));
@@ -891,7 +856,7 @@ impl Bxdf for TwoScale {
             return 0.0;
         };
         let cap = match &self.cap {
-            Some(c) => c.at(wi.z, k).max(c.at(wo.z, k)),
+            Some(c) => c.max_at(wi.z, wo.z, k),
             None => 1.0,
         };
         finite_nonneg(self.fresnel.reflectance(cos_d, lambda_nm) * f / cap)

@@ -1,0 +1,62 @@
+//! Gauss–Legendre rules on graded panels, shared by the table builders that
+//! integrate peaked lobes (the two-scale convolution and the albedo cap).
+
+use alloc::vec::Vec;
+
+/// 4-point Gauss–Legendre on [−1, 1]: the positive nodes and their weights.
+pub(crate) const GL4_X: [f64; 2] = [0.339_981_043_584_856_3, 0.861_136_311_594_052_6];
+pub(crate) const GL4_W: [f64; 2] = [0.652_145_154_862_546_1, 0.347_854_845_137_453_9];
+
+/// ∫_a^b f by 4-point Gauss–Legendre.
+#[inline]
+pub(crate) fn gl4(a: f64, b: f64, mut f: impl FnMut(f64) -> f64) -> f64 {
+    let (c, r) = (0.5 * (a + b), 0.5 * (b - a));
+    let mut s = 0.0;
+    for j in 0..2 {
+        s += GL4_W[j] * (f(c - r * GL4_X[j]) + f(c + r * GL4_X[j]));
+    }
+    s * r
+}
+
+/// The nodes and weights of [`gl4`] on every panel of `edges`, for integrals
+/// whose integrand setup is worth doing once per node.
+pub(crate) fn gl4_nodes(edges: &[f64]) -> Vec<(f64, f64)> {
+    let mut out = Vec::with_capacity(4 * edges.len());
+    for e in edges.windows(2) {
+        let (c, r) = (0.5 * (e[0] + e[1]), 0.5 * (e[1] - e[0]));
+        for j in 0..2 {
+            out.push((c - r * GL4_X[j], r * GL4_W[j]));
+            out.push((c + r * GL4_X[j], r * GL4_W[j]));
+        }
+    }
+    out
+}
+
+/// Sorted panel edges on [lo, hi] into `out`: the ends and, for every
+/// (center, scale) in `foci`, the center and the geometric sequences
+/// `center ± scale·grading^j`.
+pub(crate) fn panel_edges(lo: f64, hi: f64, foci: &[(f64, f64)], grading: f64, out: &mut Vec<f64>) {
+    out.clear();
+    out.push(lo);
+    out.push(hi);
+    for &(c, scale) in foci {
+        if !(scale > 0.0) {
+            continue;
+        }
+        if c > lo && c < hi {
+            out.push(c);
+        }
+        let mut d = scale;
+        while d < hi - lo {
+            for x in [c - d, c + d] {
+                if x > lo && x < hi {
+                    out.push(x);
+                }
+            }
+            d *= grading;
+        }
+    }
+    out.sort_by(|a, b| a.total_cmp(b));
+    let span = hi - lo;
+    out.dedup_by(|b, a| (*b - *a).abs() <= 1e-9 * span);
+}
