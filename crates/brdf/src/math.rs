@@ -65,6 +65,20 @@ pub fn powf(x: f64, y: f64) -> f64 {
     }
 }
 
+/// asinh x for x ≥ 0 (NaN stays NaN), as ln(x + √(x² + 1)) with the
+/// platform's ln: several times cheaper than libm's asinh. There is no
+/// cancellation for x ≥ 0; the absolute error is a few 1e−16 (the relative
+/// error grows for x ≪ 1, which is fine for its use: positions on table
+/// grids, where only absolute accuracy matters).
+#[inline]
+pub fn asinh_nonneg(x: f64) -> f64 {
+    if x > 1e150 {
+        // x² + 1 would overflow; asinh x = ln 2x to double precision.
+        return core::f64::consts::LN_2 + ln(x);
+    }
+    ln(x + libm::sqrt(x * x + 1.0))
+}
+
 /// (sin 2πu, cos 2πu) for `u` ∈ [0, 1], without a libm call.
 ///
 /// Samplers draw azimuths as 2πu, where the general-purpose `sincos` (argument
@@ -116,6 +130,21 @@ pub fn sincos_2pi(u: f64) -> (f64, f64) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn asinh_nonneg_matches_libm() {
+        let mut worst: f64 = 0.0;
+        let mut x = 1e-12;
+        while x < 1e300 {
+            let e = (asinh_nonneg(x) - libm::asinh(x)).abs() / libm::asinh(x).max(1.0);
+            worst = worst.max(e);
+            x *= 1.37;
+        }
+        assert!(worst < 5e-16, "{worst}");
+        assert_eq!(asinh_nonneg(0.0), 0.0);
+        assert!(asinh_nonneg(f64::NAN).is_nan());
+        assert_eq!(asinh_nonneg(f64::INFINITY), f64::INFINITY);
+    }
 
     #[test]
     fn sincos_2pi_matches_libm() {

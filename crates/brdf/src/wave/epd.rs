@@ -42,7 +42,7 @@ impl ExponentialNdf {
 
     /// D as a function of tanθ and cosθ of the half vector (cosθ > 0).
     #[inline]
-    fn d_tan_cos(&self, tan_t: f64, cos_t: f64) -> f64 {
+    pub(crate) fn d_tan_cos(&self, tan_t: f64, cos_t: f64) -> f64 {
         let r = tan_t / self.beta;
         // Beyond r = 700 the exponential is below 1e−304 while 1/cos⁴θ may
         // overflow; the product is 0 to double precision (cos⁴ ≥ (β r)^{−4}).
@@ -50,7 +50,7 @@ impl ExponentialNdf {
             return 0.0;
         }
         let c2 = cos_t * cos_t;
-        libm::exp(-r) / (2.0 * PI * self.beta * self.beta * c2 * c2)
+        crate::math::exp(-r) / (2.0 * PI * self.beta * self.beta * c2 * c2)
     }
 
     /// D(h) in sr⁻¹ for a unit half vector `h` (0 below the horizon).

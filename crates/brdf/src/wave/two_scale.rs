@@ -159,7 +159,6 @@ struct Convolver {
     ndf: ExponentialNdf,
     nu: f64,
     outer: Vec<f64>,
-    inner: Vec<f64>,
 }
 
 impl Convolver {
@@ -168,18 +167,7 @@ impl Convolver {
             ndf,
             nu,
             outer: Vec::new(),
-            inner: Vec::new(),
         }
-    }
-
-    /// K_w as a function of sin²ψ.
-    #[inline]
-    fn kernel(&self, w: f64, sin2_psi: f64) -> f64 {
-        let w2 = w * w;
-        // (1 + x)^−(ν+1) by one pow: forming 1 + x costs at most one
-        // rounding (relative 1e−16 in the result), and pow is several times
-        // cheaper than log1p + exp, which dominated the table build.
-        w2 * self.nu / PI * crate::math::powf(1.0 + w2 * sin2_psi, -(self.nu + 1.0))
     }
 
     fn d_eff(&mut self, theta_h: f64, w: f64) -> f64 {
@@ -204,76 +192,100 @@ impl Convolver {
             GRADING,
             &mut outer,
         );
+        let kernel = Kernel::new(w, self.nu);
         let mut total = 0.0;
         for p in outer.windows(2) {
             total += gl4(p[0], p[1], |tm| {
-                let (sm, cm) = libm::sincos(tm);
-                let d = self.ndf.d_theta(tm);
+                let (sm, cm) = crate::math::sincos(tm);
+                let d = self.ndf.d_tan_cos(sm / cm, cm);
                 if d == 0.0 {
                     return 0.0;
                 }
-                d * sm * self.ring(w, eps, theta_h, sh, ch, tm, sm, cm)
+                d * sm * ring(&kernel, eps, theta_h, sh, ch, tm, sm, cm)
             });
         }
         self.outer = outer;
         total
     }
+}
 
-    /// 2∫₀^{φmax} K_w(ψ(φ)) dφ over the ring of m at polar angle θm.
-    #[allow(clippy::too_many_arguments)]
-    fn ring(
-        &mut self,
-        w: f64,
-        eps: f64,
-        th: f64,
-        sh: f64,
-        ch: f64,
-        tm: f64,
-        sm: f64,
-        cm: f64,
-    ) -> f64 {
-        let ss = sh * sm;
-        // ψ < 90° ⇔ cosθh cosθm + sinθh sinθm cosφ > 0.
-        let phi_max = if ss <= 0.0 {
+/// K_w(cosψ) = w²ν/π (1 + w² sin²ψ)^{−(ν+1)} for one w.
+struct Kernel {
+    scale: f64,
+    w2: f64,
+    power: f64,
+}
+
+impl Kernel {
+    fn new(w: f64, nu: f64) -> Self {
+        Kernel {
+            scale: w * w * nu / PI,
+            w2: w * w,
+            power: nu + 1.0,
+        }
+    }
+
+    /// K as a function of sin²ψ.
+    #[inline]
+    fn at(&self, sin2_psi: f64) -> f64 {
+        // exp(−(ν+1) ln(1 + x)) rather than pow: the exponent's absolute
+        // error is ~1e−14 at most (the table is built to 1e−4), at two
+        // thirds of pow's cost, which was a third of the build. Forming
+        // 1 + x costs at most one rounding (relative 1e−16 in the result).
+        self.scale * crate::math::exp(-self.power * crate::math::ln(1.0 + self.w2 * sin2_psi))
+    }
+}
+
+/// 2∫₀^{φmax} K_w(ψ(φ)) dφ over the ring of m at polar angle θm, φ the
+/// azimuth of m relative to h; 4-point Gauss–Legendre on panels graded
+/// towards φ = 0 on the scale of K_w along the ring.
+#[allow(clippy::too_many_arguments)]
+#[inline]
+fn ring(kernel: &Kernel, eps: f64, th: f64, sh: f64, ch: f64, tm: f64, sm: f64, cm: f64) -> f64 {
+    let ss = sh * sm;
+    // ψ < 90° ⇔ cosθh cosθm + sinθh sinθm cosφ > 0.
+    let phi_max = if ss <= 0.0 {
+        PI
+    } else {
+        let c = -ch * cm / ss;
+        if c <= -1.0 {
             PI
         } else {
-            let c = -ch * cm / ss;
-            if c <= -1.0 {
-                PI
-            } else {
-                libm::acos(c.min(1.0))
-            }
-        };
-        let sin_dt = libm::sin(tm - th);
-        let sin2 = |phi: f64| {
-            // |h × m|², with cy = cosθh sinθm cosφ − sinθh cosθm written
-            // as sin(θm − θh) − 2cosθh sinθm sin²(φ/2): no cancellation
-            // where m ≈ h.
-            // One sincos of φ/2 gives both: sinφ = 2 sin(φ/2) cos(φ/2).
-            let (half, half_c) = crate::math::sincos(0.5 * phi);
-            let sp = 2.0 * half * half_c;
-            let cx = -ch * sm * sp;
-            let cy = sin_dt - ch * sm * 2.0 * half * half;
-            let cz = sh * sm * sp;
-            cx * cx + cy * cy + cz * cz
-        };
-        let delta0 = (tm - th).abs();
-        let scale = 0.5 * eps.max(delta0) / libm::sqrt(ss.max(1e-300));
-        let mut inner = core::mem::take(&mut self.inner);
-        panel_edges(
-            0.0,
-            phi_max,
-            &[(0.0, scale.min(phi_max))],
-            GRADING,
-            &mut inner,
-        );
-        let mut s = 0.0;
-        for p in inner.windows(2) {
-            s += gl4(p[0], p[1], |phi| self.kernel(w, sin2(phi)));
+            libm::acos(c.min(1.0))
         }
-        self.inner = inner;
-        2.0 * s
+    };
+    // 1 − h·m = 2sin²((θm − θh)/2) + 2 sinθh sinθm sin²(φ/2): a sum of
+    // non-negative terms, so sin²ψ = (1 − h·m)(1 + h·m) keeps its relative
+    // accuracy where m ≈ h, and only sin²(φ/2) varies along the ring.
+    let half_dt = libm::sin(0.5 * (tm - th));
+    let a0 = 2.0 * half_dt * half_dt;
+    let b = 2.0 * ss;
+    let at = |phi: f64| {
+        // (sin(φ/2), cos(φ/2)) without a general-purpose sincos: φ/2 ∈ [0, π/2].
+        let (s, _) = crate::math::sincos_2pi(phi * (0.25 / PI));
+        let one_minus_c = a0 + b * s * s;
+        kernel.at(one_minus_c * (2.0 - one_minus_c))
+    };
+    let delta0 = (tm - th).abs();
+    // Panels [0, s], [s, sG], [sG, sG²], … up to φmax.
+    let scale = (0.5 * eps.max(delta0) / libm::sqrt(ss.max(1e-300))).min(phi_max);
+    let mut sum = 0.0;
+    let (mut a, mut d) = (0.0, scale);
+    loop {
+        // The last edge absorbs one that would leave a sliver panel.
+        let b_edge = if d >= phi_max * (1.0 - 1e-9) {
+            phi_max
+        } else {
+            d
+        };
+        sum += gl4(a, b_edge, at);
+        if b_edge >= phi_max {
+            break;
+        }
+        a = b_edge;
+        d *= GRADING;
     }
+    2.0 * sum
 }
 
 /// Catmull–Rom cubic through `row` at position j + f (0 ≤ f ≤ 1).
@@ -365,7 +377,7 @@ fn ring_nodes(row: &[f64], tau_a: f64, v_ext: f64) -> Vec<(f64, f64, f64)> {
 #[inline]
 fn lambda_from_log1p_row(row: &[f64], t: f64, v_ext: f64) -> f64 {
     let n = row.len();
-    let x = libm::asinh(t) / v_ext * (n - 1) as f64;
+    let x = crate::math::asinh_nonneg(t) / v_ext * (n - 1) as f64;
     let ln1p = if !(x >= 0.0) {
         row[0]
     } else if x >= (n - 1) as f64 {
@@ -374,7 +386,9 @@ fn lambda_from_log1p_row(row: &[f64], t: f64, v_ext: f64) -> f64 {
         let j = x as usize;
         catmull_rom(row, j, x - j as f64)
     };
-    libm::expm1(ln1p).max(0.0)
+    // e^x − 1 rather than expm1: G₂ = 1/(1 + Λi + Λo) needs Λ to an
+    // absolute 1e−16, not a relative one, and exp is 3× cheaper.
+    (crate::math::exp(ln1p) - 1.0).max(0.0)
 }
 
 /// Smith 1 + Λ(θ) = (1/cosθ) ∫ D(m) max(0, ω·m) dω_m from [`ring_nodes`].
@@ -503,20 +517,19 @@ impl EffTable {
         lambda_from_log1p_row(row, tan_t / (self.tau[i] * SINH_A), self.v_extent[i])
     }
 
-    /// Smith Λ of the w-interpolated D̃_eff: the table mixes the two
+    /// Smith Λ of the w-interpolated D̃_eff at the bracket `wb`: the table mixes the two
     /// bracketing (normalised) rows linearly, and Λ of a mixture of NDFs
     /// is the same mixture of their Λs (∫D max(0, ω·m) dω is linear in D).
     #[inline]
-    fn lambda(&self, w: f64, tan_t: f64) -> f64 {
-        self.mix_nodes(w, |i| self.lambda_node(i, tan_t))
+    fn lambda(&self, wb: (usize, f64), tan_t: f64) -> f64 {
+        self.mix_nodes(wb, |i| self.lambda_node(i, tan_t))
     }
 
     /// (1 − f)·value(i) + f·value(i + 1) for the nodes bracketing w: the
     /// table's linear mixture in w of every per-node quantity (a node with
     /// zero weight is not evaluated).
     #[inline]
-    fn mix_nodes(&self, w: f64, value: impl Fn(usize) -> f64) -> f64 {
-        let (i, f) = self.w_bracket(w);
+    fn mix_nodes(&self, (i, f): (usize, f64), value: impl Fn(usize) -> f64) -> f64 {
         let a = if f < 1.0 { value(i) } else { 0.0 };
         let b = if f > 0.0 { value(i + 1) } else { 0.0 };
         (1.0 - f) * a + f * b
@@ -544,7 +557,7 @@ impl EffTable {
     /// Fractional v position (bin, fraction) of tanθ at node i, or None past the top.
     #[inline]
     fn v_position(&self, i: usize, tan_t: f64) -> Option<(usize, f64)> {
-        let v = libm::asinh(tan_t / (self.tau[i] * SINH_A)) / self.v_extent[i];
+        let v = crate::math::asinh_nonneg(tan_t / (self.tau[i] * SINH_A)) / self.v_extent[i];
         let x = v * (self.nv - 1) as f64;
         if !(x >= 0.0) {
             return Some((0, 0.0));
@@ -561,15 +574,15 @@ impl EffTable {
     fn d_node(&self, i: usize, tan_t: f64) -> f64 {
         let row = &self.log_d[i * self.nv..(i + 1) * self.nv];
         match self.v_position(i, tan_t) {
-            Some((j, f)) => libm::exp(catmull_rom(row, j, f)),
-            None => libm::exp(row[self.nv - 1]),
+            Some((j, f)) => crate::math::exp(catmull_rom(row, j, f)),
+            None => crate::math::exp(row[self.nv - 1]),
         }
     }
 
-    /// D̃_eff(h) for w = κ·Lc, tanθh given.
+    /// D̃_eff(h) at the w bracket `wb` ([`EffTable::w_bracket`]), tanθh given.
     #[inline]
-    fn d_eff(&self, w: f64, tan_t: f64) -> f64 {
-        self.mix_nodes(w, |i| self.d_node(i, tan_t))
+    fn d_eff(&self, wb: (usize, f64), tan_t: f64) -> f64 {
+        self.mix_nodes(wb, |i| self.d_node(i, tan_t))
     }
 
     /// Solid-angle density of [`EffTable::sample_node`] at node i.
@@ -582,14 +595,14 @@ impl EffTable {
         }
     }
 
-    /// Sampling density of h (solid angle) for w.
+    /// Sampling density of h (solid angle) at the w bracket `wb`.
     #[inline]
-    fn pdf(&self, w: f64, h: DVec3) -> f64 {
+    fn pdf(&self, wb: (usize, f64), h: DVec3) -> f64 {
         if !(h.z > 0.0) {
             return 0.0;
         }
         let tan_t = libm::hypot(h.x, h.y) / h.z;
-        self.mix_nodes(w, |i| self.pdf_node(i, tan_t, h.z))
+        self.mix_nodes(wb, |i| self.pdf_node(i, tan_t, h.z))
     }
 
     /// Draws h at node i from two uniforms.
@@ -750,7 +763,8 @@ impl TwoScale {
         if !(c > 0.0) {
             return 0.0;
         }
-        self.table.d_eff(kappa * self.psd.lc_um(), s / c)
+        let wb = self.table.w_bracket(kappa * self.psd.lc_um());
+        self.table.d_eff(wb, s / c)
     }
 
     /// The un-normalised convolution ∫ K_d(h·m) D(m) dω_m at κ (rad/µm),
@@ -795,9 +809,9 @@ impl TwoScale {
     /// under-shadowed and the albedo exceeded 1 by up to 7 % at oblique
     /// incidence; with the lobe's own Λ, single scattering conserves energy.
     #[inline]
-    fn lobe_lambda(&self, w_dir: DVec3, kappa_lc: f64, a: f64) -> f64 {
+    fn lobe_lambda(&self, w_dir: DVec3, wb: (usize, f64), a: f64) -> f64 {
         let tan_t = libm::hypot(w_dir.x, w_dir.y) / w_dir.z;
-        let eff = self.table.lambda(kappa_lc, tan_t);
+        let eff = self.table.lambda(wb, tan_t);
         match self.coherent {
             CoherentPart::MacroNdf => a * self.macro_lambda(tan_t) + (1.0 - a) * eff,
             CoherentPart::Delta => eff,
@@ -813,7 +827,8 @@ impl TwoScale {
         let cos_d = cos_d.min(1.0);
         let tan_h = libm::hypot(h.x, h.y) / h.z;
         let w = 2.0 * k * cos_d * self.psd.lc_um();
-        let d_eff = self.table.d_eff(w, tan_h);
+        let wb = self.table.w_bracket(w);
+        let d_eff = self.table.d_eff(wb, tan_h);
         let (a_d, one_minus_a_d) = self.coherent_fraction(k, cos_d);
         let lobe = match self.coherent {
             CoherentPart::MacroNdf => a_d * self.ndf.d(h) + one_minus_a_d * d_eff,
@@ -825,7 +840,7 @@ impl TwoScale {
                 one_minus_a * d_eff
             }
         };
-        let g2 = 1.0 / (1.0 + self.lobe_lambda(wi, w, a_d) + self.lobe_lambda(wo, w, a_d));
+        let g2 = 1.0 / (1.0 + self.lobe_lambda(wi, wb, a_d) + self.lobe_lambda(wo, wb, a_d));
         Some((g2 * lobe / (4.0 * wi.z * wo.z), cos_d))
     }
 
@@ -876,7 +891,8 @@ impl Bxdf for TwoScale {
             return 0.0;
         }
         let (p_delta, w_d) = self.choice(k, wi.z);
-        let mut ph = (1.0 - w_d) * self.table.pdf(self.kappa_s(k, wi.z), h);
+        let wb = self.table.w_bracket(self.kappa_s(k, wi.z));
+        let mut ph = (1.0 - w_d) * self.table.pdf(wb, h);
         if w_d > 0.0 {
             ph += w_d * self.ndf.pdf(h);
         }
