@@ -55,10 +55,31 @@ impl Correlation for Matern {
 #[inline]
 pub fn kernel<C: Correlation + ?Sized>(c: &C, x: f64, g: f64) -> f64 {
     if g < 1.0 {
-        crate::math::exp(-g) * libm::expm1(g * c.m(x))
+        kernel_small_g(c.m(x), g)
     } else {
-        crate::math::exp(-g * c.one_minus_m(x)) - crate::math::exp(-g)
+        kernel_large_g(c.one_minus_m(x), g)
     }
+}
+
+/// [`kernel`] from M(x) and 1 − M(x) already at hand (the table builder
+/// evaluates them once per point of a lattice shared by all its rows).
+#[inline]
+pub fn kernel_from(m: f64, one_minus_m: f64, g: f64) -> f64 {
+    if g < 1.0 {
+        kernel_small_g(m, g)
+    } else {
+        kernel_large_g(one_minus_m, g)
+    }
+}
+
+#[inline]
+fn kernel_small_g(m: f64, g: f64) -> f64 {
+    crate::math::exp(-g) * libm::expm1(g * m)
+}
+
+#[inline]
+fn kernel_large_g(one_minus_m: f64, g: f64) -> f64 {
+    crate::math::exp(-g * one_minus_m) - crate::math::exp(-g)
 }
 
 /// Cusp-subtraction parameters (A, ε) for this g.
