@@ -181,8 +181,8 @@ impl Row {
         let (mut m0, mut m2) = (0.0, 0.0);
         let first = (rp.j0 - lattice.j_lo) as usize;
         let end = rp.x_h.max(rp.x_e).min(n);
-        for i in 0..end {
-            let (x, m, omm) = lattice.at[first + i];
+        let points = &lattice.at[first..first + end];
+        for (i, (slot, &(x, m, omm))) in f.iter_mut().zip(points).enumerate() {
             let h = if i < rp.x_h {
                 kernel_from(m, omm, g)
             } else {
@@ -191,7 +191,7 @@ impl Row {
             let s = if i < rp.x_e { a * c.m(x / eps) } else { 0.0 };
             m0 += h * x * x;
             m2 += h * x * x * x * x;
-            f[i] = h - s;
+            *slot = h - s;
         }
         let ell = libm::sqrt(m2 / m0);
         plan.transform(t0, &f, &mut scratch.0, &mut scratch.1);
