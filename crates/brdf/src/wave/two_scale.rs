@@ -329,6 +329,24 @@ struct EffTable {
     log1p_lambda: Vec<f64>,
 }
 
+/// tan²θ at point j of a row's sinh grid (scale τ, extent V, nv points).
+#[inline]
+fn grid_tan2(tau: f64, v_ext: f64, j: usize, nv: usize) -> f64 {
+    let tan_t = tau * SINH_A * libm::sinh(j as f64 / (nv - 1) as f64 * v_ext);
+    tan_t * tan_t
+}
+
+/// One w node of [`EffTable`], as built.
+struct EffRow {
+    tau: f64,
+    v_ext: f64,
+    log_d: Vec<f64>,
+    norm: f64,
+    dens_t: Vec<f64>,
+    cdf: Vec<f64>,
+    log1p_lambda: Vec<f64>,
+}
+
 /// Points of the Smith Λ tables in v (θ = atan(τ a sinh(vV))).
 const LAMBDA_NODES: usize = 64;
 
@@ -419,7 +437,10 @@ impl EffTable {
         let nu = psd.nu();
         // The convolutions (nearly all of the build time) row by row, on all
         // cores with `std`; each row has its own quadrature scratch space.
-        let rows: Vec<(f64, f64, Vec<f64>)> = crate::parallel::map_rows(nw, |i| {
+        // Every row (convolutions, nearly all of the build time; sampling
+        // CDF; Smith Λ) on all cores with `std`, each with its own
+        // quadrature scratch space.
+        let rows: Vec<EffRow> = crate::parallel::map_rows(nw, |i| {
             let mut conv = Convolver::new(ndf, nu);
             let w = libm::expm1(i as f64 * dx);
             let tau = if w > 0.0 {
@@ -429,14 +450,65 @@ impl EffTable {
             };
             let tau = tau.max(beta.min(1.0));
             let v_ext = libm::asinh(libm::tan(THETA_TOP) / (tau * SINH_A));
-            let log_d = (0..nv)
+            let mut log_d: Vec<f64> = (0..nv)
                 .map(|j| {
                     let v = j as f64 / (nv - 1) as f64;
                     let theta = libm::atan(tau * SINH_A * libm::sinh(v * v_ext));
                     libm::log(conv.d_eff(theta, w).max(1e-300))
                 })
                 .collect();
-            (tau, v_ext, log_d)
+            // Bin masses of D̃ cosθ dω in T = tan²θ from the interpolant.
+            let masses: Vec<f64> = (0..nv - 1)
+                .map(|j| {
+                    gl4(0.0, 1.0, |f| {
+                        let v = (j as f64 + f) / (nv - 1) as f64;
+                        let sh = libm::sinh(v * v_ext);
+                        let tan_t = tau * SINH_A * sh;
+                        let c2 = 1.0 / (1.0 + tan_t * tan_t);
+                        // dT/dv = 2 tanθ · τ a V cosh(vV); dv/df = 1/(nv−1).
+                        let dt_dv = 2.0 * tan_t * tau * SINH_A * v_ext * libm::cosh(v * v_ext);
+                        let d = libm::exp(catmull_rom(&log_d, j, f));
+                        PI * d * c2 * c2 * dt_dv / (nv - 1) as f64
+                    })
+                })
+                .collect();
+            let total: f64 = masses.iter().sum();
+            let log_total = libm::log(total);
+            for v in &mut log_d {
+                *v -= log_total;
+            }
+            let tan2 = |j: usize| grid_tan2(tau, v_ext, j, nv);
+            let mut dens_t = Vec::with_capacity(nv);
+            let mut cdf = Vec::with_capacity(nv);
+            let mut acc = 0.0;
+            cdf.push(0.0);
+            for (j, m) in masses.iter().enumerate() {
+                dens_t.push(m / total / (tan2(j + 1) - tan2(j)));
+                acc += m / total;
+                cdf.push(acc);
+            }
+            dens_t.push(0.0);
+            cdf[nv - 1] = 1.0;
+            // Smith Λ of the normalised row.
+            let tau_a = tau * SINH_A;
+            let nodes = ring_nodes(&log_d, tau_a, v_ext);
+            let log1p_lambda = (0..LAMBDA_NODES)
+                .map(|l| {
+                    let v = l as f64 / (LAMBDA_NODES - 1) as f64;
+                    let q = one_plus_lambda(&nodes, tau_a * libm::sinh(v * v_ext));
+                    // Λ ≥ 0; quadrature round-off near the pole can dip below.
+                    libm::log(q.max(1.0))
+                })
+                .collect();
+            EffRow {
+                tau,
+                v_ext,
+                log_d,
+                norm: total,
+                dens_t,
+                cdf,
+                log1p_lambda,
+            }
         });
         let mut t = EffTable {
             dx,
@@ -450,62 +522,14 @@ impl EffTable {
             norm: Vec::with_capacity(nw),
             log1p_lambda: Vec::with_capacity(nw * LAMBDA_NODES),
         };
-        for (i, (tau, v_ext, log_d)) in rows.into_iter().enumerate() {
-            t.tau.push(tau);
-            t.v_extent.push(v_ext);
-            let start = t.log_d.len();
-            t.log_d.extend(log_d);
-            // Bin masses of D̃ cosθ dω in T = tan²θ from the interpolant.
-            let mut masses = Vec::with_capacity(nv - 1);
-            for j in 0..nv - 1 {
-                let row = &t.log_d[start..start + nv];
-                let m = gl4(0.0, 1.0, |f| {
-                    let v = (j as f64 + f) / (nv - 1) as f64;
-                    let sh = libm::sinh(v * v_ext);
-                    let tan_t = tau * SINH_A * sh;
-                    let c2 = 1.0 / (1.0 + tan_t * tan_t);
-                    // dT/dv = 2 tanθ · τ a V cosh(vV); dv/df = 1/(nv−1).
-                    let dt_dv = 2.0 * tan_t * tau * SINH_A * v_ext * libm::cosh(v * v_ext);
-                    let d = libm::exp(catmull_rom(row, j, f));
-                    PI * d * c2 * c2 * dt_dv / (nv - 1) as f64
-                });
-                masses.push(m);
-            }
-            let total: f64 = masses.iter().sum();
-            let log_total = libm::log(total);
-            for v in &mut t.log_d[start..] {
-                *v -= log_total;
-            }
-            t.norm.push(total);
-            let mut acc = 0.0;
-            t.cdf.push(0.0);
-            for (j, m) in masses.iter().enumerate() {
-                let (t0, t1) = (t.tan2_at(i, j), t.tan2_at(i, j + 1));
-                t.dens_t.push(m / total / (t1 - t0));
-                acc += m / total;
-                t.cdf.push(acc);
-            }
-            t.dens_t.push(0.0);
-            let last = t.cdf.len() - 1;
-            t.cdf[last] = 1.0;
-        }
-        // Smith Λ of each normalised row, again row by row on all cores.
-        let lambda_rows: Vec<Vec<f64>> = crate::parallel::map_rows(nw, |i| {
-            let row = &t.log_d[i * nv..(i + 1) * nv];
-            let tau_a = t.tau[i] * SINH_A;
-            let nodes = ring_nodes(row, tau_a, t.v_extent[i]);
-            (0..LAMBDA_NODES)
-                .map(|l| {
-                    let v = l as f64 / (LAMBDA_NODES - 1) as f64;
-                    let tan_t = tau_a * libm::sinh(v * t.v_extent[i]);
-                    let q = one_plus_lambda(&nodes, tan_t);
-                    // Λ ≥ 0; quadrature round-off near the pole can dip below.
-                    libm::log(q.max(1.0))
-                })
-                .collect()
-        });
-        for r in lambda_rows {
-            t.log1p_lambda.extend(r);
+        for r in rows {
+            t.tau.push(r.tau);
+            t.v_extent.push(r.v_ext);
+            t.log_d.extend(r.log_d);
+            t.norm.push(r.norm);
+            t.dens_t.extend(r.dens_t);
+            t.cdf.extend(r.cdf);
+            t.log1p_lambda.extend(r.log1p_lambda);
         }
         t
     }
@@ -538,9 +562,7 @@ impl EffTable {
     /// tan²θ at node (i, j).
     #[inline]
     fn tan2_at(&self, i: usize, j: usize) -> f64 {
-        let v = j as f64 / (self.nv - 1) as f64;
-        let tan_t = self.tau[i] * SINH_A * libm::sinh(v * self.v_extent[i]);
-        tan_t * tan_t
+        grid_tan2(self.tau[i], self.v_extent[i], j, self.nv)
     }
 
     /// (lower node, weight of the upper node) for w = κ·Lc.
