@@ -31,8 +31,9 @@
 //! both factors (β for D, 1/w for K_d), for `w` nodes uniform in ln(1 + w)
 //! over [0, 2k_max·Lc] (k_max at [`crate::WAVELENGTH_MIN_NM`]) and θ_h nodes
 //! uniform in v with tanθ_h = τ·a·sinh(v V) (linear near the pole, logarithmic
-//! in the power-law tail). Evaluation interpolates ln D̃_eff linearly in v and
-//! the values linearly in ln(1 + w). Wavelengths below 360 nm use the last
+//! in the power-law tail) up to tanθ_h = 10³, beyond which D̃_eff is held.
+//! Evaluation interpolates ln D̃_eff by Catmull–Rom in v and the values
+//! linearly in ln(1 + w). Wavelengths below 360 nm use the last
 //! node (w beyond the table, where D̃_eff ≈ D).
 //!
 //! **Energy.** Even with G₂ from the lobe's own Smith Λ, the albedo can
@@ -95,7 +96,7 @@ impl Default for TableResolution {
     fn default() -> Self {
         TableResolution {
             w_nodes: 40,
-            theta_nodes: 128,
+            theta_nodes: 92,
         }
     }
 }
@@ -313,9 +314,11 @@ struct EffTable {
     dx: f64,
     nw: usize,
     nv: usize,
-    /// Per w node: τ (tanθ scale) and V (v ↦ t extent).
+    /// Per w node: τ (tanθ scale) and V (v ↦ t extent) of the D̃ grid,
+    /// and V of the Λ grid (same τ, reaching closer to the horizon).
     tau: Vec<f64>,
     v_extent: Vec<f64>,
+    lambda_v_extent: Vec<f64>,
     /// ln D̃_eff at (node, v_j), row-major by node.
     log_d: Vec<f64>,
     /// Density in T = tan²θ per bin (piecewise constant), and CDF per node
@@ -325,7 +328,8 @@ struct EffTable {
     /// Raw normalisation ∫ D_eff cosθ dω per node (diagnostics).
     norm: Vec<f64>,
     /// ln(1 + Λ) of the normalised D̃_eff at (node, l) for tanθ on the
-    /// node's own sinh grid with [`LAMBDA_NODES`] points.
+    /// node's Λ sinh grid (extent `lambda_v_extent`) with [`LAMBDA_NODES`]
+    /// points.
     log1p_lambda: Vec<f64>,
 }
 
@@ -340,6 +344,7 @@ fn grid_tan2(tau: f64, v_ext: f64, j: usize, nv: usize) -> f64 {
 struct EffRow {
     tau: f64,
     v_ext: f64,
+    lambda_v_ext: f64,
     log_d: Vec<f64>,
     norm: f64,
     dens_t: Vec<f64>,
@@ -423,8 +428,14 @@ fn one_plus_lambda(nodes: &[(f64, f64, f64)], tan_t: f64) -> f64 {
 /// t = a sinh(vV) is linear near the pole; a fixes where logarithmic
 /// spacing starts (in units of τ: past the exponential core of D).
 const SINH_A: f64 = 1.0;
-/// Largest tabulated θ_h: 90° − 1e−6 rad.
-const THETA_TOP: f64 = core::f64::consts::FRAC_PI_2 - 1e-6;
+/// Largest tabulated tanθ_h of D̃_eff (θ_h = 90° − 1e−3 rad). Closer to
+/// the horizon D̃_eff is constant to ~1e−4 relative (h·m changes by
+/// ≤ 1e−3·sinθm there, and K is flat in h·m near ψ = 90°), so the last
+/// value is held; a top at 1e6 spent a third of the nodes on that sliver.
+const D_TOP_TAN: f64 = 1e3;
+/// Largest tabulated tanθ of the Smith Λ tables (θ = 90° − 1e−6 rad): Λ
+/// grows like tanθ towards the horizon, so it is not held early.
+const LAMBDA_TOP_TAN: f64 = 1e6;
 
 impl EffTable {
     fn build(ndf: ExponentialNdf, psd: &KcPsd, res: TableResolution) -> EffTable {
@@ -449,7 +460,8 @@ impl EffTable {
                 1.0
             };
             let tau = tau.max(beta.min(1.0));
-            let v_ext = libm::asinh(libm::tan(THETA_TOP) / (tau * SINH_A));
+            let v_ext = libm::asinh(D_TOP_TAN / (tau * SINH_A));
+            let lambda_v_ext = libm::asinh(LAMBDA_TOP_TAN / (tau * SINH_A));
             let mut log_d: Vec<f64> = (0..nv)
                 .map(|j| {
                     let v = j as f64 / (nv - 1) as f64;
@@ -495,7 +507,7 @@ impl EffTable {
             let log1p_lambda = (0..LAMBDA_NODES)
                 .map(|l| {
                     let v = l as f64 / (LAMBDA_NODES - 1) as f64;
-                    let q = one_plus_lambda(&nodes, tau_a * libm::sinh(v * v_ext));
+                    let q = one_plus_lambda(&nodes, tau_a * libm::sinh(v * lambda_v_ext));
                     // Λ ≥ 0; quadrature round-off near the pole can dip below.
                     libm::log(q.max(1.0))
                 })
@@ -503,6 +515,7 @@ impl EffTable {
             EffRow {
                 tau,
                 v_ext,
+                lambda_v_ext,
                 log_d,
                 norm: total,
                 dens_t,
@@ -516,6 +529,7 @@ impl EffTable {
             nv,
             tau: Vec::with_capacity(nw),
             v_extent: Vec::with_capacity(nw),
+            lambda_v_extent: Vec::with_capacity(nw),
             log_d: Vec::with_capacity(nw * nv),
             dens_t: Vec::with_capacity(nw * nv),
             cdf: Vec::with_capacity(nw * nv),
@@ -525,6 +539,7 @@ impl EffTable {
         for r in rows {
             t.tau.push(r.tau);
             t.v_extent.push(r.v_ext);
+            t.lambda_v_extent.push(r.lambda_v_ext);
             t.log_d.extend(r.log_d);
             t.norm.push(r.norm);
             t.dens_t.extend(r.dens_t);
@@ -538,7 +553,7 @@ impl EffTable {
     #[inline]
     fn lambda_node(&self, i: usize, tan_t: f64) -> f64 {
         let row = &self.log1p_lambda[i * LAMBDA_NODES..(i + 1) * LAMBDA_NODES];
-        lambda_from_log1p_row(row, tan_t / (self.tau[i] * SINH_A), self.v_extent[i])
+        lambda_from_log1p_row(row, tan_t / (self.tau[i] * SINH_A), self.lambda_v_extent[i])
     }
 
     /// Smith Λ of the w-interpolated D̃_eff at the bracket `wb`: the table mixes the two
@@ -687,7 +702,7 @@ impl TwoScale {
         }
         let table = EffTable::build(ndf, &psd, p.resolution);
         let beta = ndf.beta();
-        let macro_v_extent = libm::asinh(libm::tan(THETA_TOP) / (beta * SINH_A));
+        let macro_v_extent = libm::asinh(LAMBDA_TOP_TAN / (beta * SINH_A));
         let macro_log1p_lambda = crate::parallel::map_rows(MACRO_LAMBDA_NODES, |l| {
             let v = l as f64 / (MACRO_LAMBDA_NODES - 1) as f64;
             let tan_t = beta * SINH_A * libm::sinh(v * macro_v_extent);
