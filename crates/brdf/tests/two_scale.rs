@@ -431,6 +431,37 @@ fn reciprocal_and_finite() {
     eprintln!("reciprocity: max |f(i,o)/f(o,i) − 1| = {worst:.1e}");
 }
 
+/// The shared-geometry paths (`eval_pdf`, hero `eval_pdf_many`) give
+/// exactly what `eval` and `pdf` give one wavelength at a time.
+#[test]
+fn eval_pdf_many_equals_single_wavelength_calls() {
+    let mut rng = brdf::testing::Pcg32::new(5, 9);
+    for m0 in materials() {
+        for reading in [CoherentPart::MacroNdf, CoherentPart::Delta] {
+            let m = m0.with_coherent_part(reading);
+            for _ in 0..200 {
+                let wi = spherical(rng.next_f64() * FRAC_PI_2, rng.next_f64() * TAU);
+                let wo = spherical(rng.next_f64() * FRAC_PI_2, rng.next_f64() * TAU);
+                let lambdas: Vec<f64> = (0..4).map(|_| 360.0 + 470.0 * rng.next_f64()).collect();
+                let mut out = [(f64::NAN, f64::NAN); 4];
+                m.eval_pdf_many(wi, wo, &lambdas, &mut out);
+                for (&l, &(f, p)) in lambdas.iter().zip(&out) {
+                    assert_eq!(f, m.eval(wi, wo, l), "λ {l}");
+                    assert_eq!(p, m.pdf(wi, wo, l), "λ {l}");
+                    assert_eq!((f, p), m.eval_pdf(wi, wo, l), "λ {l}");
+                }
+            }
+            // Below the horizon and at a non-physical wavelength: zeros.
+            let below = DVec3::new(0.0, 0.6, -0.8);
+            let mut out = [(1.0, 1.0); 2];
+            m.eval_pdf_many(below, DVec3::Z, &[500.0, 600.0], &mut out);
+            assert_eq!(out, [(0.0, 0.0); 2]);
+            m.eval_pdf_many(DVec3::Z, DVec3::Z, &[f64::NAN, -1.0], &mut out);
+            assert_eq!(out, [(0.0, 0.0); 2]);
+        }
+    }
+}
+
 #[test]
 fn energy_cap_only_where_needed() {
     // β 0.05, Lc 0.5 µm, γ 1.5: uncapped albedo 1.037 at 88° (MacroNdf).

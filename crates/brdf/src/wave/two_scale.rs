@@ -632,14 +632,11 @@ impl EffTable {
         }
     }
 
-    /// Sampling density of h (solid angle) at the w bracket `wb`.
+    /// Sampling density of h (solid angle) at the w bracket `wb`, for h
+    /// given by tanθh and cosθh > 0.
     #[inline]
-    fn pdf(&self, wb: (usize, f64), h: DVec3) -> f64 {
-        if !(h.z > 0.0) {
-            return 0.0;
-        }
-        let tan_t = libm::hypot(h.x, h.y) / h.z;
-        self.mix_nodes(wb, |i| self.pdf_node(i, tan_t, h.z))
+    fn pdf(&self, wb: (usize, f64), tan_t: f64, cos_t: f64) -> f64 {
+        self.mix_nodes(wb, |i| self.pdf_node(i, tan_t, cos_t))
     }
 
     /// Draws h at node i from two uniforms.
@@ -667,6 +664,22 @@ impl EffTable {
         let node = if u0 < f { i + 1 } else { i };
         self.sample_node(node, u1, u2)
     }
+}
+
+/// What an evaluation at (wi, wo) shares across wavelengths.
+struct Pair {
+    zi: f64,
+    zo: f64,
+    h_z: f64,
+    /// wi·h (not clamped).
+    cos_d: f64,
+    tan_h: f64,
+    tan_i: f64,
+    tan_o: f64,
+    /// Macro NDF D(h) and its Λ at wi and wo (MacroNdf reading; 0 otherwise).
+    d_macro: f64,
+    macro_lambda_i: f64,
+    macro_lambda_o: f64,
 }
 
 /// Smallest probability given to each component of the half-vector mixture
@@ -839,52 +852,108 @@ impl TwoScale {
         )
     }
 
-    /// Smith Λ of the lobe's own microfacet distribution at direction `w`:
-    /// MacroNdf reading, the mixture A·D + (1 − A)·D̃_eff, whose Λ is
-    /// A·Λ_D + (1 − A)·Λ_eff; Delta reading, D̃_eff alone. With Λ of the
-    /// macro NDF alone (HP17's reading of G₂) the wider D̃_eff lobe is
-    /// under-shadowed and the albedo exceeded 1 by up to 7 % at oblique
-    /// incidence; with the lobe's own Λ, single scattering conserves energy.
+    /// The wavelength-independent part of an evaluation at (wi, wo): shared
+    /// by `eval` and `pdf`, and by every hero wavelength of a path. `None`
+    /// below either horizon or without a half vector.
     #[inline]
-    fn lobe_lambda(&self, w_dir: DVec3, wb: (usize, f64), a: f64) -> f64 {
-        let tan_t = libm::hypot(w_dir.x, w_dir.y) / w_dir.z;
-        let eff = self.table.lambda(wb, tan_t);
-        match self.coherent {
-            CoherentPart::MacroNdf => a * self.macro_lambda(tan_t) + (1.0 - a) * eff,
-            CoherentPart::Delta => eff,
-        }
-    }
-
-    /// The glossy BRDF without Fresnel and without the cap, and cosθd.
-    fn glossy(&self, wi: DVec3, wo: DVec3, k: f64) -> Option<(f64, f64)> {
+    fn pair(&self, wi: DVec3, wo: DVec3) -> Option<Pair> {
         if !(wi.z > 0.0 && wo.z > 0.0) {
             return None;
         }
         let (h, cos_d) = crate::frame::half_vector(wi, wo)?;
-        let cos_d = cos_d.min(1.0);
-        let tan_h = libm::hypot(h.x, h.y) / h.z;
+        let tan_i = libm::hypot(wi.x, wi.y) / wi.z;
+        let tan_o = libm::hypot(wo.x, wo.y) / wo.z;
+        let (d_macro, macro_lambda_i, macro_lambda_o) = match self.coherent {
+            CoherentPart::MacroNdf => (
+                self.ndf.d(h),
+                self.macro_lambda(tan_i),
+                self.macro_lambda(tan_o),
+            ),
+            CoherentPart::Delta => (0.0, 0.0, 0.0),
+        };
+        Some(Pair {
+            zi: wi.z,
+            zo: wo.z,
+            h_z: h.z,
+            cos_d,
+            tan_h: libm::hypot(h.x, h.y) / h.z,
+            tan_i,
+            tan_o,
+            d_macro,
+            macro_lambda_i,
+            macro_lambda_o,
+        })
+    }
+
+    /// Smith Λ of the lobe's own microfacet distribution at a direction
+    /// (tanθ, and the macro NDF's Λ there): MacroNdf reading, the mixture
+    /// A·D + (1 − A)·D̃_eff, whose Λ is A·Λ_D + (1 − A)·Λ_eff; Delta
+    /// reading, D̃_eff alone. With Λ of the macro NDF alone (HP17's reading
+    /// of G₂) the wider D̃_eff lobe is under-shadowed and the albedo
+    /// exceeded 1 by up to 7 % at oblique incidence; with the lobe's own Λ,
+    /// single scattering conserves energy.
+    #[inline]
+    fn lobe_lambda(&self, tan_t: f64, macro_lambda: f64, wb: (usize, f64), a: f64) -> f64 {
+        let eff = self.table.lambda(wb, tan_t);
+        match self.coherent {
+            CoherentPart::MacroNdf => a * macro_lambda + (1.0 - a) * eff,
+            CoherentPart::Delta => eff,
+        }
+    }
+
+    /// The glossy BRDF without Fresnel and without the cap, at wavenumber k.
+    fn glossy(&self, p: &Pair, k: f64) -> f64 {
+        let cos_d = p.cos_d.min(1.0);
         let w = 2.0 * k * cos_d * self.psd.lc_um();
         let wb = self.table.w_bracket(w);
-        let d_eff = self.table.d_eff(wb, tan_h);
+        let d_eff = self.table.d_eff(wb, p.tan_h);
         let (a_d, one_minus_a_d) = self.coherent_fraction(k, cos_d);
         let lobe = match self.coherent {
-            CoherentPart::MacroNdf => a_d * self.ndf.d(h) + one_minus_a_d * d_eff,
+            CoherentPart::MacroNdf => a_d * p.d_macro + one_minus_a_d * d_eff,
             CoherentPart::Delta => {
                 // The delta takes A(θi); the glossy part takes what the
                 // less-coherent of the two directions leaves, 1 − A(min(cosθi,
                 // cosθo)) ≤ 1 − A(θi): reciprocal, and A(θi) + glossy ≤ 1.
-                let (_, one_minus_a) = self.coherent_fraction(k, wi.z.min(wo.z));
+                let (_, one_minus_a) = self.coherent_fraction(k, p.zi.min(p.zo));
                 one_minus_a * d_eff
             }
         };
-        let g2 = 1.0 / (1.0 + self.lobe_lambda(wi, wb, a_d) + self.lobe_lambda(wo, wb, a_d));
-        Some((g2 * lobe / (4.0 * wi.z * wo.z), cos_d))
+        let g2 = 1.0
+            / (1.0
+                + self.lobe_lambda(p.tan_i, p.macro_lambda_i, wb, a_d)
+                + self.lobe_lambda(p.tan_o, p.macro_lambda_o, wb, a_d));
+        g2 * lobe / (4.0 * p.zi * p.zo)
     }
 
-    /// [`TwoScale::glossy`] as a plain value (0 where undefined).
+    /// [`TwoScale::glossy`] at (wi, wo) as a plain value (0 where undefined).
     fn glossy_unit(&self, wi: DVec3, wo: DVec3, k: f64) -> f64 {
-        self.glossy(wi, wo, k)
-            .map_or(0.0, |(f, _)| finite_nonneg(f))
+        self.pair(wi, wo)
+            .map_or(0.0, |p| finite_nonneg(self.glossy(&p, k)))
+    }
+
+    /// The BRDF at one wavelength (k = 2π/λ).
+    fn eval_pair(&self, p: &Pair, k: f64, lambda_nm: f64) -> f64 {
+        let f = self.glossy(p, k);
+        let cap = match &self.cap {
+            Some(c) => c.max_at(p.zi, p.zo, k),
+            None => 1.0,
+        };
+        finite_nonneg(self.fresnel.reflectance(p.cos_d.min(1.0), lambda_nm) * f / cap)
+    }
+
+    /// The solid-angle density of `sample` at one wavelength.
+    fn pdf_pair(&self, p: &Pair, k: f64) -> f64 {
+        if !(p.cos_d > 0.0) {
+            return 0.0;
+        }
+        let (p_delta, w_d) = self.choice(k, p.zi);
+        let wb = self.table.w_bracket(self.kappa_s(k, p.zi));
+        let mut ph = (1.0 - w_d) * self.table.pdf(wb, p.tan_h, p.h_z);
+        if w_d > 0.0 {
+            // The macro NDF's own pdf, D(h) cosθh.
+            ph += w_d * (p.d_macro * p.h_z);
+        }
+        finite_nonneg((1.0 - p_delta) * ph / (4.0 * p.cos_d))
     }
 
     fn kappa_s(&self, k: f64, ci: f64) -> f64 {
@@ -901,39 +970,34 @@ fn wavenumber(lambda_nm: f64) -> Option<f64> {
 
 impl Bxdf for TwoScale {
     fn eval(&self, wi: DVec3, wo: DVec3, lambda_nm: f64) -> f64 {
-        let Some(k) = wavenumber(lambda_nm) else {
-            return 0.0;
-        };
-        let Some((f, cos_d)) = self.glossy(wi, wo, k) else {
-            return 0.0;
-        };
-        let cap = match &self.cap {
-            Some(c) => c.max_at(wi.z, wo.z, k),
-            None => 1.0,
-        };
-        finite_nonneg(self.fresnel.reflectance(cos_d, lambda_nm) * f / cap)
+        match (wavenumber(lambda_nm), self.pair(wi, wo)) {
+            (Some(k), Some(p)) => self.eval_pair(&p, k, lambda_nm),
+            _ => 0.0,
+        }
     }
 
     fn pdf(&self, wi: DVec3, wo: DVec3, lambda_nm: f64) -> f64 {
-        let Some(k) = wavenumber(lambda_nm) else {
-            return 0.0;
-        };
-        if !(wi.z > 0.0 && wo.z > 0.0) {
-            return 0.0;
+        match (wavenumber(lambda_nm), self.pair(wi, wo)) {
+            (Some(k), Some(p)) => self.pdf_pair(&p, k),
+            _ => 0.0,
         }
-        let Some((h, cos_d)) = crate::frame::half_vector(wi, wo) else {
-            return 0.0;
-        };
-        if !(cos_d > 0.0) {
-            return 0.0;
+    }
+
+    fn eval_pdf(&self, wi: DVec3, wo: DVec3, lambda_nm: f64) -> (f64, f64) {
+        match (wavenumber(lambda_nm), self.pair(wi, wo)) {
+            (Some(k), Some(p)) => (self.eval_pair(&p, k, lambda_nm), self.pdf_pair(&p, k)),
+            _ => (0.0, 0.0),
         }
-        let (p_delta, w_d) = self.choice(k, wi.z);
-        let wb = self.table.w_bracket(self.kappa_s(k, wi.z));
-        let mut ph = (1.0 - w_d) * self.table.pdf(wb, h);
-        if w_d > 0.0 {
-            ph += w_d * self.ndf.pdf(h);
+    }
+
+    fn eval_pdf_many(&self, wi: DVec3, wo: DVec3, lambdas: &[f64], out: &mut [(f64, f64)]) {
+        let p = self.pair(wi, wo);
+        for (o, &l) in out.iter_mut().zip(lambdas) {
+            *o = match (wavenumber(l), &p) {
+                (Some(k), Some(p)) => (self.eval_pair(p, k, l), self.pdf_pair(p, k)),
+                _ => (0.0, 0.0),
+            };
         }
-        finite_nonneg((1.0 - p_delta) * ph / (4.0 * cos_d))
     }
 
     fn sample(&self, wi: DVec3, lambda_nm: f64, u: [f64; 3]) -> Option<BxdfSample> {
@@ -976,8 +1040,7 @@ impl Bxdf for TwoScale {
         if !(wo.z > 0.0 && wo.is_finite()) {
             return None;
         }
-        let pdf = self.pdf(wi, wo, lambda_nm);
-        let f = self.eval(wi, wo, lambda_nm);
+        let (f, pdf) = self.eval_pdf(wi, wo, lambda_nm);
         if !(pdf > 0.0 && f > 0.0) {
             return None;
         }
