@@ -133,7 +133,9 @@ pub struct TwoScale {
     /// [`MACRO_LAMBDA_NODES`] points: the closed form (physics.md §8.2)
     /// costs a Bessel quadrature, too slow for every evaluation.
     macro_log1p_lambda: Vec<f64>,
-    macro_v_extent: f64,
+    /// 1/(β·a) and (nodes − 1)/V_m: the table's lookup scales.
+    macro_inv_scale: f64,
+    macro_v_scale: f64,
     /// Reciprocal energy cap where the albedo would exceed 1 (`None` when
     /// it never does, the common case).
     cap: Option<AlbedoCap>,
@@ -314,11 +316,15 @@ struct EffTable {
     dx: f64,
     nw: usize,
     nv: usize,
-    /// Per w node: τ (tanθ scale) and V (v ↦ t extent) of the D̃ grid,
-    /// and V of the Λ grid (same τ, reaching closer to the horizon).
+    /// Per w node: τ (tanθ scale) and V (v ↦ t extent) of the D̃ grid (the
+    /// Λ grid has the same τ and reaches closer to the horizon).
     tau: Vec<f64>,
     v_extent: Vec<f64>,
-    lambda_v_extent: Vec<f64>,
+    /// Per w node, for lookups without divisions: 1/(τ·a), (nv − 1)/V and
+    /// (LAMBDA_NODES − 1)/V_Λ.
+    inv_tau_a: Vec<f64>,
+    v_scale: Vec<f64>,
+    lambda_v_scale: Vec<f64>,
     /// ln D̃_eff at (node, v_j), row-major by node.
     log_d: Vec<f64>,
     /// Density in T = tan²θ per bin (piecewise constant), and CDF per node
@@ -396,11 +402,12 @@ fn ring_nodes(row: &[f64], tau_a: f64, v_ext: f64) -> Vec<(f64, f64, f64)> {
 }
 
 /// Λ from a row of ln(1 + Λ) on the uniform v grid of tanθ = scale·sinh(vV),
-/// given `t` = tanθ/scale: Catmull–Rom in v, held at the ends.
+/// given `t` = tanθ/scale and `v_scale` = (n − 1)/V: Catmull–Rom in v, held
+/// at the ends.
 #[inline]
-fn lambda_from_log1p_row(row: &[f64], t: f64, v_ext: f64) -> f64 {
+fn lambda_from_log1p_row(row: &[f64], t: f64, v_scale: f64) -> f64 {
     let n = row.len();
-    let x = crate::math::asinh_nonneg(t) / v_ext * (n - 1) as f64;
+    let x = crate::math::asinh_nonneg(t) * v_scale;
     let ln1p = if !(x >= 0.0) {
         row[0]
     } else if x >= (n - 1) as f64 {
@@ -529,7 +536,9 @@ impl EffTable {
             nv,
             tau: Vec::with_capacity(nw),
             v_extent: Vec::with_capacity(nw),
-            lambda_v_extent: Vec::with_capacity(nw),
+            inv_tau_a: Vec::with_capacity(nw),
+            v_scale: Vec::with_capacity(nw),
+            lambda_v_scale: Vec::with_capacity(nw),
             log_d: Vec::with_capacity(nw * nv),
             dens_t: Vec::with_capacity(nw * nv),
             cdf: Vec::with_capacity(nw * nv),
@@ -539,7 +548,10 @@ impl EffTable {
         for r in rows {
             t.tau.push(r.tau);
             t.v_extent.push(r.v_ext);
-            t.lambda_v_extent.push(r.lambda_v_ext);
+            t.inv_tau_a.push(1.0 / (r.tau * SINH_A));
+            t.v_scale.push((nv - 1) as f64 / r.v_ext);
+            t.lambda_v_scale
+                .push((LAMBDA_NODES - 1) as f64 / r.lambda_v_ext);
             t.log_d.extend(r.log_d);
             t.norm.push(r.norm);
             t.dens_t.extend(r.dens_t);
@@ -553,7 +565,7 @@ impl EffTable {
     #[inline]
     fn lambda_node(&self, i: usize, tan_t: f64) -> f64 {
         let row = &self.log1p_lambda[i * LAMBDA_NODES..(i + 1) * LAMBDA_NODES];
-        lambda_from_log1p_row(row, tan_t / (self.tau[i] * SINH_A), self.lambda_v_extent[i])
+        lambda_from_log1p_row(row, tan_t * self.inv_tau_a[i], self.lambda_v_scale[i])
     }
 
     /// Smith Λ of the w-interpolated D̃_eff at the bracket `wb`: the table mixes the two
@@ -594,8 +606,7 @@ impl EffTable {
     /// Fractional v position (bin, fraction) of tanθ at node i, or None past the top.
     #[inline]
     fn v_position(&self, i: usize, tan_t: f64) -> Option<(usize, f64)> {
-        let v = crate::math::asinh_nonneg(tan_t / (self.tau[i] * SINH_A)) / self.v_extent[i];
-        let x = v * (self.nv - 1) as f64;
+        let x = crate::math::asinh_nonneg(tan_t * self.inv_tau_a[i]) * self.v_scale[i];
         if !(x >= 0.0) {
             return Some((0, 0.0));
         }
@@ -733,7 +744,8 @@ impl TwoScale {
             coherent: p.coherent,
             table,
             macro_log1p_lambda,
-            macro_v_extent,
+            macro_inv_scale: 1.0 / (beta * SINH_A),
+            macro_v_scale: (MACRO_LAMBDA_NODES - 1) as f64 / macro_v_extent,
             cap: None,
         };
         m.cap = m.build_cap();
@@ -828,7 +840,15 @@ impl TwoScale {
     fn coherent_fraction(&self, k: f64, cos: f64) -> (f64, f64) {
         let x = 2.0 * k * self.psd.sigma_um() * cos;
         let g = x * x;
-        (libm::exp(-g), -libm::expm1(-g))
+        // One transcendental: A = 1 + expm1(−g) has no cancellation while
+        // A ≥ 1/e, and 1 − A none while A < 1/e.
+        if g < 1.0 {
+            let e = libm::expm1(-g);
+            (1.0 + e, -e)
+        } else {
+            let a = crate::math::exp(-g);
+            (a, 1.0 - a)
+        }
     }
 
     /// Probability of the delta lobe (Delta reading) and of the D component
@@ -847,8 +867,8 @@ impl TwoScale {
     fn macro_lambda(&self, tan_t: f64) -> f64 {
         lambda_from_log1p_row(
             &self.macro_log1p_lambda,
-            tan_t / (self.ndf.beta() * SINH_A),
-            self.macro_v_extent,
+            tan_t * self.macro_inv_scale,
+            self.macro_v_scale,
         )
     }
 
