@@ -67,7 +67,7 @@ use crate::model::{Bxdf, BxdfSample, Specular, WAVELENGTH_MAX_NM, WAVELENGTH_MIN
 use crate::wave::albedo_cap::{self, AlbedoCap};
 use crate::wave::epd::ExponentialNdf;
 use crate::wave::kc::KcPsd;
-use crate::wave::quadrature::{GL4_W, GL4_X, gl4, panel_edges};
+use crate::wave::quadrature::{GL4_W, GL4_X, gl4, gl4_graded_from_zero, panel_edges};
 
 /// Where the coherent (specular) fraction A of each microfacet goes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Default)]
@@ -264,31 +264,15 @@ fn ring(kernel: &Kernel, eps: f64, th: f64, sh: f64, ch: f64, tm: f64, sm: f64, 
     let a0 = 2.0 * half_dt * half_dt;
     let b = 2.0 * ss;
     let at = |phi: f64| {
-        // (sin(φ/2), cos(φ/2)) without a general-purpose sincos: φ/2 ∈ [0, π/2].
+        // sin(φ/2) by the exact quarter-turn polynomial, not a general-purpose
+        // sincos: φ/2 ∈ [0, π/2].
         let (s, _) = crate::math::sincos_2pi(phi * (0.25 / PI));
         let one_minus_c = a0 + b * s * s;
         kernel.at(one_minus_c * (2.0 - one_minus_c))
     };
     let delta0 = (tm - th).abs();
-    // Panels [0, s], [s, sG], [sG, sG²], … up to φmax.
-    let scale = (0.5 * eps.max(delta0) / libm::sqrt(ss.max(1e-300))).min(phi_max);
-    let mut sum = 0.0;
-    let (mut a, mut d) = (0.0, scale);
-    loop {
-        // The last edge absorbs one that would leave a sliver panel.
-        let b_edge = if d >= phi_max * (1.0 - 1e-9) {
-            phi_max
-        } else {
-            d
-        };
-        sum += gl4(a, b_edge, at);
-        if b_edge >= phi_max {
-            break;
-        }
-        a = b_edge;
-        d *= GRADING;
-    }
-    2.0 * sum
+    let scale = 0.5 * eps.max(delta0) / libm::sqrt(ss.max(1e-300));
+    2.0 * gl4_graded_from_zero(phi_max, scale, GRADING, at)
 }
 
 /// Catmull–Rom cubic through `row` at position j + f (0 ≤ f ≤ 1).
@@ -334,7 +318,7 @@ struct EffTable {
     /// Raw normalisation ∫ D_eff cosθ dω per node (diagnostics).
     norm: Vec<f64>,
     /// ln(1 + Λ) of the normalised D̃_eff at (node, l) for tanθ on the
-    /// node's Λ sinh grid (extent `lambda_v_extent`) with [`LAMBDA_NODES`]
+    /// node's Λ sinh grid (top at [`LAMBDA_TOP_TAN`]) with [`LAMBDA_NODES`]
     /// points.
     log1p_lambda: Vec<f64>,
 }
@@ -453,8 +437,6 @@ impl EffTable {
         let dx = libm::log1p(w_max) / (nw - 1) as f64;
         let beta = ndf.beta();
         let nu = psd.nu();
-        // The convolutions (nearly all of the build time) row by row, on all
-        // cores with `std`; each row has its own quadrature scratch space.
         // Every row (convolutions, nearly all of the build time; sampling
         // CDF; Smith Λ) on all cores with `std`, each with its own
         // quadrature scratch space.
