@@ -58,13 +58,15 @@ fn d_equals_p_and_lobe_matches_reference() {
 
         // D ≡ P: the KC PSD of the wave-core module (independent code) at
         // ζ = 2k cosθd sinθh with cosθd = cosθi, the value of the identity.
-        let psd = KcPsd::new(paper.sigma2.sqrt(), paper.lc_um, 3.0).unwrap();
+        // σ_h² is a formal amplitude (µm⁻², far above any height variance
+        // KcPsd accepts): the unit-σ PSD scaled by it.
+        let psd = KcPsd::new(1.0, paper.lc_um, 3.0).unwrap();
         for p in row["D_vs_P"].as_array().unwrap() {
             let th = p["theta_h"].as_f64().unwrap();
             let h = spherical(th, 0.0);
             let d = ggx_d(alpha, h);
             let zeta = 2.0 * k * ti.cos() * th.sin();
-            let pk = psd.psd(zeta);
+            let pk = paper.sigma2 * psd.psd(zeta);
             worst_dp = worst_dp.max(rel(pk, d));
             worst_ref = worst_ref
                 .max(rel(d, p["D_ggx"].as_f64().unwrap()))

@@ -161,8 +161,9 @@ fn smooth_stress_long() {
 fn kc_params() -> impl Strategy<Value = (f64, f64, f64)> {
     (
         log_uniform(1e-4, 10.0),
-        log_uniform(0.01, 1000.0),
-        1.001..10.0f64,
+        log_uniform(0.03, 1000.0),
+        // γ − 1 log-uniform over the accepted 1e−3…99
+        (-3.0f64..1.9956).prop_map(|e| 1.0 + 10f64.powf(e)),
     )
 }
 
@@ -231,9 +232,10 @@ fn full_suite(cases: u32, tables: usize) {
             if i == 0 {
                 GAMMA_FULL_MIN
             } else if i == 1 {
-                10.0
+                100.0
             } else {
-                GAMMA_FULL_MIN + (10.0 - GAMMA_FULL_MIN) * rand_unit(&mut rng)
+                // γ − 1 log-uniform over 0.05…99
+                1.0 + (0.05f64.ln() + (99.0f64 / 0.05).ln() * rand_unit(&mut rng)).exp()
             }
         })
         .collect();
@@ -254,7 +256,7 @@ fn full_suite(cases: u32, tables: usize) {
         runner((cases / tables as u32 / 20).max(2), 6 + t as u8)
             .run(
                 &(
-                    (log_uniform(1e-4, 10.0), log_uniform(0.01, 1000.0)),
+                    (log_uniform(1e-4, 10.0), log_uniform(0.03, 1000.0)),
                     opts,
                     metal(),
                     per_material,

@@ -150,10 +150,12 @@ impl<P: RadialPsd> GhsFull<P> {
         if !(g > 0.0) {
             return 0.0;
         }
-        match self.table.s_tilde(u, g) {
-            Some(v) => v,
-            None => -libm::expm1(-g) * self.psd.unit_psd_u(u),
-        }
+        let ln_u = if u > 0.0 {
+            crate::math::ln(u)
+        } else {
+            f64::NEG_INFINITY
+        };
+        self.s_tilde_at(ln_u, u, g)
     }
 
     /// R = 1, unrenormalised scattered BRDF k²L² S̃.
@@ -183,11 +185,20 @@ impl<P: RadialPsd> GhsFull<P> {
         if !(g > 0.0) {
             return 0.0;
         }
-        let s_tilde = match self.table.s_tilde_ln_u(ln_u, g) {
+        kl * kl * self.s_tilde_at(ln_u, libm::sqrt(geo.u2), g)
+    }
+
+    /// S̃(u; g) from the table, with the first order from the exact p(u)
+    /// when the table leaves it out; (1 − e^{−g}) p(u) below the table.
+    #[inline]
+    fn s_tilde_at(&self, ln_u: f64, u: f64, g: f64) -> f64 {
+        match self.table.s_tilde_rest_ln_u(ln_u, g) {
+            Some(rest) if self.table.first_order_apart() => {
+                rest + g * crate::math::exp(-g) * self.psd.unit_psd_u(u)
+            }
             Some(v) => v,
-            None => -libm::expm1(-g) * self.psd.unit_psd_u(libm::sqrt(geo.u2)),
-        };
-        kl * kl * s_tilde
+            None => -libm::expm1(-g) * self.psd.unit_psd_u(u),
+        }
     }
 
     /// Density in the u-plane (∫ d²u = 1) with which the glossy sampler

@@ -32,7 +32,19 @@ pub trait Correlation {
     /// Exponent ν of the leading non-analytic term 1 − M ≈ a x^{2ν}
     /// (p ∝ u^{−2ν−2} in the tail).
     fn cusp_nu(&self) -> f64;
+    /// Whether a table of S̃ should leave the first diffraction order
+    /// g e^{−g} p(u) out, to be added back exactly. Heavy tails need it (the
+    /// orders sit at scales m^{1/(2ν)} apart), and so does any p with sharp
+    /// features (a measured PSD's machining peak), which the first order
+    /// carries unsmoothed.
+    fn separate_first_order(&self) -> bool {
+        self.cusp_nu() < FIRST_ORDER_APART_BELOW_NU
+    }
 }
+
+/// Below this tail exponent ν a KC table leaves the first order out (see
+/// [`Correlation::separate_first_order`]).
+pub const FIRST_ORDER_APART_BELOW_NU: f64 = 0.25;
 
 /// The K-correlation surface: Matérn covariance and p₁.
 impl Correlation for Matern {
@@ -80,6 +92,49 @@ fn kernel_small_g(m: f64, g: f64) -> f64 {
 #[inline]
 fn kernel_large_g(one_minus_m: f64, g: f64) -> f64 {
     crate::math::exp(-g * one_minus_m) - crate::math::exp(-g)
+}
+
+/// e^{−g}·(e^{gM} − 1 − gM): the kernel without its first diffraction order
+/// e^{−g} g M, whose transform g e^{−g} p(u) is known exactly. The series
+/// below gM = ½ keeps full relative accuracy where the two nearly cancel.
+#[inline]
+pub fn kernel_without_first_order(m: f64, one_minus_m: f64, g: f64) -> f64 {
+    let t = g * m;
+    if t < 0.5 {
+        crate::math::exp(-g) * exp_minus_1_minus_x(t)
+    } else {
+        kernel_from(m, one_minus_m, g) - crate::math::exp(-g) * t
+    }
+}
+
+/// e^t − 1 − t for |t| ≤ ½, by its Taylor series (relative error < 1e−16).
+#[inline]
+fn exp_minus_1_minus_x(t: f64) -> f64 {
+    let mut term = 0.5 * t * t;
+    let mut sum = term;
+    let mut k = 3.0;
+    while libm::fabs(term) > 1e-17 * libm::fabs(sum) && k < 40.0 {
+        term *= t / k;
+        sum += term;
+        k += 1.0;
+    }
+    sum
+}
+
+/// Cusp-subtraction parameters (A', ε') for the kernel without its first
+/// order: its value at 0 is A' = 1 − e^{−g} − g e^{−g} and its leading
+/// non-analytic term −g(1 − e^{−g}) a x^{2ν}, so A' M(x/ε') matches both with
+/// ε'^{2ν} = A'/(g(1 − e^{−g})).
+#[inline]
+pub fn cusp_params_without_first_order(nu: f64, g: f64) -> (f64, f64) {
+    let b = -libm::expm1(-g);
+    let a = if g < 0.5 {
+        crate::math::exp(-g) * exp_minus_1_minus_x(g)
+    } else {
+        b - g * crate::math::exp(-g)
+    };
+    let eps = crate::math::exp(crate::math::ln(a / (g * b)) / (2.0 * nu));
+    (a, eps)
 }
 
 /// Cusp-subtraction parameters (A, ε) for this g.

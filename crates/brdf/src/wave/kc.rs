@@ -18,10 +18,16 @@ pub const GAMMA_MIN: f64 = 1.0 + 1e-3;
 /// Largest accepted γ: beyond, the Matérn smoothness ν ≈ 50 is Gaussian to
 /// far below any measurable difference and Γ(ν) approaches overflow.
 pub const GAMMA_MAX: f64 = 100.0;
-/// Largest accepted σ and Lc, µm (1 m): keeps every product finite.
-pub const LENGTH_MAX_UM: f64 = 1e6;
-/// Smallest accepted Lc, µm.
-pub const LC_MIN_UM: f64 = 1e-9;
+/// Largest accepted rms height σ, µm. The full-GHS tables hold g up to
+/// (2k(360 nm)·10 µm)² = 1.2e5 < [`super::ghs_table::G_MAX`] without
+/// extrapolation, and every model is validated up to here (stress tests);
+/// rougher surfaces are in the geometric-optics regime: use a microfacet model.
+pub const SIGMA_MAX_UM: f64 = 10.0;
+/// Accepted correlation lengths Lc, µm: from 30 nm (a lobe far wider than
+/// the hemisphere even at 360 nm) to 1 mm (a lobe ~1e−4 rad wide).
+pub const LC_MIN_UM: f64 = 0.03;
+/// See [`LC_MIN_UM`].
+pub const LC_MAX_UM: f64 = 1000.0;
 
 /// K-correlation PSD with rms height σ, correlation length Lc (µm) and
 /// spectral exponent γ.
@@ -33,22 +39,22 @@ pub struct KcPsd {
 }
 
 impl KcPsd {
-    /// Validates and builds the PSD. σ ∈ [0, 1e6] µm, Lc ∈ [1e-9, 1e6] µm,
-    /// γ ∈ [1.001, 100].
+    /// Validates and builds the PSD. σ ∈ [0, 10] µm, Lc ∈ [0.03, 1000] µm,
+    /// γ ∈ [1.001, 100] (the full GHS needs γ ≥ 1.05).
     pub fn new(sigma_um: f64, lc_um: f64, gamma: f64) -> Result<Self, BrdfError> {
         check_range(
             "sigma_um",
             sigma_um,
             0.0,
-            LENGTH_MAX_UM,
-            "0 ≤ sigma_um ≤ 1e6 (µm)",
+            SIGMA_MAX_UM,
+            "0 ≤ sigma_um ≤ 10 (µm); rougher surfaces scatter geometrically: use ggx or beckmann",
         )?;
         check_range(
             "lc_um",
             lc_um,
             LC_MIN_UM,
-            LENGTH_MAX_UM,
-            "1e-9 ≤ lc_um ≤ 1e6 (µm)",
+            LC_MAX_UM,
+            "0.03 ≤ lc_um ≤ 1000 (µm)",
         )?;
         check_range("gamma", gamma, GAMMA_MIN, GAMMA_MAX, "1.001 ≤ gamma ≤ 100")?;
         Ok(KcPsd {
@@ -369,10 +375,23 @@ mod tests {
 
     #[test]
     fn stable_at_extremes() {
-        let p = KcPsd::new(0.0, 1e-9, 100.0).unwrap();
+        let p = KcPsd::new(0.0, LC_MIN_UM, 100.0).unwrap();
         assert_eq!(p.psd(1.0), 0.0);
         assert!(p.unit_psd(1e300).is_finite());
-        let q = KcPsd::new(1e6, 1e6, 1.001).unwrap();
+        let q = KcPsd::new(SIGMA_MAX_UM, LC_MAX_UM, 1.001).unwrap();
+        // Outside the validated domain: refused, naming the parameter.
+        for (s, l, g) in [
+            (10.01, 1.0, 3.0),
+            (0.1, 0.0299, 3.0),
+            (0.1, 1000.1, 3.0),
+            (0.1, 1.0, 100.1),
+        ] {
+            let e = KcPsd::new(s, l, g).unwrap_err();
+            assert!(
+                matches!(e, BrdfError::OutOfRange { name, .. } if ["sigma_um", "lc_um", "gamma"].contains(&name)),
+                "{e:?}"
+            );
+        }
         for z in [0.0, 1e-300, 1.0, 1e300, f64::INFINITY] {
             assert!(q.psd(z).is_finite() && q.psd(z) >= 0.0);
             assert!((0.0..=1.0).contains(&q.cdf(z)));

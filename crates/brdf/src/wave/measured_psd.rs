@@ -82,6 +82,13 @@ impl TabulatedPsd {
         let zl = zeta_rad_per_um[n - 1];
         acc += 2.0 * PI * psd_um4[n - 1] * zl * zl / (-(slope_hi + 2.0));
         let sigma2 = acc;
+        if !(libm::sqrt(sigma2) <= super::kc::SIGMA_MAX_UM) {
+            return Err(BrdfError::OutOfRange {
+                name: "sigma_um of the tabulated PSD",
+                value: libm::sqrt(sigma2),
+                valid: "≤ 10 µm (the wave models' validated range; check the PSD's units:                         zeta in rad/µm, psd in µm⁴)",
+            });
+        }
         for c in cum.iter_mut() {
             *c /= sigma2;
         }
@@ -296,6 +303,8 @@ pub struct TabulatedCorrelation {
     p: TabulatedPsd,
     matern: Matern,
     c: f64,
+    /// 1/Lc' of the tail-matching KC (1 unless the tail is steep and late).
+    inv_lc_tail: f64,
     t0: f64,
     dt: f64,
     m_r: Vec<f64>,
@@ -316,13 +325,27 @@ impl TabulatedCorrelation {
         let u_last = crate::math::exp(p.ln_zeta[nl - 1]) * p.length;
         let b =
             p.unit_psd_u_inner(u_last) * crate::math::exp(-p.slope_hi * crate::math::ln(u_last));
-        let c = PI * b / nu;
+        // The KC of the same tail with Lc = 1 has mass πB/ν. A last segment
+        // far steeper than the body (a roll-off appended past the data)
+        // makes that astronomically large, and r = p − c·p₁ then cancels
+        // to nothing; there the tail is matched by a unit-mass KC of a
+        // shorter length instead: Lc'^{−2ν} = πB/ν.
+        let tail_mass = PI * b / nu;
+        let (c, lc_tail) = if tail_mass <= 1.0 {
+            (tail_mass, 1.0)
+        } else {
+            (
+                1.0,
+                crate::math::exp(-crate::math::ln(tail_mass) / (2.0 * nu)),
+            )
+        };
         let plan = FftLog::with_bias(n, dt, 0.5);
         let tu0 = -51.0;
         let f: Vec<f64> = (0..n)
             .map(|i| {
                 let u = crate::math::exp(tu0 + i as f64 * dt);
-                2.0 * PI * (p.unit_psd_u_inner(u) - c * super::kc::p1(nu, u))
+                let tail = c * lc_tail * lc_tail * super::kc::p1(nu, lc_tail * u);
+                2.0 * PI * (p.unit_psd_u_inner(u) - tail)
             })
             .collect();
         let (mut re, mut im) = (Vec::new(), Vec::new());
@@ -340,10 +363,8 @@ impl TabulatedCorrelation {
             }
             m2 += fi * u * u * u * u * dt;
         }
-        m2 += 2.0
-            * PI
-            * b
-            * (nu + 1.0)
+        // r ≈ B(ν + 1)u^{slope−2}/Lc'² beyond the last sample.
+        m2 += 2.0 * PI * b * (nu + 1.0) / (lc_tail * lc_tail)
             * crate::math::exp((p.slope_hi + 2.0) * crate::math::ln(u_last))
             / (-(p.slope_hi + 2.0));
         // switch where the quadratic form reaches 1e−6
@@ -352,6 +373,7 @@ impl TabulatedCorrelation {
             p: p.clone(),
             matern: Matern::new(nu),
             c,
+            inv_lc_tail: 1.0 / lc_tail,
             t0,
             dt,
             m_r: re,
@@ -375,7 +397,7 @@ impl TabulatedCorrelation {
     }
 
     fn m_full(&self, x: f64) -> f64 {
-        self.c * self.matern.value(x) + self.m_r(x)
+        self.c * self.matern.value(x * self.inv_lc_tail) + self.m_r(x)
     }
 
     fn m_r(&self, x: f64) -> f64 {
@@ -423,7 +445,7 @@ impl Correlation for TabulatedCorrelation {
         } else {
             (1.0 - self.c) - self.m_r(x)
         };
-        let v = self.c * self.matern.one_minus(x) + rem;
+        let v = self.c * self.matern.one_minus(x * self.inv_lc_tail) + rem;
         v.clamp(0.0, 2.0)
     }
     fn unit_psd_u(&self, u: f64) -> f64 {
@@ -431,6 +453,9 @@ impl Correlation for TabulatedCorrelation {
     }
     fn cusp_nu(&self) -> f64 {
         self.p.tail_nu()
+    }
+    fn separate_first_order(&self) -> bool {
+        true
     }
 }
 

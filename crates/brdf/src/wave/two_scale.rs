@@ -59,7 +59,7 @@ use core::f64::consts::PI;
 
 use glam::DVec3;
 
-use crate::error::{BrdfError, check_range};
+use crate::error::BrdfError;
 use crate::frame::reflect_z;
 use crate::fresnel::Fresnel;
 use crate::math::finite_nonneg;
@@ -684,19 +684,11 @@ const DELTA_MAX: f64 = 0.99;
 impl TwoScale {
     /// Validates the parameters and builds the D̃_eff table.
     ///
-    /// β ∈ [1e−4, 10]; σ ∈ [0, 1e6] µm, Lc ∈ [1e−9, 1e6] µm, γ ∈ [1.001, 100]
-    /// (as [`KcPsd::new`]); Lc·2k_max ≤ 1e7 so the table's w range stays
-    /// meaningful; Fresnel data must cover 360–830 nm.
+    /// β ∈ [1e−4, 10]; σ ∈ [0, 10] µm, Lc ∈ [0.03, 1000] µm, γ ∈ [1.001, 100]
+    /// (as [`KcPsd::new`]); Fresnel data must cover 360–830 nm.
     pub fn new(p: TwoScaleParams) -> Result<TwoScale, BrdfError> {
         let ndf = ExponentialNdf::new(p.beta)?;
         let psd = KcPsd::new(p.sigma_um, p.lc_um, p.gamma)?;
-        check_range(
-            "lc_um",
-            p.lc_um,
-            1e-9,
-            1e5,
-            "1e-9 ≤ lc_um ≤ 1e5 (µm) for the two-scale model",
-        )?;
         p.fresnel
             .check_covers(WAVELENGTH_MIN_NM, WAVELENGTH_MAX_NM)?;
         if p.resolution.w_nodes < 2 || p.resolution.theta_nodes < 8 {
