@@ -34,9 +34,13 @@ pub mod math;
 pub mod microfacet;
 mod model;
 #[cfg(feature = "alloc")]
+pub mod paper;
+#[cfg(feature = "alloc")]
 mod parallel;
 #[cfg(feature = "testing")]
 pub mod testing;
+#[cfg(feature = "alloc")]
+pub mod spec;
 pub mod wave;
 
 pub use error::BrdfError;

@@ -11,6 +11,11 @@ use crate::model::{WAVELENGTH_MAX_NM, WAVELENGTH_MIN_NM};
 
 /// How the scattered part is normalised (physics.md §5).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[cfg_attr(
+    feature = "serde",
+    derive(serde::Serialize, serde::Deserialize),
+    serde(rename_all = "snake_case")
+)]
 pub enum Energy {
     /// The physics as written: the evanescent part is lost and, at grazing
     /// incidence, the total can exceed 1. Reciprocal. Default.
@@ -33,6 +38,11 @@ pub enum Energy {
 
 /// Which angle the Fresnel factor of the scattered part uses (physics.md §3.2).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[cfg_attr(
+    feature = "serde",
+    derive(serde::Serialize, serde::Deserialize),
+    serde(rename_all = "snake_case")
+)]
 pub enum FresnelAngle {
     /// R(cosθd), cosθd = i·h = sqrt((1 + i·o)/2): reciprocal, equals
     /// R(θi) at the mirror direction. Default.

@@ -50,7 +50,7 @@ pub const G_MIN: f64 = 1e-4;
 /// the extrapolated width W(g).
 pub const G_MAX: f64 = 2e5;
 /// Smallest tail exponent ν = (γ − 1)/2 a table accepts (γ ≥ 1.05).
-pub const NU_MIN: f64 = 0.025;
+pub const NU_MIN: f64 = (super::kc::GAMMA_MIN_FULL - 1.0) / 2.0;
 /// Largest first column in w; lowered for surfaces whose core is narrower
 /// than W (see [`GhsTable::build`]). Below the first column S̃ is held flat.
 pub const W_MIN: f64 = 1e-3;

@@ -15,6 +15,10 @@ use crate::error::check_range;
 /// Smallest accepted γ: below, the inverse CDF exponent 2/(γ−1) overflows and
 /// nearly all mass sits at evanescent frequencies (physics.md §11).
 pub const GAMMA_MIN: f64 = 1.0 + 1e-3;
+/// Smallest γ the full GHS accepts (its table's tail exponent ν ≥ 0.025):
+/// nearer γ = 1 the lobe is a stable law spanning more decades than f64
+/// holds; the SSA covers [`GAMMA_MIN`, `GAMMA_MIN_FULL`).
+pub const GAMMA_MIN_FULL: f64 = 1.05;
 /// Largest accepted γ: beyond, the Matérn smoothness ν ≈ 50 is Gaussian to
 /// far below any measurable difference and Γ(ν) approaches overflow.
 pub const GAMMA_MAX: f64 = 100.0;

@@ -71,6 +71,11 @@ use crate::wave::quadrature::{GL4_W, GL4_X, gl4, gl4_graded_from_zero, panel_edg
 
 /// Where the coherent (specular) fraction A of each microfacet goes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Default)]
+#[cfg_attr(
+    feature = "serde",
+    derive(serde::Serialize, serde::Deserialize),
+    serde(rename_all = "snake_case")
+)]
 pub enum CoherentPart {
     /// Each microfacet reflects its coherent part into its own mirror
     /// direction, so the macro-scale lobe of that part is D itself:

@@ -1,0 +1,962 @@
+//! One description of a material for every entry point: a typed
+//! [`MaterialSpec`] (which model, its parameters, its Fresnel term) with
+//! validation and [`MaterialSpec::build`], and — with the `serde` feature —
+//! the flat key/value schema [`MaterialDesc`] that scene files, `brdf eval`
+//! queries and `lustre fit` material files all use.
+//!
+//! ```text
+//! MaterialDesc (keys as written)  --into_spec-->  MaterialSpec  --build-->  Box<dyn Bxdf>
+//!            ^---------------------to_desc-------------'
+//! ```
+//!
+//! Keys of the flat schema (every entry point, every model):
+//!
+//! | key | models | meaning |
+//! |---|---|---|
+//! | `model` | all | `ggx`, `beckmann`, `smooth`, `ghs_ssa`, `ghs`, `two_scale`, `measured_psd` |
+//! | `metal` / `nk` / `nk_csv` | all | built-in metal, constant `[n, k]`, or a CSV `wavelength_nm,n,k` |
+//! | `fresnel` | all | `conductor` (default) or `one` (R ≡ 1; alias `none`) |
+//! | `alpha`, or `alpha_x` + `alpha_y` | ggx, beckmann | roughness (x along the surface tangent) |
+//! | `alpha_beckmann` | beckmann | used in preference to `alpha` (a fit file serves both models) |
+//! | `sigma_um`, `lc_um`, `gamma` | ghs_ssa, ghs, two_scale | K-correlation σ (µm), Lc (µm), γ |
+//! | `energy` | ghs_ssa, ghs, measured_psd | `raw` (default), `krywonos`, `sigma_rel` |
+//! | `fresnel_angle` | ghs_ssa, ghs, measured_psd | `halfway` (default) or `incident` |
+//! | `psd_csv` | measured_psd | CSV `zeta_rad_per_um,p_um4` |
+//! | `beta`, `coherent` | two_scale | macro NDF width β; `macro_ndf` (default) or `delta` |
+//! | `include`, `cutoff` | all | a `lustre fit` material file and its two-scale split (resolved by the caller) |
+//!
+//! File references (`nk_csv`, `psd_csv`, `include`) are resolved by the
+//! caller, which reads the files: this crate does no I/O. A key a model does
+//! not use is an error naming the key, so a misspelt or misplaced parameter
+//! never falls back to a default silently.
+
+use alloc::boxed::Box;
+use alloc::format;
+use alloc::string::{String, ToString};
+use alloc::vec::Vec;
+
+use crate::wave::kc::KcPsd;
+use crate::wave::two_scale::{CoherentPart, TableResolution, TwoScale, TwoScaleParams};
+use crate::wave::{Energy, FresnelAngle, GhsFull, GhsOptions, GhsSsa, TabulatedPsd};
+use crate::{
+    BrdfError, Bxdf, Distribution, Fresnel, Ior, Metal, MicrofacetConductor, SmoothConductor,
+};
+
+/// A built model, shareable across threads.
+pub type DynBxdf = Box<dyn Bxdf + Send + Sync>;
+
+/// Why a description does not make a material: the key to fix and why.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+#[error("`{field}`: {message}")]
+pub struct SpecError {
+    /// The key as the user writes it (`sigma_um`, `model`, …).
+    pub field: &'static str,
+    /// What is wrong and what is valid.
+    pub message: String,
+}
+
+impl SpecError {
+    /// An error on `field`.
+    pub fn new(field: &'static str, message: impl Into<String>) -> SpecError {
+        SpecError {
+            field,
+            message: message.into(),
+        }
+    }
+}
+
+impl From<BrdfError> for SpecError {
+    fn from(e: BrdfError) -> SpecError {
+        let field = match &e {
+            BrdfError::OutOfRange { name, .. } => name,
+            BrdfError::WavelengthOutOfRange { .. } => "lambda_nm",
+            BrdfError::InvalidTable { .. } => "table",
+        };
+        SpecError::new(field, e.to_string())
+    }
+}
+
+/// The reflection models.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[cfg_attr(
+    feature = "serde",
+    derive(serde::Serialize, serde::Deserialize),
+    serde(rename_all = "snake_case")
+)]
+pub enum ModelKind {
+    /// GGX / Trowbridge–Reitz microfacet conductor.
+    Ggx,
+    /// Beckmann microfacet conductor.
+    Beckmann,
+    /// Perfect mirror.
+    Smooth,
+    /// GHS smooth-surface approximation with a K-correlation PSD.
+    GhsSsa,
+    /// Full GHS with a K-correlation PSD.
+    Ghs,
+    /// Full GHS with a tabulated (measured) PSD.
+    MeasuredPsd,
+    /// Holzschuch–Pacanowski two-scale model.
+    TwoScale,
+}
+
+impl ModelKind {
+    /// Every model, in the order the documentation lists them.
+    pub const ALL: [ModelKind; 7] = [
+        ModelKind::Ggx,
+        ModelKind::Beckmann,
+        ModelKind::Smooth,
+        ModelKind::GhsSsa,
+        ModelKind::Ghs,
+        ModelKind::TwoScale,
+        ModelKind::MeasuredPsd,
+    ];
+
+    /// The name used in files.
+    pub fn name(self) -> &'static str {
+        match self {
+            ModelKind::Ggx => "ggx",
+            ModelKind::Beckmann => "beckmann",
+            ModelKind::Smooth => "smooth",
+            ModelKind::GhsSsa => "ghs_ssa",
+            ModelKind::Ghs => "ghs",
+            ModelKind::MeasuredPsd => "measured_psd",
+            ModelKind::TwoScale => "two_scale",
+        }
+    }
+
+    /// The model of a file name.
+    pub fn from_name(name: &str) -> Option<ModelKind> {
+        ModelKind::ALL.into_iter().find(|m| m.name() == name)
+    }
+
+    /// `ggx, beckmann, …` for error messages.
+    pub fn names() -> String {
+        let names: Vec<&str> = ModelKind::ALL.iter().map(|m| m.name()).collect();
+        names.join(", ")
+    }
+}
+
+/// K-correlation surface statistics (physics.md §2), validated as
+/// [`KcPsd::new`]: σ ∈ [0, 10] µm, Lc ∈ [0.03, 1000] µm, γ ∈ [1.001, 100].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct KcSpec {
+    /// rms height σ, µm.
+    pub sigma_um: f64,
+    /// Correlation (Matérn range) length Lc, µm.
+    pub lc_um: f64,
+    /// Spectral exponent γ.
+    pub gamma: f64,
+}
+
+impl KcSpec {
+    /// The PSD, or the range error naming the parameter.
+    pub fn psd(&self) -> Result<KcPsd, BrdfError> {
+        KcPsd::new(self.sigma_um, self.lc_um, self.gamma)
+    }
+}
+
+/// A model and its parameters.
+#[derive(Clone, Debug, PartialEq)]
+pub enum ModelSpec {
+    /// GGX with roughness α along x (surface tangent) and y.
+    Ggx {
+        /// α along the tangent.
+        alpha_x: f64,
+        /// α along the bitangent.
+        alpha_y: f64,
+    },
+    /// Beckmann with roughness α along x and y.
+    Beckmann {
+        /// α along the tangent.
+        alpha_x: f64,
+        /// α along the bitangent.
+        alpha_y: f64,
+    },
+    /// A perfect mirror.
+    Smooth,
+    /// GHS smooth-surface approximation.
+    GhsSsa {
+        /// The surface.
+        surface: KcSpec,
+        /// Energy and Fresnel-angle switches.
+        options: GhsOptions,
+    },
+    /// Full GHS.
+    Ghs {
+        /// The surface.
+        surface: KcSpec,
+        /// Energy and Fresnel-angle switches.
+        options: GhsOptions,
+    },
+    /// Full GHS with a tabulated PSD.
+    MeasuredPsd {
+        /// Radial frequencies ζ, rad/µm, strictly increasing.
+        zeta_rad_per_um: Vec<f64>,
+        /// PSD values P(ζ), µm⁴.
+        psd_um4: Vec<f64>,
+        /// Energy and Fresnel-angle switches.
+        options: GhsOptions,
+    },
+    /// Two-scale: exponential macro NDF of width β, KC micro scale.
+    TwoScale {
+        /// Macro NDF width β.
+        beta: f64,
+        /// The micro-scale surface.
+        surface: KcSpec,
+        /// Where the coherent part goes.
+        coherent: CoherentPart,
+    },
+}
+
+impl ModelSpec {
+    /// Which model this is.
+    pub fn kind(&self) -> ModelKind {
+        match self {
+            ModelSpec::Ggx { .. } => ModelKind::Ggx,
+            ModelSpec::Beckmann { .. } => ModelKind::Beckmann,
+            ModelSpec::Smooth => ModelKind::Smooth,
+            ModelSpec::GhsSsa { .. } => ModelKind::GhsSsa,
+            ModelSpec::Ghs { .. } => ModelKind::Ghs,
+            ModelSpec::MeasuredPsd { .. } => ModelKind::MeasuredPsd,
+            ModelSpec::TwoScale { .. } => ModelKind::TwoScale,
+        }
+    }
+
+    /// The KC surface of the wave-optical models.
+    pub fn surface(&self) -> Option<KcSpec> {
+        match self {
+            ModelSpec::GhsSsa { surface, .. }
+            | ModelSpec::Ghs { surface, .. }
+            | ModelSpec::TwoScale { surface, .. } => Some(*surface),
+            _ => None,
+        }
+    }
+}
+
+/// The Fresnel term of a conductor.
+#[derive(Clone, Debug, PartialEq)]
+pub enum FresnelSpec {
+    /// R ≡ 1 (furnace tests).
+    One,
+    /// A built-in metal's measured n + ik.
+    Metal(Metal),
+    /// A constant n + ik.
+    Constant {
+        /// Real part n.
+        n: f64,
+        /// Extinction κ.
+        k: f64,
+    },
+    /// A table of (λ nm, n, κ) rows.
+    Table(Vec<[f64; 3]>),
+}
+
+impl FresnelSpec {
+    /// The Fresnel factor.
+    pub fn build(&self) -> Result<Fresnel, BrdfError> {
+        Ok(match self {
+            FresnelSpec::One => Fresnel::One,
+            FresnelSpec::Metal(m) => Fresnel::conductor(Ior::metal(*m)),
+            FresnelSpec::Constant { n, k } => Fresnel::conductor(Ior::constant(*n, *k)?),
+            FresnelSpec::Table(rows) => Fresnel::conductor(Ior::table(rows.clone())?),
+        })
+    }
+}
+
+/// A complete material: model and Fresnel term.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MaterialSpec {
+    /// The model and its parameters.
+    pub model: ModelSpec,
+    /// The Fresnel term.
+    pub fresnel: FresnelSpec,
+}
+
+impl MaterialSpec {
+    /// Checks every parameter against its model's accepted range without
+    /// building tables (cheap: what `lustre fit` runs on what it writes).
+    pub fn validate(&self) -> Result<(), SpecError> {
+        self.fresnel.build()?;
+        match &self.model {
+            ModelSpec::Ggx { alpha_x, alpha_y } => {
+                Distribution::ggx(*alpha_x, *alpha_y)?;
+            }
+            ModelSpec::Beckmann { alpha_x, alpha_y } => {
+                Distribution::beckmann(*alpha_x, *alpha_y)?;
+            }
+            ModelSpec::Smooth => {}
+            ModelSpec::GhsSsa { surface, .. } | ModelSpec::Ghs { surface, .. } => {
+                let psd = surface.psd()?;
+                if self.model.kind() == ModelKind::Ghs
+                    && psd.gamma() < crate::wave::kc::GAMMA_MIN_FULL
+                {
+                    return Err(SpecError::new(
+                        "gamma",
+                        format!(
+                            "{} is below {} for the full GHS (its lobe spans more decades than \
+                             f64 holds); use ghs_ssa",
+                            psd.gamma(),
+                            crate::wave::kc::GAMMA_MIN_FULL
+                        ),
+                    ));
+                }
+            }
+            ModelSpec::MeasuredPsd {
+                zeta_rad_per_um,
+                psd_um4,
+                ..
+            } => {
+                TabulatedPsd::new(zeta_rad_per_um, psd_um4)
+                    .map_err(|e| SpecError::new("psd", e.to_string()))?;
+            }
+            ModelSpec::TwoScale { beta, surface, .. } => {
+                crate::wave::epd::ExponentialNdf::new(*beta)?;
+                surface.psd()?;
+            }
+        }
+        Ok(())
+    }
+
+    /// Builds the model (tables included: tens of ms for the wave models).
+    pub fn build(&self) -> Result<DynBxdf, SpecError> {
+        self.validate()?;
+        let fresnel = self.fresnel.build()?;
+        Ok(match &self.model {
+            ModelSpec::Ggx { alpha_x, alpha_y } => Box::new(MicrofacetConductor::new(
+                Distribution::ggx(*alpha_x, *alpha_y)?,
+                fresnel,
+            )?),
+            ModelSpec::Beckmann { alpha_x, alpha_y } => Box::new(MicrofacetConductor::new(
+                Distribution::beckmann(*alpha_x, *alpha_y)?,
+                fresnel,
+            )?),
+            ModelSpec::Smooth => Box::new(SmoothConductor::new(fresnel)?),
+            ModelSpec::GhsSsa { surface, options } => {
+                Box::new(GhsSsa::with_options(surface.psd()?, fresnel, *options)?)
+            }
+            ModelSpec::Ghs { surface, options } => {
+                Box::new(GhsFull::with_options(surface.psd()?, fresnel, *options)?)
+            }
+            ModelSpec::MeasuredPsd {
+                zeta_rad_per_um,
+                psd_um4,
+                options,
+            } => {
+                let table = TabulatedPsd::new(zeta_rad_per_um, psd_um4)
+                    .map_err(|e| SpecError::new("psd", e.to_string()))?;
+                Box::new(GhsFull::with_options(table, fresnel, *options)?)
+            }
+            ModelSpec::TwoScale {
+                beta,
+                surface,
+                coherent,
+            } => Box::new(TwoScale::new(TwoScaleParams {
+                beta: *beta,
+                sigma_um: surface.sigma_um,
+                lc_um: surface.lc_um,
+                gamma: surface.gamma,
+                fresnel,
+                coherent: *coherent,
+                resolution: TableResolution::default(),
+            })?),
+        })
+    }
+}
+
+#[cfg(feature = "serde")]
+pub use desc::{FileLoader, FresnelKind, MaterialDesc, NoFiles};
+
+#[cfg(feature = "serde")]
+mod desc {
+    use super::*;
+
+    /// `fresnel = …`: a conductor (default) or R ≡ 1.
+    #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+    #[serde(rename_all = "snake_case")]
+    pub enum FresnelKind {
+        /// The measured or given n + ik (default).
+        Conductor,
+        /// R ≡ 1.
+        #[serde(alias = "none")]
+        One,
+    }
+
+    /// The flat key/value form of a material, as scene files, `brdf eval`
+    /// queries and `lustre fit` material files write it (keys in the module
+    /// documentation). Unknown keys are refused when deserialised.
+    #[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+    #[serde(deny_unknown_fields)]
+    pub struct MaterialDesc {
+        /// The reflection model.
+        #[serde(skip_serializing_if = "Option::is_none")]
+        pub model: Option<ModelKind>,
+        /// A built-in metal by name (aliases as [`Metal::from_name`]).
+        #[serde(skip_serializing_if = "Option::is_none")]
+        pub metal: Option<String>,
+        /// A CSV `wavelength_nm,n,k` (resolved by the caller).
+        #[serde(skip_serializing_if = "Option::is_none")]
+        pub nk_csv: Option<String>,
+        /// A constant `[n, k]`.
+        #[serde(skip_serializing_if = "Option::is_none")]
+        pub nk: Option<[f64; 2]>,
+        /// `conductor` (default) or `one`.
+        #[serde(skip_serializing_if = "Option::is_none")]
+        pub fresnel: Option<FresnelKind>,
+        /// Isotropic microfacet roughness.
+        #[serde(skip_serializing_if = "Option::is_none")]
+        pub alpha: Option<f64>,
+        /// Roughness along the surface tangent.
+        #[serde(skip_serializing_if = "Option::is_none")]
+        pub alpha_x: Option<f64>,
+        /// Roughness along the bitangent.
+        #[serde(skip_serializing_if = "Option::is_none")]
+        pub alpha_y: Option<f64>,
+        /// Beckmann roughness, used in preference to `alpha` by `beckmann`.
+        #[serde(skip_serializing_if = "Option::is_none")]
+        pub alpha_beckmann: Option<f64>,
+        /// KC rms height σ, µm.
+        #[serde(skip_serializing_if = "Option::is_none")]
+        pub sigma_um: Option<f64>,
+        /// KC correlation length Lc, µm.
+        #[serde(skip_serializing_if = "Option::is_none")]
+        pub lc_um: Option<f64>,
+        /// KC exponent γ.
+        #[serde(skip_serializing_if = "Option::is_none")]
+        pub gamma: Option<f64>,
+        /// GHS energy handling.
+        #[serde(skip_serializing_if = "Option::is_none")]
+        pub energy: Option<Energy>,
+        /// GHS Fresnel angle.
+        #[serde(skip_serializing_if = "Option::is_none")]
+        pub fresnel_angle: Option<FresnelAngle>,
+        /// A CSV `zeta_rad_per_um,p_um4` (resolved by the caller).
+        #[serde(skip_serializing_if = "Option::is_none")]
+        pub psd_csv: Option<String>,
+        /// Two-scale macro NDF width β.
+        #[serde(skip_serializing_if = "Option::is_none")]
+        pub beta: Option<f64>,
+        /// Two-scale coherent part.
+        #[serde(skip_serializing_if = "Option::is_none")]
+        pub coherent: Option<CoherentPart>,
+        /// A `lustre fit` material file (resolved by the caller).
+        #[serde(skip_serializing_if = "Option::is_none")]
+        pub include: Option<String>,
+        /// Which two-scale split of the included file.
+        #[serde(skip_serializing_if = "Option::is_none")]
+        pub cutoff: Option<String>,
+    }
+
+    /// Reads the files a description refers to (this crate does no I/O).
+    pub trait FileLoader {
+        /// Rows `(λ nm, n, κ)` of an `nk_csv` file.
+        fn nk_table(&mut self, path: &str) -> Result<Vec<[f64; 3]>, String>;
+        /// `(ζ rad/µm, P µm⁴)` samples of a `psd_csv` file.
+        fn psd_table(&mut self, path: &str) -> Result<(Vec<f64>, Vec<f64>), String>;
+    }
+
+    /// A loader for descriptions that must not refer to files.
+    pub struct NoFiles;
+
+    impl FileLoader for NoFiles {
+        fn nk_table(&mut self, path: &str) -> Result<Vec<[f64; 3]>, String> {
+            Err(format!("cannot read {path:?} here: give `metal` or `nk` instead"))
+        }
+        fn psd_table(&mut self, path: &str) -> Result<(Vec<f64>, Vec<f64>), String> {
+            Err(format!("cannot read {path:?} here"))
+        }
+    }
+
+    fn need(v: Option<f64>, key: &'static str, model: ModelKind) -> Result<f64, SpecError> {
+        v.ok_or_else(|| SpecError::new(key, format!("model `{}` needs `{key}`", model.name())))
+    }
+
+    impl MaterialDesc {
+        /// Fills every key this description leaves unset from `base` (an
+        /// included file): keys set here win.
+        pub fn inherit(&mut self, base: &MaterialDesc) {
+            macro_rules! inherit {
+                ($($f:ident),*) => { $( if self.$f.is_none() { self.$f = base.$f.clone(); } )* };
+            }
+            inherit!(
+                model,
+                metal,
+                nk_csv,
+                nk,
+                fresnel,
+                alpha,
+                alpha_x,
+                alpha_y,
+                alpha_beckmann,
+                sigma_um,
+                lc_um,
+                gamma,
+                energy,
+                fresnel_angle,
+                psd_csv,
+                beta,
+                coherent
+            );
+        }
+
+        /// The keys that are set, by name.
+        fn set_keys(&self) -> Vec<&'static str> {
+            let mut k = Vec::new();
+            macro_rules! set {
+                ($($f:ident),*) => { $( if self.$f.is_some() { k.push(stringify!($f)); } )* };
+            }
+            set!(
+                alpha,
+                alpha_x,
+                alpha_y,
+                alpha_beckmann,
+                sigma_um,
+                lc_um,
+                gamma,
+                energy,
+                fresnel_angle,
+                psd_csv,
+                beta,
+                coherent
+            );
+            k
+        }
+
+        /// The typed material of a description with nothing to inherit:
+        /// [`MaterialDesc::resolve`] with no base.
+        pub fn into_spec(&self, files: &mut dyn FileLoader) -> Result<MaterialSpec, SpecError> {
+            self.resolve(None, files)
+        }
+
+        /// The typed material of this description over `base` (the
+        /// `[material]` of an included `lustre fit` file, already chosen and
+        /// read by the caller; keys set here win). `files` reads `nk_csv`
+        /// and `psd_csv`.
+        ///
+        /// Every key set *here* must be one the model uses: a misspelt,
+        /// misplaced or leftover key is an error naming it. Keys inherited
+        /// from `base` are not checked that way, since a fit file carries α
+        /// and the KC statistics for whichever model a scene picks.
+        pub fn resolve(
+            &self,
+            base: Option<&MaterialDesc>,
+            files: &mut dyn FileLoader,
+        ) -> Result<MaterialSpec, SpecError> {
+            let mut merged = self.clone();
+            if let Some(b) = base {
+                merged.inherit(b);
+            }
+            merged.include = None;
+            merged.cutoff = None;
+            let model = merged.model.ok_or_else(|| {
+                SpecError::new("model", format!("missing `model`; one of {}", ModelKind::names()))
+            })?;
+            self.check_used(model)?;
+            if self.cutoff.is_some() && model != ModelKind::TwoScale {
+                return Err(SpecError::new(
+                    "cutoff",
+                    "`cutoff` picks the split of a two_scale material's included file",
+                ));
+            }
+            merged.build_spec(model, files)
+        }
+
+        /// The keys `model` reads.
+        pub fn keys_of(model: ModelKind) -> &'static [&'static str] {
+            match model {
+                ModelKind::Ggx => &["alpha", "alpha_x", "alpha_y"],
+                ModelKind::Beckmann => &["alpha", "alpha_x", "alpha_y", "alpha_beckmann"],
+                ModelKind::Smooth => &[],
+                ModelKind::GhsSsa | ModelKind::Ghs => {
+                    &["sigma_um", "lc_um", "gamma", "energy", "fresnel_angle"]
+                }
+                ModelKind::MeasuredPsd => &["psd_csv", "energy", "fresnel_angle"],
+                ModelKind::TwoScale => &["sigma_um", "lc_um", "gamma", "beta", "coherent"],
+            }
+        }
+
+        /// Refuses a key set here that `model` does not read.
+        pub fn check_used(&self, model: ModelKind) -> Result<(), SpecError> {
+            let used = Self::keys_of(model);
+            match self.set_keys().into_iter().find(|k| !used.contains(k)) {
+                None => Ok(()),
+                Some(extra) => Err(SpecError::new(
+                    extra,
+                    format!(
+                        "model `{}` does not use `{extra}`; its parameters are: {}",
+                        model.name(),
+                        if used.is_empty() {
+                            "none".to_string()
+                        } else {
+                            used.join(", ")
+                        }
+                    ),
+                )),
+            }
+        }
+
+        fn build_spec(
+            &self,
+            model: ModelKind,
+            files: &mut dyn FileLoader,
+        ) -> Result<MaterialSpec, SpecError> {
+            let fresnel = self.fresnel_spec(files)?;
+            let kc = |m| -> Result<KcSpec, SpecError> {
+                Ok(KcSpec {
+                    sigma_um: need(self.sigma_um, "sigma_um", m)?,
+                    lc_um: need(self.lc_um, "lc_um", m)?,
+                    gamma: need(self.gamma, "gamma", m)?,
+                })
+            };
+            let options = GhsOptions {
+                energy: self.energy.unwrap_or_default(),
+                fresnel_angle: self.fresnel_angle.unwrap_or_default(),
+            };
+            let spec = match model {
+                ModelKind::Ggx => {
+                    let (alpha_x, alpha_y) = self.roughness(model, self.alpha)?;
+                    ModelSpec::Ggx { alpha_x, alpha_y }
+                }
+                ModelKind::Beckmann => {
+                    let (alpha_x, alpha_y) =
+                        self.roughness(model, self.alpha_beckmann.or(self.alpha))?;
+                    ModelSpec::Beckmann { alpha_x, alpha_y }
+                }
+                ModelKind::Smooth => ModelSpec::Smooth,
+                ModelKind::GhsSsa => ModelSpec::GhsSsa {
+                    surface: kc(model)?,
+                    options,
+                },
+                ModelKind::Ghs => ModelSpec::Ghs {
+                    surface: kc(model)?,
+                    options,
+                },
+                ModelKind::MeasuredPsd => {
+                    let path = self.psd_csv.as_deref().ok_or_else(|| {
+                        SpecError::new(
+                            "psd_csv",
+                            "model `measured_psd` needs `psd_csv = \"file.csv\"` \
+                             (zeta_rad_per_um,p_um4) or an included fit file with a [psd] table",
+                        )
+                    })?;
+                    let (zeta_rad_per_um, psd_um4) = files
+                        .psd_table(path)
+                        .map_err(|e| SpecError::new("psd_csv", e))?;
+                    ModelSpec::MeasuredPsd {
+                        zeta_rad_per_um,
+                        psd_um4,
+                        options,
+                    }
+                }
+                ModelKind::TwoScale => ModelSpec::TwoScale {
+                    beta: need(self.beta, "beta", model)?,
+                    surface: kc(model)?,
+                    coherent: self.coherent.unwrap_or_default(),
+                },
+            };
+            let spec = MaterialSpec {
+                model: spec,
+                fresnel,
+            };
+            spec.validate()?;
+            Ok(spec)
+        }
+
+        fn roughness(&self, model: ModelKind, iso: Option<f64>) -> Result<(f64, f64), SpecError> {
+            match (self.alpha_x, self.alpha_y, iso) {
+                (Some(x), Some(y), _) => Ok((x, y)),
+                (None, None, Some(a)) => Ok((a, a)),
+                (Some(_), None, _) => Err(SpecError::new("alpha_y", "give both `alpha_x` and `alpha_y`")),
+                (None, Some(_), _) => Err(SpecError::new("alpha_x", "give both `alpha_x` and `alpha_y`")),
+                (None, None, None) => Err(SpecError::new(
+                    "alpha",
+                    format!("model `{}` needs `alpha` (or `alpha_x` and `alpha_y`)", model.name()),
+                )),
+            }
+        }
+
+        fn fresnel_spec(&self, files: &mut dyn FileLoader) -> Result<FresnelSpec, SpecError> {
+            if self.fresnel == Some(FresnelKind::One) {
+                return Ok(FresnelSpec::One);
+            }
+            let given = [self.metal.is_some(), self.nk_csv.is_some(), self.nk.is_some()];
+            match given.iter().filter(|&&g| g).count() {
+                0 => Err(SpecError::new(
+                    "metal",
+                    "needs one of `metal = \"NAME\"`, `nk_csv = \"file.csv\"`, `nk = [n, k]` \
+                     (or `fresnel = \"one\"` for R ≡ 1)",
+                )),
+                1 => {
+                    if let Some(name) = &self.metal {
+                        let m = Metal::from_name(name).ok_or_else(|| {
+                            let names: Vec<&str> = Metal::ALL.iter().map(|m| m.name()).collect();
+                            SpecError::new(
+                                "metal",
+                                format!("unknown metal `{name}`; valid: {}", names.join(", ")),
+                            )
+                        })?;
+                        Ok(FresnelSpec::Metal(m))
+                    } else if let Some(path) = &self.nk_csv {
+                        let rows = files.nk_table(path).map_err(|e| SpecError::new("nk_csv", e))?;
+                        Ior::table(rows.clone()).map_err(|e| SpecError::new("nk_csv", e.to_string()))?;
+                        Ok(FresnelSpec::Table(rows))
+                    } else {
+                        let [n, k] = self.nk.unwrap_or_default();
+                        Ior::constant(n, k).map_err(|e| SpecError::new("nk", e.to_string()))?;
+                        Ok(FresnelSpec::Constant { n, k })
+                    }
+                }
+                _ => Err(SpecError::new("metal", "give only one of `metal`, `nk_csv`, `nk`")),
+            }
+        }
+    }
+
+    impl MaterialSpec {
+        /// The flat form. Tabulated data (a measured PSD, an n,k table) is
+        /// not representable as keys: `psd_csv` / `nk_csv` are left unset
+        /// and the caller writes the data next to the description.
+        pub fn to_desc(&self) -> MaterialDesc {
+            let mut d = MaterialDesc {
+                model: Some(self.model.kind()),
+                ..MaterialDesc::default()
+            };
+            match &self.fresnel {
+                FresnelSpec::One => d.fresnel = Some(FresnelKind::One),
+                FresnelSpec::Metal(m) => d.metal = Some(m.name().to_string()),
+                FresnelSpec::Constant { n, k } => d.nk = Some([*n, *k]),
+                FresnelSpec::Table(_) => {}
+            }
+            let set_kc = |d: &mut MaterialDesc, s: &KcSpec| {
+                d.sigma_um = Some(s.sigma_um);
+                d.lc_um = Some(s.lc_um);
+                d.gamma = Some(s.gamma);
+            };
+            let set_opts = |d: &mut MaterialDesc, o: &GhsOptions| {
+                d.energy = Some(o.energy);
+                d.fresnel_angle = Some(o.fresnel_angle);
+            };
+            match &self.model {
+                ModelSpec::Ggx { alpha_x, alpha_y } | ModelSpec::Beckmann { alpha_x, alpha_y } => {
+                    if alpha_x == alpha_y {
+                        d.alpha = Some(*alpha_x);
+                    } else {
+                        d.alpha_x = Some(*alpha_x);
+                        d.alpha_y = Some(*alpha_y);
+                    }
+                }
+                ModelSpec::Smooth => {}
+                ModelSpec::GhsSsa { surface, options } | ModelSpec::Ghs { surface, options } => {
+                    set_kc(&mut d, surface);
+                    set_opts(&mut d, options);
+                }
+                ModelSpec::MeasuredPsd { options, .. } => set_opts(&mut d, options),
+                ModelSpec::TwoScale {
+                    beta,
+                    surface,
+                    coherent,
+                } => {
+                    d.beta = Some(*beta);
+                    set_kc(&mut d, surface);
+                    d.coherent = Some(*coherent);
+                }
+            }
+            d
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_model_builds_and_validates() {
+        let kc = KcSpec {
+            sigma_um: 0.1,
+            lc_um: 2.0,
+            gamma: 2.5,
+        };
+        let zeta: Vec<f64> = (0..40).map(|i| 0.01 * 1.3f64.powi(i)).collect();
+        let p: Vec<f64> = zeta
+            .iter()
+            .map(|z| 0.01 / libm::pow(1.0 + 4.0 * z * z, 2.0))
+            .collect();
+        let specs = [
+            ModelSpec::Ggx {
+                alpha_x: 0.1,
+                alpha_y: 0.2,
+            },
+            ModelSpec::Beckmann {
+                alpha_x: 0.1,
+                alpha_y: 0.1,
+            },
+            ModelSpec::Smooth,
+            ModelSpec::GhsSsa {
+                surface: kc,
+                options: GhsOptions::default(),
+            },
+            ModelSpec::Ghs {
+                surface: kc,
+                options: GhsOptions::default(),
+            },
+            ModelSpec::MeasuredPsd {
+                zeta_rad_per_um: zeta,
+                psd_um4: p,
+                options: GhsOptions::default(),
+            },
+            ModelSpec::TwoScale {
+                beta: 0.05,
+                surface: kc,
+                coherent: CoherentPart::MacroNdf,
+            },
+        ];
+        for (spec, kind) in specs.into_iter().zip([
+            ModelKind::Ggx,
+            ModelKind::Beckmann,
+            ModelKind::Smooth,
+            ModelKind::GhsSsa,
+            ModelKind::Ghs,
+            ModelKind::MeasuredPsd,
+            ModelKind::TwoScale,
+        ]) {
+            assert_eq!(spec.kind(), kind);
+            let m = MaterialSpec {
+                model: spec,
+                fresnel: FresnelSpec::Metal(Metal::Cu),
+            };
+            m.validate().unwrap();
+            let b = m.build().unwrap();
+            let wi = crate::frame::spherical(0.3, 0.0);
+            let wo = crate::frame::spherical(0.3, core::f64::consts::PI);
+            assert!(b.eval(wi, wo, 550.0).is_finite());
+        }
+    }
+
+    #[cfg(feature = "serde")]
+    mod desc {
+        use super::super::*;
+        use alloc::string::ToString;
+
+        fn desc(json: &str) -> Result<MaterialDesc, String> {
+            serde_json::from_str(json).map_err(|e| e.to_string())
+        }
+
+        struct Files;
+        impl FileLoader for Files {
+            fn nk_table(&mut self, path: &str) -> Result<Vec<[f64; 3]>, String> {
+                assert_eq!(path, "cu.csv");
+                Ok(alloc::vec![[300.0, 1.0, 2.0], [900.0, 0.5, 5.0]])
+            }
+            fn psd_table(&mut self, _: &str) -> Result<(Vec<f64>, Vec<f64>), String> {
+                Err("no".to_string())
+            }
+        }
+
+        #[test]
+        fn keys_parse_into_the_typed_spec() {
+            let d = desc(
+                r#"{"model": "ghs", "metal": "cu", "sigma_um": 0.1, "lc_um": 2,
+                    "gamma": 2.5, "energy": "sigma_rel", "fresnel_angle": "incident"}"#,
+            )
+            .unwrap();
+            let s = d.into_spec(&mut NoFiles).unwrap();
+            assert_eq!(
+                s.model,
+                ModelSpec::Ghs {
+                    surface: KcSpec {
+                        sigma_um: 0.1,
+                        lc_um: 2.0,
+                        gamma: 2.5
+                    },
+                    options: GhsOptions {
+                        energy: Energy::SigmaRel,
+                        fresnel_angle: FresnelAngle::Incident
+                    }
+                }
+            );
+            assert_eq!(s.fresnel, FresnelSpec::Metal(Metal::Cu));
+            // and back
+            assert_eq!(s.to_desc().into_spec(&mut NoFiles).unwrap(), s);
+            // `fresnel = "none"` is R ≡ 1; nk_csv goes through the loader.
+            let d = desc(r#"{"model": "ggx", "alpha_x": 0.1, "alpha_y": 0.3, "fresnel": "none"}"#)
+                .unwrap();
+            assert_eq!(d.into_spec(&mut NoFiles).unwrap().fresnel, FresnelSpec::One);
+            let d = desc(r#"{"model": "smooth", "nk_csv": "cu.csv"}"#).unwrap();
+            assert!(matches!(
+                d.into_spec(&mut Files).unwrap().fresnel,
+                FresnelSpec::Table(_)
+            ));
+        }
+
+        #[test]
+        fn unknown_unused_and_missing_keys_name_the_key() {
+            let e = desc(r#"{"model": "ghs", "enrgy": "krywonos"}"#).unwrap_err();
+            assert!(e.contains("enrgy") && e.contains("energy"), "{e}");
+            let d = desc(r#"{"model": "ggx", "alpha": 0.1, "metal": "au", "beta": 0.2}"#).unwrap();
+            let e = d.into_spec(&mut NoFiles).unwrap_err();
+            assert_eq!(e.field, "beta");
+            assert!(e.message.contains("alpha"), "{e}");
+            let d = desc(r#"{"model": "two_scale", "metal": "au", "sigma_um": 0.1, "lc_um": 1, "gamma": 2}"#)
+                .unwrap();
+            assert_eq!(d.into_spec(&mut NoFiles).unwrap_err().field, "beta");
+            let d = desc(r#"{"model": "ggx", "alpha": 0.1}"#).unwrap();
+            assert_eq!(d.into_spec(&mut NoFiles).unwrap_err().field, "metal");
+            let d = desc(r#"{"model": "ggx", "alpha": 0.1, "metal": "unobtainium"}"#).unwrap();
+            let e = d.into_spec(&mut NoFiles).unwrap_err();
+            assert!(e.message.contains("stainless_steel"), "{e}");
+            let d = desc(r#"{"model": "ghs", "metal": "au", "sigma_um": 20, "lc_um": 1, "gamma": 2}"#)
+                .unwrap();
+            assert_eq!(d.into_spec(&mut NoFiles).unwrap_err().field, "sigma_um");
+            let e = desc(r#"{"model": "phong"}"#).unwrap_err();
+            assert!(e.contains("ghs_ssa"), "{e}");
+        }
+
+        #[test]
+        fn included_keys_are_inherited_and_not_checked() {
+            // A fit file carries α and the KC for whichever model a scene picks.
+            let base = desc(
+                r#"{"model": "ghs", "metal": "brass", "alpha": 0.2, "alpha_beckmann": 0.25,
+                    "sigma_um": 0.1, "lc_um": 2, "gamma": 2.5}"#,
+            )
+            .unwrap();
+            let own = desc(r#"{"model": "beckmann"}"#).unwrap();
+            let s = own.resolve(Some(&base), &mut NoFiles).unwrap();
+            assert_eq!(
+                s.model,
+                ModelSpec::Beckmann {
+                    alpha_x: 0.25,
+                    alpha_y: 0.25
+                }
+            );
+            // …but a key the scene sets itself must be used.
+            let own = desc(r#"{"model": "ggx", "gamma": 3}"#).unwrap();
+            assert_eq!(own.resolve(Some(&base), &mut NoFiles).unwrap_err().field, "gamma");
+            let own = desc(r#"{"alpha": 0.05}"#).unwrap();
+            assert_eq!(own.resolve(Some(&base), &mut NoFiles).unwrap_err().field, "alpha");
+        }
+    }
+
+    #[test]
+    fn out_of_range_names_the_field() {
+        let bad = MaterialSpec {
+            model: ModelSpec::Ghs {
+                surface: KcSpec {
+                    sigma_um: 0.1,
+                    lc_um: 2.0,
+                    gamma: 1.02,
+                },
+                options: GhsOptions::default(),
+            },
+            fresnel: FresnelSpec::One,
+        };
+        assert_eq!(bad.validate().unwrap_err().field, "gamma");
+        let bad = MaterialSpec {
+            model: ModelSpec::Ggx {
+                alpha_x: 0.0,
+                alpha_y: 0.1,
+            },
+            fresnel: FresnelSpec::One,
+        };
+        assert!(bad.validate().is_err());
+    }
+}
