@@ -20,7 +20,7 @@ use anyhow::{Context, anyhow, bail};
 use brdf::{Bxdf, DVec3};
 use plot::{Axis, ImageGrid, Legend, LineStyle, Marker, Plot, Rgb, Series};
 
-use crate::models::{self, ModelSpec, Surface};
+use crate::models::{self, Labelled, Surface};
 
 /// Horizontal axis of the slice plots.
 #[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
@@ -50,11 +50,14 @@ pub struct PlotArgs {
     /// (stainless_steel for --kc).
     #[arg(long)]
     pub fresnel: Option<String>,
-    /// Models, comma-separated: ggx, beckmann, ghs_ssa, ghs, two_scale.
+    /// Models, comma-separated: ggx (slope-based α), ggx_identity (GGX ≡ KC
+    /// α), beckmann, beckmann_identity, ghs_ssa, ghs, two_scale (cutoff
+    /// 100λ) or two_scale_N (N wavelengths), measured_psd (the KC sampled as
+    /// a table).
     #[arg(
         long,
         value_delimiter = ',',
-        default_value = "ggx,ghs_ssa,ghs,two_scale"
+        default_value = "ggx,ggx_identity,ghs_ssa,ghs,two_scale"
     )]
     pub models: Vec<String>,
     /// Wavelengths in nm, comma-separated.
@@ -66,12 +69,10 @@ pub struct PlotArgs {
     /// Horizontal axis of the slices.
     #[arg(long, value_enum, default_value = "theta")]
     pub x: SliceAxis,
-    /// GGX/Beckmann α (default: slope-space equivalent 1/(2kLc) at 550 nm, normal incidence).
+    /// GGX/Beckmann α for every microfacet model, instead of the rules of
+    /// `brdf::paper` (slope-based, or the GGX ≡ KC identity for *_identity).
     #[arg(long)]
     pub alpha: Option<f64>,
-    /// Two-scale cutoff period as a multiple of 550 nm.
-    #[arg(long, default_value_t = 100.0)]
-    pub cutoff: f64,
     /// Directions per slice (half uniform in θo, half clustered about the mirror direction).
     #[arg(long, default_value_t = 600)]
     pub points: usize,
@@ -120,28 +121,50 @@ fn surfaces(args: &PlotArgs) -> anyhow::Result<Vec<Surface>> {
         brdf::wave::KcPsd::new(sigma, lc, gamma).context("--kc")?;
         out.push(Surface {
             name: format!("kc_{sigma}_{lc}_{gamma}"),
-            sigma_um: sigma,
-            lc_um: lc,
-            gamma,
-            fresnel: "stainless_steel".into(),
-            alpha: models::ggx_alpha(lc, models::REFERENCE_LAMBDA_NM)?,
+            kc: brdf::spec::KcSpec {
+                sigma_um: sigma,
+                lc_um: lc,
+                gamma,
+            },
+            fresnel: brdf::spec::FresnelSpec::Metal(brdf::Metal::StainlessSteel),
         });
     } else if args.samples.is_empty() {
-        for s in models::SAMPLES {
-            out.push(Surface::from_sample(s)?);
-        }
+        out.extend(brdf::paper::SAMPLES.iter().map(Surface::from_sample));
     } else {
         for name in &args.samples {
-            out.push(Surface::from_sample(models::sample(name.trim())?)?);
+            out.push(Surface::from_sample(models::sample(name)?));
         }
     }
-    for s in &mut out {
-        if let Some(f) = &args.fresnel {
+    if let Some(f) = &args.fresnel {
+        let f = models::fresnel_from_name(f).context("--fresnel")?;
+        for s in &mut out {
             s.fresnel = f.clone();
         }
+    }
+    Ok(out)
+}
+
+/// The labelled materials of one surface, with `--alpha` applied.
+fn materials(args: &PlotArgs, s: &Surface) -> anyhow::Result<Vec<Labelled>> {
+    let mut out = Vec::new();
+    for m in models::paper_models(&args.models)? {
+        let mut l = s.material(m);
         if let Some(a) = args.alpha {
-            s.alpha = a;
+            use brdf::spec::ModelSpec;
+            if let ModelSpec::Ggx { alpha_x, alpha_y } | ModelSpec::Beckmann { alpha_x, alpha_y } =
+                &mut l.spec.model
+            {
+                (*alpha_x, *alpha_y) = (a, a);
+                let name = if matches!(l.spec.model, ModelSpec::Ggx { .. }) {
+                    "GGX"
+                } else {
+                    "Beckmann"
+                };
+                l.label = format!("{name}, --alpha {}", brdf::paper::short(a));
+            }
         }
+        l.spec.validate().map_err(|e| anyhow!("{}: {e}", l.label))?;
+        out.push(l);
     }
     Ok(out)
 }
@@ -164,12 +187,6 @@ fn check_args(args: &PlotArgs) -> anyhow::Result<()> {
     if args.points < 8 {
         bail!("--points {}: need at least 8", args.points);
     }
-    if !(args.cutoff.is_finite() && args.cutoff > 0.0) {
-        bail!(
-            "--cutoff {}: must be a positive multiple of the wavelength",
-            args.cutoff
-        );
-    }
     Ok(())
 }
 
@@ -182,19 +199,17 @@ pub fn run(args: PlotArgs) -> anyhow::Result<()> {
         .with_context(|| format!("creating output directory {}", args.out.display()))?;
     let mut panel: Vec<(String, Vec<plot::RgbImage>)> = Vec::new();
     for s in &surfaces {
-        let specs: Vec<ModelSpec> = args
-            .models
-            .iter()
-            .map(|m| s.model(m.trim(), args.cutoff))
-            .collect::<anyhow::Result<_>>()?;
+        let specs = materials(&args, s)?;
         let built: Vec<Box<dyn Bxdf>> = specs
             .iter()
-            .map(ModelSpec::build)
+            .map(|l| {
+                l.spec
+                    .build()
+                    .map(|b| b as Box<dyn Bxdf>)
+                    .map_err(|e| anyhow!("{}: {e}", l.label))
+            })
             .collect::<anyhow::Result<_>>()?;
-        let title = format!(
-            "{}: σ {} µm, Lc {} µm, γ {}, {}",
-            s.name, s.sigma_um, s.lc_um, s.gamma, s.fresnel
-        );
+        let title = format!("{}: {}", s.name, s.describe());
         let mut images = Vec::new();
         let slices = slice_plot(&args, s, &specs, &built, &title)?;
         let stem = s.name.to_lowercase();
@@ -303,23 +318,19 @@ fn csv_fields_header() -> &'static str {
     "fresnel,alpha,sigma_um,lc_um,gamma,beta"
 }
 
-fn csv_fields(m: &ModelSpec) -> String {
-    let f = |k: &str| {
-        let v = m.num(k);
-        if v.is_nan() {
-            String::new()
-        } else {
-            format!("{v}")
-        }
-    };
+/// The material's parameters as CSV columns (empty where the model has none).
+fn csv_fields(m: &Labelled) -> String {
+    let d = m.spec.to_desc();
+    let f = |v: Option<f64>| v.map_or_else(String::new, |v| format!("{v}"));
+    let alpha = d.alpha.or(d.alpha_x);
     format!(
         "{},{},{},{},{},{}",
-        m.text("fresnel"),
-        f("alpha"),
-        f("sigma_um"),
-        f("lc_um"),
-        f("gamma"),
-        f("beta")
+        models::fresnel_name(&m.spec.fresnel),
+        f(alpha),
+        f(d.sigma_um),
+        f(d.lc_um),
+        f(d.gamma),
+        f(d.beta)
     )
 }
 
@@ -334,7 +345,7 @@ fn quote(s: &str) -> String {
 fn slice_plot(
     args: &PlotArgs,
     s: &Surface,
-    specs: &[ModelSpec],
+    specs: &[Labelled],
     built: &[Box<dyn Bxdf>],
     title: &str,
 ) -> anyhow::Result<(Plot, String)> {
@@ -364,7 +375,7 @@ fn slice_plot(
                         csv,
                         "{},{},{},{lambda},{theta_i},{theta_o},{phi_o},{signed},{db},{f},{}",
                         s.name,
-                        spec.text("model"),
+                        spec.spec.model.kind().name(),
                         quote(&spec.label),
                         csv_fields(spec)
                     )?;
@@ -422,7 +433,7 @@ pub fn albedo_angles(n: usize) -> Vec<f64> {
 fn albedo_plot(
     args: &PlotArgs,
     s: &Surface,
-    specs: &[ModelSpec],
+    specs: &[Labelled],
     built: &[Box<dyn Bxdf>],
     title: &str,
 ) -> anyhow::Result<(Plot, String)> {
@@ -437,7 +448,7 @@ fn albedo_plot(
     let multi_lambda = args.lambda_nm.len() > 1;
     for (mi, (spec, model)) in specs.iter().zip(built).enumerate() {
         for (li, &lambda) in args.lambda_nm.iter().enumerate() {
-            let rho = spec.lobe_rho(lambda);
+            let rho = models::lobe_rho(&spec.spec, lambda);
             let (mut xs, mut total, mut tis) = (Vec::new(), Vec::new(), Vec::new());
             for theta_i in albedo_angles(args.albedo_angles) {
                 let wi = direction(theta_i, 0.0);
@@ -451,7 +462,7 @@ fn albedo_plot(
                     csv,
                     "{},{},{},{lambda},{theta_i},{rho},{scattered},{spec_w},{t},{r},{}",
                     s.name,
-                    spec.text("model"),
+                    spec.spec.model.kind().name(),
                     quote(&spec.label),
                     csv_fields(spec)
                 )?;

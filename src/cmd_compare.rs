@@ -2,15 +2,17 @@
 //! angles and assembles a labelled grid (rows = models, columns = views), like
 //! the paper's Fig. 1 and 4.
 //!
-//! Every cell is a scene with the geometry of `scenes/generate.py` (a 20 cm
-//! plate, the camera at θ from the normal, a small light in the mirror
-//! direction, a dim environment), rendered in-process by the `render` crate.
+//! Every cell is a scene with the geometry of the bundled sample scenes
+//! (`lustre scenes`: a 20 cm plate, the camera at θ from the normal, a small
+//! light in the mirror direction, a dim environment), rendered in-process by
+//! the `render` crate.
 //!
-//! Parameters per row:
-//! * paper sample (`--sample`): KC (σ, Lc, γ) and metal of physics.md §12;
-//!   GGX α by the slope-space identity 1/(2kLc) at 550 nm; two-scale at
-//!   Λ = m·550 nm: β from the KC slope variance below 2π/Λ (6β² = ⟨|∇h|²⟩),
-//!   micro scale = the sample's own KC (see `models::two_scale_beta`);
+//! Rows per surface:
+//! * paper sample (`--sample`): the models of `brdf::paper` — GGX with the
+//!   slope-based α (the microfacet prediction the paper rendered) and with
+//!   the GGX ≡ KC identity α (matches SSA by construction), GHS SSA, full GHS,
+//!   and two-scale at Λ = m·550 nm (β from the KC slope variance below 2π/Λ,
+//!   micro scale = the sample's own KC);
 //! * material file (`--material`, as written by `lustre fit`): included as is,
 //!   with `model` set per row and one two-scale row per `[two_scale.*]` table.
 
@@ -22,6 +24,9 @@ use plot::ImageGrid;
 use render::{Film, RenderOptions};
 
 use crate::cmd_brdf_plot::parse_size;
+use brdf::paper::{AlphaRule, PaperModel};
+use brdf::spec::MaterialDesc;
+
 use crate::models::{self, Surface};
 
 /// Arguments of `lustre compare`.
@@ -64,37 +69,28 @@ struct Row {
 }
 
 fn sample_rows(s: &Surface, cutoffs: &[f64]) -> anyhow::Result<Vec<Row>> {
-    let kc = format!(
-        "sigma_um = {}\nlc_um = {}\ngamma = {}\n",
-        s.sigma_um, s.lc_um, s.gamma
-    );
-    let metal = format!("metal = \"{}\"\n", s.fresnel);
-    let mut rows = vec![
-        Row {
-            label: format!("GGX\nα {}", models::short(s.alpha)),
-            material: format!("model = \"ggx\"\n{metal}alpha = {}\n", s.alpha),
-        },
-        Row {
-            label: "GHS SSA".into(),
-            material: format!("model = \"ghs_ssa\"\n{metal}{kc}"),
-        },
-        Row {
-            label: "full GHS".into(),
-            material: format!("model = \"ghs\"\n{metal}{kc}energy = \"raw\"\n"),
-        },
+    let mut models = vec![
+        PaperModel::Ggx(AlphaRule::Slope),
+        PaperModel::Ggx(AlphaRule::Identity),
+        PaperModel::GhsSsa,
+        PaperModel::Ghs,
     ];
     for &m in cutoffs {
         if !(m.is_finite() && m > 0.0) {
             bail!("--cutoffs {m}: must be positive multiples of the wavelength");
         }
-        let spec = s.model("two_scale", m)?;
-        let beta = spec.num("beta");
-        rows.push(Row {
-            label: format!("two-scale {m}λ\nβ {}", models::short(beta)),
-            material: format!("model = \"two_scale\"\n{metal}{kc}beta = {beta}\n"),
-        });
+        models.push(PaperModel::TwoScale(m));
     }
-    Ok(rows)
+    models
+        .into_iter()
+        .map(|m| {
+            let l = s.material(m);
+            Ok(Row {
+                label: l.label.replacen(", ", "\n", 1).replacen(" (", "\n(", 1),
+                material: models::material_toml(&l.spec, None)?,
+            })
+        })
+        .collect()
 }
 
 /// Cutoff tables of a `lustre fit` file, ordered by their number (cutoff_50 < cutoff_100).
@@ -115,25 +111,30 @@ fn material_rows(path: &Path) -> anyhow::Result<(String, Vec<Row>)> {
     let num = |t: &toml::Table, k: &str| t.get(k).and_then(toml::Value::as_float);
     let abs =
         std::fs::canonicalize(path).with_context(|| format!("resolving {}", path.display()))?;
-    let include = format!(
-        "include = {}\n",
-        toml::Value::String(abs.display().to_string())
-    );
+    let row = |model: brdf::spec::ModelKind, cutoff: Option<String>| -> anyhow::Result<String> {
+        models::desc_toml(&MaterialDesc {
+            include: Some(abs.display().to_string()),
+            model: Some(model),
+            cutoff,
+            ..MaterialDesc::default()
+        })
+    };
+    use brdf::spec::ModelKind;
     let mut rows = vec![
         Row {
             label: format!(
                 "GGX\nα {}",
-                models::short(num(mat, "alpha").unwrap_or(f64::NAN))
+                brdf::paper::short(num(mat, "alpha").unwrap_or(f64::NAN))
             ),
-            material: format!("{include}model = \"ggx\"\n"),
+            material: row(ModelKind::Ggx, None)?,
         },
         Row {
             label: "GHS SSA".into(),
-            material: format!("{include}model = \"ghs_ssa\"\n"),
+            material: row(ModelKind::GhsSsa, None)?,
         },
         Row {
             label: "full GHS".into(),
-            material: format!("{include}model = \"ghs\"\nenergy = \"raw\"\n"),
+            material: row(ModelKind::Ghs, None)?,
         },
     ];
     let mut cuts: Vec<(f64, String, f64)> = doc
@@ -160,8 +161,8 @@ fn material_rows(path: &Path) -> anyhow::Result<(String, Vec<Row>)> {
             name.clone()
         };
         rows.push(Row {
-            label: format!("two-scale {what}\nβ {}", models::short(beta)),
-            material: format!("{include}model = \"two_scale\"\ncutoff = \"{name}\"\n"),
+            label: format!("two-scale {what}\nβ {}", brdf::paper::short(beta)),
+            material: row(ModelKind::TwoScale, Some(name))?,
         });
     }
     let name = path
@@ -170,7 +171,7 @@ fn material_rows(path: &Path) -> anyhow::Result<(String, Vec<Row>)> {
     Ok((name, rows))
 }
 
-/// The scene of one cell: scenes/generate.py's plate, camera and lights.
+/// The scene of one cell: the bundled sample scenes' plate, camera and lights.
 pub fn scene_text(view_deg: f64, width: u32, height: u32, spp: u64, material: &str) -> String {
     let t = view_deg.to_radians();
     let cam = [0.0, t.cos(), t.sin()];
@@ -225,15 +226,16 @@ pub fn run(args: CompareArgs) -> anyhow::Result<()> {
             (name, title, rows, base)
         }
         None => {
-            let s =
-                Surface::from_sample(models::sample(args.sample.as_deref().unwrap_or("S280"))?)?;
+            let s = Surface::from_sample(models::sample(args.sample.as_deref().unwrap_or("S280"))?);
             let title = format!(
-                "{}: σ {} µm, Lc {} µm, γ {}, {}\n\
-                 GGX: α = 1/(2kLc) at 550 nm\n\
+                "{}: {}\n\
+                 GGX slope: α = rms slope below 2k at 550 nm\n\
+                 GGX KC identity: α = 1/(2kLc) at 550 nm\n\
                  two-scale at Λ = m·550 nm: β from the\n\
                  KC slope variance below 2π/Λ;\n\
                  micro scale = the sample's KC",
-                s.name, s.sigma_um, s.lc_um, s.gamma, s.fresnel
+                s.name,
+                s.describe()
             );
             (
                 s.name.to_lowercase(),

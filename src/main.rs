@@ -8,6 +8,7 @@ mod cmd_brdf_plot;
 mod cmd_compare;
 mod cmd_fit;
 mod cmd_render;
+mod cmd_scenes;
 mod models;
 
 use clap::{Parser, Subcommand};
@@ -40,6 +41,8 @@ enum Command {
     Fit(cmd_fit::FitArgs),
     /// Render one surface with every model at three viewing angles into a labelled image grid.
     Compare(cmd_compare::CompareArgs),
+    /// Write the bundled paper-sample scenes (scenes/samples, scenes/psd) from `brdf::paper`.
+    Scenes(cmd_scenes::ScenesArgs),
 }
 
 fn main() -> std::process::ExitCode {
@@ -51,6 +54,7 @@ fn main() -> std::process::ExitCode {
         Some(Command::Brdf(cmd)) => cmd_brdf::run(cmd),
         Some(Command::Fit(args)) => cmd_fit::run(args),
         Some(Command::Compare(args)) => cmd_compare::run(args),
+        Some(Command::Scenes(args)) => cmd_scenes::run(args),
     };
     match result {
         Ok(()) => std::process::ExitCode::SUCCESS,

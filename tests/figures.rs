@@ -163,8 +163,9 @@ fn brdf_plot_pngs_have_the_requested_size_and_csv_equals_brdf() {
     let mut cache: HashMap<String, Box<dyn Bxdf>> = HashMap::new();
     let mut per_model: HashMap<String, usize> = HashMap::new();
     for row in &rows {
+        // Two GGX rows (slope-based and identity α) share the model name.
         let m = cache
-            .entry(row["model"].clone())
+            .entry(row["label"].clone())
             .or_insert_with(|| model(row));
         let wi = dir(num(row, "theta_i_deg"), 0.0);
         let wo = dir(num(row, "theta_o_deg"), num(row, "phi_o_deg"));
@@ -192,9 +193,9 @@ fn brdf_plot_pngs_have_the_requested_size_and_csv_equals_brdf() {
     }
 
     let rows = read_csv(&out.join("s027_albedo.csv"));
-    assert_eq!(rows.len(), 4 * 3);
+    assert_eq!(rows.len(), 5 * 3);
     for row in &rows {
-        let m = &cache[&row["model"]];
+        let m = &cache[&row["label"]];
         let lambda = num(row, "lambda_nm");
         let wi = dir(num(row, "theta_i_deg"), 0.0);
         let scattered = brdf::wave::energy::hemispherical_integral(wi, num(row, "lobe_rho"), |o| {
@@ -294,15 +295,21 @@ fn compare_grid_has_one_cell_per_model_and_view() {
         .arg(&png));
     let (w, h) = png_size(&png);
     let cells = read_csv(&out.join("grid.cells.csv"));
-    // GGX, GHS SSA, full GHS, one two-scale row; two views.
-    assert_eq!(cells.len(), 4 * 2);
+    // GGX (slope α), GGX (KC identity α), GHS SSA, full GHS, one two-scale
+    // row; two views.
+    assert_eq!(cells.len(), 5 * 2);
     let labels: Vec<&str> = cells
         .iter()
         .filter(|c| c["col"] == "0")
         .map(|c| c["model"].as_str())
         .collect();
-    assert!(labels[0].starts_with("GGX") && labels[1] == "GHS SSA" && labels[2] == "full GHS");
-    assert!(labels[3].starts_with("two-scale 100λ"), "{labels:?}");
+    assert!(labels[0].starts_with("GGX, slope α"), "{labels:?}");
+    assert!(labels[1].starts_with("GGX, KC identity α"), "{labels:?}");
+    assert!(
+        labels[2] == "GHS SSA" && labels[3] == "full GHS",
+        "{labels:?}"
+    );
+    assert!(labels[4].starts_with("two-scale 100λ"), "{labels:?}");
     for c in &cells {
         assert_eq!(
             (num(c, "grid_width") as u32, num(c, "grid_height") as u32),

@@ -206,8 +206,8 @@ fn bundled_scenes_load_and_render() {
         .filter(|p| p.extension().is_some_and(|e| e == "toml"))
         .collect();
     samples.sort();
-    // 5 samples × 3 views × 6 models.
-    assert_eq!(samples.len(), 90);
+    // 5 samples × 3 views × 7 models.
+    assert_eq!(samples.len(), 105);
     files.extend(samples);
     for f in &files {
         let scene = render::load_scene(f).unwrap_or_else(|e| panic!("{e}"));

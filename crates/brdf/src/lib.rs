@@ -37,10 +37,10 @@ mod model;
 pub mod paper;
 #[cfg(feature = "alloc")]
 mod parallel;
-#[cfg(feature = "testing")]
-pub mod testing;
 #[cfg(feature = "alloc")]
 pub mod spec;
+#[cfg(feature = "testing")]
+pub mod testing;
 pub mod wave;
 
 pub use error::BrdfError;

@@ -24,10 +24,10 @@ use alloc::string::String;
 use alloc::vec::Vec;
 use core::f64::consts::PI;
 
+use crate::Metal;
 use crate::spec::{FresnelSpec, KcSpec, MaterialSpec, ModelSpec};
 use crate::wave::two_scale::CoherentPart;
 use crate::wave::{Energy, FresnelAngle, GhsOptions};
-use crate::Metal;
 
 /// Wavelength at which α and the two-scale splits are fixed, nm (`lustre
 /// fit` uses the same default for its cutoffs).

@@ -460,7 +460,9 @@ mod desc {
 
     impl FileLoader for NoFiles {
         fn nk_table(&mut self, path: &str) -> Result<Vec<[f64; 3]>, String> {
-            Err(format!("cannot read {path:?} here: give `metal` or `nk` instead"))
+            Err(format!(
+                "cannot read {path:?} here: give `metal` or `nk` instead"
+            ))
         }
         fn psd_table(&mut self, path: &str) -> Result<(Vec<f64>, Vec<f64>), String> {
             Err(format!("cannot read {path:?} here"))
@@ -549,7 +551,10 @@ mod desc {
             merged.include = None;
             merged.cutoff = None;
             let model = merged.model.ok_or_else(|| {
-                SpecError::new("model", format!("missing `model`; one of {}", ModelKind::names()))
+                SpecError::new(
+                    "model",
+                    format!("missing `model`; one of {}", ModelKind::names()),
+                )
             })?;
             self.check_used(model)?;
             if self.cutoff.is_some() && model != ModelKind::TwoScale {
@@ -666,11 +671,20 @@ mod desc {
             match (self.alpha_x, self.alpha_y, iso) {
                 (Some(x), Some(y), _) => Ok((x, y)),
                 (None, None, Some(a)) => Ok((a, a)),
-                (Some(_), None, _) => Err(SpecError::new("alpha_y", "give both `alpha_x` and `alpha_y`")),
-                (None, Some(_), _) => Err(SpecError::new("alpha_x", "give both `alpha_x` and `alpha_y`")),
+                (Some(_), None, _) => Err(SpecError::new(
+                    "alpha_y",
+                    "give both `alpha_x` and `alpha_y`",
+                )),
+                (None, Some(_), _) => Err(SpecError::new(
+                    "alpha_x",
+                    "give both `alpha_x` and `alpha_y`",
+                )),
                 (None, None, None) => Err(SpecError::new(
                     "alpha",
-                    format!("model `{}` needs `alpha` (or `alpha_x` and `alpha_y`)", model.name()),
+                    format!(
+                        "model `{}` needs `alpha` (or `alpha_x` and `alpha_y`)",
+                        model.name()
+                    ),
                 )),
             }
         }
@@ -679,7 +693,11 @@ mod desc {
             if self.fresnel == Some(FresnelKind::One) {
                 return Ok(FresnelSpec::One);
             }
-            let given = [self.metal.is_some(), self.nk_csv.is_some(), self.nk.is_some()];
+            let given = [
+                self.metal.is_some(),
+                self.nk_csv.is_some(),
+                self.nk.is_some(),
+            ];
             match given.iter().filter(|&&g| g).count() {
                 0 => Err(SpecError::new(
                     "metal",
@@ -697,8 +715,11 @@ mod desc {
                         })?;
                         Ok(FresnelSpec::Metal(m))
                     } else if let Some(path) = &self.nk_csv {
-                        let rows = files.nk_table(path).map_err(|e| SpecError::new("nk_csv", e))?;
-                        Ior::table(rows.clone()).map_err(|e| SpecError::new("nk_csv", e.to_string()))?;
+                        let rows = files
+                            .nk_table(path)
+                            .map_err(|e| SpecError::new("nk_csv", e))?;
+                        Ior::table(rows.clone())
+                            .map_err(|e| SpecError::new("nk_csv", e.to_string()))?;
                         Ok(FresnelSpec::Table(rows))
                     } else {
                         let [n, k] = self.nk.unwrap_or_default();
@@ -706,7 +727,10 @@ mod desc {
                         Ok(FresnelSpec::Constant { n, k })
                     }
                 }
-                _ => Err(SpecError::new("metal", "give only one of `metal`, `nk_csv`, `nk`")),
+                _ => Err(SpecError::new(
+                    "metal",
+                    "give only one of `metal`, `nk_csv`, `nk`",
+                )),
             }
         }
     }
@@ -896,16 +920,19 @@ mod tests {
             let e = d.into_spec(&mut NoFiles).unwrap_err();
             assert_eq!(e.field, "beta");
             assert!(e.message.contains("alpha"), "{e}");
-            let d = desc(r#"{"model": "two_scale", "metal": "au", "sigma_um": 0.1, "lc_um": 1, "gamma": 2}"#)
-                .unwrap();
+            let d = desc(
+                r#"{"model": "two_scale", "metal": "au", "sigma_um": 0.1, "lc_um": 1, "gamma": 2}"#,
+            )
+            .unwrap();
             assert_eq!(d.into_spec(&mut NoFiles).unwrap_err().field, "beta");
             let d = desc(r#"{"model": "ggx", "alpha": 0.1}"#).unwrap();
             assert_eq!(d.into_spec(&mut NoFiles).unwrap_err().field, "metal");
             let d = desc(r#"{"model": "ggx", "alpha": 0.1, "metal": "unobtainium"}"#).unwrap();
             let e = d.into_spec(&mut NoFiles).unwrap_err();
             assert!(e.message.contains("stainless_steel"), "{e}");
-            let d = desc(r#"{"model": "ghs", "metal": "au", "sigma_um": 20, "lc_um": 1, "gamma": 2}"#)
-                .unwrap();
+            let d =
+                desc(r#"{"model": "ghs", "metal": "au", "sigma_um": 20, "lc_um": 1, "gamma": 2}"#)
+                    .unwrap();
             assert_eq!(d.into_spec(&mut NoFiles).unwrap_err().field, "sigma_um");
             let e = desc(r#"{"model": "phong"}"#).unwrap_err();
             assert!(e.contains("ghs_ssa"), "{e}");
@@ -930,9 +957,15 @@ mod tests {
             );
             // …but a key the scene sets itself must be used.
             let own = desc(r#"{"model": "ggx", "gamma": 3}"#).unwrap();
-            assert_eq!(own.resolve(Some(&base), &mut NoFiles).unwrap_err().field, "gamma");
+            assert_eq!(
+                own.resolve(Some(&base), &mut NoFiles).unwrap_err().field,
+                "gamma"
+            );
             let own = desc(r#"{"alpha": 0.05}"#).unwrap();
-            assert_eq!(own.resolve(Some(&base), &mut NoFiles).unwrap_err().field, "alpha");
+            assert_eq!(
+                own.resolve(Some(&base), &mut NoFiles).unwrap_err().field,
+                "alpha"
+            );
         }
     }
 
