@@ -7,6 +7,7 @@ mod cmd_brdf;
 mod cmd_brdf_plot;
 mod cmd_compare;
 mod cmd_fit;
+mod cmd_preview;
 mod cmd_render;
 mod models;
 
@@ -40,6 +41,8 @@ enum Command {
     Fit(cmd_fit::FitArgs),
     /// Render one surface with every model at three viewing angles into a labelled image grid.
     Compare(cmd_compare::CompareArgs),
+    /// Render a material on the preview object under a daylight sky (or studio lights).
+    Preview(cmd_preview::PreviewArgs),
 }
 
 fn main() -> std::process::ExitCode {
@@ -51,6 +54,7 @@ fn main() -> std::process::ExitCode {
         Some(Command::Brdf(cmd)) => cmd_brdf::run(cmd),
         Some(Command::Fit(args)) => cmd_fit::run(args),
         Some(Command::Compare(args)) => cmd_compare::run(args),
+        Some(Command::Preview(args)) => cmd_preview::run(args),
     };
     match result {
         Ok(()) => std::process::ExitCode::SUCCESS,
