@@ -160,7 +160,7 @@ pub fn scene_text(s: &SceneSpec) -> String {
         "\n[camera]\nlook_from = [0.0, 1.75, 3.2]\nlook_at = [0.0, 0.45, 0.0]\nfov_deg = 24.0\nresolution = [{}, {}]\n\n\
          [film]\nspp = {}\nseed = 1\n{outputs}exposure = {}\n\n\
          [integrator]\nmax_depth = 8\nwavelengths = \"hero\"\n\n\
-         [materials.object]\n{}\n\
+         [materials.object]\n{}\n\n\
          # The floor: a checkerboard of rough aluminium and a dark glossy dielectric-like\n\
          # conductor (n = 1.5, k = 0: 4 % Fresnel reflection, no diffuse part).\n\
          [materials.floor_light]\nmodel = \"ggx\"\nmetal = \"al\"\nalpha = 0.6\n\n\
@@ -210,7 +210,9 @@ struct Cell {
 /// `brdf eval` JSON fields of a model → scene material keys.
 fn material_body(spec: &models::ModelSpec) -> String {
     let mut body = String::new();
-    for (k, v) in &spec.fields {
+    let model = spec.fields.iter().filter(|(k, _)| k.as_str() == "model");
+    let rest = spec.fields.iter().filter(|(k, _)| k.as_str() != "model");
+    for (k, v) in model.chain(rest) {
         let key = match k.as_str() {
             "fresnel" => "metal",
             other => other,
