@@ -404,17 +404,22 @@ impl Sky {
         let dth = PI / TABLE_H as f64;
         let mut e_h = [0.0; 4];
         let mut sky_power = 0.0;
+        // Cell-centre luminances of the upper half, kept for the sampling table.
+        let mut centre = vec![0.0; TABLE_W * TABLE_H / 2];
         for j in 0..TABLE_H / 2 {
             let th = (j as f64 + 0.5) * dth;
             let dw = th.sin() * dth * dphi;
             for i in 0..TABLE_W {
                 let d = dir_of(i as f64 + 0.5, j as f64 + 0.5);
-                if let Some(c) = sky.sky_coefficients(d) {
+                let yxy = sky.yxy(d);
+                if let Some(c) = sky.coefficients_of_yxy(yxy) {
                     for k in 0..3 {
                         e_h[k] += c[k] * th.cos() * dw;
                     }
                 }
-                sky_power += sky.luminance(d) * dw;
+                let l = (1000.0 * yxy[0]).max(0.0);
+                centre[j * TABLE_W + i] = l;
+                sky_power += l * dw;
             }
         }
         e_h[3] = omega * e.sin();
@@ -426,7 +431,7 @@ impl Sky {
             if 2 * j > TABLE_H {
                 ground_lum
             } else {
-                sky.luminance_physical(dir_of(i as f64, j as f64))
+                sky.luminance_y(dir_of(i as f64, j as f64))
             }
         };
         let corners: Vec<f64> = (0..=TABLE_H / 2)
@@ -439,7 +444,7 @@ impl Sky {
             for i in 0..TABLE_W {
                 let l = if j < TABLE_H / 2 {
                     let c = |a: usize, b: usize| corners[b * (TABLE_W + 1) + a];
-                    sky.luminance_physical(dir_of(i as f64 + 0.5, j as f64 + 0.5))
+                    centre[j * TABLE_W + i]
                         .max(c(i, j))
                         .max(c(i + 1, j))
                         .max(c(i, j + 1))
@@ -506,11 +511,14 @@ impl Sky {
         if d.y < 0.0 {
             return self.ground_luminance() / self.params.scale;
         }
-        (1000.0 * self.yxy(d)[0]).max(0.0)
+        self.luminance_y(d)
     }
 
-    fn luminance(&self, d: DVec3) -> f64 {
-        self.luminance_physical(d)
+    /// Sky luminance above the horizon (cd/m²) from the Y channel alone.
+    fn luminance_y(&self, d: DVec3) -> f64 {
+        let cos_g = d.dot(self.sun_dir).clamp(-1.0, 1.0);
+        let y = self.zenith[0] * perez(&self.perez[0], d.y, cos_g.acos(), cos_g) / self.f_zenith[0];
+        (1000.0 * y).max(0.0)
     }
 
     /// Ground luminance in scene units.
@@ -529,7 +537,11 @@ impl Sky {
         if d.y < 0.0 {
             return None;
         }
-        let [y, x, yy] = self.yxy(d);
+        self.coefficients_of_yxy(self.yxy(d))
+    }
+
+    /// Sky coefficients (scene units) of luminance Y (kcd/m²) and chromaticity x, y.
+    fn coefficients_of_yxy(&self, [y, x, yy]: [f64; 3]) -> Option<[f64; 4]> {
         let c = daylight_coefficients(x, yy)
             .or_else(|| daylight_coefficients(self.zenith[1], self.zenith[2]))?;
         let k = self.params.scale * 1000.0 * y.max(0.0);
