@@ -285,7 +285,8 @@ impl PreviewObject {
         let mut next = 1;
         for (k, (p, n)) in prof.iter().enumerate() {
             let pole = k == 0 || k == last;
-            for j in 0..if pole { 1 } else { m } {
+            let ring = if pole { 1 } else { m };
+            for (j, slot) in index[k].iter_mut().enumerate().take(ring) {
                 let phi = 2.0 * PI * j as f64 / m as f64;
                 let (c, sn) = if pole {
                     (0.0, 0.0)
@@ -294,7 +295,7 @@ impl PreviewObject {
                 };
                 let _ = writeln!(s, "v {} {} {}", f6(p.x * c), f6(p.y), f6(p.x * sn));
                 let _ = writeln!(s, "vn {} {} {}", f6(n.x * c), f6(n.y), f6(n.x * sn));
-                index[k][j] = next;
+                *slot = next;
                 next += 1;
             }
             if pole {
