@@ -1,6 +1,7 @@
 //! Renderer speed: samples per second on the default scene with 1 and 2
 //! threads (their ratio is the 2-thread scaling), and scene start-up time
-//! (parse, build materials and tables, lights) for scenes without meshes.
+//! (parse, build materials and tables, lights, mesh BVH) for plate scenes and
+//! the material-preview scenes (target ≤ 100 ms).
 //!
 //! Three clocks, because the 2-core machine this project is developed on is
 //! shared with several concurrent builds (load average 5–17):
@@ -82,6 +83,9 @@ fn startup<M: Measurement>(c: &mut Criterion<M>, group: &str) {
         "scenes/samples/s138_ghs_45deg.toml",
         "scenes/samples/s138_two_scale_45deg.toml",
         "scenes/samples/s091_measured_psd_45deg.toml",
+        // Preview object BVH (5088 triangles) + floor, daylight sky table, full GHS tables.
+        "scenes/preview/s280.toml",
+        "scenes/preview/s138.toml",
     ] {
         let path = scene_path(rel);
         let name = path

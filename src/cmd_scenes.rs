@@ -1,11 +1,14 @@
-//! `lustre scenes`: writes the bundled paper-sample scenes,
-//! `scenes/samples/<sample>_<model>_<view>.toml`, and the sampled KC PSD
-//! tables their `measured_psd` variants read (`scenes/psd/<sample>_kc.csv`),
-//! from `brdf::paper` — the one home of the samples and of the rules that
-//! turn a surface into each model's parameters. `tests/scenes_generated.rs`
-//! checks that the committed files are what this command writes.
+//! `lustre scenes`: writes every bundled scene and asset from the code that
+//! defines them —
+//! * the paper-sample plates `scenes/samples/<sample>_<model>_<view>.toml` and
+//!   the sampled KC PSD tables their `measured_psd` variants read
+//!   (`scenes/psd/<sample>_kc.csv`), from `brdf::paper`, the one home of the
+//!   samples and of the rules that turn a surface into each model;
+//! * the material previews `scenes/preview/<sample>.toml` and their object and
+//!   floor `scenes/assets/*.obj` (`render::preview_mesh`).
+//!
+//! `tests/scenes_generated.rs` checks the committed files are its output.
 
-use std::fmt::Write as _;
 use std::path::PathBuf;
 
 use anyhow::Context;
@@ -45,6 +48,12 @@ pub fn files() -> anyhow::Result<Vec<(String, String)>> {
     for s in &brdf::paper::SAMPLES {
         out.push((psd_path(s), psd_csv(s)));
     }
+    for (name, text) in crate::cmd_preview::assets() {
+        out.push((format!("assets/{name}"), text));
+    }
+    for (name, text) in crate::cmd_preview::bundled_scenes()? {
+        out.push((format!("preview/{name}"), text));
+    }
     for s in &brdf::paper::SAMPLES {
         for (tag, model) in SCENE_MODELS {
             for (view, theta) in VIEWS {
@@ -65,11 +74,7 @@ fn psd_path(s: &PaperSample) -> String {
 
 fn psd_csv(s: &PaperSample) -> String {
     let (z, p) = brdf::paper::sampled_kc_psd(&s.surface);
-    let mut t = String::from("zeta_rad_per_um,p_um4\n");
-    for (z, p) in z.iter().zip(&p) {
-        let _ = writeln!(t, "{z:.9e},{p:.9e}");
-    }
-    t
+    models::psd_csv_text(&z, &p)
 }
 
 /// Why the parameters of `model` are what they are, as comment lines.

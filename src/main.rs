@@ -7,6 +7,7 @@ mod cmd_brdf;
 mod cmd_brdf_plot;
 mod cmd_compare;
 mod cmd_fit;
+mod cmd_preview;
 mod cmd_render;
 mod cmd_scenes;
 mod models;
@@ -43,6 +44,8 @@ enum Command {
     Compare(cmd_compare::CompareArgs),
     /// Write the bundled paper-sample scenes (scenes/samples, scenes/psd) from `brdf::paper`.
     Scenes(cmd_scenes::ScenesArgs),
+    /// Render a material on the preview object under a daylight sky (or studio lights).
+    Preview(cmd_preview::PreviewArgs),
 }
 
 fn main() -> std::process::ExitCode {
@@ -55,6 +58,7 @@ fn main() -> std::process::ExitCode {
         Some(Command::Fit(args)) => cmd_fit::run(args),
         Some(Command::Compare(args)) => cmd_compare::run(args),
         Some(Command::Scenes(args)) => cmd_scenes::run(args),
+        Some(Command::Preview(args)) => cmd_preview::run(args),
     };
     match result {
         Ok(()) => std::process::ExitCode::SUCCESS,

@@ -125,6 +125,15 @@ pub fn material_toml(spec: &MaterialSpec, psd_csv: Option<&str>) -> anyhow::Resu
     desc_toml(&desc)
 }
 
+/// A `zeta_rad_per_um,p_um4` CSV of PSD samples.
+pub fn psd_csv_text(zeta: &[f64], p: &[f64]) -> String {
+    let mut t = String::from("zeta_rad_per_um,p_um4\n");
+    for (z, p) in zeta.iter().zip(p) {
+        t += &format!("{z:.9e},{p:.9e}\n");
+    }
+    t
+}
+
 /// A material description as TOML keys (model first).
 pub fn desc_toml(desc: &MaterialDesc) -> anyhow::Result<String> {
     Ok(toml::to_string(desc)?)

@@ -27,10 +27,12 @@ pub mod light;
 pub mod material;
 pub mod mesh;
 pub mod output;
+pub mod preview_mesh;
 pub mod render;
 pub mod rng;
 pub mod sampler;
 pub mod scene;
+pub mod sky;
 pub mod spectrum;
 pub mod wavelength;
 

@@ -1,8 +1,9 @@
-//! Lights: point, sphere and rectangle emitters, constant and EXR environments.
+//! Lights: point, sphere and rectangle emitters, constant, EXR and daylight-sky environments.
 
 use crate::color::{SRGB_TO_XYZ, mul};
 use crate::distribution::Distribution2D;
 use crate::geometry::{Planar, Ray, Sphere};
+use crate::sky::Sky;
 use crate::spectrum::{Cie, LAMBDA_MAX, LAMBDA_MIN, Spectrum};
 use glam::DVec3;
 use std::f64::consts::PI;
@@ -15,6 +16,8 @@ pub enum Emission<'a> {
     Spectrum(&'a Spectrum, f64),
     /// `c · (x̄, ȳ, z̄)(λ)`: an RGB texel lifted to a spectrum (see [`RgbLift`]).
     Cmf([f64; 3]),
+    /// Daylight: coefficients on the sky's basis (S0, S1, S2, sun); see [`Sky::coefficients`].
+    Sky(&'a Sky, [f64; 4]),
     /// Nothing.
     None,
 }
@@ -29,6 +32,7 @@ impl Emission<'_> {
                 let m = Cie::get().xyz(lambda);
                 c[0] * m[0] + c[1] * m[1] + c[2] * m[2]
             }
+            Emission::Sky(sky, c) => sky.spectral(&c, lambda),
             Emission::None => 0.0,
         }
     }
@@ -106,12 +110,14 @@ fn invert3(m: [[f64; 3]; 3]) -> [[f64; 3]; 3] {
     ]
 }
 
-/// An environment: constant radiance or an equirectangular map.
+/// An environment: constant radiance, an equirectangular map or a daylight sky.
 pub enum Environment {
     /// The same radiance from every direction.
     Constant(Spectrum),
     /// A lat-long map of CMF coefficients, importance-sampled by luminance.
     Map(EnvMap),
+    /// The analytic Preetham sky with its sun disk and ground (`sky.rs`).
+    Sky(Box<Sky>),
 }
 
 /// An equirectangular environment map (+y up, u = 0 at −z, increasing toward +x).
@@ -374,6 +380,10 @@ impl Lights {
                         let wi = m.dir(st);
                         (wi, m.pdf_dir(st), Emission::Cmf(m.lookup(st)))
                     }
+                    Environment::Sky(sky) => {
+                        let (wi, pdf, c) = sky.sample(uv)?;
+                        (wi, pdf, Emission::Sky(sky, c))
+                    }
                 };
                 (pdf > 0.0).then_some(LightSample {
                     wi,
@@ -432,6 +442,10 @@ impl Lights {
                 let uv = m.uv(dir);
                 (Emission::Cmf(m.lookup(uv)), sel * m.pdf_dir(uv))
             }
+            LightKind::Environment(Environment::Sky(sky)) => (
+                Emission::Sky(sky, sky.coefficients(dir)),
+                sel * sky.pdf(dir),
+            ),
             _ => (Emission::None, 0.0),
         }
     }
@@ -446,7 +460,9 @@ impl Lights {
                 | LightKind::Sphere { spectrum, .. }
                 | LightKind::Rectangle { spectrum, .. }
                 | LightKind::Environment(Environment::Constant(spectrum)) => spectrum.support(),
-                LightKind::Environment(Environment::Map(_)) => Some((LAMBDA_MIN, LAMBDA_MAX)),
+                LightKind::Environment(Environment::Map(_) | Environment::Sky(_)) => {
+                    Some((LAMBDA_MIN, LAMBDA_MAX))
+                }
             };
             if let Some((a, b)) = s {
                 lo = lo.min(a);

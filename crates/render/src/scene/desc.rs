@@ -399,4 +399,36 @@ pub enum LightDesc {
         #[serde(default)]
         rotate_deg: f64,
     },
+    /// A daylight sky with its sun and a ground below the horizon (Preetham
+    /// 1999, evaluated spectrally; see `sky.rs`). It is the scene's environment.
+    Sky {
+        /// Sun elevation above the horizon in degrees, (0, 90].
+        sun_elevation_deg: f64,
+        /// Sun azimuth in degrees: 0 toward −z, 90 toward +x (default 0).
+        #[serde(default)]
+        sun_azimuth_deg: f64,
+        /// Atmospheric turbidity, 2–10 (default 2.5).
+        #[serde(default = "default_turbidity")]
+        turbidity: f64,
+        /// Scene radiance per physical cd/m² (e.g. 1e-4: a 10 kcd/m² sky gives 1).
+        scale: f64,
+        /// Whether the sun disk emits (default true).
+        #[serde(default = "yes")]
+        sun: bool,
+        /// Albedo of the Lambertian ground below the horizon (default 0.2).
+        #[serde(default = "default_ground_albedo")]
+        ground_albedo: f64,
+    },
+}
+
+fn default_turbidity() -> f64 {
+    2.5
+}
+
+fn default_ground_albedo() -> f64 {
+    0.2
+}
+
+fn yes() -> bool {
+    true
 }

@@ -8,6 +8,7 @@ use crate::geometry::{HitGeometry, Planar, Ray, Sphere, Transform};
 use crate::light::{EnvMap, Environment, LightKind, Lights};
 use crate::material::{Material, build_material};
 use crate::mesh::{MeshAccel, load_obj};
+use crate::sky::{Sky, SkyParams};
 use crate::spectrum::{LAMBDA_MAX, LAMBDA_MIN, parse_spectrum};
 use crate::wavelength::WavelengthSampler;
 use desc::{
@@ -421,12 +422,37 @@ pub fn load_str(path: &Path, text: &str) -> Result<Scene, SceneError> {
                 environment = Some(lights.len());
                 lights.push(LightKind::Environment(env));
             }
+            LightDesc::Sky {
+                sun_elevation_deg,
+                sun_azimuth_deg,
+                turbidity,
+                scale,
+                sun,
+                ground_albedo,
+            } => {
+                if environment.is_some() {
+                    return Err(ctx(
+                        "only one environment light is allowed (a sky is one)".into()
+                    ));
+                }
+                let sky = Sky::new(SkyParams {
+                    turbidity: *turbidity,
+                    sun_elevation_deg: *sun_elevation_deg,
+                    sun_azimuth_deg: *sun_azimuth_deg,
+                    scale: *scale,
+                    sun: *sun,
+                    ground_albedo: *ground_albedo,
+                })
+                .map_err(ctx)?;
+                environment = Some(lights.len());
+                lights.push(LightKind::Environment(Environment::Sky(Box::new(sky))));
+            }
         }
     }
     if lights.is_empty() {
         return Err(SceneError::new(
             path,
-            "the scene has no lights: add a [[lights]] entry (point, sphere, rectangle or environment)",
+            "the scene has no lights: add a [[lights]] entry (point, sphere, rectangle, environment or sky)",
         ));
     }
     let lights = Lights {

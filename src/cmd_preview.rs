@@ -1,0 +1,536 @@
+//! `lustre preview`: a material on the bundled preview object, over a
+//! checkered floor, under a daylight sky with its sun (and/or a studio of
+//! rectangle lights), the way renderer users judge a material; one image per
+//! model, side by side in a labelled grid when there are several.
+//!
+//! The object, floor and sky are made here (`render::preview_mesh`,
+//! `render::sky`); `lustre scenes` writes the committed copies under
+//! `scenes/assets/` and the bundled scenes `scenes/preview/<sample>.toml`
+//! (one per paper sample of `brdf::paper`). A preview run writes, next to
+//! its PNG, the scene file of every image (and the assets they use), so any
+//! image can be re-rendered longer with `lustre render`.
+
+use std::path::{Path, PathBuf};
+use std::time::{Duration, Instant};
+
+use anyhow::{Context, anyhow, bail};
+use plot::ImageGrid;
+use render::preview_mesh::{PreviewObject, checker_floor_obj};
+use render::{Film, RenderOptions};
+
+use crate::cmd_brdf_plot::parse_size;
+use crate::cmd_render::parse_duration;
+use brdf::paper::PaperModel;
+use brdf::spec::{MaterialDesc, ModelKind};
+
+use crate::models::{self, Surface};
+
+/// Lighting of the preview.
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Lighting {
+    /// The Preetham daylight sky with its sun.
+    Sky,
+    /// Three rectangle lights (key, fill, rim) over a dim uniform surround.
+    Studio,
+    /// The sky and the studio lights together.
+    Both,
+}
+
+/// Arguments of `lustre preview`.
+#[derive(clap::Args, Debug)]
+pub struct PreviewArgs {
+    /// Material file (as written by `lustre fit`) to preview.
+    pub material: Option<PathBuf>,
+    /// Paper sample instead of a material file: S808, S280, S138, S091 or S027.
+    #[arg(long, conflicts_with = "material")]
+    pub sample: Option<String>,
+    /// Models to show side by side. For a sample: ggx (slope-based α),
+    /// ggx_identity (GGX ≡ KC α), beckmann, ghs_ssa, ghs, two_scale,
+    /// two_scale_N (cutoff N wavelengths), measured_psd; default
+    /// ggx,ghs_ssa,ghs,two_scale. For a material file: model names
+    /// (ggx, beckmann, ghs_ssa, ghs, two_scale, measured_psd); default its own.
+    #[arg(long, value_delimiter = ',')]
+    pub models: Vec<String>,
+    /// Two-scale cutoff of a paper sample, as a multiple of 550 nm.
+    #[arg(long, default_value_t = 100.0)]
+    pub cutoff: f64,
+    /// Lighting.
+    #[arg(long, value_enum, default_value = "sky")]
+    pub light: Lighting,
+    /// Sun elevation above the horizon, degrees.
+    #[arg(long, default_value_t = DEFAULT_SUN_ELEVATION)]
+    pub sun_elevation: f64,
+    /// Sun azimuth, degrees (0: behind the object, 180: behind the camera, 270: camera's left).
+    #[arg(long, default_value_t = DEFAULT_SUN_AZIMUTH)]
+    pub sun_azimuth: f64,
+    /// Atmospheric turbidity of the sky, 2 (very clear) to 10 (hazy).
+    #[arg(long, default_value_t = 2.5)]
+    pub turbidity: f64,
+    /// Size of the image (one model) or of each grid cell, WIDTHxHEIGHT
+    /// (default 400x300, or 288x216 per cell for several models).
+    #[arg(long)]
+    pub size: Option<String>,
+    /// Samples per pixel (fewer if the time limit comes first).
+    #[arg(long, default_value_t = 64)]
+    pub spp: u64,
+    /// Wall-clock budget for all images together, e.g. 40s, 2m.
+    #[arg(long, default_value = "40s")]
+    pub time_limit: String,
+    /// Exposure in stops.
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+    pub exposure: f64,
+    /// Worker threads (default: all cores).
+    #[arg(long)]
+    pub threads: Option<usize>,
+    /// Output PNG (default out/preview/<name>.png); EXRs and scene files go beside it.
+    #[arg(long, short)]
+    pub out: Option<PathBuf>,
+    /// Print nothing but errors.
+    #[arg(long, short)]
+    pub quiet: bool,
+}
+
+/// Default sun elevation, degrees: high enough for a clear sky, low enough
+/// for a long shadow and a highlight in the upper half of the bulb.
+pub const DEFAULT_SUN_ELEVATION: f64 = 35.0;
+/// Default sun azimuth, degrees: in front of the object, to the camera's left.
+pub const DEFAULT_SUN_AZIMUTH: f64 = 220.0;
+
+/// Asset file names (written beside each other).
+pub const OBJECT_OBJ: &str = "preview_object.obj";
+/// Light squares of the floor.
+pub const FLOOR_A_OBJ: &str = "preview_floor_a.obj";
+/// Dark squares of the floor.
+pub const FLOOR_B_OBJ: &str = "preview_floor_b.obj";
+/// Floor squares per side and their size.
+const FLOOR_N: usize = 28;
+const FLOOR_SQUARE: f64 = 0.5;
+
+/// The asset files and their text, generated.
+pub fn assets() -> [(&'static str, String); 3] {
+    [
+        (OBJECT_OBJ, PreviewObject::new().obj()),
+        (FLOOR_A_OBJ, checker_floor_obj(FLOOR_N, FLOOR_SQUARE, 0)),
+        (FLOOR_B_OBJ, checker_floor_obj(FLOOR_N, FLOOR_SQUARE, 1)),
+    ]
+}
+
+/// Everything one preview scene needs.
+#[derive(Clone, Debug)]
+pub struct SceneSpec {
+    /// Image size.
+    pub width: u32,
+    /// Image size.
+    pub height: u32,
+    /// Samples per pixel.
+    pub spp: u64,
+    /// Body of `[materials.object]`.
+    pub material: String,
+    /// Lighting.
+    pub light: Lighting,
+    /// Sun elevation, degrees.
+    pub sun_elevation: f64,
+    /// Sun azimuth, degrees.
+    pub sun_azimuth: f64,
+    /// Sky turbidity.
+    pub turbidity: f64,
+    /// Exposure, stops.
+    pub exposure: f64,
+    /// Directory of the OBJ files relative to the scene file.
+    pub assets: String,
+    /// `exr`/`png` output names, if any.
+    pub outputs: Option<(String, String)>,
+    /// Comment lines at the top.
+    pub header: String,
+}
+
+fn toml_str(s: &str) -> String {
+    toml::Value::String(s.to_string()).to_string()
+}
+
+/// The scene text of a preview.
+pub fn scene_text(s: &SceneSpec) -> String {
+    let mut t = s.header.clone();
+    let outputs = s.outputs.as_ref().map_or_else(String::new, |(exr, png)| {
+        format!("exr = {}\npng = {}\n", toml_str(exr), toml_str(png))
+    });
+    let asset = |f: &str| toml_str(&format!("{}/{f}", s.assets));
+    t += &format!(
+        "\n[camera]\nlook_from = [0.0, 1.75, 3.2]\nlook_at = [0.0, 0.45, 0.0]\nfov_deg = 24.0\nresolution = [{}, {}]\n\n\
+         [film]\nspp = {}\nseed = 1\n{outputs}exposure = {}\n\n\
+         [integrator]\nmax_depth = 8\nwavelengths = \"hero\"\n\n\
+         [materials.object]\n{}\n\n\
+         # The floor: a checkerboard of rough aluminium and a dark glossy dielectric-like\n\
+         # conductor (n = 1.5, k = 0: 4 % Fresnel reflection, no diffuse part).\n\
+         [materials.floor_light]\nmodel = \"ggx\"\nmetal = \"al\"\nalpha = 0.6\n\n\
+         [materials.floor_dark]\nmodel = \"ggx\"\nnk = [1.5, 0.0]\nalpha = 0.25\n\n\
+         [[shapes]]\ntype = \"mesh\"\nfile = {}\nmaterial = \"object\"\n\n\
+         [[shapes]]\ntype = \"mesh\"\nfile = {}\nmaterial = \"floor_light\"\n\n\
+         [[shapes]]\ntype = \"mesh\"\nfile = {}\nmaterial = \"floor_dark\"\n",
+        s.width,
+        s.height,
+        s.spp,
+        s.exposure,
+        s.material.trim_end(),
+        asset(OBJECT_OBJ),
+        asset(FLOOR_A_OBJ),
+        asset(FLOOR_B_OBJ),
+    );
+    if matches!(s.light, Lighting::Sky | Lighting::Both) {
+        t += &format!(
+            "\n# Daylight: Preetham sky, its sun and a 20 % ground; scale 5e-5 maps 20 kcd/m² to 1.\n\
+             [[lights]]\ntype = \"sky\"\nsun_elevation_deg = {}\nsun_azimuth_deg = {}\nturbidity = {}\nscale = 5e-5\n",
+            s.sun_elevation, s.sun_azimuth, s.turbidity
+        );
+    }
+    if matches!(s.light, Lighting::Studio | Lighting::Both) {
+        t += "\n# Studio: a large key light to the front left, a fill to the right and a rim light\n\
+              # behind, all facing the object.\n\
+              [[lights]]\ntype = \"rectangle\"\nsize = [1.2, 0.8]\nradiance = 6.0\nspectrum = \"d65\"\n\
+              transform = { translate = [-1.6, 1.9, 1.6], rotate_deg = [-40.0, -45.0, 0.0] }\n\n\
+              [[lights]]\ntype = \"rectangle\"\nsize = [1.0, 1.0]\nradiance = 1.5\nspectrum = \"d65\"\n\
+              transform = { translate = [2.0, 1.0, 1.2], rotate_deg = [-15.0, 60.0, 0.0] }\n\n\
+              [[lights]]\ntype = \"rectangle\"\nsize = [1.6, 0.4]\nradiance = 8.0\nspectrum = \"d65\"\n\
+              transform = { translate = [0.0, 2.0, -2.2], rotate_deg = [-140.0, 0.0, 0.0] }\n";
+        if s.light == Lighting::Studio {
+            t += "\n[[lights]]\ntype = \"environment\"\nradiance = 0.05\nspectrum = \"d65\"\n";
+        }
+    }
+    t
+}
+
+/// One image of a preview: its label, the `[materials.object]` body, and a
+/// data file the material reads (a measured PSD table), written beside it.
+struct Cell {
+    label: String,
+    file: String,
+    material: String,
+    data: Option<(String, String)>,
+}
+
+fn sample_cells(s: &Surface, names: &[String], cutoff: f64) -> anyhow::Result<Vec<Cell>> {
+    let models = models::paper_models(names)?;
+    names
+        .iter()
+        .zip(models)
+        .map(|(n, m)| {
+            // `two_scale` without a number splits at --cutoff.
+            let m = match m {
+                PaperModel::TwoScale(_) if n.trim() == "two_scale" => PaperModel::TwoScale(cutoff),
+                m => m,
+            };
+            let l = s.material(m);
+            let file = format!("{}_{}", s.name.to_lowercase(), n.trim());
+            let psd = format!("{file}_psd.csv");
+            let data = match &l.spec.model {
+                brdf::spec::ModelSpec::MeasuredPsd {
+                    zeta_rad_per_um,
+                    psd_um4,
+                    ..
+                } => Some((psd.clone(), models::psd_csv_text(zeta_rad_per_um, psd_um4))),
+                _ => None,
+            };
+            Ok(Cell {
+                label: l.label.clone(),
+                file,
+                material: models::material_toml(&l.spec, Some(&psd))?,
+                data,
+            })
+        })
+        .collect()
+}
+
+fn material_cells(path: &Path, names: &[String]) -> anyhow::Result<(String, Vec<Cell>)> {
+    let text =
+        std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
+    let doc: toml::Table =
+        toml::from_str(&text).with_context(|| format!("parsing {}", path.display()))?;
+    let mat = doc
+        .get("material")
+        .and_then(toml::Value::as_table)
+        .ok_or_else(|| {
+            anyhow!(
+                "{}: no [material] table (expected a `lustre fit` material file)",
+                path.display()
+            )
+        })?;
+    let abs =
+        std::fs::canonicalize(path).with_context(|| format!("resolving {}", path.display()))?;
+    let name = path
+        .file_stem()
+        .map_or_else(|| "material".into(), |s| s.to_string_lossy().into_owned());
+    let own = mat
+        .get("model")
+        .and_then(toml::Value::as_str)
+        .unwrap_or("ggx")
+        .to_string();
+    let names = if names.is_empty() {
+        vec![own]
+    } else {
+        names.to_vec()
+    };
+    let cutoffs: Vec<String> = doc
+        .get("two_scale")
+        .and_then(toml::Value::as_table)
+        .map(|t| t.keys().cloned().collect())
+        .unwrap_or_default();
+    let mut cells = Vec::new();
+    let row = |model: ModelKind, cutoff: Option<String>| -> anyhow::Result<String> {
+        models::desc_toml(&MaterialDesc {
+            include: Some(abs.display().to_string()),
+            model: Some(model),
+            cutoff,
+            ..MaterialDesc::default()
+        })
+    };
+    for n in names {
+        let Some(kind) = ModelKind::from_name(n.trim()) else {
+            bail!("--models {n}: unknown model; use {}", ModelKind::names());
+        };
+        if kind == ModelKind::TwoScale && mat.get("beta").is_none() {
+            if cutoffs.is_empty() {
+                bail!(
+                    "{}: two_scale needs a [two_scale.NAME] table (lustre fit writes them)",
+                    path.display()
+                );
+            }
+            for c in &cutoffs {
+                cells.push(Cell {
+                    label: format!("two-scale {c}"),
+                    file: format!("{name}_two_scale_{c}"),
+                    material: row(kind, Some(c.clone()))?,
+                    data: None,
+                });
+            }
+            continue;
+        }
+        cells.push(Cell {
+            label: n.clone(),
+            file: format!("{name}_{n}"),
+            material: row(kind, None)?,
+            data: None,
+        });
+    }
+    Ok((name, cells))
+}
+
+/// Linear sRGB → 8-bit sRGB (IEC 61966-2-1 transfer curve, clamped).
+fn to_srgb8(v: f32) -> u8 {
+    let x = f64::from(v).clamp(0.0, 1.0);
+    let e = if x <= 0.003_130_8 {
+        12.92 * x
+    } else {
+        1.055 * x.powf(1.0 / 2.4) - 0.055
+    };
+    (e * 255.0 + 0.5) as u8
+}
+
+/// The bundled scenes `<sample>.toml`: full GHS of each paper sample under
+/// the sky (written by `lustre scenes`).
+pub fn bundled_scenes() -> anyhow::Result<Vec<(String, String)>> {
+    brdf::paper::SAMPLES
+        .iter()
+        .map(|smp| {
+            let s = Surface::from_sample(smp);
+            let l = s.material(PaperModel::Ghs);
+            let stem = s.name.to_lowercase();
+            let header = format!(
+                "# Material preview: paper sample {} ({}), full GHS,\n\
+                 # on the preview object over a checkered floor under a Preetham sky with its sun.\n\
+                 # Written by `lustre scenes` (src/cmd_preview.rs); assets in ../assets.\n",
+                s.name,
+                s.describe()
+            );
+            let text = scene_text(&SceneSpec {
+                width: 400,
+                height: 300,
+                spp: 64,
+                material: models::material_toml(&l.spec, None)?,
+                light: Lighting::Sky,
+                sun_elevation: DEFAULT_SUN_ELEVATION,
+                sun_azimuth: DEFAULT_SUN_AZIMUTH,
+                turbidity: 2.5,
+                exposure: 0.0,
+                assets: "../assets".into(),
+                outputs: Some((format!("preview_{stem}.exr"), format!("preview_{stem}.png"))),
+                header,
+            });
+            Ok((format!("{stem}.toml"), text))
+        })
+        .collect()
+}
+
+/// Runs `lustre preview`.
+pub fn run(args: PreviewArgs) -> anyhow::Result<()> {
+    if args.spp == 0 {
+        bail!("--spp must be ≥ 1");
+    }
+    let budget = parse_duration(&args.time_limit)?;
+    let (name, title, cells) = match &args.material {
+        Some(path) => {
+            let (name, cells) = material_cells(path, &args.models)?;
+            (name.clone(), format!("{name} ({})", path.display()), cells)
+        }
+        None => {
+            let s = Surface::from_sample(models::sample(args.sample.as_deref().unwrap_or("S280"))?);
+            let names: Vec<String> = if args.models.is_empty() {
+                ["ggx", "ghs_ssa", "ghs", "two_scale"]
+                    .map(String::from)
+                    .to_vec()
+            } else {
+                args.models.clone()
+            };
+            if !(args.cutoff.is_finite() && args.cutoff > 0.0) {
+                bail!(
+                    "--cutoff {}: must be a positive multiple of 550 nm",
+                    args.cutoff
+                );
+            }
+            let title = format!("{}: {}", s.name, s.describe());
+            (
+                s.name.to_lowercase(),
+                title,
+                sample_cells(&s, &names, args.cutoff)?,
+            )
+        }
+    };
+    let grid = cells.len() > 1;
+    let (w, h) = match &args.size {
+        Some(s) => parse_size(s)?,
+        None if grid => (288, 216),
+        None => (400, 300),
+    };
+    let out = args
+        .out
+        .clone()
+        .unwrap_or_else(|| PathBuf::from(format!("out/preview/{name}.png")));
+    let dir = out
+        .parent()
+        .filter(|d| !d.as_os_str().is_empty())
+        .map_or_else(|| PathBuf::from("."), Path::to_path_buf);
+    std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
+    let assets_dir = dir.join("assets");
+    std::fs::create_dir_all(&assets_dir)
+        .with_context(|| format!("creating {}", assets_dir.display()))?;
+    for (file, text) in assets() {
+        let p = assets_dir.join(file);
+        // Rewrite only when different, so a scene's fingerprint stays put between runs.
+        if std::fs::read_to_string(&p).ok().as_deref() != Some(text.as_str()) {
+            plot::write_atomic(&p, text.as_bytes())?;
+        }
+    }
+
+    let stop = render::interrupt::ctrlc_flag().map_err(anyhow::Error::msg)?;
+    let pool = render::render::thread_pool(args.threads)?;
+    let cols = if cells.len() <= 3 {
+        cells.len()
+    } else {
+        cells.len().div_ceil(2)
+    };
+    let rows = cells.len().div_ceil(cols);
+    let mut image_grid = ImageGrid::new(rows, cols).title(format!(
+        "{title}\n{} lighting, {w}×{h} px",
+        match args.light {
+            Lighting::Sky => "sky",
+            Lighting::Studio => "studio",
+            Lighting::Both => "sky + studio",
+        }
+    ));
+    let start = Instant::now();
+    let mut single_rgb = None;
+    for (i, cell) in cells.iter().enumerate() {
+        let stem = if grid {
+            cell.file.clone()
+        } else {
+            out.file_stem()
+                .map_or_else(|| name.clone(), |s| s.to_string_lossy().into_owned())
+        };
+        let text = scene_text(&SceneSpec {
+            width: w,
+            height: h,
+            spp: args.spp,
+            material: cell.material.clone(),
+            light: args.light,
+            sun_elevation: args.sun_elevation,
+            sun_azimuth: args.sun_azimuth,
+            turbidity: args.turbidity,
+            exposure: args.exposure,
+            assets: "assets".into(),
+            outputs: Some((format!("{stem}.exr"), format!("{stem}.png"))),
+            header: format!(
+                "# lustre preview: {} ({}); render again with `lustre render` from this directory.\n",
+                cell.label.replace('\n', ", "),
+                title.replace('\n', " ")
+            ),
+        });
+        if let Some((file, text)) = &cell.data {
+            plot::write_atomic(&dir.join(file), text.as_bytes())?;
+        }
+        let scene_path = dir.join(format!("{stem}.toml"));
+        plot::write_atomic(&scene_path, text.as_bytes())?;
+        let scene = render::load_str(&scene_path, &text)
+            .map_err(|e| anyhow!("{}: {e}", cell.label.replace('\n', ", ")))?;
+        // Each remaining image gets an equal share of what is left of the budget.
+        let left = budget.saturating_sub(start.elapsed());
+        let share = left / (cells.len() - i) as u32;
+        let opts = RenderOptions {
+            threads: args.threads,
+            time_limit: Some(share.max(Duration::from_millis(100))),
+            stop: stop.clone(),
+            progress: !args.quiet,
+            pass_target: Duration::from_secs(1),
+            ..RenderOptions::default()
+        };
+        let mut film = Film::new(w, h, scene.fingerprint, scene.settings.seed, args.exposure);
+        let t0 = Instant::now();
+        let outcome = render::render_range_in(&pool, &scene, &mut film, 0..args.spp, &opts)?;
+        if film.spp() == 0 {
+            // The budget ran out before one pass: render one anyway rather than write black.
+            render::render_range_in(&pool, &scene, &mut film, 0..1, &RenderOptions::default())?;
+        }
+        let rgb = film.rgb();
+        let exr = dir.join(format!("{stem}.exr"));
+        render::output::write_exr(&exr, w, h, &rgb)?;
+        if grid {
+            let px: Vec<u8> = rgb.iter().flat_map(|p| p.map(to_srgb8)).collect();
+            let r = i / cols;
+            let c = i % cols;
+            image_grid.set_rgb8(r, c, w, h, px)?;
+            image_grid.caption(r, c, format!("{} ({} spp)", cell.label, film.spp()))?;
+        } else {
+            single_rgb = Some(rgb);
+        }
+        if !args.quiet {
+            eprintln!(
+                "  {}: {} spp in {:.1} s{} → {}",
+                cell.label.replace('\n', ", "),
+                film.spp(),
+                t0.elapsed().as_secs_f64(),
+                if outcome.complete {
+                    ""
+                } else {
+                    " (time limit)"
+                },
+                exr.display()
+            );
+        }
+        if stop.load(std::sync::atomic::Ordering::Relaxed) {
+            bail!("interrupted");
+        }
+    }
+    match single_rgb {
+        Some(rgb) => render::output::write_png(&out, w, h, &rgb)?,
+        None => {
+            image_grid.save_png(&out)?;
+        }
+    }
+    if !args.quiet {
+        eprintln!(
+            "wrote {} in {:.1} s (scenes, EXRs and assets in {})",
+            out.display(),
+            start.elapsed().as_secs_f64(),
+            dir.display()
+        );
+    }
+    Ok(())
+}
