@@ -618,12 +618,12 @@ fn rejects_bad_parameters() {
 proptest! {
     #![proptest_config(ProptestConfig { cases: 24, ..ProptestConfig::default() })]
     /// Hazards of physics.md §11 on a coarse table: γ → 1, σ → 0 and large,
-    /// tiny and huge Lc, grazing directions, the ends of the λ range.
+    /// the smallest and largest accepted Lc (0.03–1000 µm), grazing directions, the ends of the λ range.
     #[test]
     fn finite_nonnegative_everywhere(
         beta in 1e-4f64..10.0,
-        sigma in prop_oneof![Just(0.0), 1e-6f64..5.0],
-        lc in prop_oneof![1e-6f64..1e-3, 1e-3f64..100.0],
+        sigma in prop_oneof![Just(0.0), 1e-4f64..10.0],
+        lc in prop_oneof![Just(0.03), 0.03f64..1.0, 1.0f64..1000.0, Just(1000.0)],
         gamma in prop_oneof![Just(1.001), 1.001f64..20.0],
         delta in any::<bool>(),
         ti in 0.0f64..FRAC_PI_2,
