@@ -596,3 +596,149 @@ fn kc(q: &QueryFields) -> Result<KcPsd, QueryError> {
     let gamma = number(&q.gamma, "gamma")?;
     KcPsd::new(sigma, lc, gamma).map_err(|e| brdf_error(e, "sigma_um"))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn query(model: &str, extra: &str, metal: &str, ti: f64, to: f64, phi: f64) -> String {
+        format!(
+            "{{\"model\": \"{model}\", {extra}, \"fresnel\": \"{metal}\", \"lambda_nm\": 500, \
+             \"theta_i_deg\": {ti}, \"theta_o_deg\": {to}, \"phi_o_deg\": {phi}}}\n"
+        )
+    }
+
+    fn run(input: &str, cache: &mut ModelCache) -> Vec<Value> {
+        let mut out = Vec::new();
+        eval_stream_with(input.as_bytes(), &mut out, cache).unwrap();
+        String::from_utf8(out)
+            .unwrap()
+            .lines()
+            .map(|l| serde_json::from_str(l).unwrap())
+            .collect()
+    }
+
+    /// A mixed stream builds each model once and each S̃ table once per
+    /// (γ, σ, Lc), however many metals and energy options use it, and
+    /// however the lines interleave.
+    #[test]
+    fn mixed_stream_builds_each_model_and_table_once() {
+        let surfaces = [(0.05, 2.0, 2.0), (0.1, 5.0, 3.0), (0.02, 1.0, 1.5)];
+        let metals = ["none", "cu", "au", "al"];
+        let mut input = String::new();
+        for round in 0..6 {
+            for (k, &(s, l, g)) in surfaces.iter().enumerate() {
+                for (j, m) in metals.iter().enumerate() {
+                    let kc = format!("\"sigma_um\": {s}, \"lc_um\": {l}, \"gamma\": {g}");
+                    let angle = 5.0 * (round + k + j) as f64;
+                    input += &query("ghs", &kc, m, angle, 20.0, 180.0);
+                    input += &query(
+                        "ghs",
+                        &format!("{kc}, \"energy\": \"raw\""),
+                        m,
+                        10.0,
+                        angle,
+                        0.0,
+                    );
+                    input += &query("ghs_ssa", &kc, m, angle, 40.0, 170.0);
+                    input += &query(
+                        "ggx",
+                        &format!("\"alpha\": {}", 0.1 + 0.1 * k as f64),
+                        m,
+                        angle,
+                        30.0,
+                        180.0,
+                    );
+                }
+            }
+        }
+        let mut cache = ModelCache::default();
+        let out = run(&input, &mut cache);
+        assert_eq!(out.len(), 6 * 3 * 4 * 4);
+        assert!(
+            out.iter().all(|v| v["f"].is_number()),
+            "{:?}",
+            out.iter().find(|v| !v["f"].is_number())
+        );
+        // ghs (raw, explicit or default: one key), ghs_ssa, ggx per surface and metal.
+        assert_eq!(cache.model_builds, 3 * 3 * 4);
+        assert_eq!(
+            cache.table_builds, 3,
+            "one S̃ table per surface, shared by all metals"
+        );
+
+        // The cached models answer exactly as freshly built ones.
+        let mut fresh = Vec::new();
+        for line in input.lines() {
+            fresh.push(run(line, &mut ModelCache::default()).remove(0));
+        }
+        assert_eq!(out, fresh);
+        // And as GhsFull::with_options (the renderer's construction).
+        let psd = KcPsd::new(0.1, 5.0, 3.0).unwrap();
+        let direct = GhsFull::with_options(psd, Fresnel::One, GhsOptions::default()).unwrap();
+        let q = query(
+            "ghs",
+            "\"sigma_um\": 0.1, \"lc_um\": 5.0, \"gamma\": 3.0",
+            "none",
+            25.0,
+            35.0,
+            170.0,
+        );
+        let got = run(&q, &mut cache).remove(0);
+        let wi = direction(25.0, 0.0);
+        let wo = direction(35.0, 170.0);
+        assert_eq!(got["f"].as_f64().unwrap(), direct.eval(wi, wo, 500.0));
+        assert_eq!(got["pdf"].as_f64().unwrap(), direct.pdf(wi, wo, 500.0));
+    }
+
+    /// A cache smaller than the working set evicts the least recently used
+    /// model, rebuilds it when needed, and answers the same.
+    #[test]
+    fn eviction_rebuilds_and_answers_the_same() {
+        let mut input = String::new();
+        for round in 0..3 {
+            for a in [0.1, 0.2, 0.3, 0.4] {
+                input += &query(
+                    "beckmann",
+                    &format!("\"alpha\": {a}"),
+                    "cu",
+                    10.0 * round as f64,
+                    20.0,
+                    180.0,
+                );
+            }
+        }
+        let mut small = ModelCache::with_limits(2, 1 << 20);
+        let a = run(&input, &mut small);
+        assert_eq!(
+            small.model_builds, 12,
+            "a round-robin over 4 models thrashes a 2-model cache"
+        );
+        let mut big = ModelCache::default();
+        let b = run(&input, &mut big);
+        assert_eq!(big.model_builds, 4);
+        assert_eq!(a, b);
+    }
+
+    #[test]
+    fn degrees_are_exact_at_multiples_of_ninety() {
+        assert_eq!(sincos_deg(0.0), (0.0, 1.0));
+        assert_eq!(sincos_deg(90.0), (1.0, 0.0));
+        assert_eq!(sincos_deg(180.0).1, -1.0);
+        assert_eq!(sincos_deg(180.0).0, 0.0);
+        assert_eq!(sincos_deg(270.0), (-1.0, 0.0));
+        assert_eq!(sincos_deg(-90.0), (-1.0, 0.0));
+        assert_eq!(sincos_deg(360.0), (0.0, 1.0));
+        assert_eq!(direction(90.0, 0.0).z, 0.0);
+        for d in [
+            1.0, 30.0, 45.0, 89.5, 91.0, 179.0, 200.0, 300.0, -45.0, 359.9,
+        ] {
+            let (s, c) = sincos_deg(d);
+            let r = f64::to_radians(d);
+            assert!(
+                (s - r.sin()).abs() < 1e-15 && (c - r.cos()).abs() < 1e-15,
+                "{d}"
+            );
+        }
+    }
+}

@@ -253,7 +253,7 @@ pub fn render(args: RenderArgs) -> anyhow::Result<()> {
     if args.resume {
         if film_path.exists() {
             let old = Film::load(&film_path)?;
-            if let Err(why) = film.check_compatible(&old) {
+            if let Err(why) = old.check_compatible(&film) {
                 bail!(
                     "{}: the checkpoint does not belong to this render: {why}; \
                      remove it or choose another --film",

@@ -153,7 +153,7 @@ mod tests {
         assert!(c.get(&2).is_none());
         assert!(c.get(&1).is_some() && c.get(&3).is_some() && c.get(&4).is_some());
         // Weight: a heavy entry pushes out the oldest until the total fits.
-        c.insert(5, 50, 99);
+        c.insert(5, 50, 100);
         assert!(c.get(&5).is_some());
         assert_eq!(c.len(), 1, "only the newest fits under weight 100");
         // Replacing a key keeps one entry and its new weight.

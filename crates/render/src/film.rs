@@ -251,7 +251,8 @@ impl Film {
 
     /// Whether `other` holds samples of the same render as this film: same
     /// resolution, seed and fingerprint. The error names the input files
-    /// that differ when the fingerprints do.
+    /// that differ when the fingerprints do, as changes from this film's
+    /// inputs ("then") to `other`'s ("now").
     pub fn check_compatible(&self, other: &Film) -> Result<(), String> {
         if (self.width, self.height) != (other.width, other.height) {
             return Err(format!(

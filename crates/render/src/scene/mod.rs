@@ -300,6 +300,14 @@ pub fn load_str(path: &Path, text: &str) -> Result<Scene, SceneError> {
         exposure: film.exposure,
     };
 
+    // Checked before any material is built: building can take milliseconds.
+    if desc.lights.is_empty() {
+        return Err(SceneError::new(
+            path,
+            "the scene has no lights: add a [[lights]] entry (point, sphere, rectangle or environment)",
+        ));
+    }
+
     // Materials: only those some shape uses are built.
     let mut materials: Vec<Material> = Vec::new();
     let mut material_index: HashMap<String, u32> = HashMap::new();
@@ -493,12 +501,6 @@ pub fn load_str(path: &Path, text: &str) -> Result<Scene, SceneError> {
                 lights.push(LightKind::Environment(env));
             }
         }
-    }
-    if lights.is_empty() {
-        return Err(SceneError::new(
-            path,
-            "the scene has no lights: add a [[lights]] entry (point, sphere, rectangle or environment)",
-        ));
     }
     let lights = Lights {
         lights,
