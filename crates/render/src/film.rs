@@ -627,7 +627,8 @@ mod tests {
             })
         );
         let mut c = a.clone();
-        c.ranges = vec![4..8];
+        c.ranges.clear();
+        c.add_range(4..8).unwrap();
         c.dropped = Dropped::default();
         c.dropped.record(BadSample::Negative, 1, 0, 1);
         a.merge(&c).unwrap();

@@ -144,7 +144,7 @@ pub fn sample_pixel_checked(
     let cs = camera_sample(scene, x, y, sample);
     let r = &cs.radiance[..cs.n];
     // `v < ∞` is false for NaN too.
-    if !r.iter().all(|&v| v >= 0.0 && v < f64::INFINITY) {
+    if !r.iter().all(|v| (0.0..f64::INFINITY).contains(v)) {
         return Err(if r.iter().all(|v| v.is_finite()) {
             BadSample::Negative
         } else {

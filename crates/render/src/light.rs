@@ -147,7 +147,7 @@ impl EnvMap {
             .largest_resolution_level()
             .rgba_channels(
                 |res, _| {
-                    let n = res.width().checked_mul(res.height()).unwrap_or(usize::MAX);
+                    let n = res.width().saturating_mul(res.height());
                     let n = if n <= MAX_TEXELS { n } else { 0 };
                     (res.width(), res.height(), vec![[0.0f64; 3]; n])
                 },

@@ -254,12 +254,14 @@ fn merge_refuses_overlapping_or_duplicated_shards_and_keeps_high_indices_apart()
     let dup = a.clone();
     assert!(a.clone().merge(&dup).unwrap_err().contains("overlaps"));
     let mut part = a.clone();
-    part.ranges = vec![5..20];
+    part.ranges.clear();
+    part.add_range(5..20).unwrap();
     assert!(a.clone().merge(&part).is_err());
     // Indices past 2³² are samples of their own (the sampler no longer
     // wraps them), so such ranges merge as disjoint.
     let mut high = a.clone();
-    high.ranges = vec![(1 << 32)..(1 << 32) + 10];
+    high.ranges.clear();
+    high.add_range((1 << 32)..(1 << 32) + 10).unwrap();
     let mut m = a.clone();
     m.merge(&high).unwrap();
     assert_eq!(m.spp(), 20);

@@ -202,7 +202,7 @@ impl MicrofacetConductor {
         d: impl Fn(DVec3, f64) -> (f64, f64),
         homogeneous: bool,
     ) -> Option<BxdfSample> {
-        if !(wi.z >= COS_HORIZON) {
+        if wi.z.is_nan() || wi.z < COS_HORIZON {
             return None;
         }
         let h = visible(wi, [u[1], u[2]]);
@@ -213,7 +213,7 @@ impl MicrofacetConductor {
         }
         let v = 2.0 * p * h - q * wi;
         // wo = v/q: the same horizon as `eval` and `pdf`.
-        if !(v.z >= COS_HORIZON * q) {
+        if v.z.is_nan() || v.z < COS_HORIZON * q {
             return None;
         }
         let wo = v * (1.0 / q);
