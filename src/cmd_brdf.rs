@@ -24,17 +24,28 @@
 //! error naming `fresnel` (no silent default material).
 //!
 //! A line that cannot be served gets `{"error": "...", "field": "<name>"}`
-//! (`"field": "line"` for malformed JSON) and the stream goes on. Built
-//! models are cached by their parameters, so a stream of queries on one
-//! material builds its tables once.
+//! and the stream goes on: `"field": "line"` for a line that is not valid
+//! UTF-8, not valid JSON, longer than 1 MiB or not a JSON object; the key
+//! itself for an unknown (e.g. misspelt) or repeated key, whose message
+//! lists the valid keys; otherwise the key whose value is wrong.
+//!
+//! Built models are kept in a least-recently-used cache keyed on every
+//! parameter they depend on, and the full-GHS S̃ tables in one keyed on
+//! what a table depends on (γ and the ranges set by σ and Lc; not the
+//! metal, energy option or wavelength), so a stream mixing many surfaces
+//! and metals builds each table once (see [`cache`]).
 
-use std::collections::HashMap;
+mod cache;
+
 use std::io::{BufRead, BufWriter, Write};
 
-use anyhow::Context;
+use brdf::wave::ghs::{hemisphere_g_max, hemisphere_u_max};
+use brdf::wave::ghs_table::TableResolution as GhsResolution;
 use brdf::wave::two_scale::{CoherentPart, TableResolution, TwoScale, TwoScaleParams};
-use brdf::wave::{Energy, GhsFull, GhsOptions, GhsSsa, KcPsd};
+use brdf::wave::{Energy, GhsFull, GhsOptions, GhsSsa, KcPsd, RadialPsd};
 use brdf::{BrdfError, Bxdf, DVec3, Distribution, Fresnel, Ior, Metal, MicrofacetConductor};
+pub use cache::ModelCache;
+use serde::Deserialize;
 use serde_json::{Map, Value, json};
 
 /// BRDF subcommands.
@@ -63,35 +74,50 @@ pub fn run(cmd: BrdfCommand) -> anyhow::Result<()> {
 /// A query that cannot be answered: the message and the field to fix.
 #[derive(Debug)]
 pub(crate) struct QueryError {
-    pub(crate) field: &'static str,
+    pub(crate) field: String,
     pub(crate) message: String,
 }
 
 impl QueryError {
-    fn new(field: &'static str, message: impl Into<String>) -> QueryError {
+    fn new(field: impl Into<String>, message: impl Into<String>) -> QueryError {
         QueryError {
-            field,
+            field: field.into(),
             message: message.into(),
         }
     }
 }
 
-/// Most models kept at once; the cache is cleared when full.
-const CACHE_LIMIT: usize = 64;
+/// Longest line served; a longer one gets an error object (and is not
+/// held in memory whole).
+const MAX_LINE: usize = 1 << 20;
 
 /// Serves every line of `input`, writing one line per query to `output`.
 pub fn eval_stream(input: impl BufRead, output: impl Write) -> anyhow::Result<()> {
+    eval_stream_with(input, output, &mut ModelCache::default())
+}
+
+/// [`eval_stream`] with a given cache (tests read its build counts).
+pub fn eval_stream_with(
+    mut input: impl BufRead,
+    output: impl Write,
+    cache: &mut ModelCache,
+) -> anyhow::Result<()> {
     let mut out = BufWriter::new(output);
-    let mut cache: HashMap<String, Box<dyn Bxdf>> = HashMap::new();
-    for (n, line) in input.lines().enumerate() {
-        let line = line.with_context(|| format!("reading line {} of stdin", n + 1))?;
-        if line.trim().is_empty() {
-            continue;
-        }
-        let reply = match answer(&line, &mut cache) {
-            Ok(v) => v,
-            Err(e) => json!({"error": format!("line {}: {}", n + 1, e.message), "field": e.field}),
+    let mut buf = Vec::new();
+    let mut n = 0usize;
+    while let Some(too_long) = read_line(&mut input, &mut buf, MAX_LINE)
+        .map_err(|e| anyhow::anyhow!("reading line {} of stdin: {e}", n + 1))?
+    {
+        n += 1;
+        let reply = match line_text(&buf, too_long) {
+            Err(e) => Some(Err(e)),
+            Ok(line) if line.trim().is_empty() => None,
+            Ok(line) => Some(answer(line, cache)),
         };
+        let Some(reply) = reply else { continue };
+        let reply = reply.unwrap_or_else(
+            |e| json!({"error": format!("line {n}: {}", e.message), "field": e.field}),
+        );
         serde_json::to_writer(&mut out, &reply)?;
         out.write_all(b"\n")?;
         // Queries may come from an interactive pipe: answer each at once.
@@ -100,13 +126,117 @@ pub fn eval_stream(input: impl BufRead, output: impl Write) -> anyhow::Result<()
     Ok(())
 }
 
-fn answer(line: &str, cache: &mut HashMap<String, Box<dyn Bxdf>>) -> Result<Value, QueryError> {
-    let v: Value = serde_json::from_str(line)
-        .map_err(|e| QueryError::new("line", format!("not valid JSON: {e}")))?;
-    let q = v
-        .as_object()
-        .ok_or_else(|| QueryError::new("line", "a query must be a JSON object"))?;
-    let lambda_nm = number(q, "lambda_nm")?;
+/// Reads one `\n`-terminated line of bytes into `buf` (without the
+/// newline), keeping at most `max` bytes; `Some(true)` if the line was
+/// longer, `None` at the end of the input.
+fn read_line(r: &mut impl BufRead, buf: &mut Vec<u8>, max: usize) -> std::io::Result<Option<bool>> {
+    buf.clear();
+    let mut too_long = false;
+    let mut any = false;
+    loop {
+        let avail = match r.fill_buf() {
+            Ok(a) => a,
+            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => continue,
+            Err(e) => return Err(e),
+        };
+        if avail.is_empty() {
+            return Ok(any.then_some(too_long));
+        }
+        any = true;
+        let (chunk, used, done) = match avail.iter().position(|&b| b == b'\n') {
+            Some(i) => (&avail[..i], i + 1, true),
+            None => (avail, avail.len(), false),
+        };
+        if buf.len() + chunk.len() <= max {
+            buf.extend_from_slice(chunk);
+        } else {
+            too_long = true;
+        }
+        r.consume(used);
+        if done {
+            return Ok(Some(too_long));
+        }
+    }
+}
+
+/// The text of a line read by [`read_line`], or the error object's reason.
+fn line_text(bytes: &[u8], too_long: bool) -> Result<&str, QueryError> {
+    if too_long {
+        return Err(QueryError::new(
+            "line",
+            format!("longer than {} MiB; not read", MAX_LINE >> 20),
+        ));
+    }
+    let bytes = bytes.strip_suffix(b"\r").unwrap_or(bytes);
+    std::str::from_utf8(bytes).map_err(|e| {
+        QueryError::new(
+            "line",
+            format!(
+                "not valid UTF-8 (invalid byte at offset {})",
+                e.valid_up_to()
+            ),
+        )
+    })
+}
+
+/// Every key a query may have. Unknown keys are refused (serde lists these
+/// names in the message); values stay untyped here so that each can be
+/// checked with an error naming its key.
+#[derive(Deserialize, Default, Debug)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct QueryFields {
+    model: Option<Value>,
+    lambda_nm: Option<Value>,
+    theta_i_deg: Option<Value>,
+    theta_o_deg: Option<Value>,
+    phi_o_deg: Option<Value>,
+    alpha: Option<Value>,
+    sigma_um: Option<Value>,
+    lc_um: Option<Value>,
+    gamma: Option<Value>,
+    energy: Option<Value>,
+    beta: Option<Value>,
+    coherent: Option<Value>,
+    fresnel: Option<Value>,
+    metal: Option<Value>,
+}
+
+impl QueryFields {
+    /// Parses one query line; unknown and repeated keys are errors naming the key.
+    fn parse(line: &str) -> Result<QueryFields, QueryError> {
+        // Syntax first (without building anything), so that a truncated
+        // line is reported as such and not by the first key serde meets.
+        if let Err(e) = serde_json::from_str::<serde::de::IgnoredAny>(line) {
+            return Err(QueryError::new("line", format!("not valid JSON: {e}")));
+        }
+        if !line.trim_start().starts_with('{') {
+            return Err(QueryError::new("line", "a query must be a JSON object"));
+        }
+        serde_json::from_str(line).map_err(field_error)
+    }
+
+    /// The fields of a JSON object (as `plot` and `compare` build them).
+    pub(crate) fn from_map(q: &Map<String, Value>) -> Result<QueryFields, QueryError> {
+        QueryFields::deserialize(&Value::Object(q.clone())).map_err(field_error)
+    }
+}
+
+/// A serde error about a query: unknown or repeated keys name the key.
+fn field_error(e: serde_json::Error) -> QueryError {
+    let msg = e.to_string();
+    let key = ["unknown field `", "duplicate field `"]
+        .iter()
+        .find_map(|p| msg.strip_prefix(p))
+        .and_then(|rest| rest.split('`').next());
+    match key {
+        Some(k) if e.is_data() => QueryError::new(k, msg.replace("field", "key")),
+        _ => QueryError::new("line", format!("not valid JSON: {msg}")),
+    }
+}
+
+fn answer(line: &str, cache: &mut ModelCache) -> Result<Value, QueryError> {
+    let q = QueryFields::parse(line)?;
+    let lambda_nm = number(&q.lambda_nm, "lambda_nm")?;
     // `number` already rejected NaN and infinities.
     if lambda_nm <= 0.0 {
         return Err(QueryError::new(
@@ -121,33 +251,61 @@ fn answer(line: &str, cache: &mut HashMap<String, Box<dyn Bxdf>>) -> Result<Valu
             format!("{lambda_nm} nm is outside the supported range {lo}–{hi} nm"),
         ));
     }
-    let theta_i = angle(q, "theta_i_deg", 0.0, 90.0)?;
-    let theta_o = angle(q, "theta_o_deg", 0.0, 90.0)?;
-    let phi_o = angle(q, "phi_o_deg", -360.0, 360.0)?;
-    let (key, build) = model_spec(q)?;
-    if !cache.contains_key(&key) {
-        let model = build().map_err(|e| brdf_error(e, "model"))?;
-        if cache.len() >= CACHE_LIMIT {
-            cache.clear();
-        }
-        cache.insert(key.clone(), model);
+    let theta_i = angle(&q.theta_i_deg, "theta_i_deg", 0.0, 90.0)?;
+    let theta_o = angle(&q.theta_o_deg, "theta_o_deg", 0.0, 90.0)?;
+    let phi_o = angle(&q.phi_o_deg, "phi_o_deg", -360.0, 360.0)?;
+    let spec = QueryModel::parse(&q)?;
+    let key = spec.key();
+    if cache.models.get(&key).is_none() {
+        let model = spec
+            .build(Some(cache))
+            .map_err(|e| brdf_error(e, "model"))?;
+        cache.model_builds += 1;
+        cache.models.insert(key.clone(), model, 1);
     }
-    let model = &cache[&key];
-    let wi = spherical(theta_i, 0.0);
-    let wo = spherical(theta_o, phi_o);
+    let Some(model) = cache.models.get(&key) else {
+        return Err(QueryError::new("model", "internal error: model not cached"));
+    };
+    let wi = direction(theta_i, 0.0);
+    let wo = direction(theta_o, phi_o);
     let f = model.eval(wi, wo, lambda_nm);
     let pdf = model.pdf(wi, wo, lambda_nm);
     let spec = model.specular(wi, lambda_nm).weight;
     Ok(json!({"f": f, "specular_weight": spec, "pdf": pdf}))
 }
 
-/// Unit direction at polar angle θ and azimuth φ, both in degrees.
-fn spherical(theta_deg: f64, phi_deg: f64) -> DVec3 {
-    brdf::frame::spherical(theta_deg.to_radians(), phi_deg.to_radians())
+/// (sin, cos) of an angle in degrees, exact at multiples of 90°: the
+/// horizon θ = 90° has cos θ = 0, not cos(π/2) = 6.1e−17, so it lies *on*
+/// the horizon, where every model returns 0, instead of a round-off
+/// distance above it.
+fn sincos_deg(deg: f64) -> (f64, f64) {
+    let r = deg.rem_euclid(360.0);
+    let q = (r / 90.0).floor();
+    // Exact: 90q ≤ r < 90(q + 1) ≤ 2·90q for q ≥ 1 (Sterbenz).
+    let rest = r - 90.0 * q;
+    let (s, c) = if rest == 0.0 {
+        (0.0, 1.0)
+    } else {
+        let t = rest.to_radians();
+        (t.sin(), t.cos())
+    };
+    match q as u8 {
+        0 => (s, c),
+        1 => (c, -s),
+        2 => (-s, -c),
+        _ => (-c, s),
+    }
 }
 
-fn number(q: &Map<String, Value>, field: &'static str) -> Result<f64, QueryError> {
-    match q.get(field) {
+/// Unit direction at polar angle θ and azimuth φ, both in degrees.
+fn direction(theta_deg: f64, phi_deg: f64) -> DVec3 {
+    let (st, ct) = sincos_deg(theta_deg);
+    let (sp, cp) = sincos_deg(phi_deg);
+    DVec3::new(st * cp, st * sp, ct)
+}
+
+fn number(v: &Option<Value>, field: &'static str) -> Result<f64, QueryError> {
+    match v {
         None | Some(Value::Null) => Err(QueryError::new(field, format!("missing `{field}`"))),
         Some(v) => v.as_f64().filter(|x| x.is_finite()).ok_or_else(|| {
             QueryError::new(field, format!("`{field}` must be a finite number, got {v}"))
@@ -155,8 +313,8 @@ fn number(q: &Map<String, Value>, field: &'static str) -> Result<f64, QueryError
     }
 }
 
-fn angle(q: &Map<String, Value>, field: &'static str, lo: f64, hi: f64) -> Result<f64, QueryError> {
-    let x = number(q, field)?;
+fn angle(v: &Option<Value>, field: &'static str, lo: f64, hi: f64) -> Result<f64, QueryError> {
+    let x = number(v, field)?;
     if (lo..=hi).contains(&x) {
         Ok(x)
     } else {
@@ -167,8 +325,8 @@ fn angle(q: &Map<String, Value>, field: &'static str, lo: f64, hi: f64) -> Resul
     }
 }
 
-fn text<'a>(q: &'a Map<String, Value>, field: &'static str) -> Result<Option<&'a str>, QueryError> {
-    match q.get(field) {
+fn text<'a>(v: &'a Option<Value>, field: &'static str) -> Result<Option<&'a str>, QueryError> {
+    match v {
         None | Some(Value::Null) => Ok(None),
         Some(Value::String(s)) => Ok(Some(s.as_str())),
         Some(v) => Err(QueryError::new(
@@ -190,8 +348,15 @@ fn brdf_error(e: BrdfError, fallback: &'static str) -> QueryError {
     QueryError::new(field, e.to_string())
 }
 
-fn fresnel(q: &Map<String, Value>) -> Result<(String, Fresnel), QueryError> {
-    let (field, name) = match (text(q, "fresnel")?, text(q, "metal")?) {
+/// The Fresnel choice of a query: its canonical name and the term.
+#[derive(Clone, Debug)]
+struct FresnelChoice {
+    name: String,
+    fresnel: Fresnel,
+}
+
+fn fresnel(q: &QueryFields) -> Result<FresnelChoice, QueryError> {
+    let (field, name) = match (text(&q.fresnel, "fresnel")?, text(&q.metal, "metal")?) {
         (Some(f), _) => ("fresnel", f),
         (None, Some(m)) => ("metal", m),
         (None, None) => {
@@ -202,7 +367,10 @@ fn fresnel(q: &Map<String, Value>) -> Result<(String, Fresnel), QueryError> {
         }
     };
     if name.eq_ignore_ascii_case("none") {
-        return Ok(("none".into(), Fresnel::One));
+        return Ok(FresnelChoice {
+            name: "none".into(),
+            fresnel: Fresnel::One,
+        });
     }
     let metal = Metal::from_name(name).ok_or_else(|| {
         QueryError::new(
@@ -210,115 +378,367 @@ fn fresnel(q: &Map<String, Value>) -> Result<(String, Fresnel), QueryError> {
             format!("unknown metal {name:?}; use \"none\" or one of cu, au, ag, al, fe, cr, brass, stainless_steel"),
         )
     })?;
-    Ok((metal.name().into(), Fresnel::conductor(Ior::metal(metal))))
+    Ok(FresnelChoice {
+        name: metal.name().into(),
+        fresnel: Fresnel::conductor(Ior::metal(metal)),
+    })
 }
 
-pub(crate) type Builder = Box<dyn FnOnce() -> Result<Box<dyn Bxdf>, BrdfError>>;
+/// The model a query names, validated, before anything is built.
+#[derive(Clone, Debug)]
+enum QueryModel {
+    /// GGX (`ggx`) or Beckmann.
+    Microfacet {
+        ggx: bool,
+        alpha: f64,
+        fresnel: FresnelChoice,
+    },
+    /// GHS SSA or full GHS (`full`) on a KC surface.
+    Ghs {
+        full: bool,
+        psd: KcPsd,
+        energy: Energy,
+        fresnel: FresnelChoice,
+    },
+    /// Two-scale.
+    TwoScale {
+        psd: KcPsd,
+        beta: f64,
+        coherent: CoherentPart,
+        fresnel: FresnelChoice,
+    },
+}
 
-/// The cache key and a builder for the model a query names.
-pub(crate) fn model_spec(q: &Map<String, Value>) -> Result<(String, Builder), QueryError> {
-    let model = text(q, "model")?.ok_or_else(|| {
-        QueryError::new(
-            "model",
-            "missing `model`: one of ggx, beckmann, ghs_ssa, ghs, two_scale",
-        )
-    })?;
-    let (fresnel_name, fresnel) = fresnel(q)?;
-    // Bit patterns make the key exact: equal parameters share a model.
-    let bits = |x: f64| format!("{:016x}", x.to_bits());
-    match model {
-        "ggx" | "beckmann" => {
-            let alpha = number(q, "alpha")?;
-            let key = format!("{model}/{}/{fresnel_name}", bits(alpha));
-            let ggx = model == "ggx";
-            let build: Builder = Box::new(move || {
+/// Bit patterns make keys exact: equal parameters share a model.
+fn bits(x: f64) -> String {
+    format!("{:016x}", x.to_bits())
+}
+
+impl QueryModel {
+    fn parse(q: &QueryFields) -> Result<QueryModel, QueryError> {
+        let model = text(&q.model, "model")?.ok_or_else(|| {
+            QueryError::new(
+                "model",
+                "missing `model`: one of ggx, beckmann, ghs_ssa, ghs, two_scale",
+            )
+        })?;
+        let fresnel = fresnel(q)?;
+        match model {
+            "ggx" | "beckmann" => Ok(QueryModel::Microfacet {
+                ggx: model == "ggx",
+                alpha: number(&q.alpha, "alpha")?,
+                fresnel,
+            }),
+            "ghs_ssa" | "ghs" => {
+                let psd = kc(q)?;
+                let energy = match text(&q.energy, "energy")?.unwrap_or("raw") {
+                    "raw" => Energy::Raw,
+                    "krywonos" => Energy::Krywonos,
+                    "sigma_rel" => Energy::SigmaRel,
+                    other => {
+                        return Err(QueryError::new(
+                            "energy",
+                            format!(
+                                "unknown energy option {other:?}; use raw, krywonos or sigma_rel"
+                            ),
+                        ));
+                    }
+                };
+                Ok(QueryModel::Ghs {
+                    full: model == "ghs",
+                    psd,
+                    energy,
+                    fresnel,
+                })
+            }
+            "two_scale" => {
+                let psd = kc(q)?;
+                let beta = number(&q.beta, "beta")?;
+                let coherent = match text(&q.coherent, "coherent")?.unwrap_or("macro_ndf") {
+                    "macro_ndf" => CoherentPart::MacroNdf,
+                    "delta" => CoherentPart::Delta,
+                    other => {
+                        return Err(QueryError::new(
+                            "coherent",
+                            format!("unknown coherent option {other:?}; use macro_ndf or delta"),
+                        ));
+                    }
+                };
+                Ok(QueryModel::TwoScale {
+                    psd,
+                    beta,
+                    coherent,
+                    fresnel,
+                })
+            }
+            other => Err(QueryError::new(
+                "model",
+                format!("unknown model {other:?}; use ggx, beckmann, ghs_ssa, ghs or two_scale"),
+            )),
+        }
+    }
+
+    /// The model cache key: every parameter the built model depends on.
+    fn key(&self) -> String {
+        match self {
+            QueryModel::Microfacet {
+                ggx,
+                alpha,
+                fresnel,
+            } => format!(
+                "{}/{}/{}",
+                if *ggx { "ggx" } else { "beckmann" },
+                bits(*alpha),
+                fresnel.name
+            ),
+            QueryModel::Ghs {
+                full,
+                psd,
+                energy,
+                fresnel,
+            } => format!(
+                "{}/{}/{}/{}/{energy:?}/{}",
+                if *full { "ghs" } else { "ghs_ssa" },
+                bits(psd.sigma_um()),
+                bits(psd.lc_um()),
+                bits(psd.gamma()),
+                fresnel.name
+            ),
+            QueryModel::TwoScale {
+                psd,
+                beta,
+                coherent,
+                fresnel,
+            } => format!(
+                "two_scale/{}/{}/{}/{}/{coherent:?}/{}",
+                bits(*beta),
+                bits(psd.sigma_um()),
+                bits(psd.lc_um()),
+                bits(psd.gamma()),
+                fresnel.name
+            ),
+        }
+    }
+
+    /// Builds the model, taking a full-GHS S̃ table from `cache` when given
+    /// (it is built exactly as [`GhsFull::with_options`] builds it, so the
+    /// model is the same either way).
+    fn build(&self, cache: Option<&mut ModelCache>) -> Result<Box<dyn Bxdf>, BrdfError> {
+        Ok(match self.clone() {
+            QueryModel::Microfacet {
+                ggx,
+                alpha,
+                fresnel,
+            } => {
                 let d = if ggx {
                     Distribution::ggx(alpha, alpha)?
                 } else {
                     Distribution::beckmann(alpha, alpha)?
                 };
-                Ok(Box::new(MicrofacetConductor::new(d, fresnel)?) as Box<dyn Bxdf>)
-            });
-            Ok((key, build))
-        }
-        "ghs_ssa" | "ghs" => {
-            let psd = kc(q)?;
-            let energy = match text(q, "energy")?.unwrap_or("raw") {
-                "raw" => Energy::Raw,
-                "krywonos" => Energy::Krywonos,
-                "sigma_rel" => Energy::SigmaRel,
-                other => {
-                    return Err(QueryError::new(
-                        "energy",
-                        format!("unknown energy option {other:?}; use raw, krywonos or sigma_rel"),
-                    ));
-                }
-            };
-            let opts = GhsOptions {
+                Box::new(MicrofacetConductor::new(d, fresnel.fresnel)?)
+            }
+            QueryModel::Ghs {
+                full,
+                psd,
                 energy,
-                ..GhsOptions::default()
-            };
-            let key = format!(
-                "{model}/{}/{}/{}/{energy:?}/{fresnel_name}",
-                bits(psd.sigma_um()),
-                bits(psd.lc_um()),
-                bits(psd.gamma())
-            );
-            let full = model == "ghs";
-            let build: Builder = Box::new(move || {
-                Ok(if full {
-                    Box::new(GhsFull::with_options(psd, fresnel, opts)?) as Box<dyn Bxdf>
-                } else {
-                    Box::new(GhsSsa::with_options(psd, fresnel, opts)?) as Box<dyn Bxdf>
-                })
-            });
-            Ok((key, build))
-        }
-        "two_scale" => {
-            let psd = kc(q)?;
-            let beta = number(q, "beta")?;
-            let coherent = match text(q, "coherent")?.unwrap_or("macro_ndf") {
-                "macro_ndf" => CoherentPart::MacroNdf,
-                "delta" => CoherentPart::Delta,
-                other => {
-                    return Err(QueryError::new(
-                        "coherent",
-                        format!("unknown coherent option {other:?}; use macro_ndf or delta"),
-                    ));
+                fresnel,
+            } => {
+                let opts = GhsOptions {
+                    energy,
+                    ..GhsOptions::default()
+                };
+                match (full, cache) {
+                    (false, _) => Box::new(GhsSsa::with_options(psd, fresnel.fresnel, opts)?),
+                    (true, None) => Box::new(GhsFull::with_options(psd, fresnel.fresnel, opts)?),
+                    (true, Some(cache)) => {
+                        let u_max = hemisphere_u_max(psd.length_um());
+                        let g_max = hemisphere_g_max(psd.sigma_um());
+                        let key = (psd.gamma().to_bits(), u_max.to_bits(), g_max.to_bits());
+                        let table = cache.table(key, || {
+                            psd.build_table(u_max, g_max, GhsResolution::default())
+                        })?;
+                        Box::new(GhsFull::with_table(psd, fresnel.fresnel, opts, table)?)
+                    }
                 }
-            };
-            let key = format!(
-                "two_scale/{}/{}/{}/{}/{coherent:?}/{fresnel_name}",
-                bits(beta),
-                bits(psd.sigma_um()),
-                bits(psd.lc_um()),
-                bits(psd.gamma())
-            );
-            let build: Builder = Box::new(move || {
-                let m = TwoScale::new(TwoScaleParams {
-                    beta,
-                    sigma_um: psd.sigma_um(),
-                    lc_um: psd.lc_um(),
-                    gamma: psd.gamma(),
-                    fresnel,
-                    coherent,
-                    resolution: TableResolution::default(),
-                })?;
-                Ok(Box::new(m) as Box<dyn Bxdf>)
-            });
-            Ok((key, build))
-        }
-        other => Err(QueryError::new(
-            "model",
-            format!("unknown model {other:?}; use ggx, beckmann, ghs_ssa, ghs or two_scale"),
-        )),
+            }
+            QueryModel::TwoScale {
+                psd,
+                beta,
+                coherent,
+                fresnel,
+            } => Box::new(TwoScale::new(TwoScaleParams {
+                beta,
+                sigma_um: psd.sigma_um(),
+                lc_um: psd.lc_um(),
+                gamma: psd.gamma(),
+                fresnel: fresnel.fresnel,
+                coherent,
+                resolution: TableResolution::default(),
+            })?),
+        })
     }
 }
 
+pub(crate) type Builder = Box<dyn FnOnce() -> Result<Box<dyn Bxdf>, BrdfError>>;
+
+/// The cache key and a builder for the model a set of query fields names
+/// (`plot` and `compare` build their models through this).
+pub(crate) fn model_spec(q: &Map<String, Value>) -> Result<(String, Builder), QueryError> {
+    let spec = QueryModel::parse(&QueryFields::from_map(q)?)?;
+    let key = spec.key();
+    Ok((key, Box::new(move || spec.build(None))))
+}
+
 /// The KC surface of a query, validated (errors name sigma_um, lc_um or gamma).
-fn kc(q: &Map<String, Value>) -> Result<KcPsd, QueryError> {
-    let sigma = number(q, "sigma_um")?;
-    let lc = number(q, "lc_um")?;
-    let gamma = number(q, "gamma")?;
+fn kc(q: &QueryFields) -> Result<KcPsd, QueryError> {
+    let sigma = number(&q.sigma_um, "sigma_um")?;
+    let lc = number(&q.lc_um, "lc_um")?;
+    let gamma = number(&q.gamma, "gamma")?;
     KcPsd::new(sigma, lc, gamma).map_err(|e| brdf_error(e, "sigma_um"))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn query(model: &str, extra: &str, metal: &str, ti: f64, to: f64, phi: f64) -> String {
+        format!(
+            "{{\"model\": \"{model}\", {extra}, \"fresnel\": \"{metal}\", \"lambda_nm\": 500, \
+             \"theta_i_deg\": {ti}, \"theta_o_deg\": {to}, \"phi_o_deg\": {phi}}}\n"
+        )
+    }
+
+    fn run(input: &str, cache: &mut ModelCache) -> Vec<Value> {
+        let mut out = Vec::new();
+        eval_stream_with(input.as_bytes(), &mut out, cache).unwrap();
+        String::from_utf8(out)
+            .unwrap()
+            .lines()
+            .map(|l| serde_json::from_str(l).unwrap())
+            .collect()
+    }
+
+    /// A mixed stream builds each model once and each S̃ table once per
+    /// (γ, σ, Lc), however many metals and energy options use it, and
+    /// however the lines interleave.
+    #[test]
+    fn mixed_stream_builds_each_model_and_table_once() {
+        let surfaces = [(0.05, 2.0, 2.0), (0.1, 5.0, 3.0), (0.02, 1.0, 1.5)];
+        let metals = ["none", "cu", "au", "al"];
+        let mut input = String::new();
+        for round in 0..6 {
+            for (k, &(s, l, g)) in surfaces.iter().enumerate() {
+                for (j, m) in metals.iter().enumerate() {
+                    let kc = format!("\"sigma_um\": {s}, \"lc_um\": {l}, \"gamma\": {g}");
+                    let angle = 5.0 * (round + k + j) as f64;
+                    input += &query("ghs", &kc, m, angle, 20.0, 180.0);
+                    input += &query(
+                        "ghs",
+                        &format!("{kc}, \"energy\": \"raw\""),
+                        m,
+                        10.0,
+                        angle,
+                        0.0,
+                    );
+                    input += &query("ghs_ssa", &kc, m, angle, 40.0, 170.0);
+                    input += &query(
+                        "ggx",
+                        &format!("\"alpha\": {}", 0.1 + 0.1 * k as f64),
+                        m,
+                        angle,
+                        30.0,
+                        180.0,
+                    );
+                }
+            }
+        }
+        let mut cache = ModelCache::default();
+        let out = run(&input, &mut cache);
+        assert_eq!(out.len(), 6 * 3 * 4 * 4);
+        assert!(
+            out.iter().all(|v| v["f"].is_number()),
+            "{:?}",
+            out.iter().find(|v| !v["f"].is_number())
+        );
+        // ghs (raw, explicit or default: one key), ghs_ssa, ggx per surface and metal.
+        assert_eq!(cache.model_builds, 3 * 3 * 4);
+        assert_eq!(
+            cache.table_builds, 3,
+            "one S̃ table per surface, shared by all metals"
+        );
+
+        // The cached models answer exactly as freshly built ones.
+        let mut fresh = Vec::new();
+        for line in input.lines() {
+            fresh.push(run(line, &mut ModelCache::default()).remove(0));
+        }
+        assert_eq!(out, fresh);
+        // And as GhsFull::with_options (the renderer's construction).
+        let psd = KcPsd::new(0.1, 5.0, 3.0).unwrap();
+        let direct = GhsFull::with_options(psd, Fresnel::One, GhsOptions::default()).unwrap();
+        let q = query(
+            "ghs",
+            "\"sigma_um\": 0.1, \"lc_um\": 5.0, \"gamma\": 3.0",
+            "none",
+            25.0,
+            35.0,
+            170.0,
+        );
+        let got = run(&q, &mut cache).remove(0);
+        let wi = direction(25.0, 0.0);
+        let wo = direction(35.0, 170.0);
+        assert_eq!(got["f"].as_f64().unwrap(), direct.eval(wi, wo, 500.0));
+        assert_eq!(got["pdf"].as_f64().unwrap(), direct.pdf(wi, wo, 500.0));
+    }
+
+    /// A cache smaller than the working set evicts the least recently used
+    /// model, rebuilds it when needed, and answers the same.
+    #[test]
+    fn eviction_rebuilds_and_answers_the_same() {
+        let mut input = String::new();
+        for round in 0..3 {
+            for a in [0.1, 0.2, 0.3, 0.4] {
+                input += &query(
+                    "beckmann",
+                    &format!("\"alpha\": {a}"),
+                    "cu",
+                    10.0 * round as f64,
+                    20.0,
+                    180.0,
+                );
+            }
+        }
+        let mut small = ModelCache::with_limits(2, 1 << 20);
+        let a = run(&input, &mut small);
+        assert_eq!(
+            small.model_builds, 12,
+            "a round-robin over 4 models thrashes a 2-model cache"
+        );
+        let mut big = ModelCache::default();
+        let b = run(&input, &mut big);
+        assert_eq!(big.model_builds, 4);
+        assert_eq!(a, b);
+    }
+
+    #[test]
+    fn degrees_are_exact_at_multiples_of_ninety() {
+        assert_eq!(sincos_deg(0.0), (0.0, 1.0));
+        assert_eq!(sincos_deg(90.0), (1.0, 0.0));
+        assert_eq!(sincos_deg(180.0).1, -1.0);
+        assert_eq!(sincos_deg(180.0).0, 0.0);
+        assert_eq!(sincos_deg(270.0), (-1.0, 0.0));
+        assert_eq!(sincos_deg(-90.0), (-1.0, 0.0));
+        assert_eq!(sincos_deg(360.0), (0.0, 1.0));
+        assert_eq!(direction(90.0, 0.0).z, 0.0);
+        for d in [
+            1.0, 30.0, 45.0, 89.5, 91.0, 179.0, 200.0, 300.0, -45.0, 359.9,
+        ] {
+            let (s, c) = sincos_deg(d);
+            let r = f64::to_radians(d);
+            assert!(
+                (s - r.sin()).abs() < 1e-15 && (c - r.cos()).abs() < 1e-15,
+                "{d}"
+            );
+        }
+    }
 }

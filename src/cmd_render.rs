@@ -21,7 +21,7 @@ pub struct RenderArgs {
     /// Random seed (overrides the scene's `film.seed`).
     #[arg(long)]
     pub seed: Option<u64>,
-    /// Worker threads (default: all cores).
+    /// Worker threads (default: all cores; at most 4 per core).
     #[arg(long)]
     pub threads: Option<usize>,
     /// Stop after this long and write the image so far: `90`, `90s`, `15m`, `2h`.
@@ -39,9 +39,9 @@ pub struct RenderArgs {
     /// Film (checkpoint / shard) file; default: the image path with extension `.film`.
     #[arg(long)]
     pub film: Option<PathBuf>,
-    /// Seconds between checkpoints of the film while rendering.
-    #[arg(long, default_value_t = 30.0)]
-    pub checkpoint_every: f64,
+    /// Time between checkpoints of the film while rendering: `30`, `30s`, `5m` (≥ 1 s).
+    #[arg(long, value_name = "DURATION", default_value = "30")]
+    pub checkpoint_every: String,
     /// Print nothing but errors.
     #[arg(long, short)]
     pub quiet: bool,
@@ -89,28 +89,71 @@ pub fn parse_range(s: &str) -> anyhow::Result<Range<u64>> {
     Ok(a..b)
 }
 
-/// Parses `90`, `90s`, `1.5m`, `2h`.
-pub fn parse_duration(s: &str) -> anyhow::Result<Duration> {
+/// Longest duration accepted: 100 years, far beyond any render, and far
+/// below where `Instant` arithmetic overflows.
+const MAX_DURATION_SECS: f64 = 100.0 * 365.25 * 86400.0;
+
+/// Parses `90`, `90s`, `1.5m`, `2h` for the option `option`.
+pub fn parse_duration_for(option: &str, s: &str) -> anyhow::Result<Duration> {
     let t = s.trim();
-    let (num, unit) = match t.char_indices().find(|(_, c)| c.is_ascii_alphabetic()) {
-        Some((i, _)) => (&t[..i], &t[i..]),
-        None => (t, "s"),
-    };
-    let v: f64 = num
-        .trim()
-        .parse()
-        .with_context(|| format!("--time-limit `{s}`: expected e.g. 90, 90s, 15m, 2h"))?;
-    let k = match unit {
-        "s" => 1.0,
-        "m" | "min" => 60.0,
-        "h" => 3600.0,
-        _ => bail!("--time-limit `{s}`: unknown unit `{unit}` (use s, m or h)"),
-    };
+    // The unit is a suffix (the number may be `1e3` or `inf`).
+    let (num, k) = [("min", 60.0), ("s", 1.0), ("m", 60.0), ("h", 3600.0)]
+        .iter()
+        .find_map(|&(u, k)| t.strip_suffix(u).map(|n| (n, k)))
+        .unwrap_or((t, 1.0));
+    let v: f64 = num.trim().parse().with_context(|| {
+        format!("{option} `{s}`: expected a number and an optional unit s, m or h, e.g. 90, 90s, 15m, 2h")
+    })?;
     let secs = v * k;
-    if !(secs.is_finite() && secs > 0.0) {
-        bail!("--time-limit `{s}`: must be positive");
+    if !secs.is_finite() {
+        bail!("{option} `{s}`: must be a finite duration");
+    }
+    if secs <= 0.0 {
+        bail!("{option} `{s}`: must be positive");
+    }
+    if secs > MAX_DURATION_SECS {
+        bail!("{option} `{s}`: longer than 100 years; leave the option out for no limit");
     }
     Ok(Duration::from_secs_f64(secs))
+}
+
+/// Parses a `--time-limit`.
+pub fn parse_duration(s: &str) -> anyhow::Result<Duration> {
+    parse_duration_for("--time-limit", s)
+}
+
+/// Parses `--checkpoint-every` (at least one second: a film is written whole).
+pub fn parse_checkpoint_every(s: &str) -> anyhow::Result<Duration> {
+    let d = parse_duration_for("--checkpoint-every", s)?;
+    if d < Duration::from_secs(1) {
+        bail!(
+            "--checkpoint-every `{s}`: must be at least 1 s (each checkpoint writes the whole film)"
+        );
+    }
+    Ok(d)
+}
+
+/// `--threads`, capped at [`render::render::max_threads`] with a note on stderr.
+fn thread_count(requested: Option<usize>, quiet: bool) -> anyhow::Result<Option<usize>> {
+    match requested {
+        Some(0) => bail!("--threads must be ≥ 1"),
+        Some(n) if n > render::render::max_threads() => {
+            let cap = render::render::max_threads();
+            if !quiet {
+                eprintln!(
+                    "note: --threads {n} capped at {cap} (4 per core): more threads than that \
+                     only add start-up and scheduling cost"
+                );
+            }
+            Ok(Some(cap))
+        }
+        other => Ok(other),
+    }
+}
+
+/// The warning printed after a render or merge whose film left samples out.
+pub fn dropped_warning(d: &render::film::Dropped) -> Option<String> {
+    (d.total() > 0).then(|| format!("warning: {d}"))
 }
 
 fn with_suffix(path: &Path, suffix: &str) -> PathBuf {
@@ -202,24 +245,17 @@ pub fn render(args: RenderArgs) -> anyhow::Result<()> {
         );
     }
 
-    let (w, h) = (scene.camera.width, scene.camera.height);
-    let mut film = Film::new(
-        w,
-        h,
-        scene.fingerprint,
-        scene.settings.seed,
-        scene.settings.exposure,
-    );
+    let time_limit = args.time_limit.as_deref().map(parse_duration).transpose()?;
+    let checkpoint_every = parse_checkpoint_every(&args.checkpoint_every)?;
+    let threads = thread_count(args.threads, args.quiet)?;
+    let mut film = Film::for_scene(&scene);
     let mut todo = target.clone();
     if args.resume {
         if film_path.exists() {
             let old = Film::load(&film_path)?;
-            if (old.width, old.height) != (w, h)
-                || old.fingerprint != scene.fingerprint
-                || old.seed != scene.settings.seed
-            {
+            if let Err(why) = old.check_compatible(&film) {
                 bail!(
-                    "{}: the checkpoint belongs to a different scene, resolution or seed; \
+                    "{}: the checkpoint does not belong to this render: {why}; \
                      remove it or choose another --film",
                     film_path.display()
                 );
@@ -234,8 +270,9 @@ pub fn render(args: RenderArgs) -> anyhow::Result<()> {
                 );
             }
             todo = old.ranges[0].end.min(target.end)..target.end;
-            film = old;
-            film.exposure = scene.settings.exposure;
+            film.ranges = old.ranges;
+            film.sums = old.sums;
+            film.dropped = old.dropped;
             if !args.quiet {
                 eprintln!(
                     "resuming from {}: {} spp done, {} to go",
@@ -255,14 +292,11 @@ pub fn render(args: RenderArgs) -> anyhow::Result<()> {
 
     let stop = render::interrupt::ctrlc_flag().map_err(anyhow::Error::msg)?;
     let opts = RenderOptions {
-        threads: args.threads,
-        time_limit: args.time_limit.as_deref().map(parse_duration).transpose()?,
+        threads,
+        time_limit,
         stop,
         progress: !args.quiet,
-        checkpoint: Some((
-            film_path.clone(),
-            Duration::from_secs_f64(args.checkpoint_every.max(1.0)),
-        )),
+        checkpoint: Some((film_path.clone(), checkpoint_every)),
         ..RenderOptions::default()
     };
     let outcome = if todo.is_empty() {
@@ -302,6 +336,10 @@ pub fn render(args: RenderArgs) -> anyhow::Result<()> {
             ),
         }
     }
+    // Printed even with --quiet: the image is wrong where these samples fell.
+    if let Some(w) = dropped_warning(&film.dropped) {
+        eprintln!("{w} (film {})", film_path.display());
+    }
     Ok(())
 }
 
@@ -325,6 +363,9 @@ pub fn merge(args: MergeArgs) -> anyhow::Result<()> {
             film.ranges,
             film.spp()
         );
+    }
+    if let Some(w) = dropped_warning(&film.dropped) {
+        eprintln!("{w}");
     }
     if let Some(p) = &args.film {
         film.save(p)?;
@@ -352,6 +393,29 @@ mod tests {
         assert_eq!(parse_duration("2h").unwrap(), Duration::from_secs(7200));
         assert!(parse_duration("5 parsecs").is_err());
         assert!(parse_duration("-1").is_err());
+        // These panicked (Duration overflow) before.
+        for bad in ["inf", "infs", "1e30", "1e300h", "nan", "-inf", "0"] {
+            let e = parse_duration(bad).unwrap_err().to_string();
+            assert!(e.starts_with("--time-limit"), "{bad}: {e}");
+        }
+        for bad in ["inf", "0.5", "1e20", "x"] {
+            let e = parse_checkpoint_every(bad).unwrap_err().to_string();
+            assert!(e.starts_with("--checkpoint-every"), "{bad}: {e}");
+        }
+        assert_eq!(
+            parse_checkpoint_every("30").unwrap(),
+            Duration::from_secs(30)
+        );
+        assert_eq!(
+            parse_checkpoint_every("2m").unwrap(),
+            Duration::from_secs(120)
+        );
+        assert!(thread_count(Some(0), true).is_err());
+        assert_eq!(
+            thread_count(Some(10_000), true).unwrap(),
+            Some(render::render::max_threads())
+        );
+        assert_eq!(thread_count(Some(1), true).unwrap(), Some(1));
         assert_eq!(
             with_suffix(Path::new("out/a.exr"), ".spp0-8"),
             PathBuf::from("out/a.spp0-8.exr")

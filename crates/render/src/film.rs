@@ -6,20 +6,127 @@
 //! i128, leaving 2⁸⁷ of head-room: quantisation is 10⁻⁹ of a unit radiance,
 //! far below Monte Carlo noise, and overflow needs ~10²⁶ in one pixel.
 //!
-//! File format (`.film`, little endian): magic `LUSTREFILM1\n`; u32 width,
-//! u32 height; u64 scene fingerprint; u64 seed; f64 exposure; u32 range
-//! count and that many (u64 start, u64 end) sample ranges; then
-//! width·height·3 i128 sums (X, Y, Z per pixel, row-major from the top).
+//! File format 2 (`.film`, little endian): magic `LUSTREFILM2\n`; u32 width,
+//! u32 height; u64 scene fingerprint; u64 seed; f64 exposure; the dropped
+//! samples (u64 non-finite, u64 negative, u64 first sample index, u32 x,
+//! u32 y of the first; all-ones when none); u32 input count and per input
+//! file (u32 name length, the UTF-8 name, u64 length, u64 hash); u32 range
+//! count and that many (u64 start, u64 end) sample ranges, sorted and
+//! disjoint; width·height·3 i128 sums (X, Y, Z per pixel, row-major from
+//! the top); and last a CRC-32 of everything before it.
+//!
+//! Reading trusts nothing: the checksum is verified first, then every count
+//! and length is checked against the bytes that remain before anything is
+//! allocated, so a corrupt or crafted film is an error naming the file,
+//! never a panic or an attempt to allocate what the header claims.
 
 use crate::color::xyz_to_srgb;
 use crate::error::RenderError;
+use crate::scene::inputs::{InputFile, describe_differences};
 use crate::spectrum::Cie;
+use std::fmt;
 use std::io::Write;
 use std::ops::Range;
 use std::path::Path;
 
-const MAGIC: &[u8; 12] = b"LUSTREFILM1\n";
+const MAGIC: &[u8; 12] = b"LUSTREFILM2\n";
+const MAGIC_V1: &[u8; 12] = b"LUSTREFILM1\n";
 const SCALE: f64 = (1u64 << 40) as f64;
+/// Largest width or height of a film (and of a scene's `resolution`).
+pub const MAX_SIDE: u32 = 1 << 15;
+/// Largest pixel count of a film: 2²⁷ pixels hold 6 GiB of sums.
+pub const MAX_PIXELS: u64 = 1 << 27;
+/// Most input files a film records.
+const MAX_INPUTS: usize = 1 << 16;
+/// Longest recorded input name, bytes.
+const MAX_NAME: usize = 4096;
+/// Bytes per pixel: three i128 sums.
+const PIXEL_BYTES: u128 = 48;
+
+/// Why a camera sample was left out of the film.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum BadSample {
+    /// A wavelength's radiance estimate was NaN or infinite.
+    NonFinite,
+    /// A wavelength's radiance estimate was negative (a model returned f < 0).
+    Negative,
+}
+
+/// Where the first dropped sample was.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct DroppedAt {
+    /// Pixel column.
+    pub x: u32,
+    /// Pixel row, from the top.
+    pub y: u32,
+    /// Sample index within the pixel.
+    pub sample: u64,
+}
+
+/// Camera samples that were not averaged into the film because their
+/// estimate was non-finite or negative. They count as black (the sample is
+/// still part of the pixel's sample count), so a render with dropped samples
+/// is biased dark there; the count says by how much at most.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Dropped {
+    /// Samples with a NaN or infinite estimate.
+    pub non_finite: u64,
+    /// Samples with a negative estimate.
+    pub negative: u64,
+    /// The first dropped sample: lowest sample index, then row-major pixel order.
+    pub first: Option<DroppedAt>,
+}
+
+impl Dropped {
+    /// All dropped samples.
+    pub fn total(&self) -> u64 {
+        self.non_finite.saturating_add(self.negative)
+    }
+
+    /// Counts one dropped sample.
+    pub fn record(&mut self, why: BadSample, x: u32, y: u32, sample: u64) {
+        match why {
+            BadSample::NonFinite => self.non_finite = self.non_finite.saturating_add(1),
+            BadSample::Negative => self.negative = self.negative.saturating_add(1),
+        }
+        self.keep_first(DroppedAt { x, y, sample });
+    }
+
+    /// Adds another count (another tile, pass or film).
+    pub fn add(&mut self, other: &Dropped) {
+        self.non_finite = self.non_finite.saturating_add(other.non_finite);
+        self.negative = self.negative.saturating_add(other.negative);
+        if let Some(at) = other.first {
+            self.keep_first(at);
+        }
+    }
+
+    fn keep_first(&mut self, at: DroppedAt) {
+        let key = |a: &DroppedAt| (a.sample, a.y, a.x);
+        if self.first.is_none_or(|f| key(&at) < key(&f)) {
+            self.first = Some(at);
+        }
+    }
+}
+
+impl fmt::Display for Dropped {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(
+            f,
+            "{} sample(s) dropped ({} non-finite, {} negative)",
+            self.total(),
+            self.non_finite,
+            self.negative
+        )?;
+        if let Some(a) = self.first {
+            write!(f, ", first at pixel ({}, {}) sample {}", a.x, a.y, a.sample)?;
+        }
+        write!(
+            f,
+            "; they count as black, so the image is too dark where they fell"
+        )
+    }
+}
 
 /// Accumulated samples of one image.
 #[derive(Clone, Debug, PartialEq)]
@@ -34,6 +141,11 @@ pub struct Film {
     pub seed: u64,
     /// Exposure (stops) applied when writing images.
     pub exposure: f64,
+    /// The files the scene was built from (names the file that changed when
+    /// two films, or a film and a scene, disagree).
+    pub inputs: Vec<InputFile>,
+    /// Samples left out because their estimate was non-finite or negative.
+    pub dropped: Dropped,
     /// Sample-index ranges accumulated, sorted and disjoint.
     pub ranges: Vec<Range<u64>>,
     /// Fixed-point X, Y, Z sums per pixel.
@@ -85,41 +197,37 @@ impl Film {
             fingerprint,
             seed,
             exposure,
+            inputs: Vec::new(),
+            dropped: Dropped::default(),
             ranges: Vec::new(),
             sums: vec![[0; 3]; width as usize * height as usize],
         }
     }
 
+    /// An empty film for `scene` (its resolution, fingerprint, inputs,
+    /// seed and exposure).
+    pub fn for_scene(scene: &crate::Scene) -> Film {
+        let mut f = Film::new(
+            scene.camera.width,
+            scene.camera.height,
+            scene.fingerprint,
+            scene.settings.seed,
+            scene.settings.exposure,
+        );
+        f.inputs = scene.inputs.clone();
+        f
+    }
+
     /// Total samples per pixel accumulated.
     pub fn spp(&self) -> u64 {
-        self.ranges.iter().map(|r| r.end - r.start).sum()
+        self.ranges
+            .iter()
+            .fold(0u64, |a, r| a.saturating_add(r.end - r.start))
     }
 
     /// Records that samples `r` have been added; errors if they overlap.
     pub fn add_range(&mut self, r: Range<u64>) -> Result<(), String> {
-        if r.is_empty() {
-            return Ok(());
-        }
-        if let Some(o) = self
-            .ranges
-            .iter()
-            .find(|o| o.start < r.end && r.start < o.end)
-        {
-            return Err(format!(
-                "sample range {}..{} overlaps {}..{} already in the film",
-                r.start, r.end, o.start, o.end
-            ));
-        }
-        self.ranges.push(r);
-        self.ranges.sort_by_key(|r| r.start);
-        let mut merged: Vec<Range<u64>> = Vec::with_capacity(self.ranges.len());
-        for r in self.ranges.drain(..) {
-            match merged.last_mut() {
-                Some(last) if last.end == r.start => last.end = r.end,
-                _ => merged.push(r),
-            }
-        }
-        self.ranges = merged;
+        self.ranges = with_range(&self.ranges, r)?;
         Ok(())
     }
 
@@ -141,8 +249,11 @@ impl Film {
             .collect()
     }
 
-    /// Adds another film's samples; both must come from the same scene and seed.
-    pub fn merge(&mut self, other: &Film) -> Result<(), String> {
+    /// Whether `other` holds samples of the same render as this film: same
+    /// resolution, seed and fingerprint. The error names the input files
+    /// that differ when the fingerprints do, as changes from this film's
+    /// inputs ("then") to `other`'s ("now").
+    pub fn check_compatible(&self, other: &Film) -> Result<(), String> {
         if (self.width, self.height) != (other.width, other.height) {
             return Err(format!(
                 "resolution {}×{} differs from {}×{}",
@@ -150,31 +261,76 @@ impl Film {
             ));
         }
         if self.fingerprint != other.fingerprint {
-            return Err("rendered from a different scene (fingerprints differ)".into());
+            let diff = describe_differences(&other.inputs, &self.inputs);
+            return Err(if diff.is_empty() {
+                "rendered from a different scene or by a different lustre version \
+                 (fingerprints differ, input files agree)"
+                    .into()
+            } else {
+                format!("rendered from different inputs: {}", diff.join("; "))
+            });
         }
         if self.seed != other.seed {
             return Err(format!("seed {} differs from {}", other.seed, self.seed));
         }
+        Ok(())
+    }
+
+    /// Adds another film's samples; both must come from the same scene and
+    /// seed and hold disjoint sample ranges (a duplicated shard would count
+    /// its samples twice). On error the film is unchanged.
+    pub fn merge(&mut self, other: &Film) -> Result<(), String> {
+        self.check_compatible(other)?;
+        let mut ranges = self.ranges.clone();
         for r in &other.ranges {
-            self.add_range(r.clone())?;
+            ranges = with_range(&ranges, r.clone())?;
         }
+        self.ranges = ranges;
         for (a, b) in self.sums.iter_mut().zip(&other.sums) {
             for k in 0..3 {
                 a[k] = a[k].saturating_add(b[k]);
             }
         }
+        self.dropped.add(&other.dropped);
         Ok(())
     }
 
     /// Serialises the film.
     pub fn to_bytes(&self) -> Vec<u8> {
-        let mut out = Vec::with_capacity(64 + self.sums.len() * 48);
+        let mut out = Vec::with_capacity(128 + self.sums.len() * 48);
         out.extend_from_slice(MAGIC);
         out.extend_from_slice(&self.width.to_le_bytes());
         out.extend_from_slice(&self.height.to_le_bytes());
         out.extend_from_slice(&self.fingerprint.to_le_bytes());
         out.extend_from_slice(&self.seed.to_le_bytes());
         out.extend_from_slice(&self.exposure.to_le_bytes());
+        out.extend_from_slice(&self.dropped.non_finite.to_le_bytes());
+        out.extend_from_slice(&self.dropped.negative.to_le_bytes());
+        let first = self.dropped.first.unwrap_or(DroppedAt {
+            x: u32::MAX,
+            y: u32::MAX,
+            sample: u64::MAX,
+        });
+        out.extend_from_slice(&first.sample.to_le_bytes());
+        out.extend_from_slice(&first.x.to_le_bytes());
+        out.extend_from_slice(&first.y.to_le_bytes());
+        let inputs = &self.inputs[..self.inputs.len().min(MAX_INPUTS)];
+        out.extend_from_slice(&(inputs.len() as u32).to_le_bytes());
+        for f in inputs {
+            let mut name = f.name.as_bytes();
+            if name.len() > MAX_NAME {
+                // Keep a valid UTF-8 prefix.
+                let mut end = MAX_NAME;
+                while !f.name.is_char_boundary(end) {
+                    end -= 1;
+                }
+                name = &name[..end];
+            }
+            out.extend_from_slice(&(name.len() as u32).to_le_bytes());
+            out.extend_from_slice(name);
+            out.extend_from_slice(&f.len.to_le_bytes());
+            out.extend_from_slice(&f.hash.to_le_bytes());
+        }
         out.extend_from_slice(&(self.ranges.len() as u32).to_le_bytes());
         for r in &self.ranges {
             out.extend_from_slice(&r.start.to_le_bytes());
@@ -185,43 +341,151 @@ impl Film {
                 out.extend_from_slice(&v.to_le_bytes());
             }
         }
+        let crc = crc32fast::hash(&out);
+        out.extend_from_slice(&crc.to_le_bytes());
         out
     }
 
-    /// Parses a film.
+    /// Parses a film, checking its checksum and every length before
+    /// allocating.
     pub fn from_bytes(bytes: &[u8]) -> Result<Film, String> {
-        let mut r = Reader { b: bytes, at: 0 };
-        if r.take(12)? != MAGIC {
-            return Err("not a lustre film (bad magic); films are the `.film` files written by `lustre render`".into());
+        const NOT_A_FILM: &str =
+            "not a lustre film (bad magic); films are the `.film` files written by `lustre render`";
+        let Some(magic) = bytes.get(..12) else {
+            return Err(format!("{NOT_A_FILM} (only {} bytes)", bytes.len()));
+        };
+        if magic == MAGIC_V1 {
+            return Err(
+                "a film of format 1, written by an older lustre (no checksum, no input record): \
+                 render it again with this version"
+                    .into(),
+            );
         }
+        if magic != MAGIC {
+            return Err(NOT_A_FILM.into());
+        }
+        let Some(body_len) = bytes.len().checked_sub(4).filter(|&n| n >= 12) else {
+            return Err("truncated film: no checksum".into());
+        };
+        let (body, tail) = bytes.split_at(body_len);
+        let stored = u32::from_le_bytes([tail[0], tail[1], tail[2], tail[3]]);
+        let actual = crc32fast::hash(body);
+        if stored != actual {
+            return Err(format!(
+                "corrupt film: checksum mismatch (stored {stored:08x}, computed {actual:08x}); \
+                 the file was truncated or modified after lustre wrote it"
+            ));
+        }
+        let mut r = Reader { b: body, at: 12 };
         let width = u32::from_le_bytes(r.array()?);
         let height = u32::from_le_bytes(r.array()?);
+        if width == 0 || height == 0 || width > MAX_SIDE || height > MAX_SIDE {
+            return Err(format!(
+                "corrupt film: resolution {width}×{height} (expected 1..={MAX_SIDE} each)"
+            ));
+        }
+        let pixels = width as u64 * height as u64;
+        if pixels > MAX_PIXELS {
+            return Err(format!(
+                "corrupt film: {width}×{height} is more than {MAX_PIXELS} pixels"
+            ));
+        }
         let fingerprint = u64::from_le_bytes(r.array()?);
         let seed = u64::from_le_bytes(r.array()?);
         let exposure = f64::from_le_bytes(r.array()?);
-        let n_ranges = u32::from_le_bytes(r.array()?) as usize;
-        let mut film = Film::new(width, height, fingerprint, seed, exposure);
-        let pixels = width as usize * height as usize;
-        if bytes.len() != 12 + 32 + 4 + 16 * n_ranges + 48 * pixels {
+        if !exposure.is_finite() {
+            return Err(format!("corrupt film: exposure {exposure}"));
+        }
+        let non_finite = u64::from_le_bytes(r.array()?);
+        let negative = u64::from_le_bytes(r.array()?);
+        let first_sample = u64::from_le_bytes(r.array()?);
+        let first_x = u32::from_le_bytes(r.array()?);
+        let first_y = u32::from_le_bytes(r.array()?);
+        let first = if first_sample == u64::MAX && first_x == u32::MAX && first_y == u32::MAX {
+            None
+        } else if first_x < width && first_y < height {
+            Some(DroppedAt {
+                x: first_x,
+                y: first_y,
+                sample: first_sample,
+            })
+        } else {
             return Err(format!(
-                "truncated or corrupt film: {} bytes for {width}×{height} px",
-                bytes.len()
+                "corrupt film: first dropped sample at pixel ({first_x}, {first_y}) outside \
+                 {width}×{height}"
+            ));
+        };
+        if first.is_some() != (non_finite.saturating_add(negative) > 0) {
+            return Err("corrupt film: dropped-sample counts and location disagree".into());
+        }
+        let n_inputs = u32::from_le_bytes(r.array()?) as usize;
+        // Each input takes at least 20 bytes.
+        if n_inputs > MAX_INPUTS || n_inputs.saturating_mul(20) > r.remaining() {
+            return Err(format!(
+                "corrupt film: {n_inputs} input records do not fit in the file"
             ));
         }
+        let mut inputs = Vec::with_capacity(n_inputs);
+        for _ in 0..n_inputs {
+            let n = u32::from_le_bytes(r.array()?) as usize;
+            if n > MAX_NAME {
+                return Err(format!("corrupt film: input name of {n} bytes"));
+            }
+            let name = std::str::from_utf8(r.take(n)?)
+                .map_err(|_| "corrupt film: input name is not UTF-8".to_string())?
+                .to_string();
+            let len = u64::from_le_bytes(r.array()?);
+            let hash = u64::from_le_bytes(r.array()?);
+            inputs.push(InputFile { name, len, hash });
+        }
+        let n_ranges = u32::from_le_bytes(r.array()?) as usize;
+        if n_ranges.saturating_mul(16) > r.remaining() {
+            return Err(format!(
+                "corrupt film: {n_ranges} sample ranges do not fit in the file"
+            ));
+        }
+        let mut ranges: Vec<Range<u64>> = Vec::with_capacity(n_ranges);
         for _ in 0..n_ranges {
             let a = u64::from_le_bytes(r.array()?);
             let b = u64::from_le_bytes(r.array()?);
-            if a > b {
-                return Err(format!("corrupt sample range {a}..{b}"));
+            // Written merged: non-empty, increasing, with gaps between.
+            if a >= b || ranges.last().is_some_and(|p| p.end >= a) {
+                return Err(format!(
+                    "corrupt film: sample range {a}..{b} is empty, unsorted or overlaps"
+                ));
             }
-            film.add_range(a..b)?;
+            ranges.push(a..b);
         }
-        for s in film.sums.iter_mut() {
-            for v in s.iter_mut() {
+        let want = pixels as u128 * PIXEL_BYTES;
+        if r.remaining() as u128 != want {
+            return Err(format!(
+                "corrupt film: {} bytes of sums for {width}×{height} pixels (expected {want})",
+                r.remaining()
+            ));
+        }
+        let mut sums = Vec::with_capacity(pixels as usize);
+        for _ in 0..pixels {
+            let mut px = [0i128; 3];
+            for v in px.iter_mut() {
                 *v = i128::from_le_bytes(r.array()?);
             }
+            sums.push(px);
         }
-        Ok(film)
+        Ok(Film {
+            width,
+            height,
+            fingerprint,
+            seed,
+            exposure,
+            inputs,
+            dropped: Dropped {
+                non_finite,
+                negative,
+                first,
+            },
+            ranges,
+            sums,
+        })
     }
 
     /// Writes the film atomically.
@@ -229,7 +493,7 @@ impl Film {
         crate::output::write_atomic(path, |f| f.write_all(&self.to_bytes()))
     }
 
-    /// Reads a film file.
+    /// Reads a film file; a corrupt film is an error naming the file.
     pub fn load(path: &Path) -> Result<Film, RenderError> {
         let bytes = std::fs::read(path).map_err(|e| RenderError::io(path, e))?;
         Film::from_bytes(&bytes).map_err(|message| RenderError::Film {
@@ -239,18 +503,48 @@ impl Film {
     }
 }
 
+/// `ranges` (sorted, disjoint) with `r` added and adjacent ranges joined;
+/// an error if `r` overlaps one of them.
+fn with_range(ranges: &[Range<u64>], r: Range<u64>) -> Result<Vec<Range<u64>>, String> {
+    if r.start > r.end {
+        return Err(format!("invalid sample range {}..{}", r.start, r.end));
+    }
+    if r.is_empty() {
+        return Ok(ranges.to_vec());
+    }
+    if let Some(o) = ranges.iter().find(|o| o.start < r.end && r.start < o.end) {
+        return Err(format!(
+            "sample range {}..{} overlaps {}..{} already in the film \
+             (a duplicated or overlapping shard would count samples twice)",
+            r.start, r.end, o.start, o.end
+        ));
+    }
+    let mut all: Vec<Range<u64>> = ranges.to_vec();
+    all.push(r);
+    all.sort_by_key(|r| r.start);
+    let mut merged: Vec<Range<u64>> = Vec::with_capacity(all.len());
+    for r in all {
+        match merged.last_mut() {
+            Some(last) if last.end == r.start => last.end = r.end,
+            _ => merged.push(r),
+        }
+    }
+    Ok(merged)
+}
+
 struct Reader<'a> {
     b: &'a [u8],
     at: usize,
 }
 
 impl Reader<'_> {
+    fn remaining(&self) -> usize {
+        self.b.len() - self.at
+    }
     fn take(&mut self, n: usize) -> Result<&[u8], String> {
-        let s = self
-            .b
-            .get(self.at..self.at + n)
-            .ok_or("truncated film file")?;
-        self.at += n;
+        let end = self.at.checked_add(n).ok_or("truncated film file")?;
+        let s = self.b.get(self.at..end).ok_or("truncated film file")?;
+        self.at = end;
         Ok(s)
     }
     fn array<const K: usize>(&mut self) -> Result<[u8; K], String> {
@@ -293,7 +587,60 @@ mod tests {
         assert_eq!(a.sums[0], [3, 3, 3]);
         let c = Film::new(2, 2, 2, 0, 0.0);
         assert!(a.merge(&c).unwrap_err().contains("different scene"));
+        let before = a.clone();
         assert!(a.merge(&b).unwrap_err().contains("overlaps"));
+        assert_eq!(a, before, "a refused merge leaves the film unchanged");
+        // A shard holding new samples and a duplicate is refused as a whole.
+        let mut d = b.clone();
+        d.ranges = vec![0..2, 20..30];
+        assert!(a.merge(&d).is_err());
+        assert_eq!(a, before);
+    }
+
+    #[test]
+    fn differing_inputs_are_named_and_dropped_counts_travel() {
+        let file = |name: &str, hash| InputFile {
+            name: name.into(),
+            len: 10,
+            hash,
+        };
+        let mut a = Film::new(2, 1, 1, 0, 0.0);
+        a.inputs = vec![file("scene.toml", 1), file("fit.toml", 2)];
+        a.add_range(0..4).unwrap();
+        a.dropped.record(BadSample::Negative, 1, 0, 3);
+        a.dropped.record(BadSample::NonFinite, 0, 0, 2);
+        let mut b = Film::new(2, 1, 9, 0, 0.0);
+        b.inputs = vec![file("scene.toml", 1), file("fit.toml", 5)];
+        let e = a.merge(&b).unwrap_err();
+        assert!(e.contains("`fit.toml` changed"), "{e}");
+        assert!(!e.contains("scene.toml"), "{e}");
+
+        let g = Film::from_bytes(&a.to_bytes()).unwrap();
+        assert_eq!(g, a);
+        assert_eq!(g.dropped.total(), 2);
+        assert_eq!(
+            g.dropped.first,
+            Some(DroppedAt {
+                x: 0,
+                y: 0,
+                sample: 2
+            })
+        );
+        let mut c = a.clone();
+        c.ranges.clear();
+        c.add_range(4..8).unwrap();
+        c.dropped = Dropped::default();
+        c.dropped.record(BadSample::Negative, 1, 0, 1);
+        a.merge(&c).unwrap();
+        assert_eq!((a.dropped.non_finite, a.dropped.negative), (1, 2));
+        assert_eq!(a.dropped.first.unwrap().sample, 1);
+        let msg = a.dropped.to_string();
+        assert!(
+            msg.starts_with(
+                "3 sample(s) dropped (1 non-finite, 2 negative), first at pixel (1, 0) sample 1"
+            ),
+            "{msg}"
+        );
     }
 
     #[test]

@@ -22,6 +22,7 @@
 //! symmetric in which wavelength was the hero, which makes hero sampling
 //! unbiased.
 
+use crate::film::BadSample;
 use crate::geometry::Ray;
 use crate::light::Emission;
 use crate::sampler::Sampler;
@@ -123,9 +124,33 @@ pub fn camera_sample(scene: &Scene, x: u32, y: u32, sample: u64) -> CameraSample
 }
 
 /// XYZ estimate (before the film's 1/∫ȳ normalisation) of one camera sample
-/// at pixel (`x`, `y`).
+/// at pixel (`x`, `y`); zero where [`sample_pixel_checked`] rejects it.
 pub fn sample_pixel(scene: &Scene, x: u32, y: u32, sample: u64) -> [f64; 3] {
+    sample_pixel_checked(scene, x, y, sample).unwrap_or([0.0; 3])
+}
+
+/// XYZ estimate of one camera sample, or why it cannot be averaged: a
+/// wavelength's radiance estimate is NaN, infinite or negative. Radiance and
+/// the colour-matching functions are non-negative, so either means a model
+/// misbehaved; the render loop counts and reports such samples instead of
+/// averaging them (one branch, never taken in a sound render).
+#[inline]
+pub fn sample_pixel_checked(
+    scene: &Scene,
+    x: u32,
+    y: u32,
+    sample: u64,
+) -> Result<[f64; 3], BadSample> {
     let cs = camera_sample(scene, x, y, sample);
+    let r = &cs.radiance[..cs.n];
+    // `v < ∞` is false for NaN too.
+    if !r.iter().all(|v| (0.0..f64::INFINITY).contains(v)) {
+        return Err(if r.iter().all(|v| v.is_finite()) {
+            BadSample::Negative
+        } else {
+            BadSample::NonFinite
+        });
+    }
     let cie = Cie::get();
     let mut xyz = [0.0; 3];
     for j in 0..cs.n {
@@ -134,10 +159,11 @@ pub fn sample_pixel(scene: &Scene, x: u32, y: u32, sample: u64) -> [f64; 3] {
             xyz[k] += cs.radiance[j] * c[k];
         }
     }
+    // Finite radiances can still overflow in the sum.
     if xyz.iter().all(|v| v.is_finite()) {
-        xyz
+        Ok(xyz)
     } else {
-        [0.0; 3]
+        Err(BadSample::NonFinite)
     }
 }
 

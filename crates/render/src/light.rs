@@ -132,22 +132,53 @@ pub struct EnvMap {
 impl EnvMap {
     /// Loads a lat-long EXR, scaling by `scale` and rotating by `rotate_deg` about +y.
     pub fn load(path: &Path, scale: f64, rotate_deg: f64) -> Result<EnvMap, String> {
+        let bytes = std::fs::read(path)
+            .map_err(|e| format!("cannot read environment EXR {}: {e}", path.display()))?;
+        EnvMap::from_exr_bytes(path, &bytes, scale, rotate_deg)
+    }
+
+    /// [`EnvMap::load`] from the file's bytes (`path` for messages).
+    pub fn from_exr_bytes(
+        path: &Path,
+        bytes: &[u8],
+        scale: f64,
+        rotate_deg: f64,
+    ) -> Result<EnvMap, String> {
         use exr::prelude::*;
-        let image = read_first_rgba_layer_from_file(
-            path,
-            |res, _| {
-                (
-                    res.width(),
-                    res.height(),
-                    vec![[0.0f64; 3]; res.width() * res.height()],
-                )
-            },
-            |px: &mut (usize, usize, Vec<[f64; 3]>), pos, (r, g, b, _a): (f32, f32, f32, f32)| {
-                let i = pos.y() * px.0 + pos.x();
-                px.2[i] = [r as f64, g as f64, b as f64];
-            },
-        )
-        .map_err(|e| format!("cannot read environment EXR {}: {e}", path.display()))?;
+        // A header may claim any size: refuse maps beyond 2²⁸ texels
+        // (6 GB of coefficients) before allocating them.
+        const MAX_TEXELS: usize = 1 << 28;
+        let image = read()
+            .no_deep_data()
+            .largest_resolution_level()
+            .rgba_channels(
+                |res, _| {
+                    let n = res.width().saturating_mul(res.height());
+                    let n = if n <= MAX_TEXELS { n } else { 0 };
+                    (res.width(), res.height(), vec![[0.0f64; 3]; n])
+                },
+                |px: &mut (usize, usize, Vec<[f64; 3]>),
+                 pos,
+                 (r, g, b, _a): (f32, f32, f32, f32)| {
+                    let i = pos.y() * px.0 + pos.x();
+                    if let Some(p) = px.2.get_mut(i) {
+                        *p = [r as f64, g as f64, b as f64];
+                    }
+                },
+            )
+            .first_valid_layer()
+            .all_attributes()
+            .from_buffered(std::io::Cursor::new(bytes))
+            .map_err(|e| format!("cannot read environment EXR {}: {e}", path.display()))?;
+        {
+            let (w, h, px) = &image.layer_data.channel_data.pixels;
+            if px.len() != w * h {
+                return Err(format!(
+                    "environment EXR {} is {w}×{h}: more than {MAX_TEXELS} texels",
+                    path.display()
+                ));
+            }
+        }
         let (width, height, rgb) = image.layer_data.channel_data.pixels;
         if width == 0 || height == 0 {
             return Err(format!("environment EXR {} is empty", path.display()));

@@ -6,6 +6,7 @@
 use crate::scene::desc::{
     CoherentDesc, EnergyDesc, FresnelAngleDesc, FresnelKind, MaterialDesc, ModelKind,
 };
+use crate::scene::inputs::{Inputs, MAX_CSV_BYTES, MAX_TOML_BYTES};
 use crate::spectrum::parse_csv_rows;
 use brdf::wave::two_scale::{
     CoherentPart, TableResolution as TwoScaleResolution, TwoScale, TwoScaleParams,
@@ -38,7 +39,16 @@ pub struct Resolved {
 /// Resolves `include` (a `lustre fit` material file) under the scene's own
 /// keys: keys set in the scene win. For `two_scale`, the parameters come from
 /// the include's `[two_scale.NAME]` table chosen by `cutoff = "NAME"`.
-pub fn resolve_include(desc: &MaterialDesc, base_dir: &Path) -> Result<Resolved, String> {
+///
+/// The file is read through `inputs`, so it is part of the film fingerprint.
+/// Its `[material]`, `[two_scale.NAME]` and `[psd]` tables reject unknown
+/// keys (listing the valid ones), as scene tables do; `[provenance]`,
+/// `[fit]` and `[kc_2d]` hold `lustre fit`'s diagnostics and are not read.
+pub fn resolve_include(
+    desc: &MaterialDesc,
+    base_dir: &Path,
+    inputs: &mut Inputs,
+) -> Result<Resolved, String> {
     let Some(inc) = &desc.include else {
         return Ok(Resolved {
             desc: desc.clone(),
@@ -46,13 +56,9 @@ pub fn resolve_include(desc: &MaterialDesc, base_dir: &Path) -> Result<Resolved,
         });
     };
     let path = base_dir.join(inc);
-    let text = std::fs::read_to_string(&path).map_err(|e| {
-        format!(
-            "include = \"{}\": cannot read {}: {e}",
-            inc.display(),
-            path.display()
-        )
-    })?;
+    let text = inputs
+        .read_text(&path, "material file", MAX_TOML_BYTES)
+        .map_err(|e| format!("include = \"{}\": {e}", inc.display()))?;
     let located = |e: toml::de::Error, what: &str| {
         let pos = e.span().map(|s| crate::error::line_column(&text, s.start));
         match pos {
@@ -69,7 +75,9 @@ pub fn resolve_include(desc: &MaterialDesc, base_dir: &Path) -> Result<Resolved,
     };
     let mut out = desc.clone();
     out.include = None;
-    let inc_dir = path.parent().unwrap_or(Path::new("."));
+    // The include's own relative paths are relative to the include; the
+    // caller joins the result to `base_dir`, so keep it relative to that.
+    let inc_dir = inc.parent().unwrap_or(Path::new(""));
     macro_rules! inherit {
         ($src:expr; $($f:ident),*) => { $( if out.$f.is_none() { out.$f = $src.$f; } )* };
     }
@@ -108,17 +116,30 @@ pub fn resolve_include(desc: &MaterialDesc, base_dir: &Path) -> Result<Resolved,
     Ok(Resolved { desc: out, psd })
 }
 
-/// A `lustre fit` material file. Unlike scene tables it tolerates extra keys,
-/// since `fit` records provenance and fit diagnostics next to the parameters.
+/// A `lustre fit` material file. The tables the renderer reads reject
+/// unknown keys, so that a misspelt parameter is an error rather than a
+/// silently kept default; the diagnostics tables `fit` writes next to them
+/// are accepted whatever they hold.
 #[derive(serde::Deserialize)]
+#[serde(deny_unknown_fields)]
 struct FitFile {
     material: Option<FitMaterial>,
     #[serde(default)]
     two_scale: std::collections::BTreeMap<String, FitTwoScale>,
     psd: Option<FitPsd>,
+    /// Diagnostics of `lustre fit` (not read).
+    #[serde(default, rename = "provenance")]
+    _provenance: Option<toml::Table>,
+    /// Diagnostics of `lustre fit` (not read).
+    #[serde(default, rename = "fit")]
+    _fit: Option<toml::Table>,
+    /// Diagnostics of `lustre fit` (not read).
+    #[serde(default, rename = "kc_2d")]
+    _kc_2d: Option<toml::Table>,
 }
 
 #[derive(serde::Deserialize)]
+#[serde(deny_unknown_fields)]
 struct FitMaterial {
     model: Option<ModelKind>,
     metal: Option<String>,
@@ -131,29 +152,46 @@ struct FitMaterial {
 }
 
 #[derive(serde::Deserialize)]
+#[serde(deny_unknown_fields)]
 struct FitTwoScale {
     beta: Option<f64>,
     sigma_um: Option<f64>,
     lc_um: Option<f64>,
     gamma: Option<f64>,
+    /// Written by `lustre fit` as provenance of the split (not read).
+    #[serde(default, rename = "beta_source")]
+    _beta_source: Option<toml::Value>,
+    #[serde(default, rename = "cutoff_um")]
+    _cutoff_um: Option<toml::Value>,
+    #[serde(default, rename = "fit_f_range_per_m")]
+    _fit_f_range_per_m: Option<toml::Value>,
+    #[serde(default, rename = "kc_degenerate")]
+    _kc_degenerate: Option<toml::Value>,
 }
 
 #[derive(serde::Deserialize)]
+#[serde(deny_unknown_fields)]
 struct FitPsd {
     zeta_rad_per_um: Vec<f64>,
     p_um4: Vec<f64>,
+    /// Written by `lustre fit` as provenance of the table (not read).
+    #[serde(default, rename = "source")]
+    _source: Option<toml::Value>,
+    #[serde(default, rename = "integral_um2")]
+    _integral_um2: Option<toml::Value>,
 }
 
 /// Reads a two-column `zeta_rad_per_um,p_um4` CSV.
-fn read_psd_csv(path: &Path) -> Result<(Vec<f64>, Vec<f64>), String> {
-    let text = std::fs::read_to_string(path)
-        .map_err(|e| format!("psd_csv: cannot read {}: {e}", path.display()))?;
+fn read_psd_csv(path: &Path, inputs: &mut Inputs) -> Result<(Vec<f64>, Vec<f64>), String> {
+    let text = inputs
+        .read_text(path, "psd_csv", MAX_CSV_BYTES)
+        .map_err(|e| format!("psd_csv: {e}"))?;
     let rows = parse_csv_rows(&text, 2).map_err(|e| format!("psd_csv {}: {e}", path.display()))?;
     Ok(rows.into_iter().map(|r| (r[0], r[1])).unzip())
 }
 
 /// Builds the Fresnel factor of a (resolved) material description.
-fn fresnel(desc: &MaterialDesc, base_dir: &Path) -> Result<Fresnel, String> {
+fn fresnel(desc: &MaterialDesc, base_dir: &Path, inputs: &mut Inputs) -> Result<Fresnel, String> {
     if desc.fresnel == Some(FresnelKind::One) {
         return Ok(Fresnel::One);
     }
@@ -181,8 +219,9 @@ fn fresnel(desc: &MaterialDesc, base_dir: &Path) -> Result<Fresnel, String> {
         Ior::metal(metal)
     } else if let Some(csv) = &desc.nk_csv {
         let path = base_dir.join(csv);
-        let text = std::fs::read_to_string(&path)
-            .map_err(|e| format!("nk_csv: cannot read {}: {e}", path.display()))?;
+        let text = inputs
+            .read_text(&path, "nk_csv", MAX_CSV_BYTES)
+            .map_err(|e| format!("nk_csv: {e}"))?;
         let rows =
             parse_csv_rows(&text, 3).map_err(|e| format!("nk_csv {}: {e}", path.display()))?;
         Ior::table(rows.into_iter().map(|r| [r[0], r[1], r[2]]).collect())
@@ -238,20 +277,22 @@ fn ghs_options(desc: &MaterialDesc) -> GhsOptions {
     }
 }
 
-/// Builds the named material. `base_dir` resolves relative paths.
+/// Builds the named material. `base_dir` resolves relative paths; every
+/// file is read through `inputs`.
 pub fn build_material(
     name: &str,
     desc: &MaterialDesc,
     base_dir: &Path,
+    inputs: &mut Inputs,
 ) -> Result<Material, String> {
-    let Resolved { desc, psd } = resolve_include(desc, base_dir)?;
+    let Resolved { desc, psd } = resolve_include(desc, base_dir, inputs)?;
     let Some(model) = desc.model else {
         return Err(
             "needs `model`; valid: ggx, beckmann, smooth, ghs_ssa, ghs, two_scale, measured_psd"
                 .into(),
         );
     };
-    let fresnel = fresnel(&desc, base_dir)?;
+    let fresnel = fresnel(&desc, base_dir, inputs)?;
     let err = |e: brdf::BrdfError| e.to_string();
     let bxdf: DynBxdf = match model {
         ModelKind::Ggx => {
@@ -277,7 +318,7 @@ pub fn build_material(
         ),
         ModelKind::MeasuredPsd => {
             let (zeta, p) = match (&desc.psd_csv, psd) {
-                (Some(csv), _) => read_psd_csv(&base_dir.join(csv))?,
+                (Some(csv), _) => read_psd_csv(&base_dir.join(csv), inputs)?,
                 (None, Some(t)) => t,
                 (None, None) => {
                     return Err("model `measured_psd` needs `psd_csv = \"file.csv\"` (zeta_rad_per_um,p_um4) \

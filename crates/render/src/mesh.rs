@@ -27,15 +27,28 @@ pub struct MeshSource {
 
 /// Loads every model of an OBJ file as triangles, transformed to world space.
 pub fn load_obj(path: &Path, xf: &Transform, surface: u32) -> Result<MeshSource, String> {
+    let bytes = std::fs::read(path)
+        .map_err(|e| format!("cannot open mesh file {}: {e}", path.display()))?;
+    obj_from_bytes(path, &bytes, xf, surface)
+}
+
+/// [`load_obj`] from the file's bytes (`path` for messages). `mtllib`
+/// references are not followed: the renderer takes materials from the scene.
+pub fn obj_from_bytes(
+    path: &Path,
+    bytes: &[u8],
+    xf: &Transform,
+    surface: u32,
+) -> Result<MeshSource, String> {
     let opts = tobj::LoadOptions {
         triangulate: true,
         single_index: true,
         ..Default::default()
     };
-    let (models, _materials) = tobj::load_obj(path, &opts).map_err(|e| match e {
-        tobj::LoadError::OpenFileFailed => format!("cannot open mesh file {}", path.display()),
-        other => format!("cannot parse OBJ file {}: {other}", path.display()),
-    })?;
+    let (models, _materials) = tobj::load_obj_buf(&mut std::io::Cursor::new(bytes), &opts, |_| {
+        Err(tobj::LoadError::OpenFileFailed)
+    })
+    .map_err(|e| format!("cannot parse OBJ file {}: {e}", path.display()))?;
     let mut triangles = Vec::new();
     let mut normals = Vec::new();
     for m in &models {

@@ -17,6 +17,12 @@
 //!   count and for any union of sample ranges (sharded or resumed renders);
 //!   the variance is lowest at powers of two.
 //!
+//! The Sobol points are 32-bit: sample indices ≥ 2³² would repeat the first
+//! 2³² samples of the pixel. Each further block of 2³² indices therefore
+//! gets scrambles of its own (the block number is hashed into the pixel's
+//! seed; block 0 keeps the seed it always had), so every index is a distinct
+//! sample and each block is a scrambled net on its own.
+//!
 //! Like [`Rng`], the numbers depend only on (seed, pixel, sample index), never
 //! on threads or shards.
 
@@ -28,9 +34,10 @@ use crate::scene::desc::SamplerKind;
 pub struct Sampler {
     kind: SamplerKind,
     rng: Rng,
-    /// Sobol: the sample index within the pixel, bit-reversed.
+    /// Sobol: the sample index within its block of 2³², bit-reversed.
     index_rev: u32,
-    /// Sobol: per-pixel hash, mixed with the draw number into scramble seeds.
+    /// Sobol: per-pixel (and per block of 2³² samples) hash, mixed with the
+    /// draw number into scramble seeds.
     pixel_seed: u64,
     /// Sobol: the next padded dimension to compute.
     next_draw: u32,
@@ -143,13 +150,18 @@ impl Sampler {
     /// The sampler of sample `sample` of pixel `pixel` under `seed`.
     #[inline]
     pub fn new(kind: SamplerKind, seed: u64, pixel: u64, sample: u64) -> Sampler {
+        let mut pixel_seed =
+            mix(mix(seed ^ 0x243f_6a88_85a3_08d3) ^ pixel.wrapping_mul(0x9e37_79b9_7f4a_7c15));
+        let block = sample >> 32;
+        if block != 0 {
+            pixel_seed = mix(pixel_seed ^ mix(block ^ 0x1319_8a2e_0370_7344));
+        }
         Sampler {
             kind,
             rng: Rng::for_sample(seed, pixel, sample),
+            // Truncation on purpose: the index within the block.
             index_rev: (sample as u32).reverse_bits(),
-            pixel_seed: mix(
-                mix(seed ^ 0x243f_6a88_85a3_08d3) ^ pixel.wrapping_mul(0x9e37_79b9_7f4a_7c15)
-            ),
+            pixel_seed,
             next_draw: 0,
             buf: [[0.0; 2]; BLOCK],
             pos: BLOCK,
@@ -304,6 +316,39 @@ mod tests {
                 }
             }
         }
+    }
+
+    #[test]
+    fn indices_past_two_to_the_32_are_new_samples() {
+        // Before the block hash, sample 2³² + i drew exactly sample i's numbers.
+        for kind in [SamplerKind::Sobol, SamplerKind::Independent] {
+            for i in [0u64, 1, 77, (1 << 32) - 1] {
+                for block in [1u64, 2, 0xffff_ffff] {
+                    let mut a = Sampler::new(kind, 4, 9, i);
+                    let mut b = Sampler::new(kind, 4, 9, (block << 32) | i);
+                    let da: Vec<[f64; 2]> = (0..8).map(|_| a.get_2d()).collect();
+                    let db: Vec<[f64; 2]> = (0..8).map(|_| b.get_2d()).collect();
+                    assert_ne!(da, db, "{kind:?} sample {i} block {block}");
+                }
+            }
+        }
+        // Block 1 is itself stratified: its first 2^k samples form a net.
+        for k in [2u32, 6] {
+            let pts: Vec<[f64; 2]> = (0..1u64 << k)
+                .map(|s| Sampler::new(SamplerKind::Sobol, 9, 3, (1 << 32) + s).get_2d())
+                .collect();
+            check_net(&pts, k);
+        }
+        // Block 0 is unchanged (films rendered before stay valid samples).
+        let mut a = Sampler::new(SamplerKind::Sobol, 9, 3, 5);
+        assert_eq!(
+            a.get_2d(),
+            sobol_draw(
+                5u32.reverse_bits(),
+                mix(mix(9 ^ 0x243f_6a88_85a3_08d3) ^ 3u64.wrapping_mul(0x9e37_79b9_7f4a_7c15)),
+                0
+            )
+        );
     }
 
     #[test]

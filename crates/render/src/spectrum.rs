@@ -273,11 +273,14 @@ fn interpolate(rows: &[[f64; 2]], lambda: f64) -> f64 {
     a[1] + t * (b[1] - a[1])
 }
 
-/// Parses numeric CSV rows with exactly `columns` fields, skipping a header
-/// line that does not parse as numbers and blank / `#` lines. Errors name
-/// the 1-based line.
+/// Parses numeric CSV rows with exactly `columns` fields, skipping one
+/// header line (the first line that is not blank or a `#` comment, when it
+/// does not parse as numbers) and blank / `#` lines. Errors name the 1-based
+/// line; a second non-numeric line before the data is an error, not a
+/// header (a garbled file must not lose its first rows silently).
 pub fn parse_csv_rows(text: &str, columns: usize) -> Result<Vec<Vec<f64>>, String> {
     let mut rows = Vec::new();
+    let mut header_allowed = true;
     for (i, line) in text.lines().enumerate() {
         let line = line.trim();
         if line.is_empty() || line.starts_with('#') {
@@ -285,6 +288,7 @@ pub fn parse_csv_rows(text: &str, columns: usize) -> Result<Vec<Vec<f64>>, Strin
         }
         let fields: Vec<&str> = line.split(',').map(str::trim).collect();
         let parsed: Result<Vec<f64>, _> = fields.iter().map(|f| f.parse::<f64>()).collect();
+        let first = std::mem::replace(&mut header_allowed, false);
         match parsed {
             Ok(v) if v.len() == columns && v.iter().all(|x| x.is_finite()) => rows.push(v),
             Ok(v) => {
@@ -294,7 +298,7 @@ pub fn parse_csv_rows(text: &str, columns: usize) -> Result<Vec<Vec<f64>>, Strin
                     v.len()
                 ));
             }
-            Err(_) if rows.is_empty() => continue, // header
+            Err(_) if first => continue, // header
             Err(_) => return Err(format!("line {}: `{line}` is not {columns} numbers", i + 1)),
         }
     }
@@ -311,7 +315,12 @@ pub fn parse_csv_rows(text: &str, columns: usize) -> Result<Vec<Vec<f64>>, Strin
 pub fn read_spectrum_csv(path: &Path) -> Result<Spectrum, String> {
     let text = std::fs::read_to_string(path)
         .map_err(|e| format!("cannot read {}: {e}", path.display()))?;
-    let rows = parse_csv_rows(&text, 2).map_err(|e| format!("{}: {e}", path.display()))?;
+    spectrum_from_csv(path, &text)
+}
+
+/// A spectrum from the text of a `wavelength_nm,value` CSV (`path` for messages).
+pub fn spectrum_from_csv(path: &Path, text: &str) -> Result<Spectrum, String> {
+    let rows = parse_csv_rows(text, 2).map_err(|e| format!("{}: {e}", path.display()))?;
     if rows.iter().any(|r| r[1] < 0.0) {
         return Err(format!("{}: spectral values must be ≥ 0", path.display()));
     }
@@ -339,6 +348,18 @@ fn bundled(csv: &str) -> Spectrum {
 /// or `csv(path)` (path relative to `base_dir`). The result is normalised to
 /// unit luminance.
 pub fn parse_spectrum(desc: &str, base_dir: &Path) -> Result<Spectrum, String> {
+    parse_spectrum_with(desc, base_dir, &mut |p: &Path| {
+        std::fs::read_to_string(p).map_err(|e| format!("cannot read {}: {e}", p.display()))
+    })
+}
+
+/// [`parse_spectrum`] reading a `csv(…)` file through `read` (the scene
+/// build passes its [`crate::scene::Inputs`], which hashes what it reads).
+pub fn parse_spectrum_with(
+    desc: &str,
+    base_dir: &Path,
+    read: &mut dyn FnMut(&Path) -> Result<String, String>,
+) -> Result<Spectrum, String> {
     const CHOICES: &str =
         "valid: \"d65\", \"a\", \"constant\", \"blackbody(T)\" with T in kelvin, \"csv(path.csv)\"";
     let d = desc.trim();
@@ -372,7 +393,8 @@ pub fn parse_spectrum(desc: &str, base_dir: &Path) -> Result<Spectrum, String> {
         }
     } else if lower.starts_with("csv(") && d.ends_with(')') {
         let file = d[4..d.len() - 1].trim().trim_matches('"');
-        read_spectrum_csv(&base_dir.join(file))?
+        let path = base_dir.join(file);
+        spectrum_from_csv(&path, &read(&path)?)?
     } else {
         return Err(format!("unknown spectrum `{d}`; {CHOICES}"));
     };

@@ -12,7 +12,13 @@ pub(super) fn d(h: DVec3, ax: f64, ay: f64) -> f64 {
     let x = h.x / ax;
     let y = h.y / ay;
     let e = (x * x + y * y) / z2;
-    crate::math::exp(-e) / (PI * ax * ay * z2 * z2)
+    let num = crate::math::exp(-e);
+    // Near the horizon cos⁴θ underflows before e^{−tan²θ/α²} does not:
+    // the limit is 0, not 0/0.
+    if num == 0.0 {
+        return 0.0;
+    }
+    num / (PI * ax * ay * z2 * z2)
 }
 
 /// Λ from t = α² tan²θ, with a = 1/√t: (e^{−a²}/(a√π) − erfc a)/2.

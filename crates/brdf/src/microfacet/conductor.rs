@@ -1,6 +1,6 @@
 //! Rough and smooth conductors built on a microfacet distribution.
 
-use super::{Distribution, NdfKind};
+use super::{COS_HORIZON, Distribution, NdfKind};
 use crate::error::BrdfError;
 use crate::fresnel::Fresnel;
 use crate::math::finite_nonneg;
@@ -11,6 +11,10 @@ use glam::DVec3;
 ///
 /// Sampling draws visible normals, so the Monte Carlo weight is
 /// F · G2/G1(i), bounded by 1 for F ≤ 1.
+///
+/// Grazing limit: a direction with cosθ < [`COS_HORIZON`] (1e−100; in
+/// particular on or below the horizon) gives f = pdf = 0 and no sample;
+/// above it `eval`, `pdf` and `sample` agree to round-off.
 #[derive(Clone, Debug, PartialEq)]
 pub struct MicrofacetConductor {
     dist: Distribution,
@@ -78,7 +82,7 @@ impl MicrofacetConductor {
         d: impl Fn(DVec3, f64) -> (f64, f64),
         lambda_frac: impl Fn(DVec3) -> (f64, f64),
     ) -> Option<Geometry> {
-        if wi.z <= 0.0 || wo.z <= 0.0 {
+        if !(wi.z >= COS_HORIZON && wo.z >= COS_HORIZON) {
             return None;
         }
         let v = wi + wo;
@@ -111,7 +115,7 @@ impl Bxdf for MicrofacetConductor {
     #[inline]
     fn pdf(&self, wi: DVec3, wo: DVec3, _lambda_nm: f64) -> f64 {
         // Only G1(i) and D: cheaper than the full geometry.
-        if wi.z <= 0.0 || wo.z <= 0.0 {
+        if !(wi.z >= COS_HORIZON && wo.z >= COS_HORIZON) {
             return 0.0;
         }
         let Some((d, _)) = self.dist.d_half(wi, wo) else {
@@ -198,7 +202,7 @@ impl MicrofacetConductor {
         d: impl Fn(DVec3, f64) -> (f64, f64),
         homogeneous: bool,
     ) -> Option<BxdfSample> {
-        if wi.z <= 0.0 {
+        if wi.z.is_nan() || wi.z < COS_HORIZON {
             return None;
         }
         let h = visible(wi, [u[1], u[2]]);
@@ -208,7 +212,8 @@ impl MicrofacetConductor {
             return None;
         }
         let v = 2.0 * p * h - q * wi;
-        if v.z <= 0.0 {
+        // wo = v/q: the same horizon as `eval` and `pdf`.
+        if v.z.is_nan() || v.z < COS_HORIZON * q {
             return None;
         }
         let wo = v * (1.0 / q);

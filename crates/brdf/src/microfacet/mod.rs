@@ -21,6 +21,19 @@ pub const ALPHA_MIN: f64 = 1e-4;
 pub const ALPHA_MAX: f64 = 1.0;
 const ALPHA_VALID: &str = "1e-4 ≤ alpha ≤ 1 (use a smooth conductor below 1e-4)";
 
+/// Directions with cosθ below this count as on the horizon, where the
+/// microfacet conductors return f = pdf = 0 and no sample.
+///
+/// Above it the models return their analytic value, which is continuous up
+/// to the horizon but not small there: with height-correlated Smith
+/// shadowing, at a grazing mirror pair f ≈ D/(2α(cosθi + cosθo)) grows like
+/// 1/cosθ while f·cosθi·cosθo stays below D/4. The threshold sits where the
+/// products of two Smith terms (~(α cosθ)²) would reach subnormal numbers
+/// and `eval`, `pdf` and `sample` would stop agreeing to round-off; no
+/// direction a renderer or a degree-valued query produces comes near it
+/// (cos 89.999999999999° = 1.7e−14).
+pub const COS_HORIZON: f64 = 1e-100;
+
 /// Which microfacet normal distribution.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum NdfKind {
@@ -242,3 +255,6 @@ pub(crate) fn normalize_or_none(v: DVec3) -> Option<DVec3> {
         None
     }
 }
+
+#[cfg(test)]
+mod grazing_tests;

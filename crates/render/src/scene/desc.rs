@@ -4,9 +4,72 @@
 //! the valid ones. Defaults are only used where this file documents them.
 
 use serde::Deserialize;
+use serde::de::{self, Deserializer, IgnoredAny, SeqAccess, Visitor};
 use std::collections::BTreeMap;
+use std::fmt;
+use std::marker::PhantomData;
 use std::path::PathBuf;
 use toml::Spanned;
+
+/// `[T; N]` read from an array of exactly `N` elements. serde's array impl
+/// stops after `N` elements and the TOML deserializer does not complain
+/// about the rest, so without this `resolution = [320, 240, 7, …]` passed
+/// as `[320, 240]`. The surplus is counted (without storing it) for the
+/// message.
+struct Exact<T, const N: usize>([T; N]);
+
+impl<'de, T: Deserialize<'de>, const N: usize> Deserialize<'de> for Exact<T, N> {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct V<T, const N: usize>(PhantomData<T>);
+        impl<'de, T: Deserialize<'de>, const N: usize> Visitor<'de> for V<T, N> {
+            type Value = Exact<T, N>;
+            fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+                write!(f, "an array of exactly {N} numbers")
+            }
+            fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> Result<Self::Value, A::Error> {
+                let mut v = Vec::with_capacity(N);
+                while v.len() < N {
+                    match seq.next_element()? {
+                        Some(x) => v.push(x),
+                        None => return Err(de::Error::invalid_length(v.len(), &self)),
+                    }
+                }
+                let mut extra = 0usize;
+                while seq.next_element::<IgnoredAny>()?.is_some() {
+                    extra += 1;
+                }
+                if extra > 0 {
+                    return Err(de::Error::invalid_length(N + extra, &self));
+                }
+                match v.try_into() {
+                    Ok(a) => Ok(Exact(a)),
+                    Err(_) => Err(de::Error::invalid_length(N, &self)),
+                }
+            }
+        }
+        d.deserialize_seq(V(PhantomData))
+    }
+}
+
+fn exact<'de, D: Deserializer<'de>, T: Deserialize<'de>, const N: usize>(
+    d: D,
+) -> Result<[T; N], D::Error> {
+    Ok(Exact::<T, N>::deserialize(d)?.0)
+}
+
+fn exact_opt<'de, D: Deserializer<'de>, T: Deserialize<'de>, const N: usize>(
+    d: D,
+) -> Result<Option<[T; N]>, D::Error> {
+    Ok(Option::<Exact<T, N>>::deserialize(d)?.map(|e| e.0))
+}
+
+fn exact_spanned<'de, D: Deserializer<'de>, T: Deserialize<'de>, const N: usize>(
+    d: D,
+) -> Result<Spanned<[T; N]>, D::Error> {
+    let s = Spanned::<Exact<T, N>>::deserialize(d)?;
+    let span = s.span();
+    Ok(Spanned::new(span, s.into_inner().0))
+}
 
 /// A whole scene file.
 #[derive(Deserialize, Debug)]
@@ -35,15 +98,18 @@ pub struct SceneDesc {
 #[serde(deny_unknown_fields)]
 pub struct CameraDesc {
     /// Eye position.
+    #[serde(deserialize_with = "exact_spanned")]
     pub look_from: Spanned<[f64; 3]>,
     /// Point the camera looks at.
+    #[serde(deserialize_with = "exact_spanned")]
     pub look_at: Spanned<[f64; 3]>,
     /// Up direction (default +y).
-    #[serde(default = "default_up")]
+    #[serde(default = "default_up", deserialize_with = "exact_spanned")]
     pub up: Spanned<[f64; 3]>,
     /// Vertical field of view in degrees, in (0, 180).
     pub fov_deg: Spanned<f64>,
     /// Image width and height in pixels.
+    #[serde(deserialize_with = "exact_spanned")]
     pub resolution: Spanned<[u32; 2]>,
 }
 
@@ -236,6 +302,7 @@ pub struct MaterialDesc {
     /// n, k table: CSV `wavelength_nm,n,k` (relative to this scene file).
     pub nk_csv: Option<PathBuf>,
     /// Constant complex index `[n, k]`.
+    #[serde(default, deserialize_with = "exact_opt")]
     pub nk: Option<[f64; 2]>,
     /// `conductor` (default) or `one`.
     pub fresnel: Option<FresnelKind>,
@@ -272,10 +339,10 @@ pub struct MaterialDesc {
 #[serde(deny_unknown_fields)]
 pub struct TransformDesc {
     /// Translation.
-    #[serde(default)]
+    #[serde(default, deserialize_with = "exact")]
     pub translate: [f64; 3],
     /// Rotation in degrees about x, then y, then z.
-    #[serde(default)]
+    #[serde(default, deserialize_with = "exact")]
     pub rotate_deg: [f64; 3],
     /// Uniform scale (default 1).
     #[serde(default = "one")]
@@ -303,6 +370,7 @@ pub enum ShapeDesc {
     /// `size = [w, h]` in the local xy plane, normal +z.
     Rectangle {
         /// Width and height.
+        #[serde(deserialize_with = "exact")]
         size: [f64; 2],
         /// Material name.
         material: String,
@@ -323,6 +391,7 @@ pub enum ShapeDesc {
     /// A sphere.
     Sphere {
         /// Centre.
+        #[serde(deserialize_with = "exact")]
         center: [f64; 3],
         /// Radius.
         radius: f64,
@@ -350,6 +419,7 @@ pub enum LightDesc {
     /// An isotropic point light; `intensity` in luminance units per sr.
     Point {
         /// Position.
+        #[serde(deserialize_with = "exact")]
         position: [f64; 3],
         /// Radiant intensity scale.
         intensity: f64,
@@ -360,6 +430,7 @@ pub enum LightDesc {
     /// A spherical emitter of uniform radiance.
     Sphere {
         /// Centre.
+        #[serde(deserialize_with = "exact")]
         center: [f64; 3],
         /// Radius.
         radius: f64,
@@ -372,6 +443,7 @@ pub enum LightDesc {
     /// A rectangular emitter, emitting from its +z side (both with `two_sided`).
     Rectangle {
         /// Width and height.
+        #[serde(deserialize_with = "exact")]
         size: [f64; 2],
         /// Radiance scale.
         radiance: f64,

@@ -1,23 +1,31 @@
 //! Scenes: parsing the TOML file and building what the renderer needs.
 
 pub mod desc;
+pub mod inputs;
 
 use crate::camera::Camera;
 use crate::error::SceneError;
 use crate::geometry::{HitGeometry, Planar, Ray, Sphere, Transform};
 use crate::light::{EnvMap, Environment, LightKind, Lights};
 use crate::material::{Material, build_material};
-use crate::mesh::{MeshAccel, load_obj};
+use crate::mesh::{MeshAccel, obj_from_bytes};
 use crate::sky::{Sky, SkyParams};
-use crate::spectrum::{LAMBDA_MAX, LAMBDA_MIN, parse_spectrum};
+use crate::spectrum::{LAMBDA_MAX, LAMBDA_MIN, parse_spectrum_with};
 use crate::wavelength::WavelengthSampler;
 use desc::{
     LightDesc, MisHeuristic, SamplerKind, SceneDesc, ShapeDesc, TransformDesc, WavelengthMode,
 };
 use glam::DVec3;
+pub use inputs::{FNV_OFFSET, InputFile, Inputs, fnv1a};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
+
+/// The estimator version, hashed into every fingerprint: films rendered by
+/// an earlier estimator (other wavelength or random-number sampling, other
+/// inputs hashed) must not merge with new ones.
+pub const ESTIMATOR: &str = "lustre estimator 4: sobol sampler with 64-bit sample indices, \
+                             stratified hero, power MIS, every input file hashed";
 
 /// What a ray hit.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -89,20 +97,12 @@ pub struct Scene {
     pub wavelengths: WavelengthSampler,
     /// Hash of everything that determines the per-sample values (not spp or outputs).
     pub fingerprint: u64,
+    /// The files the scene was built from, with their hashes (the scene file
+    /// itself first, hashed without the keys that do not change samples).
+    pub inputs: Vec<InputFile>,
     /// One line describing what was prepared and how long it took.
     pub prepared: String,
 }
-
-/// 64-bit FNV-1a.
-pub fn fnv1a(bytes: &[u8], mut h: u64) -> u64 {
-    for &b in bytes {
-        h ^= b as u64;
-        h = h.wrapping_mul(0x0000_0100_0000_01b3);
-    }
-    h
-}
-
-const FNV_OFFSET: u64 = 0xcbf2_9ce4_8422_2325;
 
 /// Parses a scene file's text into its description, with positioned errors.
 pub fn parse(path: &Path, text: &str) -> Result<SceneDesc, SceneError> {
@@ -117,9 +117,34 @@ pub fn parse(path: &Path, text: &str) -> Result<SceneDesc, SceneError> {
 
 /// Loads and builds a scene file.
 pub fn load(path: &Path) -> Result<Scene, SceneError> {
-    let text = std::fs::read_to_string(path)
-        .map_err(|e| SceneError::new(path, format!("cannot read scene file: {e}")))?;
+    let text = read_scene_text(path)?;
     load_str(path, &text)
+}
+
+/// Reads a scene file: at most [`inputs::MAX_SCENE_BYTES`], UTF-8.
+fn read_scene_text(path: &Path) -> Result<String, SceneError> {
+    use std::io::Read;
+    let fail = |e: std::io::Error| SceneError::new(path, format!("cannot read scene file: {e}"));
+    let file = std::fs::File::open(path).map_err(fail)?;
+    let mut bytes = Vec::new();
+    file.take(inputs::MAX_SCENE_BYTES + 1)
+        .read_to_end(&mut bytes)
+        .map_err(fail)?;
+    if bytes.len() as u64 > inputs::MAX_SCENE_BYTES {
+        return Err(SceneError::new(
+            path,
+            format!(
+                "the scene file is larger than {} MiB; scenes describe geometry by reference \
+                 (put meshes in OBJ files)",
+                inputs::MAX_SCENE_BYTES >> 20
+            ),
+        ));
+    }
+    String::from_utf8(bytes).map_err(|e| {
+        let off = e.utf8_error().valid_up_to();
+        let text = String::from_utf8_lossy(e.as_bytes()).into_owned();
+        SceneError::at(path, &text, off, "the scene file is not UTF-8 text")
+    })
 }
 
 fn transform(t: &TransformDesc) -> Result<Transform, String> {
@@ -168,23 +193,56 @@ fn finite3(name: &str, v: [f64; 3]) -> Result<DVec3, String> {
     }
 }
 
+/// The scene text without the keys that do not change sample values
+/// (`[film]` spp, exr, png, exposure), as hashed into the fingerprint.
+fn normalised_text(text: &str) -> String {
+    let mut table: toml::Table = toml::from_str(text).unwrap_or_default();
+    if let Some(toml::Value::Table(film)) = table.get_mut("film") {
+        for k in ["spp", "exr", "png", "exposure"] {
+            film.remove(k);
+        }
+    }
+    table.to_string()
+}
+
 /// Builds a scene from its text (`path` locates relative files and errors).
 pub fn load_str(path: &Path, text: &str) -> Result<Scene, SceneError> {
     let start = Instant::now();
+    if text.len() as u64 > inputs::MAX_SCENE_BYTES {
+        return Err(SceneError::new(
+            path,
+            format!(
+                "the scene text is larger than {} MiB",
+                inputs::MAX_SCENE_BYTES >> 20
+            ),
+        ));
+    }
     let desc = parse(path, text)?;
     let base = path
         .parent()
         .map_or_else(|| PathBuf::from("."), Path::to_path_buf);
+    let mut inputs = Inputs::new(&base);
+    inputs.record(inputs.name_of(path), normalised_text(text).as_bytes());
     let at =
         |span: std::ops::Range<usize>, msg: String| SceneError::at(path, text, span.start, msg);
 
     // Camera and settings.
     let cam = &desc.camera;
     let [w, h] = *cam.resolution.get_ref();
-    if w == 0 || h == 0 || w > 1 << 15 || h > 1 << 15 {
+    if w == 0
+        || h == 0
+        || w > crate::film::MAX_SIDE
+        || h > crate::film::MAX_SIDE
+        || w as u64 * h as u64 > crate::film::MAX_PIXELS
+    {
         return Err(at(
             cam.resolution.span(),
-            format!("resolution = [{w}, {h}] is invalid: expected 1..=32768 each"),
+            format!(
+                "resolution = [{w}, {h}] is invalid: expected 1..={} each and at most {} \
+                 pixels in all",
+                crate::film::MAX_SIDE,
+                crate::film::MAX_PIXELS
+            ),
         ));
     }
     for v in [&cam.look_from, &cam.look_at, &cam.up] {
@@ -243,10 +301,21 @@ pub fn load_str(path: &Path, text: &str) -> Result<Scene, SceneError> {
         exposure: film.exposure,
     };
 
+    // Checked before any material is built: building can take milliseconds.
+    if desc.lights.is_empty() {
+        return Err(SceneError::new(
+            path,
+            "the scene has no lights: add a [[lights]] entry (point, sphere, rectangle, environment or sky)",
+        ));
+    }
+
     // Materials: only those some shape uses are built.
     let mut materials: Vec<Material> = Vec::new();
     let mut material_index: HashMap<String, u32> = HashMap::new();
-    let mut use_material = |name: &str, span: std::ops::Range<usize>| -> Result<u32, SceneError> {
+    let mut use_material = |name: &str,
+                            span: std::ops::Range<usize>,
+                            inputs: &mut Inputs|
+     -> Result<u32, SceneError> {
         if let Some(&i) = material_index.get(name) {
             return Ok(i);
         }
@@ -264,7 +333,7 @@ pub fn load_str(path: &Path, text: &str) -> Result<Scene, SceneError> {
                 ),
             ));
         };
-        let built = build_material(name, m.get_ref(), &base)
+        let built = build_material(name, m.get_ref(), &base, inputs)
             .map_err(|e| at(m.span(), format!("[materials.{name}]: {e}")))?;
         let i = materials.len() as u32;
         materials.push(built);
@@ -275,7 +344,6 @@ pub fn load_str(path: &Path, text: &str) -> Result<Scene, SceneError> {
     let mut planars = Vec::new();
     let mut spheres = Vec::new();
     let mut meshes = Vec::new();
-    let mut mesh_files = Vec::new();
     for (i, s) in desc.shapes.iter().enumerate() {
         let span = s.span();
         let ctx = |m: String| at(span.clone(), format!("shapes[{i}]: {m}"));
@@ -289,7 +357,7 @@ pub fn load_str(path: &Path, text: &str) -> Result<Scene, SceneError> {
                     .and(positive("size[1]", size[1]))
                     .map_err(ctx)?;
                 let xf = transform(t).map_err(ctx)?;
-                let m = use_material(material, span.clone())?;
+                let m = use_material(material, span.clone(), &mut inputs)?;
                 planars.push((Planar::rectangle(*size, &xf), Surface::Material(m)));
             }
             ShapeDesc::Disk {
@@ -299,7 +367,7 @@ pub fn load_str(path: &Path, text: &str) -> Result<Scene, SceneError> {
             } => {
                 positive("radius", *radius).map_err(ctx)?;
                 let xf = transform(t).map_err(ctx)?;
-                let m = use_material(material, span.clone())?;
+                let m = use_material(material, span.clone(), &mut inputs)?;
                 planars.push((Planar::disk(*radius, &xf), Surface::Material(m)));
             }
             ShapeDesc::Sphere {
@@ -309,7 +377,7 @@ pub fn load_str(path: &Path, text: &str) -> Result<Scene, SceneError> {
             } => {
                 positive("radius", *radius).map_err(ctx)?;
                 let c = finite3("center", *center).map_err(ctx)?;
-                let m = use_material(material, span.clone())?;
+                let m = use_material(material, span.clone(), &mut inputs)?;
                 spheres.push((
                     Sphere {
                         center: c,
@@ -324,10 +392,12 @@ pub fn load_str(path: &Path, text: &str) -> Result<Scene, SceneError> {
                 transform: t,
             } => {
                 let xf = transform(t).map_err(ctx)?;
-                let m = use_material(material, span.clone())?;
+                let m = use_material(material, span.clone(), &mut inputs)?;
                 let full = base.join(file);
-                meshes.push(load_obj(&full, &xf, m).map_err(ctx)?);
-                mesh_files.push(full);
+                let bytes = inputs
+                    .read(&full, "mesh file", inputs::MAX_BINARY_BYTES)
+                    .map_err(ctx)?;
+                meshes.push(obj_from_bytes(&full, &bytes, &xf, m).map_err(ctx)?);
             }
         }
     }
@@ -338,10 +408,12 @@ pub fn load_str(path: &Path, text: &str) -> Result<Scene, SceneError> {
     for (i, l) in desc.lights.iter().enumerate() {
         let span = l.span();
         let ctx = |m: String| at(span.clone(), format!("lights[{i}]: {m}"));
-        let spectrum = |s: &Option<String>, scale: f64| {
-            parse_spectrum(s.as_deref().unwrap_or("d65"), &base)
-                .and_then(|sp| sp.with_luminance(scale))
-                .map_err(ctx)
+        let spectrum = |s: &Option<String>, scale: f64, inputs: &mut Inputs| {
+            parse_spectrum_with(s.as_deref().unwrap_or("d65"), &base, &mut |p: &Path| {
+                inputs.read_text(p, "spectrum CSV", inputs::MAX_CSV_BYTES)
+            })
+            .and_then(|sp| sp.with_luminance(scale))
+            .map_err(ctx)
         };
         let idx = lights.len() as u32;
         match l.get_ref() {
@@ -354,7 +426,7 @@ pub fn load_str(path: &Path, text: &str) -> Result<Scene, SceneError> {
                 let position = finite3("position", *position).map_err(ctx)?;
                 lights.push(LightKind::Point {
                     position,
-                    spectrum: spectrum(s, *intensity)?,
+                    spectrum: spectrum(s, *intensity, &mut inputs)?,
                 });
             }
             LightDesc::Sphere {
@@ -373,7 +445,7 @@ pub fn load_str(path: &Path, text: &str) -> Result<Scene, SceneError> {
                 spheres.push((sphere, Surface::Emitter(idx)));
                 lights.push(LightKind::Sphere {
                     sphere,
-                    spectrum: spectrum(s, *radiance)?,
+                    spectrum: spectrum(s, *radiance, &mut inputs)?,
                 });
             }
             LightDesc::Rectangle {
@@ -391,7 +463,7 @@ pub fn load_str(path: &Path, text: &str) -> Result<Scene, SceneError> {
                 planars.push((shape, Surface::Emitter(idx)));
                 lights.push(LightKind::Rectangle {
                     shape,
-                    spectrum: spectrum(s, *radiance)?,
+                    spectrum: spectrum(s, *radiance, &mut inputs)?,
                     two_sided: *two_sided,
                 });
             }
@@ -413,11 +485,18 @@ pub fn load_str(path: &Path, text: &str) -> Result<Scene, SceneError> {
                         if !rotate_deg.is_finite() {
                             return Err(ctx("rotate_deg must be finite".into()));
                         }
+                        let full = base.join(f);
+                        let bytes = inputs
+                            .read(&full, "environment map", inputs::MAX_BINARY_BYTES)
+                            .map_err(ctx)?;
                         Environment::Map(
-                            EnvMap::load(&base.join(f), *radiance, *rotate_deg).map_err(ctx)?,
+                            EnvMap::from_exr_bytes(&full, &bytes, *radiance, *rotate_deg)
+                                .map_err(ctx)?,
                         )
                     }
-                    None => Environment::Constant(spectrum(s, (*radiance).max(1e-300))?),
+                    None => {
+                        Environment::Constant(spectrum(s, (*radiance).max(1e-300), &mut inputs)?)
+                    }
                 };
                 environment = Some(lights.len());
                 lights.push(LightKind::Environment(env));
@@ -449,12 +528,6 @@ pub fn load_str(path: &Path, text: &str) -> Result<Scene, SceneError> {
             }
         }
     }
-    if lights.is_empty() {
-        return Err(SceneError::new(
-            path,
-            "the scene has no lights: add a [[lights]] entry (point, sphere, rectangle, environment or sky)",
-        ));
-    }
     let lights = Lights {
         lights,
         environment,
@@ -470,25 +543,8 @@ pub fn load_str(path: &Path, text: &str) -> Result<Scene, SceneError> {
     let n_tris: usize = meshes.iter().map(|m| m.triangles.len()).sum();
     let mesh = (!meshes.is_empty()).then(|| MeshAccel::build(meshes));
 
-    // Fingerprint: the scene text without the keys that do not change sample values.
-    let mut fp_table: toml::Table = toml::from_str(text).unwrap_or_default();
-    if let Some(toml::Value::Table(film)) = fp_table.get_mut("film") {
-        for k in ["spp", "exr", "png", "exposure"] {
-            film.remove(k);
-        }
-    }
-    // The estimator version: films rendered by an earlier estimator (other
-    // wavelength or random-number sampling) must not merge with new ones.
-    let mut fingerprint = fnv1a(
-        b"lustre estimator 3: sobol sampler, stratified hero, power MIS",
-        FNV_OFFSET,
-    );
-    fingerprint = fnv1a(fp_table.to_string().as_bytes(), fingerprint);
-    for f in &mesh_files {
-        if let Ok(bytes) = std::fs::read(f) {
-            fingerprint = fnv1a(&bytes, fingerprint);
-        }
-    }
+    let inputs = inputs.into_files();
+    let fingerprint = inputs::fingerprint(ESTIMATOR, &inputs);
 
     let models: Vec<String> = materials
         .iter()
@@ -532,6 +588,7 @@ pub fn load_str(path: &Path, text: &str) -> Result<Scene, SceneError> {
         lights,
         wavelengths,
         fingerprint,
+        inputs,
         prepared,
     })
 }

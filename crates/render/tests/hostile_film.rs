@@ -1,0 +1,269 @@
+//! Films as a hostile user (or a failing disk) hands them over: every
+//! truncation, single-bit flips across the whole file, and headers crafted
+//! with a valid checksum but absurd counts. Each must be an error — never a
+//! panic, an abort (an attempt to allocate what the header claims) or a
+//! film silently accepted with other contents.
+
+use render::film::{BadSample, Film, MAX_PIXELS, MAX_SIDE};
+use render::scene::InputFile;
+
+/// A small film with every section populated.
+fn sample_film() -> Film {
+    let mut f = Film::new(5, 3, 0x1234_5678_9abc_def0, 42, 0.5);
+    f.inputs = vec![
+        InputFile {
+            name: "scene.toml".into(),
+            len: 812,
+            hash: 0x0102_0304_0506_0708,
+        },
+        InputFile {
+            name: "materials/fit.toml".into(),
+            len: 90_210,
+            hash: 0xfeed_beef_cafe_f00d,
+        },
+    ];
+    f.add_range(0..64).unwrap();
+    f.add_range(128..256).unwrap();
+    for (i, s) in f.sums.iter_mut().enumerate() {
+        *s = [
+            i as i128 * 1_000_003,
+            -(i as i128),
+            i128::MAX / (i as i128 + 2),
+        ];
+    }
+    f.dropped.record(BadSample::NonFinite, 2, 1, 17);
+    f.dropped.record(BadSample::Negative, 4, 2, 130);
+    f
+}
+
+/// Header offsets of format 2 (see film.rs).
+const OFF_WIDTH: usize = 12;
+const OFF_HEIGHT: usize = 16;
+const OFF_INPUT_COUNT: usize = 12 + 8 + 24 + 16 + 16;
+
+/// Replaces the trailing CRC so that a crafted body passes the checksum.
+fn reseal(mut body: Vec<u8>) -> Vec<u8> {
+    body.truncate(body.len() - 4);
+    let crc = crc32(&body);
+    body.extend_from_slice(&crc.to_le_bytes());
+    body
+}
+
+/// CRC-32 (IEEE), written out here so the test does not trust the
+/// implementation it checks.
+fn crc32(bytes: &[u8]) -> u32 {
+    let mut c = 0xffff_ffffu32;
+    for &b in bytes {
+        c ^= b as u32;
+        for _ in 0..8 {
+            c = if c & 1 != 0 {
+                (c >> 1) ^ 0xedb8_8320
+            } else {
+                c >> 1
+            };
+        }
+    }
+    !c
+}
+
+#[test]
+fn round_trip_is_exact_and_checksummed_with_crc32() {
+    let f = sample_film();
+    let bytes = f.to_bytes();
+    assert_eq!(Film::from_bytes(&bytes).unwrap(), f);
+    let n = bytes.len();
+    let stored = u32::from_le_bytes(bytes[n - 4..].try_into().unwrap());
+    assert_eq!(stored, crc32(&bytes[..n - 4]));
+}
+
+#[test]
+fn every_truncation_is_an_error() {
+    let bytes = sample_film().to_bytes();
+    for len in 0..bytes.len() {
+        let r = Film::from_bytes(&bytes[..len]);
+        assert!(
+            r.is_err(),
+            "a film cut to {len} of {} bytes was accepted",
+            bytes.len()
+        );
+    }
+    // And trailing garbage.
+    let mut longer = bytes.clone();
+    longer.push(0);
+    assert!(Film::from_bytes(&longer).is_err());
+}
+
+#[test]
+fn every_single_bit_flip_is_detected() {
+    let bytes = sample_film().to_bytes();
+    let bits = bytes.len() * 8;
+    assert!(bits >= 1000, "{bits} bit positions");
+    for bit in 0..bits {
+        let mut b = bytes.clone();
+        b[bit / 8] ^= 1 << (bit % 8);
+        match Film::from_bytes(&b) {
+            Ok(_) => panic!("flipping bit {bit} (byte {}) went unnoticed", bit / 8),
+            Err(e) => {
+                // Past the magic, the checksum catches it and says so.
+                if bit >= 96 {
+                    assert!(e.contains("checksum"), "bit {bit}: {e}");
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn random_multi_byte_damage_is_detected() {
+    let bytes = sample_film().to_bytes();
+    let mut x = 0x9e37_79b9_7f4a_7c15u64;
+    let mut next = || {
+        x ^= x << 13;
+        x ^= x >> 7;
+        x ^= x << 17;
+        x
+    };
+    for _ in 0..5000 {
+        let mut b = bytes.clone();
+        let k = 1 + (next() % 8) as usize;
+        for _ in 0..k {
+            let i = (next() % b.len() as u64) as usize;
+            b[i] = next() as u8;
+        }
+        if b != bytes {
+            assert!(Film::from_bytes(&b).is_err());
+        }
+    }
+}
+
+#[test]
+fn crafted_headers_with_valid_checksums_are_refused_without_allocating() {
+    let good = sample_film().to_bytes();
+    let put32 =
+        |b: &mut Vec<u8>, off: usize, v: u32| b[off..off + 4].copy_from_slice(&v.to_le_bytes());
+    let mut cases: Vec<(&str, Vec<u8>)> = Vec::new();
+
+    // 48-byte style: the largest dimensions a u32 can claim (the 206 GB case).
+    for (w, h) in [
+        (u32::MAX, u32::MAX),
+        (MAX_SIDE, MAX_SIDE),
+        (MAX_SIDE + 1, 1),
+        (0, 3),
+        (5, 0),
+        (1 << 14, 1 << 14),
+    ] {
+        let mut b = good.clone();
+        put32(&mut b, OFF_WIDTH, w);
+        put32(&mut b, OFF_HEIGHT, h);
+        cases.push(("dimensions", reseal(b)));
+    }
+    // A bare header claiming a big film, with no body at all.
+    let mut bare = good[..OFF_INPUT_COUNT + 4].to_vec();
+    put32(&mut bare, OFF_WIDTH, 30_000);
+    put32(&mut bare, OFF_HEIGHT, 30_000);
+    bare.extend_from_slice(&[0; 4]); // no ranges
+    bare.extend_from_slice(&[0; 4]); // room for the CRC
+    cases.push(("bare header", reseal(bare)));
+    // Input and range counts far beyond the file.
+    for n in [u32::MAX, 1 << 20, 3] {
+        let mut b = good.clone();
+        put32(&mut b, OFF_INPUT_COUNT, n);
+        cases.push(("input count", reseal(b)));
+    }
+    // The first input's name length.
+    for n in [u32::MAX, 4097, 200] {
+        let mut b = good.clone();
+        put32(&mut b, OFF_INPUT_COUNT + 4, n);
+        cases.push(("name length", reseal(b)));
+    }
+    // Range count: locate it after the two inputs.
+    let off_ranges = OFF_INPUT_COUNT + 4 + (4 + 10 + 16) + (4 + 18 + 16);
+    assert_eq!(
+        u32::from_le_bytes(good[off_ranges..off_ranges + 4].try_into().unwrap()),
+        2
+    );
+    for n in [u32::MAX, 1 << 28, 3, 0] {
+        let mut b = good.clone();
+        put32(&mut b, off_ranges, n);
+        cases.push(("range count", reseal(b)));
+    }
+    // Ranges that overlap, repeat, run backwards or are empty.
+    let range_at = |b: &mut Vec<u8>, i: usize, a: u64, e: u64| {
+        let o = off_ranges + 4 + 16 * i;
+        b[o..o + 8].copy_from_slice(&a.to_le_bytes());
+        b[o + 8..o + 16].copy_from_slice(&e.to_le_bytes());
+    };
+    for (a0, e0, a1, e1) in [
+        (0, 64, 32, 96),
+        (0, 64, 0, 64),
+        (128, 256, 0, 64),
+        (64, 0, 128, 256),
+        (0, 0, 128, 256),
+        (0, 64, 64, 128),
+    ] {
+        let mut b = good.clone();
+        range_at(&mut b, 0, a0, e0);
+        range_at(&mut b, 1, a1, e1);
+        cases.push(("ranges", reseal(b)));
+    }
+    // Non-finite exposure, a dropped location outside the image, counts
+    // without a location.
+    let mut b = good.clone();
+    b[36..44].copy_from_slice(&f64::NAN.to_le_bytes());
+    cases.push(("exposure", reseal(b)));
+    let mut b = good.clone();
+    put32(&mut b, 68, 99);
+    cases.push(("dropped x", reseal(b)));
+    let mut b = good.clone();
+    b[44..60].copy_from_slice(&[0; 16]);
+    cases.push(("dropped counts", reseal(b)));
+    // Format 1 and foreign files.
+    let mut v1 = good.clone();
+    v1[..12].copy_from_slice(b"LUSTREFILM1\n");
+    cases.push(("format 1", v1));
+    cases.push(("empty", Vec::new()));
+    cases.push(("png", b"\x89PNG\r\n\x1a\n0000000000000000".to_vec()));
+
+    for (what, bytes) in &cases {
+        match Film::from_bytes(bytes) {
+            Ok(f) => panic!("crafted {what}: accepted as {}×{}", f.width, f.height),
+            Err(e) => assert!(!e.is_empty(), "{what}"),
+        }
+    }
+    assert!(MAX_PIXELS < MAX_SIDE as u64 * MAX_SIDE as u64);
+}
+
+#[test]
+fn load_errors_name_the_file() {
+    let dir = std::env::temp_dir().join(format!("lustre-hostile-film-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let p = dir.join("bad.film");
+    let mut b = sample_film().to_bytes();
+    b[100] ^= 4;
+    std::fs::write(&p, &b).unwrap();
+    let e = Film::load(&p).unwrap_err().to_string();
+    assert!(e.contains("bad.film") && e.contains("checksum"), "{e}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn merge_refuses_overlapping_or_duplicated_shards_and_keeps_high_indices_apart() {
+    let base = sample_film();
+    let mut a = Film::new(5, 3, base.fingerprint, 42, 0.0);
+    a.add_range(0..10).unwrap();
+    let dup = a.clone();
+    assert!(a.clone().merge(&dup).unwrap_err().contains("overlaps"));
+    let mut part = a.clone();
+    part.ranges.clear();
+    part.add_range(5..20).unwrap();
+    assert!(a.clone().merge(&part).is_err());
+    // Indices past 2³² are samples of their own (the sampler no longer
+    // wraps them), so such ranges merge as disjoint.
+    let mut high = a.clone();
+    high.ranges.clear();
+    high.add_range((1 << 32)..(1 << 32) + 10).unwrap();
+    let mut m = a.clone();
+    m.merge(&high).unwrap();
+    assert_eq!(m.spp(), 20);
+    assert!(m.merge(&high).is_err());
+}

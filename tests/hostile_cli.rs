@@ -1,0 +1,154 @@
+//! Command-line values that used to panic or run away: durations that
+//! overflow, absurd thread counts, corrupt films handed to `merge` and
+//! `--resume`. Each is a clean error (exit 1, a message naming the option
+//! or file) or a capped run that says so — never a panic (exit 101) or an
+//! abort.
+
+use std::path::Path;
+use std::process::{Command, Output};
+
+const SCENE: &str = r#"[camera]
+look_from = [0.0, 1.0, 2.0]
+look_at = [0.0, 0.0, 0.0]
+fov_deg = 40.0
+resolution = [4, 3]
+
+[film]
+spp = 2
+
+[materials.m]
+model = "ggx"
+metal = "brass"
+alpha = 0.2
+
+[[shapes]]
+type = "rectangle"
+size = [1.0, 1.0]
+material = "m"
+transform = { rotate_deg = [-90.0, 0.0, 0.0] }
+
+[[lights]]
+type = "point"
+position = [0.0, 1.0, 0.0]
+intensity = 1.0
+"#;
+
+fn lustre(dir: &Path, args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_lustre"))
+        .current_dir(dir)
+        .args(args)
+        .output()
+        .expect("run lustre")
+}
+
+fn fails_with(dir: &Path, args: &[&str], needle: &str) {
+    let out = lustre(dir, args);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{args:?}: {err}");
+    assert!(err.contains(needle), "{args:?}: {err}");
+}
+
+fn tempdir(tag: &str) -> std::path::PathBuf {
+    let d = std::env::temp_dir().join(format!("lustre-hostile-cli-{tag}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    std::fs::write(d.join("s.toml"), SCENE).unwrap();
+    d
+}
+
+#[test]
+fn durations_that_overflow_are_errors() {
+    let d = tempdir("dur");
+    for v in ["inf", "nan", "1e30", "-5", "0", "0.5", "1e300h"] {
+        let arg = format!("--checkpoint-every={v}");
+        fails_with(&d, &["render", "s.toml", "-q", &arg], "--checkpoint-every");
+    }
+    for v in ["inf", "1e30", "1e300h", "18446744073709551616", "-1", "0"] {
+        let arg = format!("--time-limit={v}");
+        fails_with(&d, &["render", "s.toml", "-q", &arg], "--time-limit");
+    }
+    // A long but representable limit renders normally.
+    let out = lustre(&d, &["render", "s.toml", "-q", "--time-limit", "876000h"]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+#[test]
+fn thread_counts_are_capped_and_said_so() {
+    let d = tempdir("threads");
+    let out = lustre(&d, &["render", "s.toml", "--threads", "10000"]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{err}");
+    assert!(err.contains("--threads 10000 capped at"), "{err}");
+    fails_with(
+        &d,
+        &["render", "s.toml", "-q", "--threads", "0"],
+        "--threads",
+    );
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+#[test]
+fn corrupt_films_are_errors_naming_the_file() {
+    let d = tempdir("films");
+    let out = lustre(&d, &["render", "s.toml", "-q", "--film", "good.film"]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let good = std::fs::read(d.join("good.film")).unwrap();
+    // A flipped byte in the sums (accepted before: the image came out wrong).
+    let mut flipped = good.clone();
+    let n = flipped.len();
+    flipped[n - 20] ^= 0x10;
+    std::fs::write(d.join("flipped.film"), &flipped).unwrap();
+    fails_with(
+        &d,
+        &["merge", "good.film", "flipped.film", "--png", "x.png"],
+        "flipped.film",
+    );
+    fails_with(&d, &["merge", "flipped.film", "--png", "x.png"], "checksum");
+    // A 48-byte format-1 header claiming 65535 × 65535 pixels and 2³² − 1
+    // ranges (an attempted 206 GB allocation before).
+    let mut v1 = b"LUSTREFILM1\n".to_vec();
+    v1.extend_from_slice(&65535u32.to_le_bytes());
+    v1.extend_from_slice(&65535u32.to_le_bytes());
+    v1.extend_from_slice(&[0; 24]);
+    v1.extend_from_slice(&u32::MAX.to_le_bytes());
+    assert_eq!(v1.len(), 48);
+    std::fs::write(d.join("crafted.film"), &v1).unwrap();
+    fails_with(
+        &d,
+        &["merge", "crafted.film", "--png", "x.png"],
+        "crafted.film",
+    );
+    // Truncated, and not a film at all.
+    std::fs::write(d.join("cut.film"), &good[..good.len() / 2]).unwrap();
+    fails_with(
+        &d,
+        &["merge", "good.film", "cut.film", "--png", "x.png"],
+        "cut.film",
+    );
+    std::fs::write(d.join("text.film"), "hello").unwrap();
+    fails_with(
+        &d,
+        &["merge", "text.film", "--png", "x.png"],
+        "not a lustre film",
+    );
+    // --resume from a corrupt checkpoint is an error too, and leaves it alone.
+    std::fs::write(d.join("ck.film"), &flipped).unwrap();
+    fails_with(
+        &d,
+        &[
+            "render", "s.toml", "-q", "--spp", "4", "--resume", "--film", "ck.film",
+        ],
+        "ck.film",
+    );
+    assert_eq!(std::fs::read(d.join("ck.film")).unwrap(), flipped);
+    let _ = std::fs::remove_dir_all(&d);
+}
