@@ -5,7 +5,7 @@
 //! `lustre fit stats <scan> --json` prints the headline numbers for scripting.
 
 use anyhow::Context;
-use fit::io::{Format, ReadOptions};
+use fit::io::{ChannelSel, Format, ReadOptions, Units};
 use fit::pipeline::{self, Options};
 use std::path::{Path, PathBuf};
 
@@ -24,20 +24,41 @@ pub struct FitArgs {
 pub enum FitCommand {
     /// Print Sq, RMS slope, the K-correlation fit and the line PSD.
     Stats(StatsArgs),
+    /// List the channels of a file (index, name, unit, whether it holds heights).
+    Channels(ChannelsArgs),
 }
 
 /// Options shared by every way of reading a scan.
 #[derive(clap::Args, Clone)]
 pub struct ScanArgs {
-    /// Channel (image) index of multi-channel files such as NanoScope .di.
+    /// Channel of multi-channel files, by index or name (default: the first height
+    /// channel; list them with `lustre fit channels FILE`).
     #[arg(long)]
-    pub channel: Option<usize>,
-    /// Length unit of plain XYZ/CSV column files (m, mm, um, nm).
+    pub channel: Option<String>,
+    /// Units for files that do not state them: `um` for lengths and heights, or
+    /// `um,nm` for lengths,heights (m, mm, um/µm, nm, …).
     #[arg(long)]
     pub units: Option<String>,
-    /// Force the file format (x3p, bcr, sdf, di, matrix, gsf, dektak, xyz).
+    /// Pixel spacing for files without one, e.g. `0.5um` or `0.5um,0.4um` (x,y).
     #[arg(long)]
+    pub pixel_size: Option<String>,
+    /// Scan size for files without one, e.g. `100um` or `100um,80um` (x,y).
+    #[arg(long, conflicts_with = "pixel_size")]
+    pub size: Option<String>,
+    #[arg(long, help = fit::io::registry::format_help())]
     pub format: Option<String>,
+}
+
+/// `lustre fit channels <scan>`.
+#[derive(clap::Args)]
+pub struct ChannelsArgs {
+    /// Surface file.
+    pub scan: PathBuf,
+    /// Print JSON.
+    #[arg(long)]
+    pub json: bool,
+    #[command(flatten)]
+    pub read: ScanArgs,
 }
 
 /// `lustre fit <scan> …`.
@@ -91,40 +112,130 @@ pub struct StatsArgs {
 pub fn run(args: FitArgs) -> anyhow::Result<()> {
     match args.command {
         Some(FitCommand::Stats(s)) => stats(s),
+        Some(FitCommand::Channels(c)) => channels(c),
         None => material(args.material),
     }
 }
 
+/// `0.5um` or `0.5um,0.4um` (the second defaults to the first), in metres.
+fn parse_pair(flag: &str, v: &str) -> anyhow::Result<(f64, f64)> {
+    let one = |t: &str| -> anyhow::Result<f64> {
+        let (x, unit) = fit::io::units::split_number(t)
+            .with_context(|| format!("{flag} {v}: `{t}` is not a number with a unit"))?;
+        anyhow::ensure!(
+            !unit.is_empty(),
+            "{flag} {v}: give a unit, e.g. `{flag} 0.5um`"
+        );
+        let f = fit::io::units::length_factor(unit)
+            .with_context(|| format!("{flag} {v}: `{unit}` is not a length unit"))?;
+        let m = x * f;
+        anyhow::ensure!(m.is_finite() && m > 0.0, "{flag} {v}: must be positive");
+        Ok(m)
+    };
+    let mut it = v.split(',');
+    let a = one(it.next().unwrap_or(""))?;
+    let b = match it.next() {
+        Some(t) => one(t)?,
+        None => a,
+    };
+    anyhow::ensure!(it.next().is_none(), "{flag} {v}: at most two values (x,y)");
+    Ok((a, b))
+}
+
 fn read_options(a: &ScanArgs) -> anyhow::Result<ReadOptions> {
     let units = match &a.units {
-        Some(u) => Some(
-            fit::io::units::length_factor(u)
-                .with_context(|| format!("--units {u}: not a length unit (use m, mm, um, nm)"))?,
-        ),
+        Some(u) => Some(Units::parse(u).with_context(|| {
+            format!(
+                "--units {u}: not a length unit (use m, mm, um, nm, or `um,nm` for lengths,heights)"
+            )
+        })?),
         None => None,
     };
     let format = match &a.format {
         Some(f) => Some(Format::from_name(f).with_context(|| {
-            format!("--format {f}: unknown (use x3p, bcr, sdf, di, matrix, gsf, dektak, xyz)")
+            format!(
+                "--format {f}: unknown; supported: {}",
+                Format::all()
+                    .map(|f| f.name())
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            )
         })?),
         None => None,
     };
     Ok(ReadOptions {
-        channel: a.channel,
+        channel: a.channel.as_deref().map(ChannelSel::parse),
         units,
+        pixel_size: a
+            .pixel_size
+            .as_deref()
+            .map(|v| parse_pair("--pixel-size", v))
+            .transpose()?,
+        size: a
+            .size
+            .as_deref()
+            .map(|v| parse_pair("--size", v))
+            .transpose()?,
         format,
     })
 }
 
-fn load(path: &Path, opts: &ReadOptions) -> anyhow::Result<(Vec<u8>, fit::Topography)> {
+fn load(path: &Path, opts: &ReadOptions) -> anyhow::Result<(Vec<u8>, fit::io::Scan)> {
     let bytes = std::fs::read(path).with_context(|| format!("cannot read {}", path.display()))?;
-    let topo = fit::io::read_bytes(&path.display().to_string(), &bytes, opts)?;
-    Ok((bytes, topo))
+    let scan = fit::io::open_bytes(&path.display().to_string(), &bytes, opts)?;
+    for n in &scan.notes {
+        eprintln!("note: {}: {n}", path.display());
+    }
+    Ok((bytes, scan))
+}
+
+fn channels(args: ChannelsArgs) -> anyhow::Result<()> {
+    let bytes = std::fs::read(&args.scan)
+        .with_context(|| format!("cannot read {}", args.scan.display()))?;
+    let name = args.scan.display().to_string();
+    let (format, list) = fit::io::list_channels(&name, &bytes, &read_options(&args.read)?)?;
+    let default = list.iter().position(|c| c.is_height);
+    if args.json {
+        let json = serde_json::json!({
+            "file": name,
+            "format": format.name(),
+            "default": default,
+            "channels": list.iter().map(|c| serde_json::json!({
+                "index": c.index, "name": c.name, "unit": c.unit,
+                "height": c.is_height, "grid": [c.nx, c.ny],
+            })).collect::<Vec<_>>(),
+        });
+        println!("{}", serde_json::to_string(&json)?);
+        return Ok(());
+    }
+    println!(
+        "{name}: {} ({} channel{})",
+        format.name(),
+        list.len(),
+        if list.len() == 1 { "" } else { "s" }
+    );
+    for c in &list {
+        println!(
+            "{:>3}  {:<32} {:<6} {:>5} × {:<5} {}{}",
+            c.index,
+            c.name,
+            c.unit,
+            c.nx,
+            c.ny,
+            if c.is_height { "height" } else { "" },
+            if Some(c.index) == default {
+                " (default)"
+            } else {
+                ""
+            }
+        );
+    }
+    Ok(())
 }
 
 fn stats(args: StatsArgs) -> anyhow::Result<()> {
-    let (_, topo) = load(&args.scan, &read_options(&args.read)?)?;
-    let (t, _) = pipeline::prepare(topo)?;
+    let (_, scan) = load(&args.scan, &read_options(&args.read)?)?;
+    let (t, _) = pipeline::prepare(scan.topo)?;
     let s = fit::stats::compute(&t);
     let p = fit::psd::welch(&t, &Default::default())?;
     let kc = fit::kc::fit_bins(&p, 3, t.nx / 4)?;
@@ -185,7 +296,7 @@ fn material(args: MaterialArgs) -> anyhow::Result<()> {
         stylus_segments: args.stylus_segments,
         ..Options::default()
     };
-    let analysis = pipeline::analyse(topo, stylus.as_ref().map(|s| s.1.clone()), &opts)?;
+    let analysis = pipeline::analyse(topo.topo, stylus.as_ref().map(|s| s.1.topo.clone()), &opts)?;
     let scan_name = scan_path.display().to_string();
     let stylus_name = args.stylus.as_ref().map(|p| p.display().to_string());
     let prov = fit::material::Provenance {

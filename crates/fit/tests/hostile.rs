@@ -4,7 +4,7 @@
 //! by independent encoders.
 
 use fit::ReadError;
-use fit::io::{Format, ReadOptions, read_bytes};
+use fit::io::{ChannelSel, Format, ReadOptions, Units, read_bytes};
 use fit::rng::SplitMix64;
 use std::io::Write;
 use std::path::PathBuf;
@@ -18,9 +18,14 @@ fn data(name: &str) -> Vec<u8> {
     .unwrap()
 }
 
+fn fmt(name: &str) -> Format {
+    Format::from_name(name).unwrap()
+}
+
 fn opts(format: Format) -> ReadOptions {
     ReadOptions {
         format: Some(format),
+        units: Units::parse("m"),
         ..ReadOptions::default()
     }
 }
@@ -63,11 +68,7 @@ fn torture(name: &str, bytes: &[u8], format: Format, seed: u64, flips: usize) {
         check(&bytes[..c], &format!("truncated at {c}"));
         // Formats whose header fixes the data size must reject a file cut in half (text
         // formats and multi-channel NanoScope files can legitimately hold less data).
-        if matches!(
-            format,
-            Format::X3p | Format::Bcr | Format::Sdf | Format::Gsf
-        ) && c < n / 2
-        {
+        if ["x3p", "bcr", "sdf", "gsf"].contains(&format.name()) && c < n / 2 {
             assert!(
                 read_bytes(name, &bytes[..c], &o).is_err(),
                 "{name}: truncated file at {c} accepted"
@@ -129,12 +130,12 @@ fn replace_after(bytes: &[u8], after: &str, from: &str, to: &str) -> Vec<u8> {
 #[test]
 fn nanoscope_survives_hostile_input() {
     let b = data("di-3.di");
-    torture("di-3.di", &b, Format::NanoScope, 1, 150);
+    torture("di-3.di", &b, fmt("nanoscope"), 1, 150);
     // Same length keeps the header layout: 256 → 9999 points per line.
     expect_err(
         "huge.di",
         &replace_after(&b, "Ciao image list", "Samps/line: 256", "Samps/line: 9999"),
-        Format::NanoScope,
+        fmt("nanoscope"),
         "Samps/line",
     );
     let huge = replace_after(
@@ -143,7 +144,7 @@ fn nanoscope_survives_hostile_input() {
         "Number of lines: 256",
         "Number of lines: 1000000000000",
     );
-    expect_err("huge2.di", &huge, Format::NanoScope, "Samps/line");
+    expect_err("huge2.di", &huge, fmt("nanoscope"), "Samps/line");
     expect_err(
         "offset.di",
         &replace_after(
@@ -152,15 +153,15 @@ fn nanoscope_survives_hostile_input() {
             "Data offset: 40960",
             "Data offset: 99999999",
         ),
-        Format::NanoScope,
+        fmt("nanoscope"),
         "Data offset",
     );
     let e = read_bytes(
         "di-3.di",
         &b,
         &ReadOptions {
-            channel: Some(7),
-            ..opts(Format::NanoScope)
+            channel: Some(ChannelSel::Index(7)),
+            ..opts(fmt("nanoscope"))
         },
     )
     .unwrap_err();
@@ -170,8 +171,8 @@ fn nanoscope_survives_hostile_input() {
         "di-3.di",
         &b,
         &ReadOptions {
-            channel: Some(2),
-            ..opts(Format::NanoScope)
+            channel: Some(ChannelSel::Index(2)),
+            ..opts(fmt("nanoscope"))
         },
     )
     .unwrap_err();
@@ -184,25 +185,25 @@ fn nanoscope_survives_hostile_input() {
 #[test]
 fn matrix_and_dektak_survive_hostile_input() {
     let m = data("matrix-3.txt");
-    torture("matrix-3.txt", &m[..20_000], Format::Matrix, 2, 100);
+    torture("matrix-3.txt", &m[..20_000], fmt("matrix"), 2, 100);
     expect_err(
         "ragged.txt",
         b"# Width: 1 um\n1 2 3\n4 5\n",
-        Format::Matrix,
+        fmt("matrix"),
         "line 3",
     );
     expect_err(
         "nowidth.txt",
         b"1 2 3 4\n4 5 6 7\n",
-        Format::Matrix,
-        "Width",
+        fmt("matrix"),
+        "--pixel-size",
     );
     let d = data("dektak-1.csv");
-    torture("dektak-1.csv", &d, Format::Dektak, 3, 100);
+    torture("dektak-1.csv", &d, fmt("dektak"), 3, 100);
     expect_err(
         "nodata.csv",
         b"Scan Parameters\nfoo,bar\n",
-        Format::Dektak,
+        fmt("dektak"),
         "Scan Data",
     );
 }
@@ -210,7 +211,7 @@ fn matrix_and_dektak_survive_hostile_input() {
 #[test]
 fn x3p_survives_hostile_input() {
     let b = data("KautschukInfiniteFocus.x3p");
-    torture("k.x3p", &b, Format::X3p, 4, 60);
+    torture("k.x3p", &b, fmt("x3p"), 4, 60);
     // Rebuild the archive with a main.xml that claims 10⁹ × 10⁹ points.
     let mut zip = zip::ZipArchive::new(std::io::Cursor::new(&b[..])).unwrap();
     let mut xml = String::new();
@@ -228,7 +229,7 @@ fn x3p_survives_hostile_input() {
         w.finish().unwrap().into_inner()
     };
     // Sanity: the rebuilt archive reads.
-    let ok = read_bytes("rebuilt.x3p", &build(&xml, &bin), &opts(Format::X3p)).unwrap();
+    let ok = read_bytes("rebuilt.x3p", &build(&xml, &bin), &opts(fmt("x3p"))).unwrap();
     assert_eq!((ok.nx, ok.ny), (860, 634));
     let huge = xml
         .replace("<SizeX>860</SizeX>", "<SizeX>1000000000</SizeX>")
@@ -236,14 +237,14 @@ fn x3p_survives_hostile_input() {
     expect_err(
         "huge.x3p",
         &build(&huge, &bin),
-        Format::X3p,
+        fmt("x3p"),
         "MatrixDimension",
     );
     let short = xml.replace("<SizeX>860</SizeX>", "<SizeX>861</SizeX>");
     expect_err(
         "short.x3p",
         &build(&short, &bin),
-        Format::X3p,
+        fmt("x3p"),
         "MatrixDimension",
     );
     let dtype = xml.replacen(
@@ -252,7 +253,7 @@ fn x3p_survives_hostile_input() {
         1,
     );
     assert_ne!(dtype, xml);
-    expect_err("dtype.x3p", &build(&dtype, &bin), Format::X3p, "DataType");
+    expect_err("dtype.x3p", &build(&dtype, &bin), fmt("x3p"), "DataType");
     // Double data and an inline data list give the same heights.
     let f32s: Vec<f64> = bin
         .chunks_exact(4)
@@ -264,7 +265,7 @@ fn x3p_survives_hostile_input() {
         1,
     );
     let dbin: Vec<u8> = f32s.iter().flat_map(|v| v.to_le_bytes()).collect();
-    let d = read_bytes("double.x3p", &build(&dxml, &dbin), &opts(Format::X3p)).unwrap();
+    let d = read_bytes("double.x3p", &build(&dxml, &dbin), &opts(fmt("x3p"))).unwrap();
     for (a, b) in d.heights.iter().zip(&ok.heights) {
         assert!(a == b || (a.is_nan() && b.is_nan()));
     }
@@ -277,7 +278,7 @@ fn x3p_survives_hostile_input() {
     let ibin: Vec<u8> = (0..860 * 634)
         .flat_map(|i| ((i % 1000) as i16 - 500).to_le_bytes())
         .collect();
-    let it = read_bytes("int.x3p", &build(&ixml, &ibin), &opts(Format::X3p)).unwrap();
+    let it = read_bytes("int.x3p", &build(&ixml, &ibin), &opts(fmt("x3p"))).unwrap();
     assert!((it.heights[1234] - ((1234 % 1000) as f64 - 500.0) * 1e-9).abs() < 1e-20);
     assert_eq!(
         ok.invalid_count(),
@@ -289,7 +290,7 @@ fn x3p_survives_hostile_input() {
 #[test]
 fn bcr_survives_hostile_input() {
     let b = data("bcrf-1.bcrf");
-    torture("bcrf-1.bcrf", &b[..200_000], Format::Bcr, 5, 150);
+    torture("bcrf-1.bcrf", &b[..200_000], fmt("bcr"), 5, 150);
     let utf16 = |s: &str| -> Vec<u8> { s.encode_utf16().flat_map(|u| u.to_le_bytes()).collect() };
     let mut huge = b.clone();
     let from = utf16("xpixels = 960");
@@ -299,10 +300,10 @@ fn bcr_survives_hostile_input() {
         .position(|w| w == from.as_slice())
         .unwrap();
     huge[pos..pos + to.len()].copy_from_slice(&to);
-    expect_err("huge.bcrf", &huge, Format::Bcr, "xpixels");
+    expect_err("huge.bcrf", &huge, fmt("bcr"), "xpixels");
     let to = utf16("xpixels = 999");
     huge[pos..pos + to.len()].copy_from_slice(&to);
-    expect_err("big.bcrf", &huge, Format::Bcr, "xpixels");
+    expect_err("big.bcrf", &huge, fmt("bcr"), "xpixels");
 }
 
 /// An ASCII-header int16 BCR file written from scratch.
@@ -331,7 +332,7 @@ fn bcr_int16_round_trip_and_torture() {
     assert!((t.dx - 10e-9).abs() < 1e-20 && (t.dy - 20e-9).abs() < 1e-20);
     assert!((t.heights[1] - (-2.0 * 0.5e-9)).abs() < 1e-20);
     assert!(t.heights[12].is_nan(), "void pixel");
-    torture("x.bcr", &b, Format::Bcr, 6, 200);
+    torture("x.bcr", &b, fmt("bcr"), 6, 200);
 }
 
 /// A GSF file written from scratch.
@@ -355,9 +356,9 @@ fn gsf_round_trip_and_torture() {
     assert_eq!((t.nx, t.ny, t.channel.as_str()), (6, 4, "test"));
     assert!((t.dx - 2e-6 / 6.0).abs() < 1e-18 && (t.dy - 0.25e-6).abs() < 1e-18);
     assert!((t.heights[7] - 7e-9).abs() < 1e-20 && t.heights[20].is_nan());
-    torture("x.gsf", &b, Format::Gsf, 7, 200);
+    torture("x.gsf", &b, fmt("gsf"), 7, 200);
     let huge = String::from_utf8_lossy(&b).replace("XRes = 6", "XRes = 600000000000");
-    expect_err("huge.gsf", huge.as_bytes(), Format::Gsf, "XRes");
+    expect_err("huge.gsf", huge.as_bytes(), fmt("gsf"), "XRes");
 }
 
 /// Binary SDF written from scratch (81-byte header).
@@ -386,22 +387,22 @@ fn sdf_round_trip_and_torture() {
     assert_eq!((t.nx, t.ny), (5, 3));
     assert!((t.dx - 1e-6).abs() < 1e-18 && (t.dy - 2e-6).abs() < 1e-18);
     assert!((t.heights[4] - (-300e-9)).abs() < 1e-18);
-    torture("x.sdf", &b, Format::Sdf, 8, 200);
+    torture("x.sdf", &b, fmt("sdf"), 8, 200);
     let mut huge = b.clone();
     huge[42..46].copy_from_slice(&[0xff, 0xff, 0xff, 0xff]);
-    expect_err("huge.sdf", &huge, Format::Sdf, "NumPoints");
+    expect_err("huge.sdf", &huge, fmt("sdf"), "NumPoints");
 
     let ascii = "aISO-1.0\nManufacID = lustre\nNumPoints = 3\nNumProfiles = 2\nXscale = 1e-6\nYscale = 1e-6\nZscale = 1e-9\nDataType = 7\n*\n1 2 3\n4 5 6\n*\n";
     let t = read_bytes("a.sdf", ascii.as_bytes(), &ReadOptions::default()).unwrap();
     assert_eq!((t.nx, t.ny), (3, 2));
     assert!((t.heights[5] - 6e-9).abs() < 1e-20);
-    torture("a.sdf", ascii.as_bytes(), Format::Sdf, 9, 200);
+    torture("a.sdf", ascii.as_bytes(), fmt("sdf"), 9, 200);
     expect_err(
         "huge-a.sdf",
         ascii
             .replace("NumPoints = 3", "NumPoints = 300000000")
             .as_bytes(),
-        Format::Sdf,
+        fmt("sdf"),
         "NumPoints",
     );
 }
@@ -422,7 +423,7 @@ fn xyz_round_trip_and_torture() {
         }
     }
     let o = ReadOptions {
-        units: Some(1e-6),
+        units: Units::parse("um"),
         ..ReadOptions::default()
     };
     let t = read_bytes("x.xyz", s.as_bytes(), &o).unwrap();
@@ -430,13 +431,17 @@ fn xyz_round_trip_and_torture() {
     assert!((t.dx - 0.5e-6).abs() < 1e-18);
     assert!((t.heights[3 * 5 + 4] - 43e-6).abs() < 1e-15);
     assert!(t.heights[2 * 5 + 2].is_nan(), "missing grid point is NaN");
-    torture("x.xyz", s.as_bytes(), Format::Xyz, 10, 300);
+    torture("x.xyz", s.as_bytes(), fmt("xyz"), 10, 300);
     let prof = "0 1\n1 2\n2 3\n3 5\n";
-    let t = read_bytes("p.xyz", prof.as_bytes(), &ReadOptions::default()).unwrap();
+    let m = ReadOptions {
+        units: Units::parse("m"),
+        ..ReadOptions::default()
+    };
+    let t = read_bytes("p.xyz", prof.as_bytes(), &m).unwrap();
     assert_eq!((t.nx, t.ny, t.dx), (4, 1, 1.0));
     // A far-away point cannot make the grid explode.
     let sparse = "0 0 1\n1 0 1\n0 1 1\n1e6 1e6 1\n";
-    assert!(read_bytes("s.xyz", sparse.as_bytes(), &ReadOptions::default()).is_err());
+    assert!(read_bytes("s.xyz", sparse.as_bytes(), &m).is_err());
 }
 
 #[test]
