@@ -6,6 +6,7 @@
 
 use anyhow::Context;
 use fit::io::{ChannelSel, Format, ReadOptions, Units};
+use fit::level::Level;
 use fit::pipeline::{self, Options};
 use std::path::{Path, PathBuf};
 
@@ -47,6 +48,10 @@ pub struct ScanArgs {
     pub size: Option<String>,
     #[arg(long, help = fit::io::registry::format_help())]
     pub format: Option<String>,
+    /// Form removed before the analysis (default: plane for maps, line for profiles;
+    /// `line` on a map levels each scan line). Curved parts need `poly2`.
+    #[arg(long, value_parser = ["none", "line", "plane", "poly2", "poly3"])]
+    pub level: Option<String>,
 }
 
 /// `lustre fit channels <scan>`.
@@ -64,7 +69,7 @@ pub struct ChannelsArgs {
 /// `lustre fit <scan> …`.
 #[derive(clap::Args)]
 pub struct MaterialArgs {
-    /// Surface scan (X3P, BCR, SDF, NanoScope .di, Gwyddion matrix/.gsf, Dektak CSV, XYZ).
+    /// Surface file (see --format for the formats read).
     pub scan: Option<PathBuf>,
     /// Stylus profile whose PSD replaces the scan's below the merge cutoff.
     #[arg(long)]
@@ -84,8 +89,11 @@ pub struct MaterialArgs {
     /// Metal written to [material].metal.
     #[arg(long, default_value = "stainless_steel")]
     pub metal: String,
-    /// Model written to [material].model.
-    #[arg(long, default_value = "ghs")]
+    /// Model written to [material].model; `auto` picks GHS when the K-correlation fit is
+    /// sound, else the measured PSD, else GGX.
+    #[arg(long, default_value = "auto", value_parser = [
+        "auto", "ghs", "ghs_ssa", "measured_psd", "two_scale", "ggx", "beckmann", "smooth",
+    ])]
     pub model: String,
     /// Output material file.
     #[arg(short, long, default_value = "material.toml")]
@@ -233,25 +241,98 @@ fn channels(args: ChannelsArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
+fn level_of(a: &ScanArgs) -> Option<Level> {
+    a.level.as_deref().and_then(Level::from_name)
+}
+
 fn stats(args: StatsArgs) -> anyhow::Result<()> {
     let (_, scan) = load(&args.scan, &read_options(&args.read)?)?;
-    let (t, _) = pipeline::prepare(scan.topo)?;
-    let s = fit::stats::compute(&t);
-    let p = fit::psd::welch(&t, &Default::default())?;
-    let kc = fit::kc::fit_bins(&p, 3, t.nx / 4)?;
+    let fit::io::Scan {
+        topo,
+        format,
+        channels,
+        channel,
+        notes: read_notes,
+    } = scan;
+    let s = pipeline::summarise(topo, level_of(&args.read))?;
+    let t = &s.prepared.scan;
+    let form = &s.prepared.form;
+    let kc = &s.kc;
+    let mut warnings: Vec<String> = Vec::new();
+    if let Some(w) = form.warning() {
+        warnings.push(w);
+    }
+    if let Some(r) = kc.reason {
+        warnings.push(format!("K-correlation fit degenerate: {}", r.describe()));
+    }
+    if let Some(a) = s.anisotropy.as_ref().filter(|a| a.anisotropic) {
+        warnings.push(format!(
+            "anisotropic surface (principal slope ratio {:.2}, lay at {:.1}°): the isotropic \
+             K-correlation fit is an approximation",
+            a.ratio,
+            a.lay_direction_deg()
+        ));
+    }
+    for w in &warnings {
+        eprintln!("warning: {}: {w}", args.scan.display());
+    }
+    let num = |v: f64| {
+        if v.is_finite() {
+            serde_json::json!(v)
+        } else {
+            serde_json::Value::Null
+        }
+    };
     let json = serde_json::json!({
-        "sq_m": s.sq,
-        "rms_slope": s.rms_slope(),
+        "file": args.scan.display().to_string(),
+        "format": format.name(),
+        "channel": { "index": channel, "name": channels.get(channel).map(|c| c.name.clone()) },
+        "grid": [t.nx, t.ny],
+        "pixel_m": [t.dx, t.dy],
+        "filled_points": s.prepared.filled,
+        "notes": read_notes.iter().chain(&s.notes).collect::<Vec<_>>(),
+        "warnings": warnings,
+        "level": {
+            "kind": form.level.name(),
+            "removed_rms_m": form.removed_rms,
+            "terms": form.terms.iter().map(|x| serde_json::json!({"x_pow": x.i, "y_pow": x.j, "coefficient_si": x.c})).collect::<Vec<_>>(),
+            "residual_form_fraction": form.residual_form.map(|r| r.1),
+            "residual_shows_form": form.warning().is_some(),
+        },
+        "sq_m": s.stats.sq,
+        "rms_slope": s.stats.rms_slope(),
+        "rq_lines_m": s.stats.rq_lines,
+        "rdq_x": num(s.stats.rdq_x),
         "kc": {
             "sigma_m": kc.params.sigma,
             "lc_m": kc.params.lc,
             "l_1d_m": kc.params.l_cycles(),
             "gamma": kc.params.gamma,
             "degenerate": kc.degenerate,
-            "fit_f_range_per_m": [kc.range.0, kc.range.1],
+            "reason": kc.reason.map(|r| r.describe()),
+            "stderr": { "sigma_m": num(kc.stderr.sigma), "lc_m": num(kc.stderr.lc), "gamma": num(kc.stderr.gamma) },
+            "fit_f_range_per_m": [num(kc.range.0), num(kc.range.1)],
+            "asymptote": kc.asymptote.map(|a| serde_json::json!({
+                "exponent": a.exponent,
+                "prefactor_si": a.prefactor,
+                "f_range_per_m": [a.range.0, a.range.1],
+                "form": "P1 = prefactor · f^(−exponent), P1 in m³, f in cycles/m",
+            })),
         },
-        "psd": { "f_per_m": p.f, "p": p.p },
-        "units": "SI; lc_m is the Matérn range Lc (physics.md), l_1d_m = 2π·Lc is the data-README 1D-form length; psd p in m³ (one-sided, f in cycles/m)",
+        "anisotropy": s.anisotropy.as_ref().map(|a| serde_json::json!({
+            "rms_slope_x": a.rms_slope_x,
+            "rms_slope_y": a.rms_slope_y,
+            "ratio_xy": num(a.ratio_xy),
+            "principal_rms_slopes": [a.principal.0, a.principal.1],
+            "ratio": num(a.ratio),
+            "slope_direction_deg": a.slope_direction_deg,
+            "lay_direction_deg": a.lay_direction_deg(),
+            "anisotropic": a.anisotropic,
+            "psd_rms_slopes": [a.psd_slopes.0, a.psd_slopes.1],
+            "psd_y": { "f_per_m": a.psd_y.f, "p": a.psd_y.p },
+        })),
+        "psd": { "f_per_m": s.line_psd.f, "p": s.line_psd.p },
+        "units": "SI; lc_m is the Matérn range Lc (physics.md), l_1d_m = 2π·Lc is the data-README 1D-form length; psd p in m³ (one-sided, f in cycles/m, along x; psd_y along y)",
     });
     if !args.json {
         eprintln!("note: only JSON output is implemented; printing JSON");
@@ -294,9 +375,14 @@ fn material(args: MaterialArgs) -> anyhow::Result<()> {
         wavelength: args.lambda_nm * 1e-9,
         merge_cutoff: args.merge_cutoff * 1e6,
         stylus_segments: args.stylus_segments,
+        level: level_of(&args.read),
         ..Options::default()
     };
-    let analysis = pipeline::analyse(topo.topo, stylus.as_ref().map(|s| s.1.topo.clone()), &opts)?;
+    let analysis = pipeline::analyse(
+        topo.topo.clone(),
+        stylus.as_ref().map(|s| s.1.topo.clone()),
+        &opts,
+    )?;
     let scan_name = scan_path.display().to_string();
     let stylus_name = args.stylus.as_ref().map(|p| p.display().to_string());
     let prov = fit::material::Provenance {
@@ -308,29 +394,54 @@ fn material(args: MaterialArgs) -> anyhow::Result<()> {
         merge_cutoff_rad_per_um: args.merge_cutoff,
         metal: &args.metal,
         model: &args.model,
+        notes: &topo.notes,
     };
     let doc = fit::material::build(&analysis, &prov);
     fit::material::write_atomic(&args.output, &fit::material::to_toml(&doc)?)?;
-    let k = analysis.kc.params;
+    let m = &doc.material;
     eprintln!(
-        "wrote {}: Sq {:.4} µm, rms slope {:.4}, KC σ {:.4} µm Lc {:.4} µm γ {:.3}{}, GGX α {:.4}, Beckmann α {:.4}",
+        "wrote {}: model {}, Sq {:.4} µm, rms slope {:.4}, KC σ {:.4} µm Lc {:.4} µm γ {:.3}{}, GGX α {:.4}, Beckmann α {:.4}",
         args.output.display(),
+        m.model,
         analysis.stats.sq * 1e6,
         analysis.stats.rms_slope(),
-        k.sigma * 1e6,
-        k.lc * 1e6,
-        k.gamma,
+        m.sigma_um,
+        m.lc_um,
+        m.gamma,
         if analysis.kc.degenerate {
-            " (DEGENERATE)"
+            " (DEGENERATE: bounded estimate)"
         } else {
             ""
         },
-        analysis.ndf.alpha_ggx.0,
-        analysis.ndf.alpha_beckmann.0,
+        m.alpha,
+        m.alpha_beckmann,
     );
+    for n in &analysis.notes {
+        eprintln!("note: {n}");
+    }
+    let r = &doc.reliability;
+    for (part, state) in [
+        ("kc", &r.kc),
+        ("alpha", &r.alpha),
+        ("psd", &r.psd),
+        ("two_scale", &r.two_scale),
+        ("form", &r.form),
+        ("anisotropy", &r.anisotropy),
+    ] {
+        if state != "ok" {
+            eprintln!("warning: {part}: {state}");
+        }
+    }
+    eprintln!("model: {}", r.model);
     if !args.no_plots {
-        for path in fit::plots::write(&analysis, &args.output)? {
-            eprintln!("wrote {}", path.display());
+        // The material file is written; a plot that cannot be drawn is only a warning.
+        match fit::plots::write(&analysis, &args.output) {
+            Ok(paths) => {
+                for path in paths {
+                    eprintln!("wrote {}", path.display());
+                }
+            }
+            Err(e) => eprintln!("warning: plots not written: {e}"),
         }
     }
     Ok(())

@@ -254,6 +254,12 @@ fn x3p_survives_hostile_input() {
     );
     assert_ne!(dtype, xml);
     expect_err("dtype.x3p", &build(&dtype, &bin), fmt("x3p"), "DataType");
+    // New point data need a new checksum (or none): drop the recorded MD5.
+    let xml = {
+        let a = xml.find("<MD5ChecksumPointData>").unwrap();
+        let b = xml.find("</MD5ChecksumPointData>").unwrap() + "</MD5ChecksumPointData>".len();
+        format!("{}{}", &xml[..a], &xml[b..])
+    };
     // Double data and an inline data list give the same heights.
     let f32s: Vec<f64> = bin
         .chunks_exact(4)
@@ -448,4 +454,171 @@ fn xyz_round_trip_and_torture() {
 fn unknown_formats_are_reported() {
     let e = read_bytes("x.bin", &[0u8, 1, 2, 3, 255], &ReadOptions::default()).unwrap_err();
     assert!(matches!(e, ReadError::UnknownFormat { .. }), "{e}");
+}
+
+/// Issue 13: a flipped byte anywhere in the X3P's compressed point data or header is
+/// caught by the zip CRC-32 or the file's MD5 checksums, never read as heights.
+#[test]
+fn x3p_checksums_catch_flipped_bytes() {
+    let b = data("KautschukInfiniteFocus.x3p");
+    let good = read_bytes("k.x3p", &b, &ReadOptions::default()).unwrap();
+    let mut zip = zip::ZipArchive::new(std::io::Cursor::new(&b[..])).unwrap();
+    let (start, len) = {
+        let f = zip.by_name("bindata/data.bin").unwrap();
+        (
+            f.data_start().unwrap() as usize,
+            f.compressed_size() as usize,
+        )
+    };
+    let mut caught = 0;
+    for k in 0..200 {
+        let pos = start + (k * 7919) % len;
+        let mut m = b.clone();
+        m[pos] ^= 0x10;
+        match read_bytes("k.x3p", &m, &ReadOptions::default()) {
+            Err(e) => {
+                let msg = e.to_string();
+                assert!(
+                    msg.contains("CRC") || msg.contains("decompress") || msg.contains("MD5"),
+                    "{msg}"
+                );
+                caught += 1;
+            }
+            Ok(t) => assert!(
+                t.heights
+                    .iter()
+                    .zip(&good.heights)
+                    .all(|(a, b)| a == b || (a.is_nan() && b.is_nan())),
+                "flip at {pos} changed the heights silently"
+            ),
+        }
+    }
+    println!("{caught} of 200 flips in the point data rejected");
+    assert!(caught >= 190, "{caught}");
+
+    // Uncompressed archives: the CRC names the entry, the MD5 the point data.
+    let mut xml = String::new();
+    std::io::Read::read_to_string(&mut zip.by_name("main.xml").unwrap(), &mut xml).unwrap();
+    let mut bin = Vec::new();
+    std::io::Read::read_to_end(&mut zip.by_name("bindata/data.bin").unwrap(), &mut bin).unwrap();
+    let mut md5 = Vec::new();
+    std::io::Read::read_to_end(&mut zip.by_name("md5checksum.hex").unwrap(), &mut md5).unwrap();
+    let build = |xml: &str, bin: &[u8], md5: &[u8]| -> Vec<u8> {
+        let mut w = zip::ZipWriter::new(std::io::Cursor::new(Vec::new()));
+        let o = zip::write::SimpleFileOptions::default()
+            .compression_method(zip::CompressionMethod::Stored);
+        w.start_file("main.xml", o).unwrap();
+        w.write_all(xml.as_bytes()).unwrap();
+        w.start_file("bindata/data.bin", o).unwrap();
+        w.write_all(bin).unwrap();
+        w.start_file("md5checksum.hex", o).unwrap();
+        w.write_all(md5).unwrap();
+        w.finish().unwrap().into_inner()
+    };
+    let stored = build(&xml, &bin, &md5);
+    read_bytes("stored.x3p", &stored, &ReadOptions::default()).unwrap();
+    // One byte of the stored data flipped in place: the zip CRC fails.
+    let at = stored
+        .windows(16)
+        .position(|w| w == &bin[1000..1016])
+        .unwrap();
+    let mut m = stored.clone();
+    m[at + 3] ^= 0x40;
+    let e = read_bytes("crc.x3p", &m, &ReadOptions::default())
+        .unwrap_err()
+        .to_string();
+    println!("{e}");
+    assert!(
+        e.contains("CRC-32") && e.contains("bindata/data.bin"),
+        "{e}"
+    );
+    // A consistent archive whose data no longer match MD5ChecksumPointData.
+    let mut bad = bin.clone();
+    bad[4000] ^= 0x01;
+    let e = read_bytes("md5.x3p", &build(&xml, &bad, &md5), &ReadOptions::default())
+        .unwrap_err()
+        .to_string();
+    println!("{e}");
+    assert!(
+        e.contains("MD5ChecksumPointData") && e.contains("MD5 check failed"),
+        "{e}"
+    );
+    // A header edited without updating md5checksum.hex.
+    let edited = xml.replacen("<Comment>", "<Comment>x", 1);
+    let edited = if edited == xml {
+        xml.replacen("</Record1>", " </Record1>", 1)
+    } else {
+        edited
+    };
+    let e = read_bytes(
+        "hdr.x3p",
+        &build(&edited, &bin, &md5),
+        &ReadOptions::default(),
+    )
+    .unwrap_err()
+    .to_string();
+    println!("{e}");
+    assert!(
+        e.contains("md5checksum.hex") && e.contains("main.xml"),
+        "{e}"
+    );
+}
+
+/// Issue 13: truncated, cut or garbled Dektak profiles are errors naming the problem.
+#[test]
+fn dektak_truncation_and_garbling_are_detected() {
+    let d = data("dektak-1.csv");
+    let text = String::from_utf8_lossy(&d).into_owned();
+    let lines: Vec<&str> = text.lines().collect();
+    let start = lines
+        .iter()
+        .position(|l| l.starts_with("Scan Data"))
+        .unwrap()
+        + 2;
+    let n = lines.len();
+    let o = opts(fmt("dektak"));
+    let join = |ls: &[&str]| ls.join("\n").into_bytes();
+    // The whole file reads.
+    read_bytes("dektak-1.csv", &d, &o).unwrap();
+    // Cut anywhere in the data (by rows or mid-row), ≥ 1 % short: rejected.
+    for frac in [0.1, 0.5, 0.9, 0.98] {
+        let cut = start + ((n - start) as f64 * frac) as usize;
+        let e = read_bytes("cut.csv", &join(&lines[..cut]), &o)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("truncated"), "{e}");
+    }
+    let mut cut_bytes = d.clone();
+    cut_bytes.truncate(d.len() * 3 / 4);
+    let e = read_bytes("cut2.csv", &cut_bytes, &o)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("truncated") || e.contains("garbled"), "{e}");
+    // Rows missing in the middle.
+    let mut holes = lines.clone();
+    holes.drain(start + 3000..start + 3040);
+    let e = read_bytes("holes.csv", &join(&holes), &o)
+        .unwrap_err()
+        .to_string();
+    println!("{e}");
+    assert!(e.contains("missing") && e.contains("line"), "{e}");
+    // A garbled row.
+    let mut garbled = lines.clone();
+    let bad = format!("{}#x", lines[start + 5000]);
+    garbled[start + 5000] = &bad;
+    let e = read_bytes("garbled.csv", &join(&garbled), &o)
+        .unwrap_err()
+        .to_string();
+    println!("{e}");
+    assert!(
+        e.contains(&format!("line {}", start + 5001)) && e.contains("garbled"),
+        "{e}"
+    );
+    // Rows out of order.
+    let mut swapped = lines.clone();
+    swapped.swap(start + 100, start + 700);
+    let e = read_bytes("swap.csv", &join(&swapped), &o)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("out of order"), "{e}");
 }
