@@ -178,16 +178,19 @@ fn blocks(ctx: Ctx<'_>, b: &[u8], n: usize) -> Result<Vec<u8>, ReadError> {
     };
     let inflate = |p: usize, count: u32, size: u32| -> Option<Vec<u8>> {
         let want = count as u64 * 4;
-        let mut out = Vec::with_capacity(want as usize);
+        let mut out = Vec::with_capacity((want as usize).min(size as usize * 64));
         flate2::read::ZlibDecoder::new(&b[p..p + size as usize])
             .take(want + 1)
             .read_to_end(&mut out)
             .ok()?;
         (out.len() as u64 == want).then_some(out)
     };
-    let mut data = vec![0u8; n * 4];
-    let mut covered = vec![false; n];
+    // Blocks are kept as decoded and assembled only once they cover the grid, so a
+    // corrupt header cannot make us allocate more than the file really holds.
+    let mut parts: Vec<(usize, Vec<u8>)> = Vec::new();
+    let mut covered: Vec<(usize, usize)> = Vec::new();
     let mut filled = 0usize;
+    let mut failures = 0usize;
     let mut p = 16;
     while p < b.len() && filled < n {
         let Some((first, count, size)) = plausible(p) else {
@@ -195,14 +198,19 @@ fn blocks(ctx: Ctx<'_>, b: &[u8], n: usize) -> Result<Vec<u8>, ReadError> {
             continue;
         };
         let Some(out) = inflate(p, count, size) else {
+            // Bound the work a crafted file can cause.
+            failures += 1;
+            if failures > 4096 {
+                break;
+            }
             p += 1;
             continue;
         };
         let (s, e) = (first as usize, first as usize + count as usize);
         // Blocks of another layer may repeat points already read: keep the first.
-        if !covered[s..e].iter().any(|&c| c) {
-            covered[s..e].iter_mut().for_each(|c| *c = true);
-            data[s * 4..e * 4].copy_from_slice(&out);
+        if !covered.iter().any(|&(a, b)| s < b && a < e) {
+            covered.push((s, e));
+            parts.push((s, out));
             filled += count as usize;
         }
         p += size as usize + 16;
@@ -213,6 +221,10 @@ fn blocks(ctx: Ctx<'_>, b: &[u8], n: usize) -> Result<Vec<u8>, ReadError> {
             format!("the compressed blocks hold {filled} of the {n} points"),
             "the file is truncated or uses a layout this reader does not know",
         ));
+    }
+    let mut data = vec![0u8; n * 4];
+    for (s, out) in parts {
+        data[s * 4..s * 4 + out.len()].copy_from_slice(&out);
     }
     Ok(data)
 }

@@ -255,8 +255,13 @@ pub(crate) fn select(
             return channels.iter().position(|c| c.is_height).ok_or_else(|| {
                 ctx.err(
                     "channel",
-                    format!("no channel holds heights (channels: {})", list()),
-                    "choose one with --channel, and give its unit with --units if it is a length",
+                    format!(
+                        "no channel holds heights (channels: {}); values in deg, V, N, … are \
+                         not a height",
+                        list()
+                    ),
+                    "export a height channel, or choose one with --channel and give its unit \
+                     with --units if it is a length",
                 )
             });
         }

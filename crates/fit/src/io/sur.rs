@@ -99,7 +99,7 @@ pub(crate) fn read(ctx: Ctx<'_>, bytes: &[u8], want: Want<'_>) -> Result<Decoded
         if need > (cs as u64).saturating_mul(1100).saturating_add(4096) {
             return Err(ctx.short("compressed data", need, cs as u64));
         }
-        let mut out = Vec::with_capacity(need as usize);
+        let mut out = Vec::with_capacity((need as usize).min(cs.saturating_mul(16)));
         flate2::read::ZlibDecoder::new(&body[..cs])
             .take(need)
             .read_to_end(&mut out)

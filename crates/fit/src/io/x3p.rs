@@ -295,7 +295,8 @@ fn read_entry<R: Read + std::io::Seek>(
             .saturating_mul(MAX_DEFLATE_RATIO)
             .saturating_add(4096),
     );
-    let mut out = Vec::with_capacity(usize::try_from(cap).unwrap_or(0));
+    // Grow past 64 MB only as data really arrive.
+    let mut out = Vec::with_capacity(usize::try_from(cap.min(64 << 20)).unwrap_or(0));
     f.take(limit.saturating_add(1))
         .read_to_end(&mut out)
         .map_err(|e| {
