@@ -622,3 +622,286 @@ fn dektak_truncation_and_garbling_are_detected() {
         .to_string();
     assert!(e.contains("out of order"), "{e}");
 }
+
+/// One sample file per reader of the registry (real corpus files where there is one,
+/// files written here otherwise).
+fn samples() -> Vec<(&'static str, String, Vec<u8>)> {
+    let corpus = |f: &str| data(&format!("corpus/{f}"));
+    let vals: Vec<i16> = (0..15).map(|i| i * 100 - 700).collect();
+    let gvals: Vec<f32> = (0..24).map(|i| i as f32).collect();
+    let mut s: Vec<(&'static str, String, Vec<u8>)> = vec![
+        ("x3p", "k.x3p".into(), data("KautschukInfiniteFocus.x3p")),
+        ("sdf", "x.sdf".into(), sdf_binary(5, 3, &vals)),
+        (
+            "sdf",
+            "a.sdf".into(),
+            b"aISO-1.0\nNumPoints = 3\nNumProfiles = 2\nXscale = 1e-6\nYscale = 1e-6\nZscale = 1e-9\nDataType = 7\n*\n1 2 3\n4 5 6\n*\n".to_vec(),
+        ),
+        ("bcr", "x.bcr".into(), bcr_int16(4, 4, &[1; 16])),
+        ("bcr", "bcrf-1.bcrf".into(), data("bcrf-1.bcrf")),
+        ("gsf", "x.gsf".into(), gsf(6, 4, &gvals, "")),
+        ("nanoscope", "di-5.di".into(), corpus("di-5.di")),
+        ("plu", "plu-1.plu".into(), corpus("plu-1.plu")),
+        ("sur", "sur-2.sur".into(), corpus("sur-2.sur")),
+        ("mnt", "mnt-1.mnt".into(), corpus("mnt-1.mnt")),
+        ("metropro", "metropro-1.dat".into(), corpus("metropro-1.dat")),
+        ("opd", "opd-1.opd".into(), corpus("opd-1.opd")),
+        ("al3d", "al3d-1.al3d".into(), corpus("al3d-1.al3d")),
+        ("nid", "nid-1.nid".into(), corpus("nid-1.nid")),
+        ("ibw", "spot.ibw".into(), corpus("spot_1-1000nm.ibw")),
+        (
+            "ibw",
+            "10x10.ibw".into(),
+            corpus("10x10-one_channel_without_name.ibw"),
+        ),
+        ("park", "example_ps.tiff".into(), corpus("example_ps.tiff")),
+        ("mi", "mi-1.mi".into(), corpus("mi-1.mi")),
+        ("wsxm", "stp-1.stp".into(), corpus("stp-1.stp")),
+        ("frt", "frt-1.frt".into(), corpus("frt-1.frt")),
+        ("tmd", "tmd-1.tmd".into(), corpus("tmd-1.tmd")),
+        ("dektak", "dektak-1.csv".into(), data("dektak-1.csv")),
+        (
+            "matrix",
+            "english.txt".into(),
+            corpus("gwyddion-export-english.txt"),
+        ),
+        ("matrix", "txt_example.txt".into(), corpus("txt_example.txt")),
+        ("matrix", "matrix-3.txt".into(), data("matrix-3.txt")[..30_000].to_vec()),
+        ("xyz", "csv-2.csv".into(), corpus("csv-2.csv")),
+        ("xyz", "xy-1.txt".into(), corpus("xy-1.txt")),
+        ("xyz", "csv-1.csv".into(), corpus("csv-1.csv")),
+    ];
+    // Every reader of the registry has a sample.
+    for f in Format::all() {
+        assert!(
+            s.iter().any(|(n, _, _)| *n == f.name()),
+            "no hostile-input sample for {}",
+            f.name()
+        );
+    }
+    s.sort_by_key(|x| x.0);
+    s
+}
+
+/// Make an Igor header checksum add up again, so mutations reach past it.
+fn fix_ibw_checksum(b: &mut [u8]) {
+    if b.len() < 384 || b[0] == 0 {
+        return;
+    }
+    b[2] = 0;
+    b[3] = 0;
+    let sum = b[..384].chunks_exact(2).fold(0u16, |s, c| {
+        s.wrapping_add(u16::from_le_bytes([c[0], c[1]]))
+    });
+    b[2..4].copy_from_slice(&0u16.wrapping_sub(sum).to_le_bytes());
+}
+
+/// `n` mutations of a sample: truncations, bit flips (mostly in the header) and header
+/// numbers replaced by huge, negative, zero or non-finite ones. No panic, no abort, and
+/// any result read must be self-consistent.
+fn mutate_and_read(format: &str, name: &str, bytes: &[u8], n: usize, seed: u64) -> (usize, usize) {
+    let fmt = fmt(format);
+    let o = opts(fmt);
+    let mut rng = SplitMix64::new(seed);
+    let len = bytes.len();
+    let head = len.min(4096);
+    let (mut ok, mut err) = (0, 0);
+    let huge_text = [
+        "99999999999",
+        "4294967295",
+        "-1",
+        "0",
+        "1e308",
+        "nan",
+        "-0",
+        "2147483648",
+    ];
+    let huge_bin: [u32; 5] = [0xFFFF_FFFF, 0x7FFF_FFFF, 0x8000_0000, 0, 0x0001_0000];
+    for i in 0..n {
+        let mut b = bytes.to_vec();
+        let what = match rng.next_u64() % 10 {
+            0..=2 => {
+                let cut = (rng.next_u64() as usize) % len.max(1);
+                b.truncate(cut);
+                format!("truncated at {cut}")
+            }
+            3..=6 => {
+                let k = 1 + rng.next_u64() % 8;
+                for _ in 0..k {
+                    let region = if rng.next_u64().is_multiple_of(4) {
+                        len
+                    } else {
+                        head
+                    };
+                    let pos = (rng.next_u64() as usize) % region.max(1);
+                    b[pos] ^= 1 << (rng.next_u64() % 8);
+                }
+                format!("{k} bit flips")
+            }
+            _ => {
+                // Replace a run of ASCII digits in the header, or a binary word.
+                let start = (rng.next_u64() as usize) % head.max(1);
+                let digits = b[start..head]
+                    .iter()
+                    .position(|c| c.is_ascii_digit())
+                    .map(|p| start + p);
+                if let Some(p) = digits.filter(|_| rng.next_u64().is_multiple_of(2)) {
+                    let end = p + b[p..]
+                        .iter()
+                        .take_while(|c| c.is_ascii_digit() || **c == b'.')
+                        .count();
+                    let rep = huge_text[(rng.next_u64() as usize) % huge_text.len()];
+                    b.splice(p..end, rep.bytes());
+                    format!("number at {p} → {rep}")
+                } else {
+                    let p = ((rng.next_u64() as usize) % head.saturating_sub(4).max(1)) & !3;
+                    let v = huge_bin[(rng.next_u64() as usize) % huge_bin.len()];
+                    if p + 4 <= b.len() {
+                        b[p..p + 4].copy_from_slice(&v.to_le_bytes());
+                    }
+                    format!("word at {p} → {v:#x}")
+                }
+            }
+        };
+        if format == "ibw" && !rng.next_u64().is_multiple_of(3) {
+            fix_ibw_checksum(&mut b);
+        }
+        let r = std::panic::catch_unwind(|| {
+            let listed = fit::io::list_channels(name, &b, &o);
+            (listed.is_ok(), read_bytes(name, &b, &o))
+        });
+        match r {
+            Err(_) => panic!("{format} {name}: mutation {i} ({what}) panicked"),
+            Ok((_, Ok(t))) => {
+                assert_eq!(t.heights.len(), t.nx * t.ny, "{name} {what}");
+                assert!(
+                    t.dx > 0.0 && t.dx.is_finite() && t.dy > 0.0 && t.dy.is_finite(),
+                    "{name} {what}: spacing {} {}",
+                    t.dx,
+                    t.dy
+                );
+                assert!(
+                    t.heights.len() <= 8 * b.len().max(1) + 64
+                        || format == "mnt"
+                        || format == "x3p"
+                        || format == "sur",
+                    "{name} {what}: more points than bytes"
+                );
+                ok += 1;
+            }
+            Ok((_, Err(e))) => {
+                let msg = e.to_string();
+                assert!(
+                    !msg.is_empty() && !msg.contains('\n'),
+                    "{name} {what}: {msg}"
+                );
+                err += 1;
+            }
+        }
+    }
+    (ok, err)
+}
+
+fn hostile_suite(n: usize) {
+    for (i, (format, name, bytes)) in samples().into_iter().enumerate() {
+        let t0 = std::time::Instant::now();
+        let (ok, err) = mutate_and_read(format, &name, &bytes, n, 1000 + i as u64);
+        println!(
+            "{format:<10} {name:<22} {n} mutations: {ok} read, {err} rejected ({:.1} s)",
+            t0.elapsed().as_secs_f64()
+        );
+    }
+}
+
+/// ≥ 100 mutations of every reader's sample in the normal run.
+#[test]
+fn every_reader_survives_mutations() {
+    hostile_suite(100);
+}
+
+/// ≥ 2000 mutations per sample: `cargo test -p fit --test hostile -- --ignored`.
+#[test]
+#[ignore]
+fn every_reader_survives_many_mutations() {
+    hostile_suite(2000);
+}
+
+/// Headers that claim enormous grids are errors before any allocation.
+#[test]
+fn oversized_headers_of_the_new_formats_are_rejected() {
+    let corpus = |f: &str| data(&format!("corpus/{f}"));
+    let o = ReadOptions::default();
+    let expect = |name: &str, b: &[u8], needle: &str| {
+        let e = match read_bytes(name, b, &o) {
+            Ok(t) => panic!("{name}: accepted ({} × {})", t.nx, t.ny),
+            Err(e) => e.to_string(),
+        };
+        println!("{e}");
+        assert!(
+            e.contains(needle),
+            "{name}: `{e}` should mention `{needle}`"
+        );
+    };
+    // PLU: layer 100000 × 100000.
+    let mut b = corpus("plu-1.plu");
+    b[500..508].copy_from_slice(&[0xa0, 0x86, 1, 0, 0xa0, 0x86, 1, 0]);
+    expect("big.plu", &b, "xres × yres");
+    // SUR: 2³¹ − 1 points per line.
+    let mut b = corpus("sur-2.sur");
+    b[108..112].copy_from_slice(&i32::MAX.to_le_bytes());
+    expect("big.sur", &b, "total number of points");
+    // MetroPro: 65535 × 65535 phase points.
+    let mut b = corpus("metropro-1.dat");
+    b[68..72].copy_from_slice(&[0xff; 4]);
+    expect("big.dat", &b, "cn_org_width");
+    // TMD: u32::MAX columns.
+    let mut b = corpus("tmd-1.tmd");
+    b[56..60].copy_from_slice(&[0xff; 4]);
+    expect("big.tmd", &b, "columns");
+    // IBW: 65536 × 65536 × 8 points with a consistent checksum.
+    let mut b = corpus("spot_1-1000nm.ibw");
+    b[64 + 68..64 + 72].copy_from_slice(&65536u32.to_le_bytes());
+    b[64 + 72..64 + 76].copy_from_slice(&65536u32.to_le_bytes());
+    fix_ibw_checksum(&mut b);
+    expect("big.ibw", &b, "nDim");
+    // MI: 10⁸ pixels per line.
+    let b = String::from_utf8_lossy(&corpus("mi-1.mi")).replacen(
+        "xPixels       256",
+        "xPixels       100000000",
+        1,
+    );
+    let b: Vec<u8> = b.chars().map(|c| c as u32 as u8).collect();
+    assert!(read_bytes("big.mi", &b, &o).is_err());
+    // WSxM: 10⁹ columns.
+    let t = corpus("stp-1.stp");
+    let pos = t
+        .windows(22)
+        .position(|w| w == b"Number of columns: 256")
+        .unwrap();
+    let mut b = t[..pos].to_vec();
+    b.extend_from_slice(b"Number of columns: 999999999");
+    b.extend_from_slice(&t[pos + 22..]);
+    expect("big.stp", &b, "columns × rows");
+    // NID: 10⁹ points.
+    let t = corpus("nid-1.nid");
+    let sec = t.windows(13).position(|w| w == b"[DataSet-0:1]").unwrap();
+    let pos = sec
+        + t[sec..]
+            .windows(10)
+            .position(|w| w == b"Points=256")
+            .unwrap();
+    let mut b = t[..pos].to_vec();
+    b.extend_from_slice(b"Points=999999999");
+    b.extend_from_slice(&t[pos + 10..]);
+    expect("big.nid", &b, "Points × Lines");
+    // FRT: 2³² − 1 points per line.
+    let t = corpus("frt-1.frt");
+    let mut b = t.clone();
+    let g = 500u32.to_le_bytes();
+    let p = t
+        .windows(8)
+        .position(|w| w[..4] == g && w[4..] == g)
+        .unwrap();
+    b[p..p + 4].copy_from_slice(&[0xff; 4]);
+    expect("big.frt", &b, "grid");
+}

@@ -28,17 +28,26 @@ pub(crate) fn read(ctx: Ctx<'_>, bytes: &[u8], want: Want<'_>) -> Result<Decoded
             .iter()
             .position(|&b| b == b'\n')
             .map_or(bytes.len(), |e| pos + e);
-        let line: String = bytes[pos..end].iter().map(|&b| b as char).collect();
+        let raw = &bytes[pos..end];
         pos = (end + 1).min(bytes.len());
-        let line = line.trim_end_matches('\r');
-        if line.starts_with(' ') || line.len() < 2 {
+        let raw = raw.strip_suffix(b"\r").unwrap_or(raw);
+        if raw.first() == Some(&b' ') || raw.len() < 2 {
             continue;
         }
-        let (k, v) = if line.len() > 14 {
-            (line[..14].trim(), line[14..].trim())
-        } else {
-            (line.trim(), "")
+        // Keys fill the first 14 bytes; values are Latin-1.
+        let text = |b: &[u8]| {
+            b.iter()
+                .map(|&c| c as char)
+                .collect::<String>()
+                .trim()
+                .to_string()
         };
+        let (k, v) = if raw.len() > 14 {
+            (text(&raw[..14]), text(&raw[14..]))
+        } else {
+            (text(raw), String::new())
+        };
+        let (k, v) = (k.as_str(), v.as_str());
         if k == "data" {
             data_kind = Some(v.to_string());
             break;
