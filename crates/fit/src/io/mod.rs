@@ -334,6 +334,26 @@ pub(crate) struct Ctx<'a> {
     pub file: &'a str,
 }
 
+/// Text taken from a file, made fit for a one-line message: control characters become
+/// spaces, runs of spaces collapse, and at most `max` characters are kept.
+pub fn clean(s: &str, max: usize) -> String {
+    let mut out = String::with_capacity(s.len().min(max));
+    let mut space = false;
+    for c in s.chars() {
+        let c = if c.is_control() { ' ' } else { c };
+        if c == ' ' && space {
+            continue;
+        }
+        space = c == ' ';
+        if out.chars().count() >= max {
+            out.push('…');
+            break;
+        }
+        out.push(c);
+    }
+    out.trim().to_string()
+}
+
 impl Ctx<'_> {
     pub fn err(
         &self,
@@ -343,9 +363,9 @@ impl Ctx<'_> {
     ) -> ReadError {
         ReadError::Invalid {
             file: self.file.to_string(),
-            field: field.to_string(),
-            problem: problem.into(),
-            fix: fix.into(),
+            field: clean(field, 120),
+            problem: clean(&problem.into(), 600),
+            fix: clean(&fix.into(), 300),
         }
     }
 
@@ -431,13 +451,14 @@ pub fn open_bytes(name: &str, bytes: &[u8], opts: &ReadOptions) -> Result<Scan, 
             "report this file as a bug",
         )
     })?;
-    let (topo, notes) = finish(ctx, raw, opts, format)?;
+    let (mut topo, notes) = finish(ctx, raw, opts, format)?;
+    topo.channel = clean(&topo.channel, 80);
     Ok(Scan {
         topo,
         format,
-        channels: d.channels,
+        channels: cleaned(d.channels),
         channel: d.selected,
-        notes,
+        notes: notes.iter().map(|n| clean(n, 400)).collect(),
     })
 }
 
@@ -449,7 +470,15 @@ pub fn list_channels(
 ) -> Result<(Format, Vec<ChannelInfo>), ReadError> {
     let format = format_of(name, bytes, opts)?;
     let d = (format.reader().read)(Ctx { file: name }, bytes, Want::List)?;
-    Ok((format, d.channels))
+    Ok((format, cleaned(d.channels)))
+}
+
+fn cleaned(mut channels: Vec<ChannelInfo>) -> Vec<ChannelInfo> {
+    for c in &mut channels {
+        c.name = clean(&c.name, 80);
+        c.unit = clean(&c.unit, 24);
+    }
+    channels
 }
 
 /// Read a file into metres (see [`open_path`] for the details and notes).
