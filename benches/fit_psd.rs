@@ -46,6 +46,20 @@ fn bench(c: &mut Criterion) {
             fit::pipeline::summarise(scan.topo, None).unwrap()
         })
     });
+    // Parts of the above.
+    g.bench_function("read_gsf_1024x1024", |b| {
+        b.iter(|| open_bytes("bench.gsf", black_box(&file), &ReadOptions::default()).unwrap())
+    });
+    g.bench_function("level_plane_and_form_check_1024x1024", |b| {
+        b.iter(|| {
+            let mut t = map.clone();
+            fit::level::apply(black_box(&mut t), fit::level::Level::Plane).unwrap()
+        })
+    });
+    g.bench_function("anisotropy_1024x1024", |b| {
+        let p = psd::welch(&map, &WelchOptions::default()).unwrap();
+        b.iter(|| fit::anisotropy::analyse(black_box(&map), p.clone()).unwrap())
+    });
     g.bench_function("welch_1024x1024", |b| {
         b.iter(|| psd::welch(black_box(&map), &WelchOptions::default()).unwrap())
     });
