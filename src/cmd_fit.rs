@@ -5,7 +5,8 @@
 //! `lustre fit stats <scan> --json` prints the headline numbers for scripting.
 
 use anyhow::Context;
-use fit::io::{Format, ReadOptions};
+use fit::io::{ChannelSel, Format, ReadOptions, Units};
+use fit::level::Level;
 use fit::pipeline::{self, Options};
 use std::path::{Path, PathBuf};
 
@@ -24,26 +25,51 @@ pub struct FitArgs {
 pub enum FitCommand {
     /// Print Sq, RMS slope, the K-correlation fit and the line PSD.
     Stats(StatsArgs),
+    /// List the channels of a file (index, name, unit, whether it holds heights).
+    Channels(ChannelsArgs),
 }
 
 /// Options shared by every way of reading a scan.
 #[derive(clap::Args, Clone)]
 pub struct ScanArgs {
-    /// Channel (image) index of multi-channel files such as NanoScope .di.
+    /// Channel of multi-channel files, by index or name (default: the first height
+    /// channel; list them with `lustre fit channels FILE`).
     #[arg(long)]
-    pub channel: Option<usize>,
-    /// Length unit of plain XYZ/CSV column files (m, mm, um, nm).
+    pub channel: Option<String>,
+    /// Units for files that do not state them: `um` for lengths and heights, or
+    /// `um,nm` for lengths,heights (m, mm, um/µm, nm, …).
     #[arg(long)]
     pub units: Option<String>,
-    /// Force the file format (x3p, bcr, sdf, di, matrix, gsf, dektak, xyz).
+    /// Pixel spacing for files without one, e.g. `0.5um` or `0.5um,0.4um` (x,y).
     #[arg(long)]
+    pub pixel_size: Option<String>,
+    /// Scan size for files without one, e.g. `100um` or `100um,80um` (x,y).
+    #[arg(long, conflicts_with = "pixel_size")]
+    pub size: Option<String>,
+    #[arg(long, help = fit::io::registry::format_help())]
     pub format: Option<String>,
+    /// Form removed before the analysis (default: plane for maps, line for profiles;
+    /// `line` on a map levels each scan line). Curved parts need `poly2`.
+    #[arg(long, value_parser = ["none", "line", "plane", "poly2", "poly3"])]
+    pub level: Option<String>,
+}
+
+/// `lustre fit channels <scan>`.
+#[derive(clap::Args)]
+pub struct ChannelsArgs {
+    /// Surface file.
+    pub scan: PathBuf,
+    /// Print JSON.
+    #[arg(long)]
+    pub json: bool,
+    #[command(flatten)]
+    pub read: ScanArgs,
 }
 
 /// `lustre fit <scan> …`.
 #[derive(clap::Args)]
 pub struct MaterialArgs {
-    /// Surface scan (X3P, BCR, SDF, NanoScope .di, Gwyddion matrix/.gsf, Dektak CSV, XYZ).
+    /// Surface file (see --format for the formats read).
     pub scan: Option<PathBuf>,
     /// Stylus profile whose PSD replaces the scan's below the merge cutoff.
     #[arg(long)]
@@ -63,8 +89,11 @@ pub struct MaterialArgs {
     /// Metal written to [material].metal.
     #[arg(long, default_value = "stainless_steel")]
     pub metal: String,
-    /// Model written to [material].model.
-    #[arg(long, default_value = "ghs")]
+    /// Model written to [material].model; `auto` picks GHS when the K-correlation fit is
+    /// sound, else the measured PSD, else GGX.
+    #[arg(long, default_value = "auto", value_parser = [
+        "auto", "ghs", "ghs_ssa", "measured_psd", "two_scale", "ggx", "beckmann", "smooth",
+    ])]
     pub model: String,
     /// Output material file.
     #[arg(short, long, default_value = "material.toml")]
@@ -91,56 +120,219 @@ pub struct StatsArgs {
 pub fn run(args: FitArgs) -> anyhow::Result<()> {
     match args.command {
         Some(FitCommand::Stats(s)) => stats(s),
+        Some(FitCommand::Channels(c)) => channels(c),
         None => material(args.material),
     }
 }
 
+/// `0.5um` or `0.5um,0.4um` (the second defaults to the first), in metres.
+fn parse_pair(flag: &str, v: &str) -> anyhow::Result<(f64, f64)> {
+    let one = |t: &str| -> anyhow::Result<f64> {
+        let (x, unit) = fit::io::units::split_number(t)
+            .with_context(|| format!("{flag} {v}: `{t}` is not a number with a unit"))?;
+        anyhow::ensure!(
+            !unit.is_empty(),
+            "{flag} {v}: give a unit, e.g. `{flag} 0.5um`"
+        );
+        let f = fit::io::units::length_factor(unit)
+            .with_context(|| format!("{flag} {v}: `{unit}` is not a length unit"))?;
+        let m = x * f;
+        anyhow::ensure!(m.is_finite() && m > 0.0, "{flag} {v}: must be positive");
+        Ok(m)
+    };
+    let mut it = v.split(',');
+    let a = one(it.next().unwrap_or(""))?;
+    let b = match it.next() {
+        Some(t) => one(t)?,
+        None => a,
+    };
+    anyhow::ensure!(it.next().is_none(), "{flag} {v}: at most two values (x,y)");
+    Ok((a, b))
+}
+
 fn read_options(a: &ScanArgs) -> anyhow::Result<ReadOptions> {
     let units = match &a.units {
-        Some(u) => Some(
-            fit::io::units::length_factor(u)
-                .with_context(|| format!("--units {u}: not a length unit (use m, mm, um, nm)"))?,
-        ),
+        Some(u) => Some(Units::parse(u).with_context(|| {
+            format!(
+                "--units {u}: not a length unit (use m, mm, um, nm, or `um,nm` for lengths,heights)"
+            )
+        })?),
         None => None,
     };
     let format = match &a.format {
         Some(f) => Some(Format::from_name(f).with_context(|| {
-            format!("--format {f}: unknown (use x3p, bcr, sdf, di, matrix, gsf, dektak, xyz)")
+            format!(
+                "--format {f}: unknown; supported: {}",
+                Format::all()
+                    .map(|f| f.name())
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            )
         })?),
         None => None,
     };
     Ok(ReadOptions {
-        channel: a.channel,
+        channel: a.channel.as_deref().map(ChannelSel::parse),
         units,
+        pixel_size: a
+            .pixel_size
+            .as_deref()
+            .map(|v| parse_pair("--pixel-size", v))
+            .transpose()?,
+        size: a
+            .size
+            .as_deref()
+            .map(|v| parse_pair("--size", v))
+            .transpose()?,
         format,
     })
 }
 
-fn load(path: &Path, opts: &ReadOptions) -> anyhow::Result<(Vec<u8>, fit::Topography)> {
+fn load(path: &Path, opts: &ReadOptions) -> anyhow::Result<(Vec<u8>, fit::io::Scan)> {
     let bytes = std::fs::read(path).with_context(|| format!("cannot read {}", path.display()))?;
-    let topo = fit::io::read_bytes(&path.display().to_string(), &bytes, opts)?;
-    Ok((bytes, topo))
+    let scan = fit::io::open_bytes(&path.display().to_string(), &bytes, opts)?;
+    for n in &scan.notes {
+        eprintln!("note: {}: {n}", path.display());
+    }
+    Ok((bytes, scan))
+}
+
+fn channels(args: ChannelsArgs) -> anyhow::Result<()> {
+    let bytes = std::fs::read(&args.scan)
+        .with_context(|| format!("cannot read {}", args.scan.display()))?;
+    let name = args.scan.display().to_string();
+    let (format, list) = fit::io::list_channels(&name, &bytes, &read_options(&args.read)?)?;
+    let default = list.iter().position(|c| c.is_height);
+    if args.json {
+        let json = serde_json::json!({
+            "file": name,
+            "format": format.name(),
+            "default": default,
+            "channels": list.iter().map(|c| serde_json::json!({
+                "index": c.index, "name": c.name, "unit": c.unit,
+                "height": c.is_height, "grid": [c.nx, c.ny],
+            })).collect::<Vec<_>>(),
+        });
+        println!("{}", serde_json::to_string(&json)?);
+        return Ok(());
+    }
+    println!(
+        "{name}: {} ({} channel{})",
+        format.name(),
+        list.len(),
+        if list.len() == 1 { "" } else { "s" }
+    );
+    for c in &list {
+        println!(
+            "{:>3}  {:<32} {:<6} {:>5} × {:<5} {}{}",
+            c.index,
+            c.name,
+            c.unit,
+            c.nx,
+            c.ny,
+            if c.is_height { "height" } else { "" },
+            if Some(c.index) == default {
+                " (default)"
+            } else {
+                ""
+            }
+        );
+    }
+    Ok(())
+}
+
+fn level_of(a: &ScanArgs) -> Option<Level> {
+    a.level.as_deref().and_then(Level::from_name)
 }
 
 fn stats(args: StatsArgs) -> anyhow::Result<()> {
-    let (_, topo) = load(&args.scan, &read_options(&args.read)?)?;
-    let (t, _) = pipeline::prepare(topo)?;
-    let s = fit::stats::compute(&t);
-    let p = fit::psd::welch(&t, &Default::default())?;
-    let kc = fit::kc::fit_bins(&p, 3, t.nx / 4)?;
+    let (_, scan) = load(&args.scan, &read_options(&args.read)?)?;
+    let fit::io::Scan {
+        topo,
+        format,
+        channels,
+        channel,
+        notes: read_notes,
+    } = scan;
+    let s = pipeline::summarise(topo, level_of(&args.read))?;
+    let t = &s.prepared.scan;
+    let form = &s.prepared.form;
+    let kc = &s.kc;
+    let mut warnings: Vec<String> = Vec::new();
+    if let Some(w) = form.warning() {
+        warnings.push(w);
+    }
+    if let Some(r) = kc.reason {
+        warnings.push(format!("K-correlation fit degenerate: {}", r.describe()));
+    }
+    if let Some(a) = s.anisotropy.as_ref().filter(|a| a.anisotropic) {
+        warnings.push(format!(
+            "anisotropic surface (principal slope ratio {:.2}, lay at {:.1}°): the isotropic \
+             K-correlation fit is an approximation",
+            a.ratio,
+            a.lay_direction_deg()
+        ));
+    }
+    for w in &warnings {
+        eprintln!("warning: {}: {w}", args.scan.display());
+    }
+    let num = |v: f64| {
+        if v.is_finite() {
+            serde_json::json!(v)
+        } else {
+            serde_json::Value::Null
+        }
+    };
     let json = serde_json::json!({
-        "sq_m": s.sq,
-        "rms_slope": s.rms_slope(),
+        "file": args.scan.display().to_string(),
+        "format": format.name(),
+        "channel": { "index": channel, "name": channels.get(channel).map(|c| c.name.clone()) },
+        "grid": [t.nx, t.ny],
+        "pixel_m": [t.dx, t.dy],
+        "filled_points": s.prepared.filled,
+        "notes": read_notes.iter().chain(&s.notes).collect::<Vec<_>>(),
+        "warnings": warnings,
+        "level": {
+            "kind": form.level.name(),
+            "removed_rms_m": form.removed_rms,
+            "terms": form.terms.iter().map(|x| serde_json::json!({"x_pow": x.i, "y_pow": x.j, "coefficient_si": x.c})).collect::<Vec<_>>(),
+            "residual_form_fraction": form.residual_form.map(|r| r.1),
+            "residual_shows_form": form.warning().is_some(),
+        },
+        "sq_m": s.stats.sq,
+        "rms_slope": s.stats.rms_slope(),
+        "rq_lines_m": s.stats.rq_lines,
+        "rdq_x": num(s.stats.rdq_x),
         "kc": {
             "sigma_m": kc.params.sigma,
             "lc_m": kc.params.lc,
             "l_1d_m": kc.params.l_cycles(),
             "gamma": kc.params.gamma,
             "degenerate": kc.degenerate,
-            "fit_f_range_per_m": [kc.range.0, kc.range.1],
+            "reason": kc.reason.map(|r| r.describe()),
+            "stderr": { "sigma_m": num(kc.stderr.sigma), "lc_m": num(kc.stderr.lc), "gamma": num(kc.stderr.gamma) },
+            "fit_f_range_per_m": [num(kc.range.0), num(kc.range.1)],
+            "asymptote": kc.asymptote.map(|a| serde_json::json!({
+                "exponent": a.exponent,
+                "prefactor_si": a.prefactor,
+                "f_range_per_m": [a.range.0, a.range.1],
+                "form": "P1 = prefactor · f^(−exponent), P1 in m³, f in cycles/m",
+            })),
         },
-        "psd": { "f_per_m": p.f, "p": p.p },
-        "units": "SI; lc_m is the Matérn range Lc (physics.md), l_1d_m = 2π·Lc is the data-README 1D-form length; psd p in m³ (one-sided, f in cycles/m)",
+        "anisotropy": s.anisotropy.as_ref().map(|a| serde_json::json!({
+            "rms_slope_x": a.rms_slope_x,
+            "rms_slope_y": a.rms_slope_y,
+            "ratio_xy": num(a.ratio_xy),
+            "principal_rms_slopes": [a.principal.0, a.principal.1],
+            "ratio": num(a.ratio),
+            "slope_direction_deg": a.slope_direction_deg,
+            "lay_direction_deg": a.lay_direction_deg(),
+            "anisotropic": a.anisotropic,
+            "psd_rms_slopes": [a.psd_slopes.0, a.psd_slopes.1],
+            "psd_y": { "f_per_m": a.psd_y.f, "p": a.psd_y.p },
+        })),
+        "psd": { "f_per_m": s.line_psd.f, "p": s.line_psd.p },
+        "units": "SI; lc_m is the Matérn range Lc (physics.md), l_1d_m = 2π·Lc is the data-README 1D-form length; psd p in m³ (one-sided, f in cycles/m, along x; psd_y along y)",
     });
     if !args.json {
         eprintln!("note: only JSON output is implemented; printing JSON");
@@ -183,9 +375,14 @@ fn material(args: MaterialArgs) -> anyhow::Result<()> {
         wavelength: args.lambda_nm * 1e-9,
         merge_cutoff: args.merge_cutoff * 1e6,
         stylus_segments: args.stylus_segments,
+        level: level_of(&args.read),
         ..Options::default()
     };
-    let analysis = pipeline::analyse(topo, stylus.as_ref().map(|s| s.1.clone()), &opts)?;
+    let analysis = pipeline::analyse(
+        topo.topo.clone(),
+        stylus.as_ref().map(|s| s.1.topo.clone()),
+        &opts,
+    )?;
     let scan_name = scan_path.display().to_string();
     let stylus_name = args.stylus.as_ref().map(|p| p.display().to_string());
     let prov = fit::material::Provenance {
@@ -197,29 +394,54 @@ fn material(args: MaterialArgs) -> anyhow::Result<()> {
         merge_cutoff_rad_per_um: args.merge_cutoff,
         metal: &args.metal,
         model: &args.model,
+        notes: &topo.notes,
     };
     let doc = fit::material::build(&analysis, &prov);
     fit::material::write_atomic(&args.output, &fit::material::to_toml(&doc)?)?;
-    let k = analysis.kc.params;
+    let m = &doc.material;
     eprintln!(
-        "wrote {}: Sq {:.4} µm, rms slope {:.4}, KC σ {:.4} µm Lc {:.4} µm γ {:.3}{}, GGX α {:.4}, Beckmann α {:.4}",
+        "wrote {}: model {}, Sq {:.4} µm, rms slope {:.4}, KC σ {:.4} µm Lc {:.4} µm γ {:.3}{}, GGX α {:.4}, Beckmann α {:.4}",
         args.output.display(),
+        m.model,
         analysis.stats.sq * 1e6,
         analysis.stats.rms_slope(),
-        k.sigma * 1e6,
-        k.lc * 1e6,
-        k.gamma,
+        m.sigma_um,
+        m.lc_um,
+        m.gamma,
         if analysis.kc.degenerate {
-            " (DEGENERATE)"
+            " (DEGENERATE: bounded estimate)"
         } else {
             ""
         },
-        analysis.ndf.alpha_ggx.0,
-        analysis.ndf.alpha_beckmann.0,
+        m.alpha,
+        m.alpha_beckmann,
     );
+    for n in &analysis.notes {
+        eprintln!("note: {n}");
+    }
+    let r = &doc.reliability;
+    for (part, state) in [
+        ("kc", &r.kc),
+        ("alpha", &r.alpha),
+        ("psd", &r.psd),
+        ("two_scale", &r.two_scale),
+        ("form", &r.form),
+        ("anisotropy", &r.anisotropy),
+    ] {
+        if state != "ok" {
+            eprintln!("warning: {part}: {state}");
+        }
+    }
+    eprintln!("model: {}", r.model);
     if !args.no_plots {
-        for path in fit::plots::write(&analysis, &args.output)? {
-            eprintln!("wrote {}", path.display());
+        // The material file is written; a plot that cannot be drawn is only a warning.
+        match fit::plots::write(&analysis, &args.output) {
+            Ok(paths) => {
+                for path in paths {
+                    eprintln!("wrote {}", path.display());
+                }
+            }
+            Err(e) => eprintln!("warning: plots not written: {e}"),
         }
     }
     Ok(())

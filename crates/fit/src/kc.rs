@@ -8,7 +8,12 @@
 //!   form: `P1(f) = 2σ²L Γ(γ/2)/(√π Γ((γ−1)/2)) (1 + L²f²)^{−γ/2}` with `L = 2π Lc`.
 //!
 //! The fit minimises `Σ (ln P_model − ln P_data)²` with Levenberg–Marquardt over
-//! `(ln σ, ln ℓ, ln(γ−1))` after a profiled grid search for the start point.
+//! `ln σ` and logistic transforms of `ln ℓ` and `γ`, after a profiled grid search for the
+//! start point, so the result always lies in the bounds the renderer accepts
+//! ([`GAMMA_BOUNDS`], lengths within 10³ of the fitted band and within [`LC_BOUNDS_M`]).
+//! A fit that does not converge, ends on a bound or is steeper than γ = 12 is kept as the
+//! bounded best estimate and marked degenerate with its [`Degeneracy`]; the power law
+//! through the top of the band ([`PowerLaw`]) is reported with every fit.
 
 use crate::FitError;
 use levenberg_marquardt::{LeastSquaresProblem, LevenbergMarquardt};
@@ -66,6 +71,60 @@ pub enum Form {
     Radial2d,
 }
 
+/// γ range of the fit: the range the renderer's K-correlation PSD accepts.
+pub const GAMMA_BOUNDS: (f64, f64) = (1.001, 100.0);
+/// Lc range of the fit [m]: the renderer's 1e-9 … 1e6 µm.
+pub const LC_BOUNDS_M: (f64, f64) = (1e-15, 1.0);
+/// Beyond this γ the band shows no power-law tail: the fit is called degenerate.
+pub const GAMMA_STEEP: f64 = 12.0;
+
+/// Why a K-correlation fit is not a meaningful description of the PSD.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Degeneracy {
+    /// The minimiser did not converge.
+    NotConverged,
+    /// γ ended on a bound of [`GAMMA_BOUNDS`].
+    GammaAtBound,
+    /// The correlation length ended on a bound: the roll-off lies 10³ beyond the band.
+    LengthAtBound,
+    /// γ > 12: the band shows no power-law tail (a flat spectrum with peaks, noise).
+    Steep,
+    /// Too few PSD points to fit; the parameters are estimated from Sq and Sdq with
+    /// γ = 4 assumed.
+    TooFewPoints,
+}
+
+impl Degeneracy {
+    /// One-line explanation.
+    pub fn describe(self) -> &'static str {
+        match self {
+            Degeneracy::NotConverged => "the minimiser did not converge",
+            Degeneracy::GammaAtBound => "γ ended on a bound of 1.001…100",
+            Degeneracy::LengthAtBound => {
+                "the correlation length ended on a bound: the roll-off lies far outside the \
+                 measured band"
+            }
+            Degeneracy::Steep => {
+                "γ > 12: the band shows no power-law tail (flat spectrum, peaks or noise)"
+            }
+            Degeneracy::TooFewPoints => {
+                "too few PSD points to fit; σ = Sq, γ = 4 assumed, Lc from the rms slope"
+            }
+        }
+    }
+}
+
+/// A power law `P = A·x^(−exponent)` fitted to the top of a band.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PowerLaw {
+    /// Exponent (γ of the 1D form's high-frequency tail).
+    pub exponent: f64,
+    /// Prefactor A in SI units (P in m³ or m⁴, x in cycles/m or rad/m).
+    pub prefactor: f64,
+    /// Abscissa range used.
+    pub range: (f64, f64),
+}
+
 /// Result of a K-correlation fit.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct KcFit {
@@ -79,9 +138,12 @@ pub struct KcFit {
     pub points: usize,
     /// Abscissa range fitted (f in cycles/m or ζ in rad/m).
     pub range: (f64, f64),
-    /// True when the optimum is not a meaningful K-correlation fit (γ > 12, a length
-    /// outside the fitted band by 10³, or a failed minimisation).
+    /// True when the optimum is not a meaningful K-correlation fit (see `reason`).
     pub degenerate: bool,
+    /// Why, when degenerate.
+    pub reason: Option<Degeneracy>,
+    /// Power law through the top half (in log abscissa) of the fitted band.
+    pub asymptote: Option<PowerLaw>,
     /// Form fitted.
     pub form: Form,
 }
@@ -122,11 +184,52 @@ struct Problem<'a> {
     ly: &'a [f64],
     sw: &'a [f64],
     q: Vector3<f64>,
+    /// ln ℓ bounds.
+    ll: (f64, f64),
+    /// γ bounds.
+    gb: (f64, f64),
+}
+
+fn sigmoid(u: f64) -> f64 {
+    if u >= 0.0 {
+        1.0 / (1.0 + (-u).exp())
+    } else {
+        let e = u.exp();
+        e / (1.0 + e)
+    }
+}
+
+fn logit(s: f64) -> f64 {
+    let s = s.clamp(1e-12, 1.0 - 1e-12);
+    (s / (1.0 - s)).ln()
 }
 
 impl Problem<'_> {
+    /// (ln σ, ℓ, γ) and the derivatives d lnℓ/du, dγ/dv.
+    fn unpack_full(&self) -> (f64, f64, f64, f64, f64) {
+        let (su, sv) = (sigmoid(self.q[1]), sigmoid(self.q[2]));
+        let ln_l = self.ll.0 + (self.ll.1 - self.ll.0) * su;
+        let g = self.gb.0 + (self.gb.1 - self.gb.0) * sv;
+        (
+            self.q[0],
+            ln_l.exp(),
+            g,
+            (self.ll.1 - self.ll.0) * su * (1.0 - su),
+            (self.gb.1 - self.gb.0) * sv * (1.0 - sv),
+        )
+    }
+
     fn unpack(&self) -> (f64, f64, f64) {
-        (self.q[0], self.q[1].exp(), 1.0 + self.q[2].exp())
+        let (a, b, c, _, _) = self.unpack_full();
+        (a, b, c)
+    }
+
+    fn pack(&self, ln_sigma: f64, l: f64, g: f64) -> Vector3<f64> {
+        Vector3::new(
+            ln_sigma,
+            logit((l.ln() - self.ll.0) / (self.ll.1 - self.ll.0)),
+            logit((g - self.gb.0) / (self.gb.1 - self.gb.0)),
+        )
     }
 }
 
@@ -161,15 +264,15 @@ impl LeastSquaresProblem<f64, Dyn, U3> for Problem<'_> {
     }
 
     fn jacobian(&self) -> Option<OMatrix<f64, Dyn, U3>> {
-        let (_, l, g) = self.unpack();
+        let (_, l, g, dl, dg) = self.unpack_full();
         let (_, a, e) = shape_consts(self.form, g);
         let (dc, de) = dshape_dgamma(self.form, g);
         let mut j = OMatrix::<f64, Dyn, U3>::zeros(self.lx.len());
         for (i, (&lx, &sw)) in self.lx.iter().zip(self.sw).enumerate() {
             let u2 = (l * lx.exp()).powi(2);
             j[(i, 0)] = sw * 2.0;
-            j[(i, 1)] = sw * (a - 2.0 * e * u2 / (1.0 + u2));
-            j[(i, 2)] = sw * (g - 1.0) * (dc - de * u2.ln_1p());
+            j[(i, 1)] = sw * (a - 2.0 * e * u2 / (1.0 + u2)) * dl;
+            j[(i, 2)] = sw * (dc - de * u2.ln_1p()) * dg;
         }
         j.iter().all(|v| v.is_finite()).then_some(j)
     }
@@ -223,15 +326,32 @@ pub fn fit_weighted(
     let lw: Vec<f64> = lw.iter().map(|w| w / wmean).collect();
     let (xlo, xhi) = (lx[0].min(lx[n - 1]).exp(), lx[0].max(lx[n - 1]).exp());
 
-    // Profiled grid search: σ enters additively in log space.
+    // Bounds: lengths within 10³ of the band and in the renderer's Lc range, γ in the
+    // renderer's range.
+    let to_l = |lc: f64| match form {
+        Form::Profile1d => 2.0 * PI * lc,
+        Form::Radial2d => lc,
+    };
+    let l_lo = (1e-3 / xhi).max(to_l(LC_BOUNDS_M.0));
+    let l_hi = (1e3 / xlo).min(to_l(LC_BOUNDS_M.1));
+    if !(l_lo < l_hi) {
+        return Err(FitError::data(
+            "K-correlation fit",
+            format!("the band {xlo:e}…{xhi:e} lies outside the lengths the renderer accepts"),
+        ));
+    }
+    let ll = (l_lo.ln(), l_hi.ln());
+    let gb = GAMMA_BOUNDS;
+    // Profiled grid search inside the bounds: σ enters additively in log space.
     let mut best = (f64::INFINITY, 0.0, 0.0, 0.0);
     let nl = 60;
     let ng = 48;
+    let (gl, gh) = (gb.0 + 0.02, 15.0f64.min(gb.1));
     for il in 0..nl {
-        let l = (0.1 / xhi) * (1000.0 * xhi / xlo).powf(il as f64 / (nl - 1) as f64);
+        let l = (ll.0 + (ll.1 - ll.0) * (0.02 + 0.96 * il as f64 / (nl - 1) as f64)).exp();
         let lg: Vec<f64> = lx.iter().map(|&v| (l * v.exp()).powi(2).ln_1p()).collect();
         for ig in 0..ng {
-            let g = 1.0 + 0.03 * (14.0f64 / 0.03).powf(ig as f64 / (ng - 1) as f64);
+            let g = gl * (gh / gl).powf(ig as f64 / (ng - 1) as f64);
             let (c, a, e) = shape_consts(form, g);
             let base = c + a * l.ln();
             let mean = ly
@@ -252,49 +372,74 @@ pub fn fit_weighted(
             }
         }
     }
-    let start = Vector3::new(best.1, best.2.ln(), (best.3 - 1.0).ln());
-    let problem = Problem {
+    let mut problem = Problem {
         form,
         lx: &lx,
         ly: &ly,
         sw: &sw,
-        q: start,
+        q: Vector3::zeros(),
+        ll,
+        gb,
     };
-    let (problem, report) = LevenbergMarquardt::new()
+    problem.q = problem.pack(best.1, best.2, best.3);
+    let start = problem.q;
+    let (mut problem, report) = LevenbergMarquardt::new()
         .with_patience(400)
         .minimize(problem);
+    let mut converged = report.termination.was_successful();
+    let res = match problem.residuals() {
+        Some(r) => r,
+        None => {
+            // Outside the region where the model is finite: keep the grid optimum.
+            converged = false;
+            problem.q = start;
+            problem.residuals().ok_or_else(|| {
+                FitError::data(
+                    "K-correlation fit",
+                    "the model is not finite anywhere near the data",
+                )
+            })?
+        }
+    };
     let (lns, l, g) = problem.unpack();
-    let res = problem.residuals().ok_or_else(|| {
-        FitError::data(
-            "K-correlation fit",
-            "the minimiser left the valid parameter region",
-        )
-    })?;
     let ssr = res.norm_squared();
     let sigma = lns.exp();
     let lc = match form {
         Form::Profile1d => l / (2.0 * PI),
         Form::Radial2d => l,
     };
+    // On a bound: within 0.1 % of the transformed range.
+    let at = |v: f64, (a, b): (f64, f64)| (v - a) <= 1e-3 * (b - a) || (b - v) <= 1e-3 * (b - a);
+    let reason = if !converged {
+        Some(Degeneracy::NotConverged)
+    } else if at(g, gb) {
+        Some(Degeneracy::GammaAtBound)
+    } else if at(l.ln(), ll) {
+        Some(Degeneracy::LengthAtBound)
+    } else if g > GAMMA_STEEP {
+        Some(Degeneracy::Steep)
+    } else {
+        None
+    };
     let mut stderr = KcParams {
         sigma: f64::NAN,
         lc: f64::NAN,
         gamma: f64::NAN,
     };
-    if let Some(j) = problem.jacobian()
+    if reason.is_none()
+        && let Some(j) = problem.jacobian()
         && n > 3
         && let Some(inv) = (j.transpose() * &j).try_inverse()
     {
+        let (_, _, _, dl, dg) = problem.unpack_full();
         let s2 = ssr / (n - 3) as f64;
         let var = |i: usize| (s2 * inv[(i, i)]).max(0.0).sqrt();
         stderr = KcParams {
             sigma: sigma * var(0),
-            lc: lc * var(1),
-            gamma: (g - 1.0) * var(2),
+            lc: lc * dl * var(1),
+            gamma: dg * var(2),
         };
     }
-    let degenerate =
-        !report.termination.was_successful() || g > 12.0 || l * xhi < 1e-3 || l * xlo > 1e3;
     Ok(KcFit {
         params: KcParams {
             sigma,
@@ -305,9 +450,79 @@ pub fn fit_weighted(
         rms_log_residual: (ssr / n as f64).sqrt(),
         points: n,
         range: (xlo, xhi),
-        degenerate,
+        degenerate: reason.is_some(),
+        reason,
+        asymptote: power_law(&lx, &ly),
         form,
     })
+}
+
+/// Power law through the points in the upper half of the log-abscissa range (at least
+/// the last three).
+fn power_law(lx: &[f64], ly: &[f64]) -> Option<PowerLaw> {
+    let n = lx.len();
+    if n < 3 {
+        return None;
+    }
+    let (lo, hi) = (lx[0].min(lx[n - 1]), lx[0].max(lx[n - 1]));
+    let mid = 0.5 * (lo + hi);
+    let mut idx: Vec<usize> = (0..n).filter(|&i| lx[i] >= mid).collect();
+    if idx.len() < 3 {
+        let mut all: Vec<usize> = (0..n).collect();
+        all.sort_by(|&a, &b| lx[b].total_cmp(&lx[a]));
+        idx = all[..3].to_vec();
+    }
+    let m = idx.len() as f64;
+    let mx = idx.iter().map(|&i| lx[i]).sum::<f64>() / m;
+    let my = idx.iter().map(|&i| ly[i]).sum::<f64>() / m;
+    let sxx: f64 = idx.iter().map(|&i| (lx[i] - mx).powi(2)).sum();
+    let sxy: f64 = idx.iter().map(|&i| (lx[i] - mx) * (ly[i] - my)).sum();
+    if sxx <= 0.0 {
+        return None;
+    }
+    let slope = sxy / sxx;
+    let (a, b) = idx
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &i| {
+            (a.min(lx[i]), b.max(lx[i]))
+        });
+    Some(PowerLaw {
+        exponent: -slope,
+        prefactor: (my - slope * mx).exp(),
+        range: (a.exp(), b.exp()),
+    })
+}
+
+/// Parameters when there are too few PSD points to fit: σ = Sq, γ = 4, and Lc from the
+/// K-correlation slope variance `2σ²/(Lc²(γ − 3))` = Sdq² (or the scan length when the
+/// surface is flat); clamped to the renderer's ranges.
+pub fn estimate_from_stats(sq: f64, rms_slope: f64, scan_length: f64, form: Form) -> KcFit {
+    let gamma = 4.0;
+    let lc = if rms_slope > 0.0 && sq > 0.0 {
+        (2.0f64 / (gamma - 3.0)).sqrt() * sq / rms_slope
+    } else {
+        scan_length / (2.0 * PI)
+    };
+    let nan = KcParams {
+        sigma: f64::NAN,
+        lc: f64::NAN,
+        gamma: f64::NAN,
+    };
+    KcFit {
+        params: KcParams {
+            sigma: sq.max(0.0),
+            lc: lc.clamp(LC_BOUNDS_M.0, LC_BOUNDS_M.1),
+            gamma,
+        },
+        stderr: nan,
+        rms_log_residual: f64::NAN,
+        points: 0,
+        range: (f64::NAN, f64::NAN),
+        degenerate: true,
+        reason: Some(Degeneracy::TooFewPoints),
+        asymptote: None,
+        form,
+    }
 }
 
 /// Fit the 1D form to a line PSD on the raw bins `k_lo ..= k_hi` (README: 3 ..= nx/4).

@@ -12,6 +12,7 @@
 //! `zeta` (rad per length, the physics.md convention). The 1D K-correlation form uses the
 //! reference-table length `L = 2π·Lc`, where `Lc` is the Matérn range of physics.md §2.
 
+pub mod anisotropy;
 pub mod error;
 pub mod fill;
 pub mod io;

@@ -5,7 +5,16 @@
 //! the reference-table length of the 1D form is `2π·lc_um` and is written as
 //! `[fit].l_1d_um`. The `[psd]` table is the isotropic 2D PSD in rad/µm with
 //! `∫ P d²ζ = σ²` (µm⁴).
+//!
+//! Every parameter written is one the renderer accepts: each is checked with the
+//! renderer's own constructors (`brdf::wave::KcPsd::new`, `brdf::Distribution::ggx`,
+//! `TabulatedPsd::new`, the exponential NDF's β range) and brought into range if needed.
+//! What is unreliable — a degenerate K-correlation fit, a clamped α, a PSD table the
+//! renderer cannot use, a two-scale split without a measured β, form left in the
+//! residual, anisotropy the isotropic models ignore — is listed in `[reliability]`, and
+//! the model defaults to one whose inputs are reliable.
 
+use crate::kc::KcParams;
 use crate::pipeline::Analysis;
 use crate::two_scale::BetaSource;
 use crate::{FitError, sha256};
@@ -27,8 +36,11 @@ pub struct Provenance<'a> {
     pub merge_cutoff_rad_per_um: f64,
     /// Metal name for `[material].metal`.
     pub metal: &'a str,
-    /// Model name for `[material].model`.
+    /// Model name for `[material].model`; `"auto"` chooses the model whose inputs are
+    /// reliable (GHS with a sound K-correlation fit, else the measured PSD, else GGX).
     pub model: &'a str,
+    /// What the reader had to assume or change (resampling, units, …).
+    pub notes: &'a [String],
 }
 
 /// The TOML document.
@@ -40,6 +52,13 @@ pub struct MaterialFile {
     pub material: MaterialTable,
     /// Fit diagnostics: uncertainties, residuals, statistics.
     pub fit: FitTable,
+    /// Which parts are unreliable, and why.
+    pub reliability: ReliabilityTable,
+    /// What levelling removed.
+    pub form: FormTable,
+    /// Direction dependence (maps only).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub anisotropy: Option<AnisotropyTable>,
     /// K-correlation fit of the radial 2D PSD (maps only).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub kc_2d: Option<KcTable>,
@@ -87,6 +106,9 @@ pub struct ProvenanceTable {
     pub levelling: String,
     /// Invalid points filled by harmonic interpolation.
     pub filled_points: usize,
+    /// What the reader and the analysis had to assume, change or skip.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub notes: Vec<String>,
     /// Stylus profile merged below the cutoff.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub stylus_file: Option<String>,
@@ -115,6 +137,93 @@ pub struct MaterialTable {
     pub alpha: f64,
     /// Beckmann α.
     pub alpha_beckmann: f64,
+    /// Anisotropic GGX α along the principal axes (anisotropic surfaces only; the
+    /// directions are in `[anisotropy]`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub alpha_x: Option<f64>,
+    /// See `alpha_x`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub alpha_y: Option<f64>,
+}
+
+/// `[reliability]`: one entry per part, `"ok"` or the reason it should not be trusted.
+#[derive(Debug, Serialize)]
+pub struct ReliabilityTable {
+    /// The K-correlation parameters of `[material]`.
+    pub kc: String,
+    /// The NDF roughness `alpha`/`alpha_beckmann` (and `alpha_x`/`alpha_y`).
+    pub alpha: String,
+    /// The `[psd]` table for `model = "measured_psd"`.
+    pub psd: String,
+    /// The two-scale tables.
+    pub two_scale: String,
+    /// Form left in the residual after levelling.
+    pub form: String,
+    /// Anisotropy that the isotropic models ignore.
+    pub anisotropy: String,
+    /// Why `[material].model` is what it is.
+    pub model: String,
+    /// The parts flagged above, for scripts.
+    pub unreliable: Vec<String>,
+}
+
+/// `[form]`.
+#[derive(Debug, Serialize)]
+pub struct FormTable {
+    /// `none`, `line`, `plane`, `poly2` or `poly3`.
+    pub level: String,
+    /// Rms of what was removed [µm].
+    pub removed_rms_um: f64,
+    /// Fitted terms `[i, j, c]`: `c·Xⁱ·Yʲ` with X, Y in µm from the map centre and c in
+    /// µm^(1−i−j).
+    pub terms: Vec<[f64; 3]>,
+    /// Fraction of the residual variance the next polynomial degree would remove.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub residual_form_fraction: Option<f64>,
+    /// Set when the residual still shows form.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub warning: Option<String>,
+}
+
+/// `[anisotropy]`.
+#[derive(Debug, Serialize)]
+pub struct AnisotropyTable {
+    /// Rms slope along x.
+    pub rms_slope_x: f64,
+    /// Rms slope along y.
+    pub rms_slope_y: f64,
+    /// Larger over smaller of the two.
+    pub ratio_xy: f64,
+    /// Principal rms slopes `[steepest, across it]`.
+    pub principal_rms_slopes: [f64; 2],
+    /// Principal ratio (> 1.5: anisotropic).
+    pub ratio: f64,
+    /// Direction of the steepest slope (`alpha_x`), degrees from +x towards +y.
+    pub slope_direction_deg: f64,
+    /// Direction of the lay (grooves, `alpha_y`), degrees from +x towards +y.
+    pub lay_direction_deg: f64,
+    /// Rms slopes along x and y from the x- and y-PSDs.
+    pub psd_rms_slopes: [f64; 2],
+    /// True when `ratio > 1.5`.
+    pub anisotropic: bool,
+    /// GGX α along the principal axes.
+    pub alpha_ggx: [f64; 2],
+    /// Beckmann α along the principal axes.
+    pub alpha_beckmann: [f64; 2],
+    /// Set for anisotropic surfaces.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub warning: Option<String>,
+}
+
+/// `[fit.kc_asymptote]`.
+#[derive(Debug, Serialize)]
+pub struct AsymptoteTable {
+    /// `P1 ∝ f^(−exponent)` over the top half of the fitted band.
+    pub exponent: f64,
+    /// Prefactor A of `P1 = A·f^(−exponent)`, SI (P1 in m³, f in cycles/m).
+    pub prefactor_si: f64,
+    /// Frequencies used [cycles/m].
+    pub f_range_per_m: [f64; 2],
 }
 
 /// `[fit]`.
@@ -134,6 +243,12 @@ pub struct FitTable {
     pub kc_points: usize,
     /// True if the KC fit is not meaningful.
     pub kc_degenerate: bool,
+    /// Why, when degenerate; `[material]` then holds the bounded best estimate.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub kc_reason: Option<String>,
+    /// High-frequency power law of the fitted band.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub kc_asymptote: Option<AsymptoteTable>,
     /// Sq (Rq for profiles) [µm].
     pub sq_um: f64,
     /// Rms slope (Sdq; Rdq for profiles).
@@ -184,6 +299,9 @@ pub struct TwoScaleTable {
     pub fit_f_range_per_m: [f64; 2],
     /// Degenerate flag of the residual fit.
     pub kc_degenerate: bool,
+    /// What is unreliable in this split (absent when it is sound).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub problem: Option<String>,
 }
 
 /// `[psd]`.
@@ -193,6 +311,10 @@ pub struct PsdTable {
     pub source: String,
     /// ∫ P d²ζ over the tabulated range (trapezoid, µm²); compare with `sq_um²`.
     pub integral_um2: f64,
+    /// True when the renderer accepts the table (`model = "measured_psd"`).
+    pub usable: bool,
+    /// Bins dropped so the renderer accepts it (non-positive bins, the noise floor).
+    pub dropped_bins: usize,
     /// Radial frequency ζ [rad/µm].
     pub zeta_rad_per_um: Vec<f64>,
     /// Isotropic 2D PSD [µm⁴].
@@ -203,41 +325,256 @@ fn finite(v: f64) -> f64 {
     if v.is_finite() { v } else { -1.0 }
 }
 
+/// Largest Lc the two-scale model accepts [µm] (`brdf::wave::two_scale::TwoScale::new`).
+const TWO_SCALE_LC_MAX_UM: f64 = 1e5;
+
+/// K-correlation parameters in µm the renderer accepts; `Some(problem)` if they had to
+/// be brought into range.
+pub fn renderer_kc(k: &KcParams) -> ((f64, f64, f64), Option<String>) {
+    let (s, l, g) = (k.sigma * UM, k.lc * UM, k.gamma);
+    if brdf::wave::KcPsd::new(s, l, g).is_ok() {
+        return ((s, l, g), None);
+    }
+    let fix = |v: f64, lo: f64, hi: f64| if v.is_finite() { v.clamp(lo, hi) } else { lo };
+    let out = (
+        fix(s, 0.0, brdf::wave::kc::LENGTH_MAX_UM),
+        fix(l, brdf::wave::kc::LC_MIN_UM, brdf::wave::kc::LENGTH_MAX_UM),
+        fix(g, brdf::wave::kc::GAMMA_MIN, brdf::wave::kc::GAMMA_MAX),
+    );
+    (
+        out,
+        Some(format!(
+            "σ {s:.4e} µm, Lc {l:.4e} µm, γ {g:.4} brought into the renderer's range"
+        )),
+    )
+}
+
+/// A microfacet α the renderer accepts (1e-4 … 1); `Some(problem)` if clamped.
+pub fn renderer_alpha(a: f64) -> (f64, Option<String>) {
+    if brdf::Distribution::ggx(a, a).is_ok() {
+        return (a, None);
+    }
+    let c = if a.is_finite() {
+        a.clamp(brdf::microfacet::ALPHA_MIN, brdf::microfacet::ALPHA_MAX)
+    } else {
+        brdf::microfacet::ALPHA_MIN
+    };
+    (
+        c,
+        Some(format!(
+            "α {a:.4e} clamped to {c} (the renderer accepts 1e-4 … 1)"
+        )),
+    )
+}
+
+/// The `[psd]` table as the renderer needs it: finite positive samples at strictly
+/// increasing ζ, ending in a segment steeper than ζ^−2.02. A noise floor at the high
+/// end is trimmed; returns the table, how many bins were dropped, and the problem if the
+/// renderer still rejects it.
+pub fn renderer_psd(zeta: &[f64], p: &[f64]) -> (Vec<f64>, Vec<f64>, usize, Option<String>) {
+    let mut z = Vec::with_capacity(zeta.len());
+    let mut q = Vec::with_capacity(p.len());
+    for (&a, &b) in zeta.iter().zip(p) {
+        if a.is_finite() && a > 0.0 && b.is_finite() && b > 0.0 && z.last().is_none_or(|l| a > *l) {
+            z.push(a);
+            q.push(b);
+        }
+    }
+    let slope = |z: &[f64], q: &[f64]| {
+        let n = z.len();
+        (q[n - 1].ln() - q[n - 2].ln()) / (z[n - 1].ln() - z[n - 2].ln())
+    };
+    while z.len() > 2 && !(slope(&z, &q) < -2.02) {
+        z.pop();
+        q.pop();
+    }
+    let dropped = zeta.len() - z.len();
+    let problem = match brdf::wave::TabulatedPsd::new(&z, &q) {
+        Ok(_) => None,
+        Err(e) => Some(format!("the renderer rejects the PSD table: {e}")),
+    };
+    (z, q, dropped, problem)
+}
+
 /// Build the document.
 pub fn build(a: &Analysis, prov: &Provenance<'_>) -> MaterialFile {
-    let k = a.kc.params;
+    let ((sigma_um, lc_um, gamma), kc_range) = renderer_kc(&a.kc.params);
+    let kc_state = match (a.kc.reason, &kc_range) {
+        (Some(r), _) => format!(
+            "degenerate: {}; [material] holds the bounded best estimate",
+            r.describe()
+        ),
+        (None, Some(p)) => p.clone(),
+        (None, None) => "ok".into(),
+    };
+    let (alpha, alpha_problem) = renderer_alpha(a.ndf.alpha_ggx.0);
+    let (alpha_beckmann, beckmann_problem) = renderer_alpha(a.ndf.alpha_beckmann.0);
     let zeta: Vec<f64> = a.table.0.zeta.iter().map(|z| z / UM).collect();
     let p: Vec<f64> = a.table.0.p.iter().map(|p| p * UM.powi(4)).collect();
+    let (zeta, p, dropped, psd_problem) = renderer_psd(&zeta, &p);
     let mut integral = 0.0;
     for i in 1..zeta.len() {
         let f = |j: usize| 2.0 * std::f64::consts::PI * zeta[j] * p[j];
         integral += 0.5 * (f(i) + f(i - 1)) * (zeta[i] - zeta[i - 1]);
     }
+    let mut split_problems = Vec::new();
     let two_scale = Ordered(
         a.two_scale
             .iter()
             .map(|t| {
+                let name = format!("cutoff_{}", t.multiple.round() as i64);
+                let ((s, l, g), range) = renderer_kc(&t.kc.params);
+                let mut problems = Vec::new();
+                if let Some(r) = t.kc.reason {
+                    problems.push(format!(
+                        "residual K-correlation fit degenerate: {}",
+                        r.describe()
+                    ));
+                }
+                if let Some(r) = range {
+                    problems.push(r);
+                }
+                let l = if l > TWO_SCALE_LC_MAX_UM {
+                    problems.push(format!(
+                        "Lc {l:.4e} µm clamped to the two-scale limit {TWO_SCALE_LC_MAX_UM:e} µm"
+                    ));
+                    TWO_SCALE_LC_MAX_UM
+                } else {
+                    l
+                };
+                let beta = if brdf::wave::epd::ExponentialNdf::new(t.beta).is_ok() {
+                    t.beta
+                } else {
+                    let c = if t.beta.is_finite() {
+                        t.beta
+                            .clamp(brdf::wave::epd::BETA_MIN, brdf::wave::epd::BETA_MAX)
+                    } else {
+                        brdf::wave::epd::BETA_MIN
+                    };
+                    problems.push(format!(
+                        "β {:.4e} {} set to {c}",
+                        t.beta,
+                        if t.beta_source == BetaSource::Unresolved {
+                            "(not measured: the scan does not reach the cutoff period)"
+                        } else {
+                            "(outside 1e-4 … 10)"
+                        }
+                    ));
+                    c
+                };
+                let problem = (!problems.is_empty()).then(|| problems.join("; "));
+                if problem.is_some() {
+                    split_problems.push(name.clone());
+                }
                 (
-                    format!("cutoff_{}", t.multiple.round() as i64),
+                    name,
                     TwoScaleTable {
-                        beta: t.beta,
+                        beta,
                         beta_source: match t.beta_source {
                             BetaSource::Map => "map",
                             BetaSource::Psd => "psd",
                             BetaSource::Unresolved => "unresolved",
                         }
                         .into(),
-                        sigma_um: t.kc.params.sigma * UM,
-                        lc_um: t.kc.params.lc * UM,
-                        gamma: t.kc.params.gamma,
+                        sigma_um: s,
+                        lc_um: l,
+                        gamma: g,
                         cutoff_um: t.cutoff * UM,
                         fit_f_range_per_m: [t.kc.range.0, t.kc.range.1],
                         kc_degenerate: t.kc.degenerate,
+                        problem,
                     },
                 )
             })
             .collect(),
     );
+    let form_warning = a.form.warning();
+    let aniso = a.anisotropy.as_ref().map(|an| {
+        let (gx, gy) = an.ggx(alpha);
+        let (gx, gy) = (renderer_alpha(gx).0, renderer_alpha(gy).0);
+        let (bx, by) = an.beckmann();
+        let (bx, by) = (renderer_alpha(bx).0, renderer_alpha(by).0);
+        AnisotropyTable {
+            rms_slope_x: an.rms_slope_x,
+            rms_slope_y: an.rms_slope_y,
+            ratio_xy: finite(an.ratio_xy),
+            principal_rms_slopes: [an.principal.0, an.principal.1],
+            ratio: finite(an.ratio),
+            slope_direction_deg: an.slope_direction_deg,
+            lay_direction_deg: an.lay_direction_deg(),
+            psd_rms_slopes: [an.psd_slopes.0, an.psd_slopes.1],
+            anisotropic: an.anisotropic,
+            alpha_ggx: [gx, gy],
+            alpha_beckmann: [bx, by],
+            warning: an.anisotropic.then(|| {
+                format!(
+                    "anisotropic (principal slope ratio {:.2}, lay at {:.1}°): the isotropic \
+                     K-correlation and NDF fits average over directions and are only an \
+                     approximation; [material].alpha_x/alpha_y (GGX) and \
+                     [anisotropy].alpha_beckmann describe the two axes, with alpha_x across \
+                     the lay (at {:.1}°)",
+                    an.ratio,
+                    an.lay_direction_deg(),
+                    an.slope_direction_deg
+                )
+            }),
+        }
+    });
+    let anisotropic = aniso.as_ref().is_some_and(|t| t.anisotropic);
+    let kc_ok = a.kc.reason.is_none() && kc_range.is_none();
+    let (model, model_reason) = match prov.model {
+        "auto" if kc_ok => (
+            "ghs".to_string(),
+            "auto: the K-correlation fit is sound".to_string(),
+        ),
+        "auto" if psd_problem.is_none() => (
+            "measured_psd".to_string(),
+            "auto: the K-correlation fit is degenerate, the measured PSD is used".to_string(),
+        ),
+        "auto" => (
+            "ggx".to_string(),
+            "auto: neither the K-correlation fit nor the PSD table is usable".to_string(),
+        ),
+        m => (m.to_string(), "chosen with --model".to_string()),
+    };
+    let mut unreliable = Vec::new();
+    if !kc_ok {
+        unreliable.push("kc".to_string());
+    }
+    let alpha_state = match (&alpha_problem, &beckmann_problem) {
+        (None, None) => "ok".to_string(),
+        (a, b) => {
+            unreliable.push("alpha".into());
+            [a.clone(), b.clone()]
+                .into_iter()
+                .flatten()
+                .collect::<Vec<_>>()
+                .join("; ")
+        }
+    };
+    if psd_problem.is_some() {
+        unreliable.push("psd".into());
+    }
+    if !split_problems.is_empty() {
+        unreliable.push("two_scale".into());
+    }
+    if form_warning.is_some() {
+        unreliable.push("form".into());
+    }
+    if anisotropic {
+        unreliable.push("anisotropy".into());
+    }
+    let uses_kc = matches!(model.as_str(), "ghs" | "ghs_ssa");
+    let model_reason = if uses_kc && !kc_ok {
+        format!("{model_reason}; WARNING: it uses the unreliable K-correlation parameters")
+    } else if model == "measured_psd" && psd_problem.is_some() {
+        format!("{model_reason}; WARNING: the renderer rejects the PSD table")
+    } else {
+        model_reason
+    };
+    let mut notes: Vec<String> = prov.notes.to_vec();
+    notes.extend(a.notes.iter().cloned());
+    let level_name = a.form.level.name();
     MaterialFile {
         provenance: ProvenanceTable {
             file: prov.file.to_string(),
@@ -248,35 +585,92 @@ pub fn build(a: &Analysis, prov: &Provenance<'_>) -> MaterialFile {
             channel: a.scan.channel.clone(),
             grid: [a.scan.nx, a.scan.ny],
             pixel_um: [a.scan.dx * UM, a.scan.dy * UM],
-            levelling: "harmonic fill of invalid points, least-squares plane".into(),
+            levelling: match a.form.level {
+                crate::level::Level::None => "harmonic fill of invalid points, no levelling".into(),
+                crate::level::Level::Line if !a.scan.is_profile() => {
+                    "harmonic fill of invalid points, least-squares line per scan line".into()
+                }
+                _ => format!("harmonic fill of invalid points, least-squares {level_name}"),
+            },
             filled_points: a.filled,
+            notes,
             stylus_file: prov.stylus.map(|s| s.0.to_string()),
             stylus_sha256: prov.stylus.map(|s| sha256::hex(s.1)),
             merge_cutoff_rad_per_um: prov.stylus.map(|_| prov.merge_cutoff_rad_per_um),
         },
         material: MaterialTable {
             metal: prov.metal.to_string(),
-            model: prov.model.to_string(),
-            sigma_um: k.sigma * UM,
-            lc_um: k.lc * UM,
-            gamma: k.gamma,
-            alpha: a.ndf.alpha_ggx.0,
-            alpha_beckmann: a.ndf.alpha_beckmann.0,
+            model,
+            sigma_um,
+            lc_um,
+            gamma,
+            alpha,
+            alpha_beckmann,
+            alpha_x: aniso
+                .as_ref()
+                .filter(|t| t.anisotropic)
+                .map(|t| t.alpha_ggx[0]),
+            alpha_y: aniso
+                .as_ref()
+                .filter(|t| t.anisotropic)
+                .map(|t| t.alpha_ggx[1]),
         },
         fit: FitTable {
             sigma_um_err: finite(a.kc.stderr.sigma * UM),
             lc_um_err: finite(a.kc.stderr.lc * UM),
             gamma_err: finite(a.kc.stderr.gamma),
-            l_1d_um: k.l_cycles() * UM,
-            kc_rms_log_residual: a.kc.rms_log_residual,
+            l_1d_um: lc_um * 2.0 * std::f64::consts::PI,
+            kc_rms_log_residual: finite(a.kc.rms_log_residual),
             kc_points: a.kc.points,
             kc_degenerate: a.kc.degenerate,
+            kc_reason: a.kc.reason.map(|r| r.describe().to_string()),
+            kc_asymptote: a.kc.asymptote.map(|p| AsymptoteTable {
+                exponent: p.exponent,
+                prefactor_si: p.prefactor,
+                f_range_per_m: [p.range.0, p.range.1],
+            }),
             sq_um: a.stats.sq * UM,
             rms_slope: a.stats.rms_slope(),
-            alpha_ggx_rms_log_residual: a.ndf.alpha_ggx.1,
-            alpha_beckmann_rms_log_residual: a.ndf.alpha_beckmann.1,
-            alpha_beckmann_moment: a.ndf.alpha_beckmann_moment,
+            alpha_ggx_rms_log_residual: finite(a.ndf.alpha_ggx.1),
+            alpha_beckmann_rms_log_residual: finite(a.ndf.alpha_beckmann.1),
+            alpha_beckmann_moment: finite(a.ndf.alpha_beckmann_moment),
         },
+        reliability: ReliabilityTable {
+            kc: kc_state,
+            alpha: alpha_state,
+            psd: psd_problem.clone().unwrap_or_else(|| "ok".into()),
+            two_scale: if split_problems.is_empty() {
+                "ok".into()
+            } else {
+                format!("see problem in {}", split_problems.join(", "))
+            },
+            form: form_warning.clone().unwrap_or_else(|| "ok".into()),
+            anisotropy: aniso
+                .as_ref()
+                .and_then(|t| t.warning.clone())
+                .unwrap_or_else(|| "ok".into()),
+            model: model_reason,
+            unreliable,
+        },
+        form: FormTable {
+            level: level_name.into(),
+            removed_rms_um: a.form.removed_rms * UM,
+            terms: a
+                .form
+                .terms
+                .iter()
+                .map(|t| {
+                    [
+                        t.i as f64,
+                        t.j as f64,
+                        t.c * UM.powi(1 - t.i as i32 - t.j as i32),
+                    ]
+                })
+                .collect(),
+            residual_form_fraction: a.form.residual_form.map(|r| r.1),
+            warning: form_warning,
+        },
+        anisotropy: aniso,
         kc_2d: a.kc_2d.map(|f| KcTable {
             sigma_um: f.params.sigma * UM,
             lc_um: f.params.lc * UM,
@@ -294,6 +688,8 @@ pub fn build(a: &Analysis, prov: &Provenance<'_>) -> MaterialFile {
         psd: PsdTable {
             source: a.table.1.to_string(),
             integral_um2: integral,
+            usable: psd_problem.is_none(),
+            dropped_bins: dropped,
             zeta_rad_per_um: zeta,
             p_um4: p,
         },
@@ -308,8 +704,11 @@ pub fn to_toml(doc: &MaterialFile) -> Result<String, FitError> {
          # Units: lengths in µm, angles in degrees, PSD in rad/µm with ∫P d²ζ = σ² (physics.md §1–2).\n\
          # lc_um is the Matérn range Lc; the 1D-form length of the data README is 2π·lc_um.\n",
     );
-    if doc.fit.kc_degenerate {
-        out.push_str("# WARNING: the K-correlation fit is degenerate (see [fit]); prefer model = \"measured_psd\".\n");
+    if !doc.reliability.unreliable.is_empty() {
+        out.push_str(&format!(
+            "# WARNING: unreliable parts: {} (see [reliability]).\n",
+            doc.reliability.unreliable.join(", ")
+        ));
     }
     out.push_str(&body);
     Ok(out)

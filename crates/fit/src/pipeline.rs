@@ -1,12 +1,20 @@
-//! The whole analysis of `lustre fit`: prepare the scan (fill, plane-level), statistics,
-//! PSDs, K-correlation fits, NDF fits, two-scale splits and the tabulated PSD.
+//! The whole analysis of `lustre fit`: prepare the scan (fill, level), statistics, PSDs,
+//! K-correlation fits, NDF fits, anisotropy, two-scale splits and the tabulated PSD.
+//!
+//! The analysis degrades instead of failing: statistics are always computed; a
+//! K-correlation fit that does not converge or ends on a bound is kept as a bounded,
+//! degenerate estimate; a map too small for a fit gets parameters estimated from Sq and
+//! Sdq (marked as such); optional parts (2D PSD fit, two-scale splits) that cannot be
+//! computed are skipped with a note.
 
+use crate::anisotropy::{self, Anisotropy};
 use crate::kc::{self, KcFit};
+use crate::level::{self, Form, Level};
 use crate::ndf::{self, Ndf};
 use crate::psd::{self, Psd1d, RadialPsd, WelchOptions};
 use crate::stats::{self, Stats};
 use crate::two_scale::{self, TwoScale};
-use crate::{FitError, Topography, fill, level};
+use crate::{FitError, Topography, fill};
 use std::f64::consts::PI;
 
 /// Options of the analysis.
@@ -27,6 +35,8 @@ pub struct Options {
     pub ndf_bins: usize,
     /// NDF smoothing standard deviation in bin widths.
     pub ndf_smooth_bins: f64,
+    /// Levelling; `None`: a plane for maps, a line for profiles.
+    pub level: Option<Level>,
 }
 
 impl Default for Options {
@@ -39,6 +49,7 @@ impl Default for Options {
             stylus_segments: 4,
             ndf_bins: 90,
             ndf_smooth_bins: 1.0,
+            level: None,
         }
     }
 }
@@ -59,10 +70,12 @@ pub struct NdfFits {
 /// Everything the material file and plots need.
 #[derive(Debug, Clone)]
 pub struct Analysis {
-    /// The prepared (filled, plane-levelled) scan.
+    /// The prepared (filled, levelled) scan.
     pub scan: Topography,
     /// Number of invalid points filled in the scan.
     pub filled: usize,
+    /// What levelling removed.
+    pub form: Form,
     /// Statistics of the scan.
     pub stats: Stats,
     /// Welch PSD of the scan lines.
@@ -81,15 +94,60 @@ pub struct Analysis {
     pub table: (RadialPsd, &'static str),
     /// NDF fits.
     pub ndf: NdfFits,
-    /// Two-scale splits, one per cutoff.
+    /// Two-scale splits, one per cutoff that could be computed.
     pub two_scale: Vec<TwoScale>,
+    /// Direction dependence (maps only).
+    pub anisotropy: Option<Anisotropy>,
+    /// Parts skipped or degraded, in words.
+    pub notes: Vec<String>,
 }
 
-/// Fill invalid points and subtract the least-squares plane.
-pub fn prepare(mut t: Topography) -> Result<(Topography, usize), FitError> {
+/// A scan ready for analysis.
+#[derive(Debug, Clone)]
+pub struct Prepared {
+    /// Filled and levelled.
+    pub scan: Topography,
+    /// Invalid points filled.
+    pub filled: usize,
+    /// What levelling removed.
+    pub form: Form,
+}
+
+/// Fill invalid points and level (`None`: a plane for maps, a line for profiles).
+pub fn prepare_with(mut t: Topography, level: Option<Level>) -> Result<Prepared, FitError> {
     let filled = fill::harmonic(&mut t)?;
-    level::plane(&mut t)?;
-    Ok((t, filled))
+    let l = level.unwrap_or_else(|| Level::default_for(&t));
+    let form = level::apply(&mut t, l)?;
+    Ok(Prepared {
+        scan: t,
+        filled,
+        form,
+    })
+}
+
+/// Fill invalid points and subtract the least-squares plane (a line for profiles).
+pub fn prepare(t: Topography) -> Result<(Topography, usize), FitError> {
+    let p = prepare_with(t, None)?;
+    Ok((p.scan, p.filled))
+}
+
+/// The material K-correlation fit of a line PSD on bins 3 ..= n/4 (the data README's
+/// convention), degrading to a bounded estimate or to one from Sq and Sdq.
+pub fn kc_of(t: &Topography, stats: &Stats, p: &Psd1d) -> KcFit {
+    let nseg = p.f.len().saturating_sub(1) * 2;
+    let k_hi = (nseg / 4).max(4).min(p.f.len().saturating_sub(1));
+    let f_lo = p.f.get(3).copied().unwrap_or(f64::NAN);
+    let f_hi = p.f.get(k_hi).copied().unwrap_or(f64::NAN);
+    kc::fit(
+        kc::Form::Profile1d,
+        &p.f,
+        &p.p,
+        f_lo * (1.0 - 1e-9),
+        f_hi * (1.0 + 1e-9),
+    )
+    .unwrap_or_else(|_| {
+        kc::estimate_from_stats(stats.sq, stats.rms_slope(), t.size_x(), kc::Form::Profile1d)
+    })
 }
 
 /// Run the analysis on a scan and an optional stylus profile.
@@ -98,7 +156,8 @@ pub fn analyse(
     stylus: Option<Topography>,
     opts: &Options,
 ) -> Result<Analysis, FitError> {
-    let (scan, filled) = prepare(scan)?;
+    let Prepared { scan, filled, form } = prepare_with(scan, opts.level)?;
+    let mut notes = Vec::new();
     let stats = stats::compute(&scan);
     let line_psd = psd::welch(&scan, &opts.welch)?;
     let nseg = line_psd.f.len().saturating_sub(1) * 2;
@@ -108,7 +167,7 @@ pub fn analyse(
 
     let (stylus_psd, fit_psd, f_lo) = match stylus {
         Some(st) => {
-            let (st, _) = prepare(st)?;
+            let st = prepare_with(st, None)?.scan;
             let nperseg = (st.nx / opts.stylus_segments.max(1)).max(8).min(st.nx);
             let sp = psd::welch(
                 &st,
@@ -133,9 +192,21 @@ pub fn analyse(
         &fit_psd.p,
         f_lo * (1.0 - 1e-9),
         f_hi * (1.0 + 1e-9),
-    )?;
+    )
+    .unwrap_or_else(|e| {
+        notes.push(format!("{e}"));
+        kc::estimate_from_stats(
+            stats.sq,
+            stats.rms_slope(),
+            scan.size_x(),
+            kc::Form::Profile1d,
+        )
+    });
 
-    let radial = if scan.is_profile() {
+    let radial = if scan.is_profile() || scan.nx < 8 || scan.ny < 8 {
+        if !scan.is_profile() {
+            notes.push("map smaller than 8 × 8: no radial 2D PSD".into());
+        }
         None
     } else {
         Some(psd::radial(&scan)?)
@@ -222,17 +293,32 @@ pub fn analyse(
 
     let mut splits = Vec::new();
     for &m in &opts.cutoff_multiples {
-        splits.push(two_scale::split(
+        match two_scale::split(
             &scan,
             &fit_psd,
             m,
             opts.wavelength,
             (f_lo * (1.0 - 1e-9), f_hi * (1.0 + 1e-9)),
-        )?);
+        ) {
+            Ok(t) => splits.push(t),
+            Err(e) => notes.push(format!("two-scale split at {m} λ skipped: {e}")),
+        }
     }
+    let anisotropy = if scan.is_profile() {
+        None
+    } else {
+        match anisotropy::analyse(&scan, line_psd.clone()) {
+            Ok(a) => Some(a),
+            Err(e) => {
+                notes.push(format!("{e}"));
+                None
+            }
+        }
+    };
     Ok(Analysis {
         scan,
         filled,
+        form,
         stats,
         line_psd,
         stylus_psd,
@@ -243,5 +329,60 @@ pub fn analyse(
         table,
         ndf,
         two_scale: splits,
+        anisotropy,
+        notes,
+    })
+}
+
+/// What `lustre fit stats` reports: statistics, the line PSD, the material
+/// K-correlation fit and the anisotropy, without the NDF, 2D and two-scale work.
+#[derive(Debug, Clone)]
+pub struct Summary {
+    /// The prepared scan and its levelling.
+    pub prepared: Prepared,
+    /// Statistics of the prepared scan.
+    pub stats: Stats,
+    /// Welch PSD of the x-lines (full-length segments).
+    pub line_psd: Psd1d,
+    /// K-correlation fit on bins 3 ..= n/4 (degrades, never fails).
+    pub kc: KcFit,
+    /// Direction dependence (maps of at least 2 × 2).
+    pub anisotropy: Option<Anisotropy>,
+    /// Parts skipped, in words.
+    pub notes: Vec<String>,
+}
+
+/// The `fit stats` analysis of one scan.
+pub fn summarise(scan: Topography, level: Option<Level>) -> Result<Summary, FitError> {
+    let prepared = prepare_with(scan, level)?;
+    let t = &prepared.scan;
+    let stats = stats::compute(t);
+    let line_psd = psd::welch(t, &WelchOptions::default())?;
+    let kc = kc_of(t, &stats, &line_psd);
+    let mut notes = Vec::new();
+    if kc.reason == Some(kc::Degeneracy::TooFewPoints) {
+        notes.push(format!(
+            "the line PSD has only {} bins: K-correlation parameters estimated from Sq and Sdq",
+            line_psd.f.len()
+        ));
+    }
+    let anisotropy = if t.is_profile() {
+        None
+    } else {
+        match anisotropy::analyse(t, line_psd.clone()) {
+            Ok(a) => Some(a),
+            Err(e) => {
+                notes.push(e.to_string());
+                None
+            }
+        }
+    };
+    Ok(Summary {
+        prepared,
+        stats,
+        line_psd,
+        kc,
+        anisotropy,
+        notes,
     })
 }

@@ -33,7 +33,15 @@ pub fn write(a: &Analysis, material: &Path) -> Result<Vec<PathBuf>, FitError> {
         .map(|(f, p)| (f * 1e-6, p * 1e18))
         .unzip();
     let k = a.kc.params;
-    let (flo, fhi) = (a.kc.range.0 * 1e-6, a.kc.range.1 * 1e-6);
+    // A fit estimated without PSD points has no range: draw it over the measured band.
+    let (flo, fhi) = if a.kc.range.0.is_finite() && a.kc.range.1 > a.kc.range.0 {
+        (a.kc.range.0 * 1e-6, a.kc.range.1 * 1e-6)
+    } else {
+        (
+            f.first().copied().unwrap_or(1.0),
+            f.last().copied().unwrap_or(1.0),
+        )
+    };
     let fk: Vec<f64> = (0..200)
         .map(|i| flo * (fhi / flo).powf(i as f64 / 199.0))
         .collect();

@@ -41,13 +41,14 @@ pub fn hann(n: usize) -> Vec<f64> {
 }
 
 /// Welch PSD of every x-line, averaged over lines and segments. Needs a NaN-free map.
+/// Segments may be as short as 2 points, so a tiny map still gives the PSD it holds.
 pub fn welch(t: &Topography, opts: &WelchOptions) -> Result<Psd1d, FitError> {
     let nperseg = opts.nperseg.unwrap_or(t.nx);
-    if nperseg < 8 || nperseg > t.nx {
+    if nperseg < 2 || nperseg > t.nx {
         return Err(FitError::data(
             "Welch PSD",
             format!(
-                "segment length {nperseg} must be between 8 and the line length {}",
+                "segment length {nperseg} must be between 2 and the line length {}",
                 t.nx
             ),
         ));

@@ -4,7 +4,7 @@
 //! by independent encoders.
 
 use fit::ReadError;
-use fit::io::{Format, ReadOptions, read_bytes};
+use fit::io::{ChannelSel, Format, ReadOptions, Units, read_bytes};
 use fit::rng::SplitMix64;
 use std::io::Write;
 use std::path::PathBuf;
@@ -18,9 +18,14 @@ fn data(name: &str) -> Vec<u8> {
     .unwrap()
 }
 
+fn fmt(name: &str) -> Format {
+    Format::from_name(name).unwrap()
+}
+
 fn opts(format: Format) -> ReadOptions {
     ReadOptions {
         format: Some(format),
+        units: Units::parse("m"),
         ..ReadOptions::default()
     }
 }
@@ -63,11 +68,7 @@ fn torture(name: &str, bytes: &[u8], format: Format, seed: u64, flips: usize) {
         check(&bytes[..c], &format!("truncated at {c}"));
         // Formats whose header fixes the data size must reject a file cut in half (text
         // formats and multi-channel NanoScope files can legitimately hold less data).
-        if matches!(
-            format,
-            Format::X3p | Format::Bcr | Format::Sdf | Format::Gsf
-        ) && c < n / 2
-        {
+        if ["x3p", "bcr", "sdf", "gsf"].contains(&format.name()) && c < n / 2 {
             assert!(
                 read_bytes(name, &bytes[..c], &o).is_err(),
                 "{name}: truncated file at {c} accepted"
@@ -129,12 +130,12 @@ fn replace_after(bytes: &[u8], after: &str, from: &str, to: &str) -> Vec<u8> {
 #[test]
 fn nanoscope_survives_hostile_input() {
     let b = data("di-3.di");
-    torture("di-3.di", &b, Format::NanoScope, 1, 150);
+    torture("di-3.di", &b, fmt("nanoscope"), 1, 150);
     // Same length keeps the header layout: 256 → 9999 points per line.
     expect_err(
         "huge.di",
         &replace_after(&b, "Ciao image list", "Samps/line: 256", "Samps/line: 9999"),
-        Format::NanoScope,
+        fmt("nanoscope"),
         "Samps/line",
     );
     let huge = replace_after(
@@ -143,7 +144,7 @@ fn nanoscope_survives_hostile_input() {
         "Number of lines: 256",
         "Number of lines: 1000000000000",
     );
-    expect_err("huge2.di", &huge, Format::NanoScope, "Samps/line");
+    expect_err("huge2.di", &huge, fmt("nanoscope"), "Samps/line");
     expect_err(
         "offset.di",
         &replace_after(
@@ -152,15 +153,15 @@ fn nanoscope_survives_hostile_input() {
             "Data offset: 40960",
             "Data offset: 99999999",
         ),
-        Format::NanoScope,
+        fmt("nanoscope"),
         "Data offset",
     );
     let e = read_bytes(
         "di-3.di",
         &b,
         &ReadOptions {
-            channel: Some(7),
-            ..opts(Format::NanoScope)
+            channel: Some(ChannelSel::Index(7)),
+            ..opts(fmt("nanoscope"))
         },
     )
     .unwrap_err();
@@ -170,8 +171,8 @@ fn nanoscope_survives_hostile_input() {
         "di-3.di",
         &b,
         &ReadOptions {
-            channel: Some(2),
-            ..opts(Format::NanoScope)
+            channel: Some(ChannelSel::Index(2)),
+            ..opts(fmt("nanoscope"))
         },
     )
     .unwrap_err();
@@ -184,25 +185,25 @@ fn nanoscope_survives_hostile_input() {
 #[test]
 fn matrix_and_dektak_survive_hostile_input() {
     let m = data("matrix-3.txt");
-    torture("matrix-3.txt", &m[..20_000], Format::Matrix, 2, 100);
+    torture("matrix-3.txt", &m[..20_000], fmt("matrix"), 2, 100);
     expect_err(
         "ragged.txt",
         b"# Width: 1 um\n1 2 3\n4 5\n",
-        Format::Matrix,
+        fmt("matrix"),
         "line 3",
     );
     expect_err(
         "nowidth.txt",
         b"1 2 3 4\n4 5 6 7\n",
-        Format::Matrix,
-        "Width",
+        fmt("matrix"),
+        "--pixel-size",
     );
     let d = data("dektak-1.csv");
-    torture("dektak-1.csv", &d, Format::Dektak, 3, 100);
+    torture("dektak-1.csv", &d, fmt("dektak"), 3, 100);
     expect_err(
         "nodata.csv",
         b"Scan Parameters\nfoo,bar\n",
-        Format::Dektak,
+        fmt("dektak"),
         "Scan Data",
     );
 }
@@ -210,7 +211,7 @@ fn matrix_and_dektak_survive_hostile_input() {
 #[test]
 fn x3p_survives_hostile_input() {
     let b = data("KautschukInfiniteFocus.x3p");
-    torture("k.x3p", &b, Format::X3p, 4, 60);
+    torture("k.x3p", &b, fmt("x3p"), 4, 60);
     // Rebuild the archive with a main.xml that claims 10⁹ × 10⁹ points.
     let mut zip = zip::ZipArchive::new(std::io::Cursor::new(&b[..])).unwrap();
     let mut xml = String::new();
@@ -228,7 +229,7 @@ fn x3p_survives_hostile_input() {
         w.finish().unwrap().into_inner()
     };
     // Sanity: the rebuilt archive reads.
-    let ok = read_bytes("rebuilt.x3p", &build(&xml, &bin), &opts(Format::X3p)).unwrap();
+    let ok = read_bytes("rebuilt.x3p", &build(&xml, &bin), &opts(fmt("x3p"))).unwrap();
     assert_eq!((ok.nx, ok.ny), (860, 634));
     let huge = xml
         .replace("<SizeX>860</SizeX>", "<SizeX>1000000000</SizeX>")
@@ -236,14 +237,14 @@ fn x3p_survives_hostile_input() {
     expect_err(
         "huge.x3p",
         &build(&huge, &bin),
-        Format::X3p,
+        fmt("x3p"),
         "MatrixDimension",
     );
     let short = xml.replace("<SizeX>860</SizeX>", "<SizeX>861</SizeX>");
     expect_err(
         "short.x3p",
         &build(&short, &bin),
-        Format::X3p,
+        fmt("x3p"),
         "MatrixDimension",
     );
     let dtype = xml.replacen(
@@ -252,7 +253,13 @@ fn x3p_survives_hostile_input() {
         1,
     );
     assert_ne!(dtype, xml);
-    expect_err("dtype.x3p", &build(&dtype, &bin), Format::X3p, "DataType");
+    expect_err("dtype.x3p", &build(&dtype, &bin), fmt("x3p"), "DataType");
+    // New point data need a new checksum (or none): drop the recorded MD5.
+    let xml = {
+        let a = xml.find("<MD5ChecksumPointData>").unwrap();
+        let b = xml.find("</MD5ChecksumPointData>").unwrap() + "</MD5ChecksumPointData>".len();
+        format!("{}{}", &xml[..a], &xml[b..])
+    };
     // Double data and an inline data list give the same heights.
     let f32s: Vec<f64> = bin
         .chunks_exact(4)
@@ -264,7 +271,7 @@ fn x3p_survives_hostile_input() {
         1,
     );
     let dbin: Vec<u8> = f32s.iter().flat_map(|v| v.to_le_bytes()).collect();
-    let d = read_bytes("double.x3p", &build(&dxml, &dbin), &opts(Format::X3p)).unwrap();
+    let d = read_bytes("double.x3p", &build(&dxml, &dbin), &opts(fmt("x3p"))).unwrap();
     for (a, b) in d.heights.iter().zip(&ok.heights) {
         assert!(a == b || (a.is_nan() && b.is_nan()));
     }
@@ -277,7 +284,7 @@ fn x3p_survives_hostile_input() {
     let ibin: Vec<u8> = (0..860 * 634)
         .flat_map(|i| ((i % 1000) as i16 - 500).to_le_bytes())
         .collect();
-    let it = read_bytes("int.x3p", &build(&ixml, &ibin), &opts(Format::X3p)).unwrap();
+    let it = read_bytes("int.x3p", &build(&ixml, &ibin), &opts(fmt("x3p"))).unwrap();
     assert!((it.heights[1234] - ((1234 % 1000) as f64 - 500.0) * 1e-9).abs() < 1e-20);
     assert_eq!(
         ok.invalid_count(),
@@ -289,7 +296,7 @@ fn x3p_survives_hostile_input() {
 #[test]
 fn bcr_survives_hostile_input() {
     let b = data("bcrf-1.bcrf");
-    torture("bcrf-1.bcrf", &b[..200_000], Format::Bcr, 5, 150);
+    torture("bcrf-1.bcrf", &b[..200_000], fmt("bcr"), 5, 150);
     let utf16 = |s: &str| -> Vec<u8> { s.encode_utf16().flat_map(|u| u.to_le_bytes()).collect() };
     let mut huge = b.clone();
     let from = utf16("xpixels = 960");
@@ -299,10 +306,10 @@ fn bcr_survives_hostile_input() {
         .position(|w| w == from.as_slice())
         .unwrap();
     huge[pos..pos + to.len()].copy_from_slice(&to);
-    expect_err("huge.bcrf", &huge, Format::Bcr, "xpixels");
+    expect_err("huge.bcrf", &huge, fmt("bcr"), "xpixels");
     let to = utf16("xpixels = 999");
     huge[pos..pos + to.len()].copy_from_slice(&to);
-    expect_err("big.bcrf", &huge, Format::Bcr, "xpixels");
+    expect_err("big.bcrf", &huge, fmt("bcr"), "xpixels");
 }
 
 /// An ASCII-header int16 BCR file written from scratch.
@@ -331,7 +338,7 @@ fn bcr_int16_round_trip_and_torture() {
     assert!((t.dx - 10e-9).abs() < 1e-20 && (t.dy - 20e-9).abs() < 1e-20);
     assert!((t.heights[1] - (-2.0 * 0.5e-9)).abs() < 1e-20);
     assert!(t.heights[12].is_nan(), "void pixel");
-    torture("x.bcr", &b, Format::Bcr, 6, 200);
+    torture("x.bcr", &b, fmt("bcr"), 6, 200);
 }
 
 /// A GSF file written from scratch.
@@ -355,9 +362,9 @@ fn gsf_round_trip_and_torture() {
     assert_eq!((t.nx, t.ny, t.channel.as_str()), (6, 4, "test"));
     assert!((t.dx - 2e-6 / 6.0).abs() < 1e-18 && (t.dy - 0.25e-6).abs() < 1e-18);
     assert!((t.heights[7] - 7e-9).abs() < 1e-20 && t.heights[20].is_nan());
-    torture("x.gsf", &b, Format::Gsf, 7, 200);
+    torture("x.gsf", &b, fmt("gsf"), 7, 200);
     let huge = String::from_utf8_lossy(&b).replace("XRes = 6", "XRes = 600000000000");
-    expect_err("huge.gsf", huge.as_bytes(), Format::Gsf, "XRes");
+    expect_err("huge.gsf", huge.as_bytes(), fmt("gsf"), "XRes");
 }
 
 /// Binary SDF written from scratch (81-byte header).
@@ -386,22 +393,22 @@ fn sdf_round_trip_and_torture() {
     assert_eq!((t.nx, t.ny), (5, 3));
     assert!((t.dx - 1e-6).abs() < 1e-18 && (t.dy - 2e-6).abs() < 1e-18);
     assert!((t.heights[4] - (-300e-9)).abs() < 1e-18);
-    torture("x.sdf", &b, Format::Sdf, 8, 200);
+    torture("x.sdf", &b, fmt("sdf"), 8, 200);
     let mut huge = b.clone();
     huge[42..46].copy_from_slice(&[0xff, 0xff, 0xff, 0xff]);
-    expect_err("huge.sdf", &huge, Format::Sdf, "NumPoints");
+    expect_err("huge.sdf", &huge, fmt("sdf"), "NumPoints");
 
     let ascii = "aISO-1.0\nManufacID = lustre\nNumPoints = 3\nNumProfiles = 2\nXscale = 1e-6\nYscale = 1e-6\nZscale = 1e-9\nDataType = 7\n*\n1 2 3\n4 5 6\n*\n";
     let t = read_bytes("a.sdf", ascii.as_bytes(), &ReadOptions::default()).unwrap();
     assert_eq!((t.nx, t.ny), (3, 2));
     assert!((t.heights[5] - 6e-9).abs() < 1e-20);
-    torture("a.sdf", ascii.as_bytes(), Format::Sdf, 9, 200);
+    torture("a.sdf", ascii.as_bytes(), fmt("sdf"), 9, 200);
     expect_err(
         "huge-a.sdf",
         ascii
             .replace("NumPoints = 3", "NumPoints = 300000000")
             .as_bytes(),
-        Format::Sdf,
+        fmt("sdf"),
         "NumPoints",
     );
 }
@@ -422,7 +429,7 @@ fn xyz_round_trip_and_torture() {
         }
     }
     let o = ReadOptions {
-        units: Some(1e-6),
+        units: Units::parse("um"),
         ..ReadOptions::default()
     };
     let t = read_bytes("x.xyz", s.as_bytes(), &o).unwrap();
@@ -430,17 +437,471 @@ fn xyz_round_trip_and_torture() {
     assert!((t.dx - 0.5e-6).abs() < 1e-18);
     assert!((t.heights[3 * 5 + 4] - 43e-6).abs() < 1e-15);
     assert!(t.heights[2 * 5 + 2].is_nan(), "missing grid point is NaN");
-    torture("x.xyz", s.as_bytes(), Format::Xyz, 10, 300);
+    torture("x.xyz", s.as_bytes(), fmt("xyz"), 10, 300);
     let prof = "0 1\n1 2\n2 3\n3 5\n";
-    let t = read_bytes("p.xyz", prof.as_bytes(), &ReadOptions::default()).unwrap();
+    let m = ReadOptions {
+        units: Units::parse("m"),
+        ..ReadOptions::default()
+    };
+    let t = read_bytes("p.xyz", prof.as_bytes(), &m).unwrap();
     assert_eq!((t.nx, t.ny, t.dx), (4, 1, 1.0));
     // A far-away point cannot make the grid explode.
     let sparse = "0 0 1\n1 0 1\n0 1 1\n1e6 1e6 1\n";
-    assert!(read_bytes("s.xyz", sparse.as_bytes(), &ReadOptions::default()).is_err());
+    assert!(read_bytes("s.xyz", sparse.as_bytes(), &m).is_err());
 }
 
 #[test]
 fn unknown_formats_are_reported() {
     let e = read_bytes("x.bin", &[0u8, 1, 2, 3, 255], &ReadOptions::default()).unwrap_err();
     assert!(matches!(e, ReadError::UnknownFormat { .. }), "{e}");
+}
+
+/// Issue 13: a flipped byte anywhere in the X3P's compressed point data or header is
+/// caught by the zip CRC-32 or the file's MD5 checksums, never read as heights.
+#[test]
+fn x3p_checksums_catch_flipped_bytes() {
+    let b = data("KautschukInfiniteFocus.x3p");
+    let good = read_bytes("k.x3p", &b, &ReadOptions::default()).unwrap();
+    let mut zip = zip::ZipArchive::new(std::io::Cursor::new(&b[..])).unwrap();
+    let (start, len) = {
+        let f = zip.by_name("bindata/data.bin").unwrap();
+        (
+            f.data_start().unwrap() as usize,
+            f.compressed_size() as usize,
+        )
+    };
+    let mut caught = 0;
+    for k in 0..200 {
+        let pos = start + (k * 7919) % len;
+        let mut m = b.clone();
+        m[pos] ^= 0x10;
+        match read_bytes("k.x3p", &m, &ReadOptions::default()) {
+            Err(e) => {
+                let msg = e.to_string();
+                assert!(
+                    msg.contains("CRC") || msg.contains("decompress") || msg.contains("MD5"),
+                    "{msg}"
+                );
+                caught += 1;
+            }
+            Ok(t) => assert!(
+                t.heights
+                    .iter()
+                    .zip(&good.heights)
+                    .all(|(a, b)| a == b || (a.is_nan() && b.is_nan())),
+                "flip at {pos} changed the heights silently"
+            ),
+        }
+    }
+    println!("{caught} of 200 flips in the point data rejected");
+    assert!(caught >= 190, "{caught}");
+
+    // Uncompressed archives: the CRC names the entry, the MD5 the point data.
+    let mut xml = String::new();
+    std::io::Read::read_to_string(&mut zip.by_name("main.xml").unwrap(), &mut xml).unwrap();
+    let mut bin = Vec::new();
+    std::io::Read::read_to_end(&mut zip.by_name("bindata/data.bin").unwrap(), &mut bin).unwrap();
+    let mut md5 = Vec::new();
+    std::io::Read::read_to_end(&mut zip.by_name("md5checksum.hex").unwrap(), &mut md5).unwrap();
+    let build = |xml: &str, bin: &[u8], md5: &[u8]| -> Vec<u8> {
+        let mut w = zip::ZipWriter::new(std::io::Cursor::new(Vec::new()));
+        let o = zip::write::SimpleFileOptions::default()
+            .compression_method(zip::CompressionMethod::Stored);
+        w.start_file("main.xml", o).unwrap();
+        w.write_all(xml.as_bytes()).unwrap();
+        w.start_file("bindata/data.bin", o).unwrap();
+        w.write_all(bin).unwrap();
+        w.start_file("md5checksum.hex", o).unwrap();
+        w.write_all(md5).unwrap();
+        w.finish().unwrap().into_inner()
+    };
+    let stored = build(&xml, &bin, &md5);
+    read_bytes("stored.x3p", &stored, &ReadOptions::default()).unwrap();
+    // One byte of the stored data flipped in place: the zip CRC fails.
+    let at = stored
+        .windows(16)
+        .position(|w| w == &bin[1000..1016])
+        .unwrap();
+    let mut m = stored.clone();
+    m[at + 3] ^= 0x40;
+    let e = read_bytes("crc.x3p", &m, &ReadOptions::default())
+        .unwrap_err()
+        .to_string();
+    println!("{e}");
+    assert!(
+        e.contains("CRC-32") && e.contains("bindata/data.bin"),
+        "{e}"
+    );
+    // A consistent archive whose data no longer match MD5ChecksumPointData.
+    let mut bad = bin.clone();
+    bad[4000] ^= 0x01;
+    let e = read_bytes("md5.x3p", &build(&xml, &bad, &md5), &ReadOptions::default())
+        .unwrap_err()
+        .to_string();
+    println!("{e}");
+    assert!(
+        e.contains("MD5ChecksumPointData") && e.contains("MD5 check failed"),
+        "{e}"
+    );
+    // A header edited without updating md5checksum.hex.
+    let edited = xml.replacen("<Comment>", "<Comment>x", 1);
+    let edited = if edited == xml {
+        xml.replacen("</Record1>", " </Record1>", 1)
+    } else {
+        edited
+    };
+    let e = read_bytes(
+        "hdr.x3p",
+        &build(&edited, &bin, &md5),
+        &ReadOptions::default(),
+    )
+    .unwrap_err()
+    .to_string();
+    println!("{e}");
+    assert!(
+        e.contains("md5checksum.hex") && e.contains("main.xml"),
+        "{e}"
+    );
+}
+
+/// Issue 13: truncated, cut or garbled Dektak profiles are errors naming the problem.
+#[test]
+fn dektak_truncation_and_garbling_are_detected() {
+    let d = data("dektak-1.csv");
+    let text = String::from_utf8_lossy(&d).into_owned();
+    let lines: Vec<&str> = text.lines().collect();
+    let start = lines
+        .iter()
+        .position(|l| l.starts_with("Scan Data"))
+        .unwrap()
+        + 2;
+    let n = lines.len();
+    let o = opts(fmt("dektak"));
+    let join = |ls: &[&str]| ls.join("\n").into_bytes();
+    // The whole file reads.
+    read_bytes("dektak-1.csv", &d, &o).unwrap();
+    // Cut anywhere in the data (by rows or mid-row), ≥ 1 % short: rejected.
+    for frac in [0.1, 0.5, 0.9, 0.98] {
+        let cut = start + ((n - start) as f64 * frac) as usize;
+        let e = read_bytes("cut.csv", &join(&lines[..cut]), &o)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("truncated"), "{e}");
+    }
+    let mut cut_bytes = d.clone();
+    cut_bytes.truncate(d.len() * 3 / 4);
+    let e = read_bytes("cut2.csv", &cut_bytes, &o)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("truncated") || e.contains("garbled"), "{e}");
+    // Rows missing in the middle.
+    let mut holes = lines.clone();
+    holes.drain(start + 3000..start + 3040);
+    let e = read_bytes("holes.csv", &join(&holes), &o)
+        .unwrap_err()
+        .to_string();
+    println!("{e}");
+    assert!(e.contains("missing") && e.contains("line"), "{e}");
+    // A garbled row.
+    let mut garbled = lines.clone();
+    let bad = format!("{}#x", lines[start + 5000]);
+    garbled[start + 5000] = &bad;
+    let e = read_bytes("garbled.csv", &join(&garbled), &o)
+        .unwrap_err()
+        .to_string();
+    println!("{e}");
+    assert!(
+        e.contains(&format!("line {}", start + 5001)) && e.contains("garbled"),
+        "{e}"
+    );
+    // Rows out of order.
+    let mut swapped = lines.clone();
+    swapped.swap(start + 100, start + 700);
+    let e = read_bytes("swap.csv", &join(&swapped), &o)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("out of order"), "{e}");
+}
+
+/// One sample file per reader of the registry (real corpus files where there is one,
+/// files written here otherwise).
+fn samples() -> Vec<(&'static str, String, Vec<u8>)> {
+    let corpus = |f: &str| data(&format!("corpus/{f}"));
+    let vals: Vec<i16> = (0..15).map(|i| i * 100 - 700).collect();
+    let gvals: Vec<f32> = (0..24).map(|i| i as f32).collect();
+    let mut s: Vec<(&'static str, String, Vec<u8>)> = vec![
+        ("x3p", "k.x3p".into(), data("KautschukInfiniteFocus.x3p")),
+        ("sdf", "x.sdf".into(), sdf_binary(5, 3, &vals)),
+        (
+            "sdf",
+            "a.sdf".into(),
+            b"aISO-1.0\nNumPoints = 3\nNumProfiles = 2\nXscale = 1e-6\nYscale = 1e-6\nZscale = 1e-9\nDataType = 7\n*\n1 2 3\n4 5 6\n*\n".to_vec(),
+        ),
+        ("bcr", "x.bcr".into(), bcr_int16(4, 4, &[1; 16])),
+        ("bcr", "bcrf-1.bcrf".into(), data("bcrf-1.bcrf")),
+        ("gsf", "x.gsf".into(), gsf(6, 4, &gvals, "")),
+        ("nanoscope", "di-5.di".into(), corpus("di-5.di")),
+        ("plu", "plu-1.plu".into(), corpus("plu-1.plu")),
+        ("sur", "sur-2.sur".into(), corpus("sur-2.sur")),
+        ("mnt", "mnt-1.mnt".into(), corpus("mnt-1.mnt")),
+        ("metropro", "metropro-1.dat".into(), corpus("metropro-1.dat")),
+        ("opd", "opd-1.opd".into(), corpus("opd-1.opd")),
+        ("al3d", "al3d-1.al3d".into(), corpus("al3d-1.al3d")),
+        ("nid", "nid-1.nid".into(), corpus("nid-1.nid")),
+        ("ibw", "spot.ibw".into(), corpus("spot_1-1000nm.ibw")),
+        (
+            "ibw",
+            "10x10.ibw".into(),
+            corpus("10x10-one_channel_without_name.ibw"),
+        ),
+        ("park", "example_ps.tiff".into(), corpus("example_ps.tiff")),
+        ("mi", "mi-1.mi".into(), corpus("mi-1.mi")),
+        ("wsxm", "stp-1.stp".into(), corpus("stp-1.stp")),
+        ("frt", "frt-1.frt".into(), corpus("frt-1.frt")),
+        ("tmd", "tmd-1.tmd".into(), corpus("tmd-1.tmd")),
+        ("dektak", "dektak-1.csv".into(), data("dektak-1.csv")),
+        (
+            "matrix",
+            "english.txt".into(),
+            corpus("gwyddion-export-english.txt"),
+        ),
+        ("matrix", "txt_example.txt".into(), corpus("txt_example.txt")),
+        ("matrix", "matrix-3.txt".into(), data("matrix-3.txt")[..30_000].to_vec()),
+        ("xyz", "csv-2.csv".into(), corpus("csv-2.csv")),
+        ("xyz", "xy-1.txt".into(), corpus("xy-1.txt")),
+        ("xyz", "csv-1.csv".into(), corpus("csv-1.csv")),
+    ];
+    // Every reader of the registry has a sample.
+    for f in Format::all() {
+        assert!(
+            s.iter().any(|(n, _, _)| *n == f.name()),
+            "no hostile-input sample for {}",
+            f.name()
+        );
+    }
+    s.sort_by_key(|x| x.0);
+    s
+}
+
+/// Make an Igor header checksum add up again, so mutations reach past it.
+fn fix_ibw_checksum(b: &mut [u8]) {
+    if b.len() < 384 || b[0] == 0 {
+        return;
+    }
+    b[2] = 0;
+    b[3] = 0;
+    let sum = b[..384].chunks_exact(2).fold(0u16, |s, c| {
+        s.wrapping_add(u16::from_le_bytes([c[0], c[1]]))
+    });
+    b[2..4].copy_from_slice(&0u16.wrapping_sub(sum).to_le_bytes());
+}
+
+/// `n` mutations of a sample: truncations, bit flips (mostly in the header) and header
+/// numbers replaced by huge, negative, zero or non-finite ones. No panic, no abort, and
+/// any result read must be self-consistent.
+fn mutate_and_read(format: &str, name: &str, bytes: &[u8], n: usize, seed: u64) -> (usize, usize) {
+    let fmt = fmt(format);
+    let o = opts(fmt);
+    let mut rng = SplitMix64::new(seed);
+    let len = bytes.len();
+    let head = len.min(4096);
+    let (mut ok, mut err) = (0, 0);
+    let huge_text = [
+        "99999999999",
+        "4294967295",
+        "-1",
+        "0",
+        "1e308",
+        "nan",
+        "-0",
+        "2147483648",
+    ];
+    let huge_bin: [u32; 5] = [0xFFFF_FFFF, 0x7FFF_FFFF, 0x8000_0000, 0, 0x0001_0000];
+    for i in 0..n {
+        let mut b = bytes.to_vec();
+        let what = match rng.next_u64() % 10 {
+            0..=2 => {
+                let cut = (rng.next_u64() as usize) % len.max(1);
+                b.truncate(cut);
+                format!("truncated at {cut}")
+            }
+            3..=6 => {
+                let k = 1 + rng.next_u64() % 8;
+                for _ in 0..k {
+                    let region = if rng.next_u64().is_multiple_of(4) {
+                        len
+                    } else {
+                        head
+                    };
+                    let pos = (rng.next_u64() as usize) % region.max(1);
+                    b[pos] ^= 1 << (rng.next_u64() % 8);
+                }
+                format!("{k} bit flips")
+            }
+            _ => {
+                // Replace a run of ASCII digits in the header, or a binary word.
+                let start = (rng.next_u64() as usize) % head.max(1);
+                let digits = b[start..head]
+                    .iter()
+                    .position(|c| c.is_ascii_digit())
+                    .map(|p| start + p);
+                if let Some(p) = digits.filter(|_| rng.next_u64().is_multiple_of(2)) {
+                    let end = p + b[p..]
+                        .iter()
+                        .take_while(|c| c.is_ascii_digit() || **c == b'.')
+                        .count();
+                    let rep = huge_text[(rng.next_u64() as usize) % huge_text.len()];
+                    b.splice(p..end, rep.bytes());
+                    format!("number at {p} → {rep}")
+                } else {
+                    let p = ((rng.next_u64() as usize) % head.saturating_sub(4).max(1)) & !3;
+                    let v = huge_bin[(rng.next_u64() as usize) % huge_bin.len()];
+                    if p + 4 <= b.len() {
+                        b[p..p + 4].copy_from_slice(&v.to_le_bytes());
+                    }
+                    format!("word at {p} → {v:#x}")
+                }
+            }
+        };
+        if format == "ibw" && !rng.next_u64().is_multiple_of(3) {
+            fix_ibw_checksum(&mut b);
+        }
+        let r = std::panic::catch_unwind(|| {
+            let listed = fit::io::list_channels(name, &b, &o);
+            (listed.is_ok(), read_bytes(name, &b, &o))
+        });
+        match r {
+            Err(_) => panic!("{format} {name}: mutation {i} ({what}) panicked"),
+            Ok((_, Ok(t))) => {
+                assert_eq!(t.heights.len(), t.nx * t.ny, "{name} {what}");
+                assert!(
+                    t.dx > 0.0 && t.dx.is_finite() && t.dy > 0.0 && t.dy.is_finite(),
+                    "{name} {what}: spacing {} {}",
+                    t.dx,
+                    t.dy
+                );
+                assert!(
+                    t.heights.len() <= 8 * b.len().max(1) + 64
+                        || format == "mnt"
+                        || format == "x3p"
+                        || format == "sur",
+                    "{name} {what}: more points than bytes"
+                );
+                ok += 1;
+            }
+            Ok((_, Err(e))) => {
+                let msg = e.to_string();
+                assert!(
+                    !msg.is_empty() && !msg.contains('\n'),
+                    "{name} {what}: {msg}"
+                );
+                err += 1;
+            }
+        }
+    }
+    (ok, err)
+}
+
+fn hostile_suite(n: usize) {
+    for (i, (format, name, bytes)) in samples().into_iter().enumerate() {
+        let t0 = std::time::Instant::now();
+        let (ok, err) = mutate_and_read(format, &name, &bytes, n, 1000 + i as u64);
+        println!(
+            "{format:<10} {name:<22} {n} mutations: {ok} read, {err} rejected ({:.1} s)",
+            t0.elapsed().as_secs_f64()
+        );
+    }
+}
+
+/// ≥ 100 mutations of every reader's sample in the normal run.
+#[test]
+fn every_reader_survives_mutations() {
+    hostile_suite(100);
+}
+
+/// ≥ 2000 mutations per sample: `cargo test -p fit --test hostile -- --ignored`.
+#[test]
+#[ignore]
+fn every_reader_survives_many_mutations() {
+    hostile_suite(2000);
+}
+
+/// Headers that claim enormous grids are errors before any allocation.
+#[test]
+fn oversized_headers_of_the_new_formats_are_rejected() {
+    let corpus = |f: &str| data(&format!("corpus/{f}"));
+    let o = ReadOptions::default();
+    let expect = |name: &str, b: &[u8], needle: &str| {
+        let e = match read_bytes(name, b, &o) {
+            Ok(t) => panic!("{name}: accepted ({} × {})", t.nx, t.ny),
+            Err(e) => e.to_string(),
+        };
+        println!("{e}");
+        assert!(
+            e.contains(needle),
+            "{name}: `{e}` should mention `{needle}`"
+        );
+    };
+    // PLU: layer 100000 × 100000.
+    let mut b = corpus("plu-1.plu");
+    b[500..508].copy_from_slice(&[0xa0, 0x86, 1, 0, 0xa0, 0x86, 1, 0]);
+    expect("big.plu", &b, "xres × yres");
+    // SUR: 2³¹ − 1 points per line.
+    let mut b = corpus("sur-2.sur");
+    b[108..112].copy_from_slice(&i32::MAX.to_le_bytes());
+    expect("big.sur", &b, "total number of points");
+    // MetroPro: 65535 × 65535 phase points.
+    let mut b = corpus("metropro-1.dat");
+    b[68..72].copy_from_slice(&[0xff; 4]);
+    expect("big.dat", &b, "cn_org_width");
+    // TMD: u32::MAX columns.
+    let mut b = corpus("tmd-1.tmd");
+    b[56..60].copy_from_slice(&[0xff; 4]);
+    expect("big.tmd", &b, "columns");
+    // IBW: 65536 × 65536 × 8 points with a consistent checksum.
+    let mut b = corpus("spot_1-1000nm.ibw");
+    b[64 + 68..64 + 72].copy_from_slice(&65536u32.to_le_bytes());
+    b[64 + 72..64 + 76].copy_from_slice(&65536u32.to_le_bytes());
+    fix_ibw_checksum(&mut b);
+    expect("big.ibw", &b, "nDim");
+    // MI: 10⁸ pixels per line.
+    let b = String::from_utf8_lossy(&corpus("mi-1.mi")).replacen(
+        "xPixels       256",
+        "xPixels       100000000",
+        1,
+    );
+    let b: Vec<u8> = b.chars().map(|c| c as u32 as u8).collect();
+    assert!(read_bytes("big.mi", &b, &o).is_err());
+    // WSxM: 10⁹ columns.
+    let t = corpus("stp-1.stp");
+    let pos = t
+        .windows(22)
+        .position(|w| w == b"Number of columns: 256")
+        .unwrap();
+    let mut b = t[..pos].to_vec();
+    b.extend_from_slice(b"Number of columns: 999999999");
+    b.extend_from_slice(&t[pos + 22..]);
+    expect("big.stp", &b, "columns × rows");
+    // NID: 10⁹ points.
+    let t = corpus("nid-1.nid");
+    let sec = t.windows(13).position(|w| w == b"[DataSet-0:1]").unwrap();
+    let pos = sec
+        + t[sec..]
+            .windows(10)
+            .position(|w| w == b"Points=256")
+            .unwrap();
+    let mut b = t[..pos].to_vec();
+    b.extend_from_slice(b"Points=999999999");
+    b.extend_from_slice(&t[pos + 10..]);
+    expect("big.nid", &b, "Points × Lines");
+    // FRT: 2³² − 1 points per line.
+    let t = corpus("frt-1.frt");
+    let mut b = t.clone();
+    let g = 500u32.to_le_bytes();
+    let p = t
+        .windows(8)
+        .position(|w| w[..4] == g && w[4..] == g)
+        .unwrap();
+    b[p..p + 4].copy_from_slice(&[0xff; 4]);
+    expect("big.frt", &b, "grid");
 }

@@ -22,6 +22,7 @@ fn prov<'a>(file: &'a str, bytes: &'a [u8], stylus: Option<(&'a str, &'a [u8])>)
         merge_cutoff_rad_per_um: 1.0,
         metal: "stainless_steel",
         model: "ghs",
+        notes: &[],
     }
 }
 

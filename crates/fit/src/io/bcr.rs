@@ -3,14 +3,24 @@
 //! (`bcrstm`) or float32 (`bcrf`) data, x fastest. Lateral units default to nm; heights are
 //! `raw × bit2nm` nm for integers and `raw` in `zunit` (default nm) for floats.
 
-use super::{Ctx, binary, check_spacing, checked_grid, units};
+use super::{Ctx, Decoded, Raw, Want, binary, check_spacing, checked_grid, units};
 use crate::{ReadError, Topography};
 use std::collections::HashMap;
 
 const HEADER_CHARS: usize = 2048;
 
+/// Read the file (one channel).
+pub(crate) fn read(ctx: Ctx<'_>, bytes: &[u8], want: Want<'_>) -> Result<Decoded, ReadError> {
+    let t = parse(ctx, bytes)?;
+    Decoded::single(
+        ctx,
+        want,
+        Raw::si(t.nx, t.ny, t.dx, t.dy, t.heights, t.channel),
+    )
+}
+
 /// Parse a BCR file.
-pub(crate) fn read(ctx: Ctx<'_>, bytes: &[u8]) -> Result<Topography, ReadError> {
+fn parse(ctx: Ctx<'_>, bytes: &[u8]) -> Result<Topography, ReadError> {
     let unicode = bytes.len() >= 2 && bytes[1] == 0 && bytes[0] != 0;
     let char_bytes = if unicode { 2 } else { 1 };
     let head_len = (HEADER_CHARS * char_bytes).min(bytes.len());

@@ -83,3 +83,102 @@ pub fn le_u16(data: &[u8], off: usize) -> Option<u16> {
 pub fn le_f64(data: &[u8], off: usize) -> Option<f64> {
     Some(f64::from_le_bytes(data.get(off..off + 8)?.try_into().ok()?))
 }
+
+/// A bounds-checked reader of fixed-layout binary headers. Every getter returns `None`
+/// past the end instead of panicking.
+#[derive(Debug, Clone)]
+pub struct Cursor<'a> {
+    data: &'a [u8],
+    /// Current offset.
+    pub pos: usize,
+    little: bool,
+}
+
+impl<'a> Cursor<'a> {
+    /// A little-endian cursor at `pos`.
+    pub fn le(data: &'a [u8], pos: usize) -> Self {
+        Cursor {
+            data,
+            pos,
+            little: true,
+        }
+    }
+
+    /// A big-endian cursor at `pos`.
+    pub fn be(data: &'a [u8], pos: usize) -> Self {
+        Cursor {
+            data,
+            pos,
+            little: false,
+        }
+    }
+
+    /// Take `n` bytes.
+    pub fn bytes(&mut self, n: usize) -> Option<&'a [u8]> {
+        let end = self.pos.checked_add(n)?;
+        let b = self.data.get(self.pos..end)?;
+        self.pos = end;
+        Some(b)
+    }
+
+    /// Skip `n` bytes (may move to the end exactly).
+    pub fn skip(&mut self, n: usize) -> Option<()> {
+        self.bytes(n).map(|_| ())
+    }
+
+    fn arr<const N: usize>(&mut self) -> Option<[u8; N]> {
+        let mut a: [u8; N] = self.bytes(N)?.try_into().ok()?;
+        if !self.little {
+            a.reverse();
+        }
+        Some(a)
+    }
+
+    /// Unsigned byte.
+    pub fn u8(&mut self) -> Option<u8> {
+        Some(self.bytes(1)?[0])
+    }
+    /// Unsigned 16-bit.
+    pub fn u16(&mut self) -> Option<u16> {
+        Some(u16::from_le_bytes(self.arr()?))
+    }
+    /// Signed 16-bit.
+    pub fn i16(&mut self) -> Option<i16> {
+        Some(i16::from_le_bytes(self.arr()?))
+    }
+    /// Unsigned 32-bit.
+    pub fn u32(&mut self) -> Option<u32> {
+        Some(u32::from_le_bytes(self.arr()?))
+    }
+    /// Signed 32-bit.
+    pub fn i32(&mut self) -> Option<i32> {
+        Some(i32::from_le_bytes(self.arr()?))
+    }
+    /// Unsigned 64-bit.
+    pub fn u64(&mut self) -> Option<u64> {
+        Some(u64::from_le_bytes(self.arr()?))
+    }
+    /// IEEE single.
+    pub fn f32(&mut self) -> Option<f64> {
+        Some(f32::from_le_bytes(self.arr()?) as f64)
+    }
+    /// IEEE double.
+    pub fn f64(&mut self) -> Option<f64> {
+        Some(f64::from_le_bytes(self.arr()?))
+    }
+    /// A fixed-size text field, cut at the first NUL, Latin-1, trimmed.
+    pub fn text(&mut self, n: usize) -> Option<String> {
+        Some(cstr(self.bytes(n)?))
+    }
+}
+
+/// Latin-1 text up to the first NUL, trimmed.
+pub fn cstr(b: &[u8]) -> String {
+    let end = b.iter().position(|&c| c == 0).unwrap_or(b.len());
+    b[..end]
+        .iter()
+        .map(|&c| c as char)
+        .collect::<String>()
+        .trim()
+        .to_string()
+}

@@ -1,28 +1,55 @@
-//! Bruker Dektak CSV profiles: a "Scan Parameters" block, the instrument's results, then
-//! "Scan Data" with a column header such as `Lateral um,Raw Micrometer`. The x column is
-//! rounded in the export, so the spacing is taken as `(x_last − x_first)/(n − 1)`.
+//! Bruker Dektak CSV profiles: a "Scan Parameters" block (`Length,1500.0 um`,
+//! `Resolution,0.156 um/sample`, …), the instrument's results, then "Scan Data" with a
+//! column header such as `Lateral um,Raw Micrometer`. The x column is rounded in the
+//! export, so the spacing is taken as `(x_last − x_first)/(n − 1)`.
+//!
+//! A profile is accepted only if it is whole: every row is `x,z`, x advances by one
+//! sample per row (within the export's rounding), and the profile spans the `Length`
+//! the header states. A truncated, cut or garbled file is an error naming the line.
 
-use super::{Ctx, check_spacing, units};
-use crate::{ReadError, Topography};
+use super::{Ctx, Decoded, Raw, Sniff, Want, check_spacing, text, units};
+use crate::ReadError;
 
-/// Parse a Dektak CSV profile.
-pub(crate) fn read(ctx: Ctx<'_>, bytes: &[u8]) -> Result<Topography, ReadError> {
-    let text = String::from_utf8_lossy(bytes);
+/// Content check: the section titles of a Dektak export.
+pub(crate) fn sniff(bytes: &[u8]) -> Sniff {
+    let t = text::decode(&bytes[..bytes.len().min(8192)]);
+    if t.contains("Scan Data") && (t.contains("Scan Parameters") || t.contains("Lateral")) {
+        Sniff::Magic
+    } else {
+        Sniff::No
+    }
+}
+
+/// Read a Dektak CSV profile.
+pub(crate) fn read(ctx: Ctx<'_>, bytes: &[u8], want: Want<'_>) -> Result<Decoded, ReadError> {
+    let text = text::decode(bytes);
     let mut lines = text.lines().enumerate();
-    lines
-        .by_ref()
-        .find(|(_, l)| {
-            l.trim()
-                .trim_end_matches(',')
-                .eq_ignore_ascii_case("Scan Data")
-        })
-        .ok_or_else(|| {
-            ctx.err(
-                "Scan Data",
-                "section not found",
-                "export the profile with its data section",
-            )
-        })?;
+    let mut length = None;
+    let mut resolution = None;
+    let mut found = false;
+    for (_, l) in lines.by_ref() {
+        let t = l.trim().trim_end_matches(',');
+        if t.eq_ignore_ascii_case("Scan Data") {
+            found = true;
+            break;
+        }
+        let mut f = t.splitn(2, ',');
+        let (k, v) = (f.next().unwrap_or("").trim(), f.next().unwrap_or("").trim());
+        match k.to_ascii_lowercase().as_str() {
+            "length" => length = units::parse_length(v.split(',').next().unwrap_or("")),
+            "resolution" => {
+                resolution = units::parse_length(v.split('/').next().unwrap_or(""));
+            }
+            _ => {}
+        }
+    }
+    if !found {
+        return Err(ctx.err(
+            "Scan Data",
+            "section not found",
+            "export the profile with its data section",
+        ));
+    }
     let (_, head) = lines.next().ok_or_else(|| {
         ctx.err(
             "Scan Data",
@@ -48,6 +75,7 @@ pub(crate) fn read(ctx: Ctx<'_>, bytes: &[u8]) -> Result<Topography, ReadError> 
     let zu = unit_of(cols.get(1), "height column")?;
     let mut xs = Vec::new();
     let mut zs = Vec::new();
+    let mut lineno = Vec::new();
     for (i, line) in lines {
         let line = line.trim();
         if line.is_empty() {
@@ -56,32 +84,92 @@ pub(crate) fn read(ctx: Ctx<'_>, bytes: &[u8]) -> Result<Topography, ReadError> 
         let mut f = line.split(',');
         let x = f.next().and_then(|v| v.trim().parse::<f64>().ok());
         let z = f.next().and_then(|v| v.trim().parse::<f64>().ok());
+        let rest_ok = f.all(|v| v.trim().is_empty() || v.trim().parse::<f64>().is_ok());
         match (x, z) {
-            (Some(x), Some(z)) => {
+            (Some(x), Some(z)) if x.is_finite() && rest_ok => {
                 xs.push(x * xu);
                 zs.push(if z.is_finite() { z * zu } else { f64::NAN });
+                lineno.push(i + 1);
             }
             _ => {
                 return Err(ctx.err(
                     &format!("line {}", i + 1),
-                    format!("`{line}` is not `x,z`"),
-                    "the data section must contain two numeric columns",
+                    format!("`{line}` is not `x,z`: the profile is garbled"),
+                    "re-export the profile; the data section must hold two numeric columns",
                 ));
             }
         }
     }
     if xs.len() < 2 {
-        return Err(ctx.err("Scan Data", "fewer than two points", "the profile is empty"));
+        return Err(ctx.err(
+            "Scan Data",
+            "fewer than two points",
+            "the profile is empty or truncated",
+        ));
     }
     let n = xs.len();
-    let dx = check_spacing(ctx, "lateral column", (xs[n - 1] - xs[0]) / (n - 1) as f64)?;
-    Ok(Topography {
-        nx: n,
-        ny: 1,
+    let span = xs[n - 1] - xs[0];
+    let dx = check_spacing(ctx, "lateral column", span / (n - 1) as f64)?;
+    // The export rounds x to a few decimals; allow half a sample plus that rounding.
+    let rounding = xs
+        .windows(2)
+        .map(|w| (w[1] - w[0]).abs())
+        .filter(|d| *d > 0.0)
+        .fold(f64::INFINITY, f64::min)
+        .min(dx);
+    let tol = 0.5 * dx + 0.5 * rounding;
+    for (i, &x) in xs.iter().enumerate() {
+        let expect = xs[0] + i as f64 * dx;
+        if (x - expect).abs() > tol {
+            return Err(ctx.err(
+                &format!("line {}", lineno[i]),
+                format!(
+                    "x = {:.6} µm where the regular spacing puts {:.6} µm: rows are missing, \
+                     repeated or out of order",
+                    x * 1e6,
+                    expect * 1e6
+                ),
+                "the profile is garbled; re-export it",
+            ));
+        }
+    }
+    if let Some(len) = length.filter(|l| *l > 0.0) {
+        let res = resolution.filter(|r| *r > 0.0).unwrap_or(dx);
+        let expected_span = len - res;
+        if (span - expected_span).abs() > 2.0 * res + 0.002 * len {
+            return Err(ctx.err(
+                "Length",
+                format!(
+                    "the data span {:.3} µm but the header states a {:.3} µm scan: the profile \
+                     is truncated",
+                    span * 1e6,
+                    len * 1e6
+                ),
+                "re-export the whole profile",
+            ));
+        }
+    }
+    if let Some(res) = resolution.filter(|r| *r > 0.0)
+        && ((dx / res) - 1.0).abs() > 0.05
+    {
+        return Err(ctx.err(
+            "Resolution",
+            format!(
+                "the data are spaced {:.5} µm but the header states {:.5} µm/sample: rows \
+                 are missing or the file is garbled",
+                dx * 1e6,
+                res * 1e6
+            ),
+            "re-export the profile",
+        ));
+    }
+    let raw = Raw::si(
+        n,
+        1,
         dx,
-        dy: dx,
-        heights: zs,
-        channel: cols.get(1).unwrap_or(&"height").to_string(),
-        format: "dektak",
-    })
+        dx,
+        zs,
+        cols.get(1).copied().unwrap_or("height").to_string(),
+    );
+    Decoded::single(ctx, want, raw)
 }

@@ -2,14 +2,24 @@
 //! lines (XRes, YRes, XReal, YReal, XYUnits, ZUnits), NUL padding to a multiple of 4 bytes,
 //! then XRes·YRes little-endian float32 values. NaN marks invalid points.
 
-use super::{Ctx, binary, check_spacing, checked_grid, units};
+use super::{Ctx, Decoded, Raw, Want, binary, check_spacing, checked_grid, units};
 use crate::{ReadError, Topography};
 use std::collections::HashMap;
 
 const MAGIC: &[u8] = b"Gwyddion Simple Field 1.0";
 
+/// Read the file (one channel).
+pub(crate) fn read(ctx: Ctx<'_>, bytes: &[u8], want: Want<'_>) -> Result<Decoded, ReadError> {
+    let t = parse(ctx, bytes)?;
+    Decoded::single(
+        ctx,
+        want,
+        Raw::si(t.nx, t.ny, t.dx, t.dy, t.heights, t.channel),
+    )
+}
+
 /// Parse a GSF file.
-pub(crate) fn read(ctx: Ctx<'_>, bytes: &[u8]) -> Result<Topography, ReadError> {
+fn parse(ctx: Ctx<'_>, bytes: &[u8]) -> Result<Topography, ReadError> {
     if !bytes.starts_with(MAGIC) {
         return Err(ctx.err(
             "magic",

@@ -1,108 +1,333 @@
-//! Gwyddion "Export Text" ASCII matrix: `# Key: value` header lines (Channel, Width,
-//! Height, Value units), then one row of values per scan line.
+//! Text matrices: one row of heights per scan line, after an optional header in any of
+//! the dialects instruments write: Gwyddion "Export Text" (`# Width: 10.00 µm`, in the
+//! English or German locale: `Breite`, `Höhe`, `Kanal`, decimal commas), `key = value`
+//! and `key: value` lines (`x-length`, `y-length`, `x-unit`, `z-unit`, `pixel size`,
+//! `height conversion factor (-> µm) = 0.001`, `Value units`), any separator, UTF-8 or
+//! UTF-16. Invalid points may be written as `NaN`, `bad`, `inf` or empty fields.
+//!
+//! What the header leaves out (pixel size, units) is left unknown here and supplied by the
+//! user's flags, or named in the error.
 
-use super::{Ctx, check_spacing, text::parse_row, units};
-use crate::{ReadError, Topography};
+use super::{ChannelInfo, Ctx, Decoded, Raw, Sniff, Unit, Want, select, text, units};
+use crate::ReadError;
 
-/// Parse a text matrix. `units` (m per unit) applies to values when the header gives none.
-pub(crate) fn read(
-    ctx: Ctx<'_>,
-    bytes: &[u8],
-    units: Option<f64>,
-) -> Result<Topography, ReadError> {
-    let text = std::str::from_utf8(bytes).map_err(|e| {
-        ctx.err(
-            "text",
-            format!("not UTF-8 text ({e})"),
-            "save the matrix as UTF-8",
-        )
-    })?;
-    let mut width = None;
-    let mut height = None;
-    let mut zunit = None;
-    let mut channel = String::from("matrix");
-    let mut rows: Vec<f64> = Vec::new();
-    let mut nx = 0usize;
-    let mut ny = 0usize;
-    for (lineno, line) in text.lines().enumerate() {
-        let line = line.trim();
-        if line.is_empty() {
-            continue;
+/// What a header key means.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Key {
+    SizeX,
+    SizeY,
+    PixelSize,
+    LateralUnit,
+    HeightUnit,
+    HeightFactor,
+    Channel,
+    PixelsX,
+    PixelsY,
+}
+
+fn classify(key: &str) -> Option<Key> {
+    let k = key
+        .trim()
+        .to_lowercase()
+        .replace(['_', '-'], " ")
+        .split_whitespace()
+        .collect::<Vec<_>>()
+        .join(" ");
+    Some(match k.as_str() {
+        "width" | "breite" | "x length" | "xlength" | "xreal" | "x size" | "scan size x"
+        | "x range" | "x scan size" | "length x" | "size x" => Key::SizeX,
+        "height" | "höhe" | "hoehe" | "y length" | "ylength" | "yreal" | "y size"
+        | "scan size y" | "y range" | "y scan size" | "length y" | "size y" => Key::SizeY,
+        "pixel size" | "pixelsize" | "pixel spacing" | "spacing" | "sampling" | "dx"
+        | "x pixel size" | "lateral resolution" => Key::PixelSize,
+        "x unit" | "xunit" | "xy unit" | "xy units" | "xyunits" | "lateral unit"
+        | "lateral units" | "length unit" | "x units" => Key::LateralUnit,
+        "value units"
+        | "value unit"
+        | "z unit"
+        | "zunit"
+        | "z units"
+        | "zunits"
+        | "height unit"
+        | "height units"
+        | "wertebereich einheit"
+        | "einheit" => Key::HeightUnit,
+        "channel" | "kanal" | "title" | "name" => Key::Channel,
+        "x pixels" | "xpixels" | "xres" | "columns" | "number of columns" | "points" => {
+            Key::PixelsX
         }
-        if let Some(h) = line.strip_prefix('#') {
-            if let Some((k, v)) = h.split_once(':') {
-                let v = v.trim();
-                match k.trim().to_ascii_lowercase().as_str() {
-                    "width" => width = Some(parse_len(ctx, "Width", v)?),
-                    "height" => height = Some(parse_len(ctx, "Height", v)?),
-                    "value units" => {
-                        zunit = Some(units::length_factor(v).ok_or_else(|| {
-                            ctx.err(
-                                "Value units",
-                                format!("`{v}` is not a length unit"),
-                                "export a height channel (units m, µm or nm)",
-                            )
-                        })?)
-                    }
-                    "channel" => channel = v.to_string(),
-                    _ => {}
-                }
-            }
-            continue;
+        "y pixels" | "ypixels" | "yres" | "rows" | "number of rows" | "lines" => Key::PixelsY,
+        _ if k.starts_with("height conversion factor")
+            || k.starts_with("z scale")
+            || k.starts_with("zscale")
+            || k.starts_with("z factor")
+            || k.starts_with("height scale") =>
+        {
+            Key::HeightFactor
         }
-        let row = parse_row(line).ok_or_else(|| {
-            ctx.err(
-                &format!("line {}", lineno + 1),
-                "contains a field that is not a number",
-                "remove stray text; header lines must start with '#'",
-            )
-        })?;
-        if nx == 0 {
-            nx = row.len();
-        } else if row.len() != nx {
-            return Err(ctx.err(
-                &format!("line {}", lineno + 1),
-                format!("has {} values but the first row has {nx}", row.len()),
-                "every row of the matrix must have the same length",
-            ));
-        }
-        rows.extend_from_slice(&row);
-        ny += 1;
-    }
-    if nx == 0 || ny == 0 {
-        return Err(ctx.err("data", "no numeric rows", "the file holds no matrix"));
-    }
-    let width = width.ok_or_else(|| {
-        ctx.err(
-            "Width",
-            "missing, so the pixel size is unknown",
-            "add a header line `# Width: 10 µm`",
-        )
-    })?;
-    let height = height.unwrap_or(width * ny as f64 / nx as f64);
-    let dx = check_spacing(ctx, "Width", width / nx as f64)?;
-    let dy = check_spacing(ctx, "Height", height / ny as f64)?;
-    let z = zunit.or(units).unwrap_or(1.0);
-    for v in &mut rows {
-        *v *= z;
-    }
-    Ok(Topography {
-        nx,
-        ny,
-        dx,
-        dy: if ny == 1 { dx } else { dy },
-        heights: rows,
-        channel,
-        format: "gwyddion-matrix",
+        _ => return None,
     })
 }
 
-fn parse_len(ctx: Ctx<'_>, field: &str, v: &str) -> Result<f64, ReadError> {
-    units::parse_length(v).ok_or_else(|| {
+/// Content check: numeric rows (≥ 4 columns or a recognised header).
+pub(crate) fn sniff(bytes: &[u8]) -> Sniff {
+    if !text::looks_like_text(bytes) {
+        return Sniff::No;
+    }
+    let t = text::decode(&bytes[..bytes.len().min(16384)]);
+    let lines: Vec<&str> = t.lines().take(200).collect();
+    // The last line of a cut sample may be partial.
+    let usable = &lines[..lines.len().saturating_sub(1).max(1).min(lines.len())];
+    let dialect = text::Dialect::guess(usable.iter().copied().filter(|l| looks_numeric(l)));
+    let mut header = false;
+    let mut cols = Vec::new();
+    for l in usable {
+        if let Some(r) = dialect.row(l) {
+            cols.push(r.len());
+        } else if text::key_value(l).is_some_and(|(k, _)| classify(&k).is_some()) {
+            header = true;
+        }
+    }
+    let Some(&first) = cols.first() else {
+        return Sniff::No;
+    };
+    let consistent = cols.iter().all(|&c| c == first);
+    match (header, consistent, first) {
+        (true, true, _) => Sniff::Likely,
+        (false, true, c) if c >= 4 || (c == 1 && cols.len() >= 4) => Sniff::Maybe,
+        _ => Sniff::No,
+    }
+}
+
+fn looks_numeric(l: &str) -> bool {
+    let t = l.trim();
+    !t.is_empty()
+        && t.chars()
+            .all(|c| c.is_ascii_digit() || " \t,;.eE+-".contains(c) || c.is_ascii_alphabetic())
+        && t.chars()
+            .next()
+            .is_some_and(|c| c.is_ascii_digit() || c == '-' || c == '+' || c == '.')
+}
+
+/// A length in a header: `12.34 µm`, `12,34 µm` or a bare number (unit unknown).
+fn header_length(ctx: Ctx<'_>, field: &str, v: &str) -> Result<(f64, Option<f64>), ReadError> {
+    let (num, unit) = units::split_number(v).ok_or_else(|| {
         ctx.err(
             field,
             format!("`{v}` is not a length"),
             "write it as `<number> <unit>`, e.g. `10.00 µm`",
         )
+    })?;
+    if unit.is_empty() {
+        return Ok((num, None));
+    }
+    let f = units::length_factor(unit).ok_or_else(|| {
+        ctx.err(
+            field,
+            format!("`{unit}` is not a length unit"),
+            "use m, mm, µm (um) or nm",
+        )
+    })?;
+    Ok((num, Some(f)))
+}
+
+/// Read a text matrix.
+pub(crate) fn read(ctx: Ctx<'_>, bytes: &[u8], want: Want<'_>) -> Result<Decoded, ReadError> {
+    let text = text::decode(bytes);
+    let dialect = text::Dialect::guess(text.lines().filter(|l| looks_numeric(l)));
+    let mut size_x = None;
+    let mut size_y = None;
+    let mut pixel = None;
+    let mut lateral_unit: Option<f64> = None;
+    let mut height_unit: Option<Result<f64, String>> = None;
+    let mut factor: Option<(f64, Option<f64>)> = None;
+    let mut pixels: (Option<usize>, Option<usize>) = (None, None);
+    let mut channel = String::from("matrix");
+    let mut values: Vec<f64> = Vec::new();
+    let (mut nx, mut ny) = (0usize, 0usize);
+    let mut data_ended = false;
+    for (lineno, line) in text.lines().enumerate() {
+        let t = line.trim();
+        if t.is_empty() {
+            if ny > 0 {
+                data_ended = true;
+            }
+            continue;
+        }
+        if let Some(row) = dialect.row(t) {
+            if data_ended {
+                return Err(ctx.err(
+                    &format!("line {}", lineno + 1),
+                    "data continue after a blank line",
+                    "a matrix must be one block of rows; remove the blank line or split the file",
+                ));
+            }
+            if nx == 0 {
+                nx = row.len();
+            } else if row.len() != nx {
+                return Err(ctx.err(
+                    &format!("line {}", lineno + 1),
+                    format!("has {} values but the first row has {nx}", row.len()),
+                    "every row of the matrix must have the same length",
+                ));
+            }
+            values.extend_from_slice(&row);
+            ny += 1;
+            continue;
+        }
+        if ny > 0 && !t.starts_with('#') {
+            return Err(ctx.err(
+                &format!("line {}", lineno + 1),
+                format!(
+                    "`{}` is not a row of numbers",
+                    t.chars().take(40).collect::<String>()
+                ),
+                "remove stray text; header lines go before the data",
+            ));
+        }
+        let Some((k, v)) = text::key_value(t) else {
+            continue;
+        };
+        let Some(key) = classify(&k) else {
+            continue;
+        };
+        match key {
+            Key::SizeX => size_x = Some(header_length(ctx, &k, &v)?),
+            Key::SizeY => size_y = Some(header_length(ctx, &k, &v)?),
+            Key::PixelSize => pixel = Some(header_length(ctx, &k, &v)?),
+            Key::LateralUnit => {
+                lateral_unit = Some(units::length_factor(&v).ok_or_else(|| {
+                    ctx.err(
+                        &k,
+                        format!("`{v}` is not a length unit"),
+                        "use m, mm, µm or nm",
+                    )
+                })?)
+            }
+            Key::HeightUnit => {
+                height_unit = Some(units::length_factor(&v).ok_or_else(|| v.trim().to_string()))
+            }
+            Key::HeightFactor => {
+                let (f, unit_in_value) = units::split_number(&v)
+                    .map(|(f, u)| (f, units::length_factor(u)))
+                    .ok_or_else(|| {
+                        ctx.err(&k, format!("`{v}` is not a number"), "write e.g. `= 0.001`")
+                    })?;
+                // "height conversion factor (-> µm) = 0.001": the unit sits in the key.
+                let unit_in_key = k
+                    .split("->")
+                    .nth(1)
+                    .map(|u| u.trim_end_matches(')').trim())
+                    .and_then(units::length_factor);
+                factor = Some((f, unit_in_value.or(unit_in_key)));
+            }
+            Key::Channel => channel = v.to_string(),
+            Key::PixelsX => pixels.0 = v.trim().parse().ok(),
+            Key::PixelsY => pixels.1 = v.trim().parse().ok(),
+        }
+    }
+    if nx == 0 || ny == 0 {
+        return Err(ctx.err(
+            "data",
+            "no rows of numbers",
+            "this is not a height matrix; check the file or force another format with --format",
+        ));
+    }
+    // A single column is a profile written one value per line.
+    let (nx, ny) = if nx == 1 { (ny, 1) } else { (nx, ny) };
+    if let (Some(px), Some(py)) = pixels
+        && (px, py) != (nx, ny)
+        && (py, px) != (nx, ny)
+    {
+        return Err(ctx.err(
+            "pixels",
+            format!("the header states {px} × {py} points but the data are {nx} × {ny}"),
+            "the file is truncated or its header is wrong",
+        ));
+    }
+    let mut notes = Vec::new();
+    let (height_unit, is_height, unit_name) = match (&height_unit, factor) {
+        (Some(Err(u)), _) => (Unit::Unknown, false, u.clone()),
+        (_, Some((f, Some(u)))) => (Unit::Known(f * u), true, units::name_of(u)),
+        (Some(Ok(u)), Some((f, None))) => (Unit::Known(f * u), true, units::name_of(*u)),
+        (None, Some((f, None))) => {
+            for v in &mut values {
+                *v *= f;
+            }
+            (Unit::Unknown, true, String::new())
+        }
+        (Some(Ok(u)), None) => (Unit::Known(*u), true, units::name_of(*u)),
+        (None, None) => (Unit::Unknown, true, String::new()),
+    };
+    // Lateral spacing and its unit.
+    let lat = |u: Option<f64>| u.or(lateral_unit);
+    let (spacing, lunit) = if let Some((p, u)) = pixel {
+        (Some((p, p)), lat(u))
+    } else if let Some((sx, ux)) = size_x {
+        let (sy, uy) = match size_y {
+            Some((sy, uy)) => (sy, uy),
+            None if ny > 1 => {
+                notes.push("the header gives no height (y size): square pixels assumed".into());
+                (sx * ny as f64 / nx as f64, ux)
+            }
+            None => (sx, ux),
+        };
+        let (ux, uy) = (lat(ux), lat(uy));
+        // Mixed units (`Width: 12.34 µm`, `Height: 5678.9 nm`) are folded into x's unit.
+        let sy = match (ux, uy) {
+            (Some(a), Some(b)) => sy * b / a,
+            _ => sy,
+        };
+        (
+            Some((
+                sx / nx as f64,
+                if ny > 1 {
+                    sy / ny as f64
+                } else {
+                    sx / nx as f64
+                },
+            )),
+            ux.or(uy),
+        )
+    } else {
+        (None, lateral_unit)
+    };
+    let lateral_unit = match (lunit, height_unit, spacing) {
+        (Some(u), _, _) => Unit::Known(u),
+        (None, Unit::Known(u), Some(_)) if is_height => {
+            notes.push(format!(
+                "lengths taken in {}, the unit the header gives for heights",
+                units::name_of(u)
+            ));
+            Unit::Known(u)
+        }
+        _ => Unit::Unknown,
+    };
+    let raw = Raw {
+        nx,
+        ny,
+        heights: values,
+        height_unit,
+        spacing,
+        lateral_unit,
+        channel: channel.clone(),
+        notes,
+    };
+    let channels = vec![ChannelInfo {
+        index: 0,
+        name: channel,
+        unit: unit_name,
+        is_height,
+        nx,
+        ny,
+    }];
+    let selected = match want {
+        Want::List => 0,
+        Want::Channel(sel) => select(ctx, &channels, sel)?,
+    };
+    Ok(Decoded {
+        channels,
+        selected,
+        raw: matches!(want, Want::Channel(_)).then_some(raw),
     })
 }

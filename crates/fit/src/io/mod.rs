@@ -1,78 +1,357 @@
-//! Readers for surface-topography files. Each format lives in its own module; [`read_path`]
-//! and [`read_bytes`] pick one from the file's magic bytes or extension.
+//! Readers for surface-topography files, behind one registry ([`registry::READERS`]).
 //!
 //! Every reader takes the whole file as a byte slice, never panics on malformed input and
-//! checks declared sizes against the bytes actually present before allocating.
+//! checks declared sizes against the bytes actually present before allocating. A reader
+//! decodes one channel into a [`Raw`] map in the file's own units; [`open_bytes`] then
+//! applies what the user supplied for the facts the file leaves out (`--units`,
+//! `--pixel-size`, `--size`) and names the missing fact and its flag when neither the
+//! file nor the user gives it.
 
+pub mod al3d;
 pub mod bcr;
 pub mod binary;
 pub mod dektak;
+pub mod frt;
 pub mod gsf;
+pub mod ibw;
 pub mod matrix;
+pub mod md5;
+pub mod metropro;
+pub mod mi;
+pub mod mnt;
 pub mod nanoscope;
+pub mod nid;
+pub mod ole;
+pub mod opd;
+pub mod park;
+pub mod plu;
+pub mod registry;
 pub mod sdf;
+pub mod sur;
 pub mod text;
+pub mod tiff;
+pub mod tmd;
 pub mod units;
+pub mod wsxm;
 pub mod x3p;
 pub mod xyz;
+
+pub use registry::{Format, READERS, Sniff};
 
 use crate::{ReadError, Topography};
 use std::path::Path;
 
+/// A channel chosen on the command line: by 0-based index or by name.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum ChannelSel {
+    /// 0-based position in the file's channel list.
+    Index(usize),
+    /// Channel name (case-insensitive; a unique substring is enough).
+    Name(String),
+}
+
+impl ChannelSel {
+    /// `"3"` is an index, anything else a name.
+    pub fn parse(s: &str) -> ChannelSel {
+        match s.trim().parse::<usize>() {
+            Ok(i) => ChannelSel::Index(i),
+            Err(_) => ChannelSel::Name(s.trim().to_string()),
+        }
+    }
+}
+
+/// Units supplied by the user for files that do not state them [metres per unit].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Units {
+    /// Lateral (x, y) unit.
+    pub lateral: f64,
+    /// Height unit.
+    pub height: f64,
+}
+
+impl Units {
+    /// Parse `um` (both) or `um,nm` (lateral, height).
+    pub fn parse(s: &str) -> Option<Units> {
+        let mut parts = s.split(',').map(str::trim);
+        let a = units::length_factor(parts.next()?)?;
+        let b = match parts.next() {
+            Some(p) => units::length_factor(p)?,
+            None => a,
+        };
+        if parts.next().is_some() {
+            return None;
+        }
+        Some(Units {
+            lateral: a,
+            height: b,
+        })
+    }
+}
+
 /// Options that apply to some readers.
 #[derive(Debug, Clone, Default)]
 pub struct ReadOptions {
-    /// Channel (image) index for multi-channel files (NanoScope). Default 0.
-    pub channel: Option<usize>,
-    /// Length unit [m per unit] of plain column files (XYZ/CSV), and of the values of a
-    /// matrix file that does not state its units. Default 1 (metres).
-    pub units: Option<f64>,
+    /// Channel of multi-channel files; default: the first height channel.
+    pub channel: Option<ChannelSel>,
+    /// Units for files that do not state them (ignored, with a note, where they do).
+    pub units: Option<Units>,
+    /// Pixel spacing `(dx, dy)` [m]; overrides the file's.
+    pub pixel_size: Option<(f64, f64)>,
+    /// Scan size `(x, y)` [m] (`dx = x / nx`); overrides the file's.
+    pub size: Option<(f64, f64)>,
     /// Force a format instead of detecting it.
     pub format: Option<Format>,
 }
 
-/// Supported file formats.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Format {
-    /// ISO 25178-72 X3P (zip).
-    X3p,
-    /// BCR-STM (`bcrstm`, `bcrf`, ASCII or UTF-16 header).
-    Bcr,
-    /// SDF (ISO 25178-71 / BCR SDF), binary or ASCII.
-    Sdf,
-    /// Bruker/Veeco NanoScope (`.di`, `.spm`, `.001`).
-    NanoScope,
-    /// Gwyddion "Export Text" ASCII matrix.
-    Matrix,
-    /// Gwyddion Simple Field `.gsf`.
-    Gsf,
-    /// Bruker Dektak CSV profile.
-    Dektak,
-    /// Plain XYZ (or XZ profile) column file.
-    Xyz,
+/// One channel of a file as listed by `lustre fit channels`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ChannelInfo {
+    /// 0-based index (the `--channel` value).
+    pub index: usize,
+    /// Name as stored in the file.
+    pub name: String,
+    /// Unit of the values as stated by the file (empty when it states none).
+    pub unit: String,
+    /// True when the channel holds heights (a length), so it can be analysed.
+    pub is_height: bool,
+    /// Points along x.
+    pub nx: usize,
+    /// Lines.
+    pub ny: usize,
 }
 
-impl Format {
-    /// Parse a format name as given on the command line.
-    pub fn from_name(name: &str) -> Option<Format> {
-        Some(match name.to_ascii_lowercase().as_str() {
-            "x3p" => Format::X3p,
-            "bcr" | "bcrf" | "bcrstm" => Format::Bcr,
-            "sdf" => Format::Sdf,
-            "di" | "nanoscope" | "spm" => Format::NanoScope,
-            "matrix" | "txt" | "asc" => Format::Matrix,
-            "gsf" => Format::Gsf,
-            "dektak" => Format::Dektak,
-            "xyz" | "csv" => Format::Xyz,
-            _ => return None,
+/// A file read and converted to SI, with what the reader had to assume or change.
+#[derive(Debug, Clone)]
+pub struct Scan {
+    /// The height map in metres.
+    pub topo: Topography,
+    /// Reader used.
+    pub format: Format,
+    /// Every channel of the file.
+    pub channels: Vec<ChannelInfo>,
+    /// Index of the channel read.
+    pub channel: usize,
+    /// Things the user should know (resampling, flags ignored or used, assumed units).
+    pub notes: Vec<String>,
+}
+
+/// A unit stated by the file, or not.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) enum Unit {
+    /// Metres per stored unit.
+    Known(f64),
+    /// The file does not say.
+    Unknown,
+}
+
+/// One decoded channel in the file's own units.
+#[derive(Debug, Clone)]
+pub(crate) struct Raw {
+    pub nx: usize,
+    pub ny: usize,
+    /// Values in `height_unit`, NaN where invalid; x fastest.
+    pub heights: Vec<f64>,
+    pub height_unit: Unit,
+    /// Pixel spacing `(dx, dy)` in `lateral_unit`; `None` when the file gives no size.
+    pub spacing: Option<(f64, f64)>,
+    pub lateral_unit: Unit,
+    pub channel: String,
+    pub notes: Vec<String>,
+}
+
+impl Raw {
+    /// A channel already in metres.
+    pub fn si(
+        nx: usize,
+        ny: usize,
+        dx: f64,
+        dy: f64,
+        heights: Vec<f64>,
+        channel: impl Into<String>,
+    ) -> Raw {
+        Raw {
+            nx,
+            ny,
+            heights,
+            height_unit: Unit::Known(1.0),
+            spacing: Some((dx, dy)),
+            lateral_unit: Unit::Known(1.0),
+            channel: channel.into(),
+            notes: Vec::new(),
+        }
+    }
+
+    fn info(&self, index: usize) -> ChannelInfo {
+        ChannelInfo {
+            index,
+            name: self.channel.clone(),
+            unit: match self.height_unit {
+                Unit::Known(f) => units::name_of(f),
+                Unit::Unknown => String::new(),
+            },
+            is_height: true,
+            nx: self.nx,
+            ny: self.ny,
+        }
+    }
+}
+
+/// What a reader returns: the channel list and, unless only the list was asked for, the
+/// selected channel decoded.
+#[derive(Debug)]
+pub(crate) struct Decoded {
+    pub channels: Vec<ChannelInfo>,
+    pub selected: usize,
+    pub raw: Option<Raw>,
+}
+
+impl Decoded {
+    /// A single-channel file.
+    pub fn single(ctx: Ctx<'_>, want: Want<'_>, raw: Raw) -> Result<Decoded, ReadError> {
+        let channels = vec![raw.info(0)];
+        let selected = match want {
+            Want::List => 0,
+            Want::Channel(sel) => select(ctx, &channels, sel)?,
+        };
+        Ok(Decoded {
+            channels,
+            selected,
+            raw: matches!(want, Want::Channel(_)).then_some(raw),
         })
     }
+}
+
+/// What the caller of a reader wants.
+#[derive(Debug, Clone, Copy)]
+pub(crate) enum Want<'a> {
+    /// Only the channel list.
+    List,
+    /// Decode this channel (default: the first height channel).
+    Channel(Option<&'a ChannelSel>),
+}
+
+/// Choose a channel: the user's choice, or the first height channel.
+pub(crate) fn select(
+    ctx: Ctx<'_>,
+    channels: &[ChannelInfo],
+    sel: Option<&ChannelSel>,
+) -> Result<usize, ReadError> {
+    let list = || {
+        channels
+            .iter()
+            .map(|c| {
+                let unit = if c.unit.is_empty() {
+                    String::new()
+                } else {
+                    format!(" [{}]", c.unit)
+                };
+                format!("{} {}{unit}", c.index, c.name)
+            })
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    let chosen = match sel {
+        None => {
+            return channels.iter().position(|c| c.is_height).ok_or_else(|| {
+                ctx.err(
+                    "channel",
+                    format!(
+                        "no channel holds heights (channels: {}); values in deg, V, N, … are \
+                         not a height",
+                        list()
+                    ),
+                    "export a height channel, or choose one with --channel and give its unit \
+                     with --units if it is a length",
+                )
+            });
+        }
+        Some(ChannelSel::Index(i)) => {
+            if *i >= channels.len() {
+                return Err(ctx.err(
+                    "channel",
+                    format!(
+                        "channel {i} requested but the file has {} (channels: {})",
+                        channels.len(),
+                        list()
+                    ),
+                    format!("choose --channel 0..{}", channels.len().saturating_sub(1)),
+                ));
+            }
+            *i
+        }
+        Some(ChannelSel::Name(n)) => {
+            let lower = n.to_lowercase();
+            let exact: Vec<usize> = channels
+                .iter()
+                .filter(|c| c.name.to_lowercase() == lower)
+                .map(|c| c.index)
+                .collect();
+            let partial: Vec<usize> = channels
+                .iter()
+                .filter(|c| c.name.to_lowercase().contains(&lower))
+                .map(|c| c.index)
+                .collect();
+            match (exact.as_slice(), partial.as_slice()) {
+                ([i, ..], _) => *i,
+                ([], [i]) => *i,
+                ([], []) => {
+                    return Err(ctx.err(
+                        "channel",
+                        format!("no channel named `{n}` (channels: {})", list()),
+                        "choose a channel by index or name with --channel",
+                    ));
+                }
+                ([], _) => {
+                    return Err(ctx.err(
+                        "channel",
+                        format!("`{n}` matches several channels (channels: {})", list()),
+                        "choose it by index with --channel",
+                    ));
+                }
+            }
+        }
+    };
+    let c = &channels[chosen];
+    if !c.is_height {
+        return Err(ctx.err(
+            "channel",
+            format!(
+                "channel {} `{}` is in `{}`, not a height (channels: {})",
+                c.index,
+                c.name,
+                c.unit,
+                list()
+            ),
+            "choose a height channel with --channel",
+        ));
+    }
+    Ok(chosen)
 }
 
 /// File-name context for error messages.
 #[derive(Clone, Copy)]
 pub(crate) struct Ctx<'a> {
     pub file: &'a str,
+}
+
+/// Text taken from a file, made fit for a one-line message: control characters become
+/// spaces, runs of spaces collapse, and at most `max` characters are kept.
+pub fn clean(s: &str, max: usize) -> String {
+    let mut out = String::with_capacity(s.len().min(max));
+    let mut space = false;
+    for c in s.chars() {
+        let c = if c.is_control() { ' ' } else { c };
+        if c == ' ' && space {
+            continue;
+        }
+        space = c == ' ';
+        if out.chars().count() >= max {
+            out.push('…');
+            break;
+        }
+        out.push(c);
+    }
+    out.trim().to_string()
 }
 
 impl Ctx<'_> {
@@ -84,9 +363,9 @@ impl Ctx<'_> {
     ) -> ReadError {
         ReadError::Invalid {
             file: self.file.to_string(),
-            field: field.to_string(),
-            problem: problem.into(),
-            fix: fix.into(),
+            field: clean(field, 120),
+            problem: clean(&problem.into(), 600),
+            fix: clean(&fix.into(), 300),
         }
     }
 
@@ -144,97 +423,228 @@ pub(crate) fn check_spacing(ctx: Ctx<'_>, field: &str, d: f64) -> Result<f64, Re
     } else {
         Err(ctx.err(
             field,
-            format!("pixel spacing {d} m is not a positive finite number"),
+            format!("pixel spacing {d} is not a positive finite number"),
             "check the scan-size fields of the header",
         ))
     }
 }
 
-/// Read and parse a file. The format comes from `opts.format` or is detected.
-pub fn read_path(path: &Path, opts: &ReadOptions) -> Result<Topography, ReadError> {
+/// Read and convert a file. The format comes from `opts.format` or is detected.
+pub fn open_path(path: &Path, opts: &ReadOptions) -> Result<Scan, ReadError> {
     let bytes = std::fs::read(path).map_err(|source| ReadError::Io {
         file: path.to_path_buf(),
         source,
     })?;
-    let name = path.display().to_string();
-    read_bytes(&name, &bytes, opts)
+    open_bytes(&path.display().to_string(), &bytes, opts)
 }
 
-/// Parse a file already in memory; `name` is used for format detection (extension) and
-/// messages.
-pub fn read_bytes(name: &str, bytes: &[u8], opts: &ReadOptions) -> Result<Topography, ReadError> {
-    let format = match opts.format {
-        Some(f) => f,
-        None => detect(name, bytes).ok_or_else(|| ReadError::UnknownFormat {
-            file: name.to_string(),
-            fix: "supported: .x3p, .bcr/.bcrf, .sdf, NanoScope .di/.spm, Gwyddion text matrix \
-                  and .gsf, Dektak .csv, XYZ columns; force one with --format"
-                .into(),
-        })?,
-    };
+/// Read and convert a file already in memory; `name` is used for format detection
+/// (extension) and messages.
+pub fn open_bytes(name: &str, bytes: &[u8], opts: &ReadOptions) -> Result<Scan, ReadError> {
+    let format = format_of(name, bytes, opts)?;
     let ctx = Ctx { file: name };
-    match format {
-        Format::X3p => x3p::read(ctx, bytes),
-        Format::Bcr => bcr::read(ctx, bytes),
-        Format::Sdf => sdf::read(ctx, bytes),
-        Format::NanoScope => nanoscope::read(ctx, bytes, opts.channel.unwrap_or(0)),
-        Format::Matrix => matrix::read(ctx, bytes, opts.units),
-        Format::Gsf => gsf::read(ctx, bytes),
-        Format::Dektak => dektak::read(ctx, bytes),
-        Format::Xyz => xyz::read(ctx, bytes, opts.units.unwrap_or(1.0)),
+    let d = (format.reader().read)(ctx, bytes, Want::Channel(opts.channel.as_ref()))?;
+    let raw = d.raw.ok_or_else(|| {
+        ctx.err(
+            "channel",
+            "the reader returned no data",
+            "report this file as a bug",
+        )
+    })?;
+    let (mut topo, notes) = finish(ctx, raw, opts, format)?;
+    topo.channel = clean(&topo.channel, 80);
+    Ok(Scan {
+        topo,
+        format,
+        channels: cleaned(d.channels),
+        channel: d.selected,
+        notes: notes.iter().map(|n| clean(n, 400)).collect(),
+    })
+}
+
+/// The channels of a file, without decoding any.
+pub fn list_channels(
+    name: &str,
+    bytes: &[u8],
+    opts: &ReadOptions,
+) -> Result<(Format, Vec<ChannelInfo>), ReadError> {
+    let format = format_of(name, bytes, opts)?;
+    let d = (format.reader().read)(Ctx { file: name }, bytes, Want::List)?;
+    Ok((format, cleaned(d.channels)))
+}
+
+fn cleaned(mut channels: Vec<ChannelInfo>) -> Vec<ChannelInfo> {
+    for c in &mut channels {
+        c.name = clean(&c.name, 80);
+        c.unit = clean(&c.unit, 24);
+    }
+    channels
+}
+
+/// Read a file into metres (see [`open_path`] for the details and notes).
+pub fn read_path(path: &Path, opts: &ReadOptions) -> Result<Topography, ReadError> {
+    open_path(path, opts).map(|s| s.topo)
+}
+
+/// Parse a file already in memory (see [`open_bytes`]).
+pub fn read_bytes(name: &str, bytes: &[u8], opts: &ReadOptions) -> Result<Topography, ReadError> {
+    open_bytes(name, bytes, opts).map(|s| s.topo)
+}
+
+fn format_of(name: &str, bytes: &[u8], opts: &ReadOptions) -> Result<Format, ReadError> {
+    match opts.format {
+        Some(f) => Ok(f),
+        None => registry::detect(name, bytes).ok_or_else(|| ReadError::UnknownFormat {
+            file: name.to_string(),
+            fix: format!(
+                "supported: {}; force one with --format",
+                registry::supported_list()
+            ),
+        }),
     }
 }
 
-/// Guess the format from magic bytes, then content, then extension.
-pub fn detect(name: &str, bytes: &[u8]) -> Option<Format> {
-    let head = &bytes[..bytes.len().min(64)];
-    if head.starts_with(b"PK\x03\x04") {
-        return Some(Format::X3p);
+/// Apply the user's units and sizes to a decoded channel; name every missing fact.
+fn finish(
+    ctx: Ctx<'_>,
+    raw: Raw,
+    opts: &ReadOptions,
+    format: Format,
+) -> Result<(Topography, Vec<String>), ReadError> {
+    let Raw {
+        nx,
+        ny,
+        mut heights,
+        height_unit,
+        spacing,
+        lateral_unit,
+        channel,
+        mut notes,
+    } = raw;
+    if heights.len() != nx.saturating_mul(ny) || nx == 0 || ny == 0 {
+        return Err(ctx.err(
+            "data",
+            format!("{} values for a {nx} × {ny} grid", heights.len()),
+            "the file is corrupt",
+        ));
     }
-    if head.starts_with(b"\\*File list") {
-        return Some(Format::NanoScope);
+    let mut missing: Vec<&str> = Vec::new();
+    let mut fixes: Vec<&str> = Vec::new();
+    let z = match (height_unit, opts.units) {
+        (Unit::Known(f), Some(u)) => {
+            if (u.height / f - 1.0).abs() > 1e-9 {
+                notes.push(format!(
+                    "--units ignored for heights: the file states them in {}",
+                    units::name_of(f)
+                ));
+            }
+            f
+        }
+        (Unit::Known(f), None) => f,
+        (Unit::Unknown, Some(u)) => {
+            notes.push(format!(
+                "heights taken in {} (--units)",
+                units::name_of(u.height)
+            ));
+            u.height
+        }
+        (Unit::Unknown, None) => {
+            missing.push("the unit of its heights");
+            fixes.push("--units um (or m, mm, nm; `--units um,nm` for lateral,height)");
+            f64::NAN
+        }
+    };
+    let lateral = |d: (f64, f64), notes: &mut Vec<String>| -> Option<(f64, f64)> {
+        match (lateral_unit, opts.units) {
+            (Unit::Known(f), Some(u)) => {
+                if (u.lateral / f - 1.0).abs() > 1e-9 {
+                    notes.push(format!(
+                        "--units ignored for lengths: the file states them in {}",
+                        units::name_of(f)
+                    ));
+                }
+                Some((d.0 * f, d.1 * f))
+            }
+            (Unit::Known(f), None) => Some((d.0 * f, d.1 * f)),
+            (Unit::Unknown, Some(u)) => {
+                notes.push(format!(
+                    "lengths taken in {} (--units)",
+                    units::name_of(u.lateral)
+                ));
+                Some((d.0 * u.lateral, d.1 * u.lateral))
+            }
+            (Unit::Unknown, None) => None,
+        }
+    };
+    let (dx, dy) = if let Some(p) = opts.pixel_size {
+        if spacing.is_some() {
+            notes.push("--pixel-size overrides the file's pixel size".into());
+        }
+        p
+    } else if let Some(s) = opts.size {
+        if spacing.is_some() {
+            notes.push("--size overrides the file's scan size".into());
+        }
+        (
+            s.0 / nx as f64,
+            if ny > 1 {
+                s.1 / ny as f64
+            } else {
+                s.0 / nx as f64
+            },
+        )
+    } else if let Some(d) = spacing {
+        match lateral(d, &mut notes) {
+            Some(d) => d,
+            None => {
+                missing.push("the unit of its lengths");
+                if !fixes.iter().any(|f| f.starts_with("--units")) {
+                    fixes.push("--units um (or m, mm, nm)");
+                }
+                (f64::NAN, f64::NAN)
+            }
+        }
+    } else {
+        missing.push("its pixel size or scan size");
+        fixes.push("--pixel-size 0.5um (or --size 100um,80um)");
+        (f64::NAN, f64::NAN)
+    };
+    if !missing.is_empty() {
+        return Err(ctx.err(
+            "units",
+            format!("the file does not state {}", missing.join(", nor ")),
+            format!("pass {}", fixes.join(" and ")),
+        ));
     }
-    if head.starts_with(b"Gwyddion Simple Field") {
-        return Some(Format::Gsf);
+    let dx = check_spacing(ctx, "pixel size", dx)?;
+    let dy = if ny == 1 {
+        dx
+    } else {
+        check_spacing(ctx, "pixel size", dy)?
+    };
+    if !(z.is_finite() && z != 0.0) {
+        return Err(ctx.err(
+            "height scale",
+            format!("scale factor {z} is not usable"),
+            "the header is corrupt",
+        ));
     }
-    for magic in [&b"aBCR-"[..], b"bBCR-", b"aISO-", b"bISO-"] {
-        if head.starts_with(magic) {
-            return Some(Format::Sdf);
+    for h in &mut heights {
+        *h = if h.is_finite() { *h * z } else { f64::NAN };
+        if !h.is_finite() {
+            *h = f64::NAN;
         }
     }
-    if head.starts_with(b"fileformat") || head.starts_with(b"f\0i\0l\0e\0f\0o\0r\0m\0a\0t\0") {
-        return Some(Format::Bcr);
-    }
-    let ext = Path::new(name)
-        .extension()
-        .map(|e| e.to_string_lossy().to_ascii_lowercase())
-        .unwrap_or_default();
-    match ext.as_str() {
-        "x3p" => return Some(Format::X3p),
-        "bcr" | "bcrf" => return Some(Format::Bcr),
-        "sdf" => return Some(Format::Sdf),
-        "gsf" => return Some(Format::Gsf),
-        "di" | "spm" => return Some(Format::NanoScope),
-        _ => {}
-    }
-    let text_head = String::from_utf8_lossy(&bytes[..bytes.len().min(4096)]);
-    if text_head.contains("Scan Parameters") || text_head.contains("Scan Data") {
-        return Some(Format::Dektak);
-    }
-    if text_head.starts_with('#')
-        && (text_head.contains("Width:") || text_head.contains("Channel:"))
-    {
-        return Some(Format::Matrix);
-    }
-    // Plain numbers: a matrix has many columns, XYZ has two or three.
-    let first_data = text_head
-        .lines()
-        .map(str::trim)
-        .find(|l| !l.is_empty() && !l.starts_with('#') && text::parse_row(l).is_some())?;
-    let cols = text::parse_row(first_data)?.len();
-    match cols {
-        2 | 3 => Some(Format::Xyz),
-        c if c > 3 => Some(Format::Matrix),
-        _ => None,
-    }
+    Ok((
+        Topography {
+            nx,
+            ny,
+            dx,
+            dy,
+            heights,
+            channel,
+            format: format.name(),
+        },
+        notes,
+    ))
 }

@@ -3,8 +3,10 @@
 //! `raw × hard scale [V/LSB] × sensitivity [nm/V]`, with the sensitivity named inside the
 //! image's `Z scale` entry (e.g. `[Sens. ZsensSens]`).
 
-use super::{Ctx, binary, check_spacing, checked_grid, units};
-use crate::{ReadError, Topography};
+use super::{
+    ChannelInfo, Ctx, Decoded, Raw, Want, binary, check_spacing, checked_grid, select, units,
+};
+use crate::ReadError;
 
 struct Section {
     name: String,
@@ -20,8 +22,8 @@ impl Section {
     }
 }
 
-/// Parse a NanoScope file; `channel` indexes the image sections (0-based).
-pub(crate) fn read(ctx: Ctx<'_>, bytes: &[u8], channel: usize) -> Result<Topography, ReadError> {
+/// Read a NanoScope file: list its image channels, decode the chosen one.
+pub(crate) fn read(ctx: Ctx<'_>, bytes: &[u8], want: Want<'_>) -> Result<Decoded, ReadError> {
     let end_marker = b"\\*File list end";
     let header_end = bytes
         .windows(end_marker.len())
@@ -46,16 +48,86 @@ pub(crate) fn read(ctx: Ctx<'_>, bytes: &[u8], channel: usize) -> Result<Topogra
             "this reader handles image files, not force curves",
         ));
     }
-    let img = images.get(channel).ok_or_else(|| {
-        ctx.err(
-            "channel",
-            format!(
-                "channel {channel} requested but the file has {} images",
-                images.len()
-            ),
-            format!("choose --channel 0..{}", images.len() - 1),
-        )
-    })?;
+    let channels: Vec<ChannelInfo> = images
+        .iter()
+        .enumerate()
+        .map(|(i, img)| describe(ctx, i, img, &sections))
+        .collect();
+    let sel = match want {
+        Want::List => {
+            return Ok(Decoded {
+                selected: channels.iter().position(|c| c.is_height).unwrap_or(0),
+                channels,
+                raw: None,
+            });
+        }
+        Want::Channel(sel) => sel,
+    };
+    let selected = select(ctx, &channels, sel)?;
+    let raw = decode(ctx, bytes, images[selected], &sections)?;
+    Ok(Decoded {
+        channels,
+        selected,
+        raw: Some(raw),
+    })
+}
+
+/// Name, unit and size of an image section, without decoding it.
+fn describe(ctx: Ctx<'_>, index: usize, img: &Section, sections: &[Section]) -> ChannelInfo {
+    let dim = |k: &str| {
+        img.get(k)
+            .and_then(|v| v.split_whitespace().next())
+            .and_then(|v| v.parse::<f64>().ok())
+            .filter(|v| *v >= 0.0 && *v < 1e9)
+            .map_or(0, |v| v as usize)
+    };
+    let name = img
+        .entries
+        .iter()
+        .find(|(k, _)| k.ends_with("Image Data"))
+        .map(|(_, v)| {
+            let quoted = v.split('"').nth(1).map(str::trim).filter(|s| !s.is_empty());
+            quoted
+                .or_else(|| between(v, '[', ']'))
+                .unwrap_or("unknown")
+                .to_string()
+        })
+        .unwrap_or_else(|| "unknown".into());
+    let (unit, is_height) = match z_factor(ctx, img, sections) {
+        Ok(_) => ("m".to_string(), true),
+        Err(_) => (sensitivity_unit(img, sections).unwrap_or_default(), false),
+    };
+    ChannelInfo {
+        index,
+        name,
+        unit,
+        is_height,
+        nx: dim("Samps/line"),
+        ny: dim("Number of lines"),
+    }
+}
+
+/// The unit of the sensitivity that scales an image (`nm/V` → `nm`), when stated.
+fn sensitivity_unit(img: &Section, sections: &[Section]) -> Option<String> {
+    let (image_key, _) = img
+        .entries
+        .iter()
+        .find(|(k, _)| k.ends_with("Image Data"))?;
+    let prefix = image_key.strip_suffix("Image Data").unwrap_or("@2:");
+    let zval = img.get(&format!("{prefix}Z scale"))?;
+    let sens_name = between(zval, '[', ']')?;
+    let sens = find_global(sections, &format!("@{sens_name}"))?;
+    let unit = sens.split_whitespace().nth(2)?;
+    Some(unit.split('/').next().unwrap_or(unit).to_string())
+}
+
+/// Decode one image section into metres.
+fn decode(
+    ctx: Ctx<'_>,
+    bytes: &[u8],
+    img: &Section,
+    sections: &[Section],
+) -> Result<Raw, ReadError> {
     let num = |key: &str| -> Result<f64, ReadError> {
         img.get(key)
             .and_then(|v| v.split_whitespace().next())
@@ -112,7 +184,7 @@ pub(crate) fn read(ctx: Ctx<'_>, bytes: &[u8], channel: usize) -> Result<Topogra
     // Lateral size: "\Scan Size: 10 10 ~m" (x y unit) or older "10000 nm".
     let scan = img
         .get("Scan Size")
-        .or_else(|| find_global(&sections, "Scan Size"))
+        .or_else(|| find_global(sections, "Scan Size"))
         .ok_or_else(|| ctx.err("Scan Size", "missing", "the header is incomplete"))?;
     let (sx, sy) = parse_scan_size(scan).ok_or_else(|| {
         ctx.err(
@@ -124,7 +196,7 @@ pub(crate) fn read(ctx: Ctx<'_>, bytes: &[u8], channel: usize) -> Result<Topogra
     let dx = check_spacing(ctx, "Scan Size", sx / nx as f64)?;
     let dy = check_spacing(ctx, "Scan Size", sy / ny as f64)?;
 
-    let (name, zfactor) = z_factor(ctx, img, &sections)?;
+    let (name, zfactor) = z_factor(ctx, img, sections)?;
     // The scale is per 16-bit LSB; a 32-bit LSB is 2^16 times smaller.
     let zfactor = if bpp == 4 { zfactor / 65536.0 } else { zfactor };
     // NanoScope stores the bottom line first; flip so row 0 is the top line (as Gwyddion
@@ -135,15 +207,7 @@ pub(crate) fn read(ctx: Ctx<'_>, bytes: &[u8], channel: usize) -> Result<Topogra
         .rev()
         .flat_map(|line| line.iter().map(|v| v * zfactor))
         .collect();
-    Ok(Topography {
-        nx: nx as usize,
-        ny: ny as usize,
-        dx,
-        dy,
-        heights,
-        channel: name,
-        format: "nanoscope",
-    })
+    Ok(Raw::si(nx as usize, ny as usize, dx, dy, heights, name))
 }
 
 fn parse_sections(header: &str) -> Vec<Section> {

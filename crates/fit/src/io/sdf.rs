@@ -4,14 +4,24 @@
 //! followed by the data. ASCII (`aBCR-1.0`, `aISO-1.0`): `Key = value` lines, a `*` line,
 //! the values, then `*`. Heights are `raw × Zscale`.
 
-use super::{Ctx, binary, check_spacing, checked_grid, text::parse_row};
+use super::{Ctx, Decoded, Raw, Want, binary, check_spacing, checked_grid, text::parse_row};
 use crate::{ReadError, Topography};
 use std::collections::HashMap;
 
 const BINARY_HEADER: usize = 81;
 
+/// Read the file (one channel).
+pub(crate) fn read(ctx: Ctx<'_>, bytes: &[u8], want: Want<'_>) -> Result<Decoded, ReadError> {
+    let t = parse(ctx, bytes)?;
+    Decoded::single(
+        ctx,
+        want,
+        Raw::si(t.nx, t.ny, t.dx, t.dy, t.heights, t.channel),
+    )
+}
+
 /// Parse an SDF file (binary or ASCII).
-pub(crate) fn read(ctx: Ctx<'_>, bytes: &[u8]) -> Result<Topography, ReadError> {
+fn parse(ctx: Ctx<'_>, bytes: &[u8]) -> Result<Topography, ReadError> {
     match bytes.first() {
         Some(b'b') => read_binary(ctx, bytes),
         Some(b'a') => read_ascii(ctx, bytes),

@@ -2,8 +2,12 @@
 //! (`bindata/data.bin`, x fastest) or an inline `<DataList>`. Data types D/F/L/I; integer
 //! data are scaled by the Z increment. Non-finite values and points flagged in the optional
 //! valid-points bit map become NaN.
+//!
+//! Integrity: every entry read is checked against its zip CRC-32, the point data against
+//! `Record3/DataLink/MD5ChecksumPointData` and `main.xml` against the checksum file
+//! (`md5checksum.hex`); the error says which check failed.
 
-use super::{Ctx, binary, check_spacing, checked_grid};
+use super::{Ctx, Decoded, Raw, Want, binary, check_spacing, checked_grid, md5};
 use crate::{ReadError, Topography};
 use quick_xml::events::Event;
 use std::collections::HashMap;
@@ -14,8 +18,18 @@ const MAX_XML: u64 = 64 << 20;
 /// Deflate cannot expand data by more than about 1032:1; a larger claim is a corrupt header.
 const MAX_DEFLATE_RATIO: u64 = 1100;
 
+/// Read an X3P file (one channel).
+pub(crate) fn read(ctx: Ctx<'_>, bytes: &[u8], want: Want<'_>) -> Result<Decoded, ReadError> {
+    let t = parse(ctx, bytes)?;
+    Decoded::single(
+        ctx,
+        want,
+        Raw::si(t.nx, t.ny, t.dx, t.dy, t.heights, t.channel),
+    )
+}
+
 /// Parse an X3P file.
-pub(crate) fn read(ctx: Ctx<'_>, bytes: &[u8]) -> Result<Topography, ReadError> {
+fn parse(ctx: Ctx<'_>, bytes: &[u8]) -> Result<Topography, ReadError> {
     let mut zip = zip::ZipArchive::new(std::io::Cursor::new(bytes)).map_err(|e| {
         ctx.err(
             "zip container",
@@ -24,6 +38,7 @@ pub(crate) fn read(ctx: Ctx<'_>, bytes: &[u8]) -> Result<Topography, ReadError> 
         )
     })?;
     let xml = read_entry(ctx, &mut zip, "main.xml", MAX_XML)?;
+    check_header_md5(ctx, &mut zip, &xml)?;
     let xml = String::from_utf8(xml)
         .map_err(|_| ctx.err("main.xml", "not UTF-8", "the X3P file is corrupt"))?;
     let doc = parse_xml(ctx, &xml)?;
@@ -141,7 +156,28 @@ pub(crate) fn read(ctx: Ctx<'_>, bytes: &[u8]) -> Result<Topography, ReadError> 
             kind.size() as u64,
             size,
         )?;
-        let data = read_entry(ctx, &mut zip, &link, n as u64 * kind.size() as u64)?;
+        let need = n as u64 * kind.size() as u64;
+        if size > need.saturating_mul(2).saturating_add(1 << 20) {
+            return Err(ctx.err(
+                &link,
+                format!("the entry holds {size} bytes but the header implies {need}"),
+                "the X3P file is corrupt; re-export it",
+            ));
+        }
+        let data = read_entry(ctx, &mut zip, &link, size)?;
+        if let Some(want) = get("Record3/DataLink/MD5ChecksumPointData") {
+            let have = md5::hex(&data);
+            if !have.eq_ignore_ascii_case(want.trim()) {
+                return Err(ctx.err(
+                    "Record3/DataLink/MD5ChecksumPointData",
+                    format!(
+                        "MD5 check failed: {link} has MD5 {have}, main.xml records {}",
+                        want.trim()
+                    ),
+                    "the point data are corrupt; re-export or re-copy the file",
+                ));
+            }
+        }
         binary::decode(&data, kind, true, n)
             .ok_or_else(|| ctx.short(&link, (n * kind.size()) as u64, data.len() as u64))?
     } else if !doc.data_list.is_empty() {
@@ -190,7 +226,10 @@ pub(crate) fn read(ctx: Ctx<'_>, bytes: &[u8]) -> Result<Topography, ReadError> 
         if size < need_bytes {
             return Err(ctx.short(&valid, need_bytes, size));
         }
-        let bits = read_entry(ctx, &mut zip, &valid, need_bytes)?;
+        if size > need_bytes.saturating_mul(2).saturating_add(1 << 20) {
+            return Err(ctx.short(&valid, need_bytes, size));
+        }
+        let bits = read_entry(ctx, &mut zip, &valid, size)?;
         for (i, h) in heights.iter_mut().enumerate() {
             if bits.get(i / 8).is_some_and(|b| b & (1 << (i % 8)) == 0) {
                 *h = f64::NAN;
@@ -227,7 +266,8 @@ fn entry_size<R: Read + std::io::Seek>(
     ))
 }
 
-/// Read at most `limit` bytes of an entry, never trusting the declared size for allocation.
+/// Read a whole entry (at most `limit` bytes, never trusting the declared size for
+/// allocation) and verify its zip CRC-32.
 fn read_entry<R: Read + std::io::Seek>(
     ctx: Ctx<'_>,
     zip: &mut zip::ZipArchive<R>,
@@ -241,20 +281,85 @@ fn read_entry<R: Read + std::io::Seek>(
             "the X3P file is incomplete",
         )
     })?;
-    let cap = f.size().min(limit).min(
+    let declared = f.size();
+    let crc = f.crc32();
+    if declared > limit {
+        return Err(ctx.err(
+            name,
+            format!("the entry claims {declared} bytes, more than the {limit} accepted"),
+            "the X3P file is corrupt",
+        ));
+    }
+    let cap = declared.min(
         f.compressed_size()
             .saturating_mul(MAX_DEFLATE_RATIO)
             .saturating_add(4096),
     );
-    let mut out = Vec::with_capacity(usize::try_from(cap).unwrap_or(0));
-    f.take(limit).read_to_end(&mut out).map_err(|e| {
-        ctx.err(
+    // Grow past 64 MB only as data really arrive.
+    let mut out = Vec::with_capacity(usize::try_from(cap.min(64 << 20)).unwrap_or(0));
+    f.take(limit.saturating_add(1))
+        .read_to_end(&mut out)
+        .map_err(|e| {
+            let msg = e.to_string();
+            if msg.to_ascii_lowercase().contains("checksum") {
+                ctx.err(
+                    name,
+                    format!("zip CRC-32 check failed ({msg})"),
+                    "the file is corrupt; re-export or re-copy it",
+                )
+            } else {
+                ctx.err(
+                    name,
+                    format!("cannot decompress ({msg})"),
+                    "the X3P file is corrupt",
+                )
+            }
+        })?;
+    if out.len() as u64 != declared {
+        return Err(ctx.err(
             name,
-            format!("cannot decompress ({e})"),
+            format!(
+                "the entry holds {} bytes but its zip header declares {declared}",
+                out.len()
+            ),
             "the X3P file is corrupt",
-        )
-    })?;
+        ));
+    }
+    let have = crc32fast::hash(&out);
+    if have != crc {
+        return Err(ctx.err(
+            name,
+            format!("zip CRC-32 check failed: the data hash to {have:08x}, the archive records {crc:08x}"),
+            "the file is corrupt; re-export or re-copy it",
+        ));
+    }
     Ok(out)
+}
+
+/// Compare `main.xml` with its MD5 in the checksum file (`md5checksum.hex`, as
+/// `<hex> *main.xml`), when the archive has one.
+fn check_header_md5<R: Read + std::io::Seek>(
+    ctx: Ctx<'_>,
+    zip: &mut zip::ZipArchive<R>,
+    xml: &[u8],
+) -> Result<(), ReadError> {
+    if zip.index_for_name("md5checksum.hex").is_none() {
+        return Ok(());
+    }
+    let text = read_entry(ctx, zip, "md5checksum.hex", 4096)?;
+    let text = String::from_utf8_lossy(&text);
+    let Some(want) = text.split_whitespace().next() else {
+        return Ok(());
+    };
+    let have = md5::hex(xml);
+    if !have.eq_ignore_ascii_case(want) {
+        return Err(ctx.err(
+            "md5checksum.hex",
+            format!("MD5 check failed: main.xml has MD5 {have}, md5checksum.hex records {want}"),
+            "the header is corrupt; re-export or re-copy the file",
+        ));
+    }
+    Ok(())
 }
 
 struct Doc {

@@ -1,43 +1,132 @@
-//! Plain column files: `x z` (a profile) or `x y z` (a map on a regular grid, any order,
-//! missing points become NaN). Separators: whitespace, comma or semicolon; lines starting
-//! with `#`, `%` or `//` and leading non-numeric header lines are skipped. All columns are
-//! in the unit given by the caller (metres per unit).
+//! Column files: `x z` (a profile) or `x y z` (a map on a regular grid, any order,
+//! missing points become NaN), as CSV, TSV, `;`-separated with decimal commas or plain
+//! whitespace, UTF-8 or UTF-16 with or without a BOM.
+//!
+//! Column titles may carry units (`X_(microns)`, `x in µm`, `z [nm]`, `Height (um)`), a
+//! row of units may follow the titles (`µm;µm;nm`), an `index` column is dropped and a
+//! `valid`/`mask` column marks invalid points. A profile whose x is not uniformly spaced
+//! is resampled by linear interpolation onto the same number of points, and the notes
+//! say so. Units the file does not state come from `--units`.
 
-use super::{Ctx, check_spacing, checked_grid, text::parse_row};
-use crate::{ReadError, Topography};
+use super::{
+    ChannelInfo, Ctx, Decoded, Raw, Sniff, Unit, Want, check_spacing, checked_grid, select, text,
+    units,
+};
+use crate::ReadError;
 
-/// Parse a column file; `unit` converts every column to metres.
-pub(crate) fn read(ctx: Ctx<'_>, bytes: &[u8], unit: f64) -> Result<Topography, ReadError> {
-    if !(unit.is_finite() && unit > 0.0) {
-        return Err(ctx.err(
-            "units",
-            format!("{unit} is not a valid unit factor"),
-            "pass --units m|mm|um|nm",
-        ));
-    }
-    let text = String::from_utf8_lossy(bytes);
-    let mut rows: Vec<Vec<f64>> = Vec::new();
-    let mut ncol = 0;
-    for (i, line) in text.lines().enumerate() {
-        let line = line.trim();
-        if line.is_empty()
-            || line.starts_with('#')
-            || line.starts_with('%')
-            || line.starts_with("//")
+/// What a column holds.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Role {
+    Index,
+    Valid,
+    Value,
+}
+
+#[derive(Debug, Clone)]
+struct Column {
+    role: Role,
+    title: String,
+    unit: Option<f64>,
+}
+
+/// Find a length unit in a column title: `X_(microns)`, `x in µm`, `z [nm]`, `Lateral um`.
+fn unit_in_title(title: &str) -> Option<f64> {
+    let t = title.trim();
+    for (open, close) in [('(', ')'), ('[', ']'), ('{', '}')] {
+        if let (Some(a), Some(b)) = (t.rfind(open), t.rfind(close))
+            && a < b
+            && let Some(f) = units::length_factor(&t[a + 1..b])
         {
+            return Some(f);
+        }
+    }
+    t.split(|c: char| c.is_whitespace() || c == '_' || c == '/')
+        .rev()
+        .filter(|w| !w.is_empty())
+        .find_map(units::length_factor)
+        .filter(|_| t.split(|c: char| c.is_whitespace() || c == '_').count() > 1)
+}
+
+fn role_of(title: &str) -> Role {
+    let t = title.trim().to_lowercase();
+    let word = t
+        .split(|c: char| !c.is_alphanumeric())
+        .find(|w| !w.is_empty())
+        .unwrap_or("");
+    match word {
+        "index" | "idx" | "no" | "nr" | "n" | "point" | "points" | "sample" | "row" => Role::Index,
+        "valid" | "validity" | "mask" | "flag" | "flags" | "quality" | "ok" => Role::Valid,
+        _ => Role::Value,
+    }
+}
+
+/// Content check: rows of 2–5 numbers, optionally after titles.
+pub(crate) fn sniff(bytes: &[u8]) -> Sniff {
+    if !text::looks_like_text(bytes) {
+        return Sniff::No;
+    }
+    let t = text::decode(&bytes[..bytes.len().min(16384)]);
+    let lines: Vec<&str> = t.lines().take(200).collect();
+    let usable = &lines[..lines.len().saturating_sub(1).max(1).min(lines.len())];
+    let d = text::Dialect::guess(usable.iter().copied().filter(|l| numeric_start(l)));
+    let rows: Vec<usize> = usable
+        .iter()
+        .filter_map(|l| d.row(l))
+        .map(|r| r.len())
+        .collect();
+    let Some(&c) = rows.first() else {
+        return Sniff::No;
+    };
+    if rows.len() < 2 || rows.iter().any(|&r| r != c) || !(2..=5).contains(&c) {
+        return Sniff::No;
+    }
+    let titled = usable
+        .iter()
+        .take_while(|l| d.row(l).is_none())
+        .any(|l| d.fields(l).iter().any(|f| unit_in_title(f).is_some()));
+    if titled { Sniff::Likely } else { Sniff::Maybe }
+}
+
+fn numeric_start(l: &str) -> bool {
+    l.trim()
+        .chars()
+        .next()
+        .is_some_and(|c| c.is_ascii_digit() || c == '-' || c == '+' || c == '.')
+}
+
+/// Read a column file.
+pub(crate) fn read(ctx: Ctx<'_>, bytes: &[u8], want: Want<'_>) -> Result<Decoded, ReadError> {
+    let text = text::decode(bytes);
+    let d = text::Dialect::guess(text.lines().filter(|l| numeric_start(l)));
+    let mut header: Vec<String> = Vec::new();
+    let mut rows: Vec<Vec<f64>> = Vec::new();
+    let mut first_line = 0;
+    let mut ncol = 0;
+    let mut kv_units: (Option<f64>, Option<f64>) = (None, None);
+    for (i, line) in text.lines().enumerate() {
+        let t = line.trim();
+        if t.is_empty() {
             continue;
         }
-        match parse_row(line) {
+        if t.starts_with('#') || t.starts_with('%') || t.starts_with("//") {
+            if let Some((k, v)) = text::key_value(t) {
+                let k = k.to_lowercase();
+                if k.contains("unit") {
+                    let f = units::length_factor(&v);
+                    if k.starts_with('z') || k.contains("height") || k.contains("value") {
+                        kv_units.1 = f.or(kv_units.1);
+                    } else if k.starts_with('x') || k.contains("lateral") || k.contains("length") {
+                        kv_units.0 = f.or(kv_units.0);
+                    }
+                }
+            }
+            continue;
+        }
+        match d.row(t) {
             Some(r) => {
                 if ncol == 0 {
                     ncol = r.len();
-                    if !(2..=3).contains(&ncol) {
-                        return Err(ctx.err(
-                            &format!("line {}", i + 1),
-                            format!("{ncol} columns"),
-                            "expected `x z` or `x y z`",
-                        ));
-                    }
+                    first_line = i + 1;
                 } else if r.len() != ncol {
                     return Err(ctx.err(
                         &format!("line {}", i + 1),
@@ -45,14 +134,17 @@ pub(crate) fn read(ctx: Ctx<'_>, bytes: &[u8], unit: f64) -> Result<Topography, 
                         "every line needs the same number of columns",
                     ));
                 }
-                rows.push(r.into_iter().map(|v| v * unit).collect());
+                rows.push(r);
             }
-            None if rows.is_empty() => continue, // column titles
+            None if rows.is_empty() => header.push(t.to_string()),
             None => {
                 return Err(ctx.err(
                     &format!("line {}", i + 1),
-                    format!("`{line}` is not numeric"),
-                    "remove stray text",
+                    format!(
+                        "`{}` is not numeric",
+                        t.chars().take(40).collect::<String>()
+                    ),
+                    "remove stray text; titles and units go before the data",
                 ));
             }
         }
@@ -61,46 +153,276 @@ pub(crate) fn read(ctx: Ctx<'_>, bytes: &[u8], unit: f64) -> Result<Topography, 
         return Err(ctx.err(
             "data",
             "fewer than two data lines",
-            "the file holds no surface",
+            "the file holds no profile or surface",
         ));
     }
-    if ncol == 2 {
-        return profile(ctx, rows);
-    }
-    grid(ctx, rows)
-}
-
-fn profile(ctx: Ctx<'_>, mut rows: Vec<Vec<f64>>) -> Result<Topography, ReadError> {
-    rows.sort_by(|a, b| a[0].total_cmp(&b[0]));
-    let n = rows.len();
-    let dx = check_spacing(
-        ctx,
-        "x column",
-        (rows[n - 1][0] - rows[0][0]) / (n - 1) as f64,
-    )?;
-    for (i, r) in rows.iter().enumerate() {
-        let expect = rows[0][0] + i as f64 * dx;
-        if (r[0] - expect).abs() > 0.25 * dx {
-            return Err(ctx.err(
-                "x column",
-                format!("x = {} is off the regular spacing {dx} m", r[0]),
-                "resample the profile onto a regular grid",
-            ));
+    // Titles: the last header line with as many fields as there are columns, possibly
+    // followed by a row of units.
+    let mut columns: Vec<Column> = (0..ncol)
+        .map(|_| Column {
+            role: Role::Value,
+            title: String::new(),
+            unit: None,
+        })
+        .collect();
+    let split = |l: &str| -> Vec<String> {
+        d.fields(l)
+            .into_iter()
+            .map(|s| s.trim().trim_matches('"').to_string())
+            .collect()
+    };
+    let fitting: Vec<Vec<String>> = header
+        .iter()
+        .map(|l| split(l))
+        .filter(|f| f.len() == ncol)
+        .collect();
+    if let Some(last) = fitting.last() {
+        let unit_row = last
+            .iter()
+            .all(|f| f.is_empty() || units::length_factor(f).is_some())
+            && last.iter().any(|f| !f.is_empty());
+        let titles = if unit_row && fitting.len() >= 2 {
+            &fitting[fitting.len() - 2]
+        } else {
+            last
+        };
+        for (c, t) in columns.iter_mut().zip(titles) {
+            c.title = t.clone();
+            c.role = role_of(t);
+            c.unit = unit_in_title(t);
+        }
+        if unit_row {
+            for (c, u) in columns.iter_mut().zip(last) {
+                if let Some(f) = units::length_factor(u) {
+                    c.unit = Some(f);
+                }
+            }
         }
     }
-    Ok(Topography {
+    // Without titles, a first column counting 0, 1, 2, … is an index.
+    if columns.iter().all(|c| c.title.is_empty())
+        && ncol >= 3
+        && rows
+            .iter()
+            .enumerate()
+            .all(|(i, r)| r[0] == i as f64 || r[0] == i as f64 + 1.0)
+        && ncol > 3
+    {
+        columns[0].role = Role::Index;
+    }
+    let values: Vec<usize> = (0..ncol)
+        .filter(|&c| columns[c].role == Role::Value)
+        .collect();
+    let valid = (0..ncol).find(|&c| columns[c].role == Role::Valid);
+    let mut notes = Vec::new();
+    if let Some(v) = valid {
+        notes.push(format!(
+            "column `{}` marks invalid points",
+            columns[v].title
+        ));
+    }
+    let is_valid = |r: &[f64]| valid.is_none_or(|v| r[v].is_finite() && r[v] != 0.0);
+    let (xc, yc, zc) = match values.as_slice() {
+        [x, z] => (*x, None, *z),
+        [x, y, z] => (*x, Some(*y), *z),
+        _ => {
+            return Err(ctx.err(
+                &format!("line {first_line}"),
+                format!("{} value columns", values.len()),
+                "expected `x z` or `x y z` (plus optional index and validity columns)",
+            ));
+        }
+    };
+    // Units: per column, then `# x-unit:` style lines, then the other axis.
+    let lat = columns[xc].unit.or(kv_units.0);
+    let hgt = columns[zc].unit.or(kv_units.1);
+    let (lateral_unit, height_unit) = match (lat, hgt) {
+        (Some(l), Some(h)) => (Unit::Known(l), Unit::Known(h)),
+        (Some(l), None) => {
+            notes.push(format!(
+                "heights taken in {}, the unit the file gives for x",
+                units::name_of(l)
+            ));
+            (Unit::Known(l), Unit::Known(l))
+        }
+        (None, Some(h)) => {
+            notes.push(format!(
+                "lengths taken in {}, the unit the file gives for heights",
+                units::name_of(h)
+            ));
+            (Unit::Known(h), Unit::Known(h))
+        }
+        (None, None) => (Unit::Unknown, Unit::Unknown),
+    };
+    let name = if columns[zc].title.is_empty() {
+        "z".to_string()
+    } else {
+        columns[zc].title.clone()
+    };
+    let mut raw = match yc {
+        None => profile(ctx, &rows, xc, zc, &is_valid, &mut notes)?,
+        Some(yc) => grid(ctx, &rows, xc, yc, zc, &is_valid)?,
+    };
+    raw.height_unit = height_unit;
+    raw.lateral_unit = lateral_unit;
+    raw.channel = name.clone();
+    raw.notes = notes;
+    let channels = vec![ChannelInfo {
+        index: 0,
+        name,
+        unit: match height_unit {
+            Unit::Known(f) => units::name_of(f),
+            Unit::Unknown => String::new(),
+        },
+        is_height: true,
+        nx: raw.nx,
+        ny: raw.ny,
+    }];
+    let selected = match want {
+        Want::List => 0,
+        Want::Channel(sel) => select(ctx, &channels, sel)?,
+    };
+    Ok(Decoded {
+        channels,
+        selected,
+        raw: matches!(want, Want::Channel(_)).then_some(raw),
+    })
+}
+
+/// A profile: sorted by x, duplicates averaged, resampled when not uniformly spaced.
+fn profile(
+    ctx: Ctx<'_>,
+    rows: &[Vec<f64>],
+    xc: usize,
+    zc: usize,
+    is_valid: &dyn Fn(&[f64]) -> bool,
+    notes: &mut Vec<String>,
+) -> Result<Raw, ReadError> {
+    let mut pts: Vec<(f64, f64)> = Vec::with_capacity(rows.len());
+    for r in rows {
+        if !r[xc].is_finite() {
+            return Err(ctx.err(
+                "x column",
+                "an x value is missing or not a number",
+                "every row needs an x value",
+            ));
+        }
+        pts.push((r[xc], if is_valid(r) { r[zc] } else { f64::NAN }));
+    }
+    if pts.windows(2).any(|w| w[1].0 < w[0].0) {
+        pts.sort_by(|a, b| a.0.total_cmp(&b.0));
+        notes.push("rows sorted by x".into());
+    }
+    // Average repeated x values.
+    let mut merged: Vec<(f64, f64, usize)> = Vec::with_capacity(pts.len());
+    for (x, z) in pts {
+        match merged.last_mut() {
+            Some(last) if x == last.0 => {
+                if z.is_finite() {
+                    if last.1.is_finite() {
+                        last.1 += z;
+                        last.2 += 1;
+                    } else {
+                        last.1 = z;
+                        last.2 = 1;
+                    }
+                }
+            }
+            _ => merged.push((x, z, 1)),
+        }
+    }
+    if merged.len() < rows.len() {
+        notes.push(format!(
+            "{} rows with a repeated x averaged",
+            rows.len() - merged.len()
+        ));
+    }
+    let pts: Vec<(f64, f64)> = merged
+        .into_iter()
+        .map(|(x, z, c)| (x, if c > 1 { z / c as f64 } else { z }))
+        .collect();
+    let n = pts.len();
+    if n < 2 {
+        return Err(ctx.err(
+            "x column",
+            "a single x value",
+            "the profile needs two points",
+        ));
+    }
+    let span = pts[n - 1].0 - pts[0].0;
+    let dx = check_spacing(ctx, "x column", span / (n - 1) as f64)?;
+    let worst = pts
+        .iter()
+        .enumerate()
+        .map(|(i, p)| (p.0 - (pts[0].0 + i as f64 * dx)).abs())
+        .fold(0.0, f64::max);
+    // Uniform if every x is where a uniform grid puts it, up to the rounding of the
+    // printed values (both ends and the point itself: one unit of the last digit).
+    // Rounding explains deviations only when the printed digits resolve the step.
+    let quantum = print_quantum(pts.iter().map(|p| p.0).take(500));
+    let quantum = if quantum <= 0.1 * dx { quantum } else { 0.0 };
+    let heights = if worst <= 1.01 * quantum + 1e-9 * span.abs() {
+        pts.iter().map(|p| p.1).collect()
+    } else {
+        let (lo, hi) = pts.windows(2).fold((f64::INFINITY, 0.0f64), |(lo, hi), w| {
+            let s = w[1].0 - w[0].0;
+            (lo.min(s), hi.max(s))
+        });
+        notes.push(format!(
+            "x is not uniformly spaced (steps {lo:.4e} to {hi:.4e}): resampled {n} points \
+             by linear interpolation onto {n} points {dx:.4e} apart (same span)"
+        ));
+        let mut out = Vec::with_capacity(n);
+        let mut j = 0;
+        for i in 0..n {
+            let x = if i == n - 1 {
+                pts[n - 1].0
+            } else {
+                pts[0].0 + i as f64 * dx
+            };
+            while j + 2 < n && pts[j + 1].0 < x {
+                j += 1;
+            }
+            let (a, b) = (pts[j], pts[j + 1]);
+            let t = ((x - a.0) / (b.0 - a.0)).clamp(0.0, 1.0);
+            out.push(a.1 + t * (b.1 - a.1));
+        }
+        out
+    };
+    Ok(Raw {
         nx: n,
         ny: 1,
-        dx,
-        dy: dx,
-        heights: rows.into_iter().map(|r| r[1]).collect(),
-        channel: "z".into(),
-        format: "xyz",
+        heights,
+        height_unit: Unit::Unknown,
+        spacing: Some((dx, dx)),
+        lateral_unit: Unit::Unknown,
+        channel: String::new(),
+        notes: Vec::new(),
     })
+}
+
+/// The unit of the last printed digit of a column (1e-4 for `0.0386`, 1e-7 for
+/// `1.3381669e+01`), found as the coarsest power of ten all values are multiples of.
+fn print_quantum(values: impl Iterator<Item = f64>) -> f64 {
+    let v: Vec<f64> = values.filter(|x| x.is_finite()).collect();
+    for k in -6i32..=17 {
+        let q = 10f64.powi(-k);
+        if v.iter().all(|x| {
+            let m = x / q;
+            (m - m.round()).abs() <= 1e-9 * m.abs().max(1.0)
+        }) {
+            return q;
+        }
+    }
+    0.0
 }
 
 /// Distinct values of a coordinate on a regular lattice: (origin, spacing, count).
 fn axis(ctx: Ctx<'_>, field: &str, mut v: Vec<f64>) -> Result<(f64, f64, usize), ReadError> {
+    v.retain(|x| x.is_finite());
+    if v.is_empty() {
+        return Err(ctx.err(field, "no values", "every row needs coordinates"));
+    }
     v.sort_by(f64::total_cmp);
     let span = v[v.len() - 1] - v[0];
     let scale = v[0].abs().max(v[v.len() - 1].abs());
@@ -111,12 +433,11 @@ fn axis(ctx: Ctx<'_>, field: &str, mut v: Vec<f64>) -> Result<(f64, f64, usize),
     }
     let d = span / (v.len() - 1) as f64;
     let d = check_spacing(ctx, field, d)?;
-    // Every step between distinct values must be one lattice spacing.
     if let Some(w) = v.windows(2).find(|w| ((w[1] - w[0]) - d).abs() > 0.25 * d) {
         return Err(ctx.err(
             field,
             format!(
-                "values {} and {} are not one grid step ({d} m) apart",
+                "values {} and {} are not one grid step ({d}) apart",
                 w[0], w[1]
             ),
             "the points must lie on a regular grid; resample the data",
@@ -125,9 +446,16 @@ fn axis(ctx: Ctx<'_>, field: &str, mut v: Vec<f64>) -> Result<(f64, f64, usize),
     Ok((v[0], d, v.len()))
 }
 
-fn grid(ctx: Ctx<'_>, rows: Vec<Vec<f64>>) -> Result<Topography, ReadError> {
-    let (x0, dx, nx) = axis(ctx, "x column", rows.iter().map(|r| r[0]).collect())?;
-    let (y0, dy, ny) = axis(ctx, "y column", rows.iter().map(|r| r[1]).collect())?;
+fn grid(
+    ctx: Ctx<'_>,
+    rows: &[Vec<f64>],
+    xc: usize,
+    yc: usize,
+    zc: usize,
+    is_valid: &dyn Fn(&[f64]) -> bool,
+) -> Result<Raw, ReadError> {
+    let (x0, dx, nx) = axis(ctx, "x column", rows.iter().map(|r| r[xc]).collect())?;
+    let (y0, dy, ny) = axis(ctx, "y column", rows.iter().map(|r| r[yc]).collect())?;
     if nx < 2 {
         return Err(ctx.err(
             "x column",
@@ -145,31 +473,32 @@ fn grid(ctx: Ctx<'_>, rows: Vec<Vec<f64>>) -> Result<Topography, ReadError> {
         (rows.len() as u64).saturating_mul(16),
     )?;
     let mut heights = vec![f64::NAN; n];
-    for r in &rows {
-        let ix = ((r[0] - x0) / dx).round();
+    for r in rows {
+        let ix = ((r[xc] - x0) / dx).round();
         let iy = if ny == 1 {
             0.0
         } else {
-            ((r[1] - y0) / dy).round()
+            ((r[yc] - y0) / dy).round()
         };
-        let off_x = (r[0] - x0 - ix * dx).abs() > 0.25 * dx;
-        let off_y = ny > 1 && (r[1] - y0 - iy * dy).abs() > 0.25 * dy;
-        if off_x || off_y || ix < 0.0 || iy < 0.0 || ix >= nx as f64 || iy >= ny as f64 {
+        let off_x = (r[xc] - x0 - ix * dx).abs() > 0.25 * dx;
+        let off_y = ny > 1 && (r[yc] - y0 - iy * dy).abs() > 0.25 * dy;
+        if !(ix >= 0.0 && iy >= 0.0 && ix < nx as f64 && iy < ny as f64) || off_x || off_y {
             return Err(ctx.err(
                 "x/y columns",
-                format!("point ({}, {}) is off the regular grid", r[0], r[1]),
+                format!("point ({}, {}) is off the regular grid", r[xc], r[yc]),
                 "resample onto a regular grid",
             ));
         }
-        heights[iy as usize * nx + ix as usize] = r[2];
+        heights[iy as usize * nx + ix as usize] = if is_valid(r) { r[zc] } else { f64::NAN };
     }
-    Ok(Topography {
+    Ok(Raw {
         nx,
         ny,
-        dx,
-        dy,
         heights,
-        channel: "z".into(),
-        format: "xyz",
+        height_unit: Unit::Unknown,
+        spacing: Some((dx, dy)),
+        lateral_unit: Unit::Unknown,
+        channel: String::new(),
+        notes: Vec::new(),
     })
 }

@@ -1,0 +1,161 @@
+//! Direction dependence of a map's roughness: rms slope and PSD along x and along y, the
+//! principal axes of the slope covariance, and the anisotropic microfacet roughness they
+//! imply.
+//!
+//! The slope covariance `C = ⟨s sᵀ⟩` (forward differences on the common
+//! `(nx−1)×(ny−1)` region) has principal rms slopes `s₁ ≥ s₂` along the unit vectors at
+//! `slope_direction_deg` and 90° from it; grooves (the lay) run perpendicular to the
+//! steepest direction. A Beckmann surface with roughness `(α₁, α₂)` has per-axis slope
+//! variance `αᵢ²/2`, so `αᵢ = √2·sᵢ`; GGX has no finite slope variance, so its isotropic
+//! NDF fit `α` is split in the same proportion: `αᵢ = α·sᵢ/√((s₁² + s₂²)/2)`.
+
+use crate::psd::{self, Psd1d, WelchOptions};
+use crate::{FitError, Topography};
+
+/// Principal-slope ratio above which a surface is treated as anisotropic.
+pub const ANISOTROPY_THRESHOLD: f64 = 1.5;
+
+/// Direction-resolved roughness of a map.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Anisotropy {
+    /// Rms slope along x (`∂h/∂x`).
+    pub rms_slope_x: f64,
+    /// Rms slope along y.
+    pub rms_slope_y: f64,
+    /// `max/min` of the two.
+    pub ratio_xy: f64,
+    /// Principal rms slopes, larger first.
+    pub principal: (f64, f64),
+    /// `principal.0 / principal.1`.
+    pub ratio: f64,
+    /// Direction of the steepest rms slope, degrees from +x towards +y, in (−90, 90].
+    pub slope_direction_deg: f64,
+    /// Welch PSD of the x-lines.
+    pub psd_x: Psd1d,
+    /// Welch PSD of the y-columns.
+    pub psd_y: Psd1d,
+    /// Rms slope along x and y integrated from the two PSDs, `√∫(2πf)²P df`.
+    pub psd_slopes: (f64, f64),
+    /// True when `ratio > ANISOTROPY_THRESHOLD`.
+    pub anisotropic: bool,
+}
+
+impl Anisotropy {
+    /// Direction of the lay (the grooves), degrees in (−90, 90].
+    pub fn lay_direction_deg(&self) -> f64 {
+        let d = self.slope_direction_deg + 90.0;
+        if d > 90.0 { d - 180.0 } else { d }
+    }
+
+    /// Anisotropic Beckmann roughness along the principal axes `(α₁, α₂)`.
+    pub fn beckmann(&self) -> (f64, f64) {
+        (
+            2f64.sqrt() * self.principal.0,
+            2f64.sqrt() * self.principal.1,
+        )
+    }
+
+    /// Anisotropic GGX roughness from the isotropic fit `alpha`, split like the slopes.
+    pub fn ggx(&self, alpha: f64) -> (f64, f64) {
+        let (a, b) = self.principal;
+        let m = ((a * a + b * b) / 2.0).sqrt();
+        if m > 0.0 {
+            (alpha * a / m, alpha * b / m)
+        } else {
+            (alpha, alpha)
+        }
+    }
+}
+
+/// Transpose a map (columns become lines).
+pub fn transpose(t: &Topography) -> Topography {
+    let (nx, ny) = (t.nx, t.ny);
+    let mut h = vec![0.0; nx * ny];
+    for y in 0..ny {
+        for x in 0..nx {
+            h[x * ny + y] = t.heights[y * nx + x];
+        }
+    }
+    Topography {
+        nx: ny,
+        ny: nx,
+        dx: t.dy,
+        dy: t.dx,
+        heights: h,
+        channel: t.channel.clone(),
+        format: t.format,
+    }
+}
+
+fn slope_rms(p: &Psd1d) -> f64 {
+    let mut acc = 0.0;
+    for i in 1..p.f.len() {
+        let g = |k: usize| (2.0 * std::f64::consts::PI * p.f[k]).powi(2) * p.p[k];
+        acc += 0.5 * (g(i) + g(i - 1)) * (p.f[i] - p.f[i - 1]);
+    }
+    acc.max(0.0).sqrt()
+}
+
+/// Analyse a levelled, NaN-free map (at least 2 × 2); `psd_x` is its Welch PSD of the
+/// x-lines with full-length segments (computed once by the caller).
+pub fn analyse(t: &Topography, psd_x: Psd1d) -> Result<Anisotropy, FitError> {
+    if t.is_profile() || t.nx < 2 || t.ny < 2 {
+        return Err(FitError::data(
+            "anisotropy",
+            "needs a map of at least 2 × 2 points",
+        ));
+    }
+    let (nx, ny) = (t.nx, t.ny);
+    let h = &t.heights;
+    let (mut cxx, mut cyy, mut cxy, mut n) = (0.0, 0.0, 0.0, 0.0);
+    for y in 0..ny - 1 {
+        for x in 0..nx - 1 {
+            let i = y * nx + x;
+            let sx = (h[i + 1] - h[i]) / t.dx;
+            let sy = (h[i + nx] - h[i]) / t.dy;
+            if sx.is_finite() && sy.is_finite() {
+                cxx += sx * sx;
+                cyy += sy * sy;
+                cxy += sx * sy;
+                n += 1.0;
+            }
+        }
+    }
+    if n == 0.0 {
+        return Err(FitError::data("anisotropy", "no valid slopes"));
+    }
+    let (cxx, cyy, cxy) = (cxx / n, cyy / n, cxy / n);
+    let mean = 0.5 * (cxx + cyy);
+    let r = (0.25 * (cxx - cyy).powi(2) + cxy * cxy).sqrt();
+    let (l1, l2) = (mean + r, (mean - r).max(0.0));
+    let theta = 0.5 * (2.0 * cxy).atan2(cxx - cyy);
+    let mut deg = theta.to_degrees();
+    if deg <= -90.0 {
+        deg += 180.0;
+    }
+    let (sx, sy) = (cxx.sqrt(), cyy.sqrt());
+    let principal = (l1.sqrt(), l2.sqrt());
+    let ratio = if principal.1 > 0.0 {
+        principal.0 / principal.1
+    } else {
+        f64::INFINITY
+    };
+    let psd_y = psd::welch(&transpose(t), &WelchOptions::default())?;
+    let psd_slopes = (slope_rms(&psd_x), slope_rms(&psd_y));
+    Ok(Anisotropy {
+        rms_slope_x: sx,
+        rms_slope_y: sy,
+        ratio_xy: if sx.min(sy) > 0.0 {
+            sx.max(sy) / sx.min(sy)
+        } else {
+            f64::INFINITY
+        },
+        principal,
+        ratio,
+        slope_direction_deg: deg,
+        psd_x,
+        psd_y,
+        psd_slopes,
+        anisotropic: ratio > ANISOTROPY_THRESHOLD,
+    })
+}

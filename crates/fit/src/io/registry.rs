@@ -1,0 +1,363 @@
+//! The one list of readers. Detection, `--format`, the `--help` text and the
+//! "supported formats" error are all derived from [`READERS`].
+
+use super::{Ctx, Decoded, Want};
+use crate::ReadError;
+use std::path::Path;
+
+/// How sure a content check is that a file is in a reader's format.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
+pub enum Sniff {
+    /// Not this format.
+    No,
+    /// Could be (generic text or container shape).
+    Maybe,
+    /// The structure checks out.
+    Likely,
+    /// A format-specific magic number.
+    Magic,
+}
+
+/// A reader: its names, how to recognise its files, and its read function.
+pub struct Reader {
+    /// Name used by `--format` and in messages.
+    pub name: &'static str,
+    /// Other accepted `--format` names.
+    pub aliases: &'static [&'static str],
+    /// One-line description for `--help`.
+    pub description: &'static str,
+    /// File extensions (lower case, no dot).
+    pub extensions: &'static [&'static str],
+    /// True for binary formats: an extension match alone selects the reader, so a
+    /// damaged file gets that reader's specific error.
+    pub binary: bool,
+    /// Content check on the whole file (it must only look at the first few kB).
+    pub sniff: fn(&[u8]) -> Sniff,
+    pub(crate) read: fn(Ctx<'_>, &[u8], Want<'_>) -> Result<Decoded, ReadError>,
+}
+
+impl std::fmt::Debug for Reader {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name)
+    }
+}
+
+/// A reader chosen by name or detection.
+#[derive(Debug, Clone, Copy)]
+pub struct Format(&'static Reader);
+
+impl PartialEq for Format {
+    fn eq(&self, other: &Format) -> bool {
+        std::ptr::eq(self.0, other.0)
+    }
+}
+impl Eq for Format {}
+
+impl Format {
+    /// Parse a format name or alias as given on the command line.
+    pub fn from_name(name: &str) -> Option<Format> {
+        let n = name.trim().to_ascii_lowercase();
+        READERS
+            .iter()
+            .find(|r| r.name == n || r.aliases.contains(&n.as_str()))
+            .map(Format)
+    }
+
+    /// The reader's `--format` name.
+    pub fn name(self) -> &'static str {
+        self.0.name
+    }
+
+    /// The reader.
+    pub fn reader(self) -> &'static Reader {
+        self.0
+    }
+
+    /// Every format, in registry order.
+    pub fn all() -> impl Iterator<Item = Format> {
+        READERS.iter().map(Format)
+    }
+}
+
+use super::{
+    al3d, bcr, dektak, frt, gsf, ibw, matrix, metropro, mi, mnt, nanoscope, nid, opd, park, plu,
+    sdf, sur, tmd, wsxm, x3p, xyz,
+};
+
+fn starts(bytes: &[u8], magic: &[u8]) -> Sniff {
+    if bytes.starts_with(magic) {
+        Sniff::Magic
+    } else {
+        Sniff::No
+    }
+}
+
+/// Every reader. Order breaks ties in detection (more specific first).
+pub static READERS: &[Reader] = &[
+    Reader {
+        name: "x3p",
+        aliases: &[],
+        description: "ISO 25178-72 X3P (zip with main.xml)",
+        extensions: &["x3p"],
+        binary: true,
+        sniff: |b| starts(b, b"PK\x03\x04"),
+        read: x3p::read,
+    },
+    Reader {
+        name: "sdf",
+        aliases: &[],
+        description: "Surface Data File (BCR/ISO 25178-71 SDF, binary or ASCII)",
+        extensions: &["sdf"],
+        binary: true,
+        sniff: |b| {
+            for m in [&b"aBCR-"[..], b"bBCR-", b"aISO-", b"bISO-"] {
+                if b.starts_with(m) {
+                    return Sniff::Magic;
+                }
+            }
+            Sniff::No
+        },
+        read: sdf::read,
+    },
+    Reader {
+        name: "bcr",
+        aliases: &["bcrf", "bcrstm"],
+        description: "BCR-STM (bcrstm/bcrf, ASCII or UTF-16 header)",
+        extensions: &["bcr", "bcrf", "bcrstm"],
+        binary: true,
+        sniff: |b| {
+            if b.starts_with(b"fileformat") || b.starts_with(b"f\0i\0l\0e\0f\0o\0r\0m\0a\0t\0") {
+                Sniff::Magic
+            } else {
+                Sniff::No
+            }
+        },
+        read: bcr::read,
+    },
+    Reader {
+        name: "gsf",
+        aliases: &[],
+        description: "Gwyddion Simple Field .gsf",
+        extensions: &["gsf"],
+        binary: true,
+        sniff: |b| starts(b, b"Gwyddion Simple Field"),
+        read: gsf::read,
+    },
+    Reader {
+        name: "nanoscope",
+        aliases: &["di", "spm"],
+        description: "Bruker/Veeco NanoScope .di/.spm/.001 (multi-channel)",
+        extensions: &["di", "spm", "001", "002", "003", "004"],
+        binary: true,
+        sniff: |b| starts(b, b"\\*File list"),
+        read: nanoscope::read,
+    },
+    Reader {
+        name: "plu",
+        aliases: &["sensofar"],
+        description: "Sensofar .plu/.apx (confocal/interferometric)",
+        extensions: &["plu", "apx"],
+        binary: true,
+        sniff: plu::sniff,
+        read: plu::read,
+    },
+    Reader {
+        name: "sur",
+        aliases: &["digitalsurf"],
+        description: "Digital Surf .sur (MountainsMap)",
+        extensions: &["sur"],
+        binary: true,
+        sniff: |b| {
+            if b.starts_with(b"DIGITAL SURF") || b.starts_with(b"DSCOMPRESSED") {
+                Sniff::Magic
+            } else {
+                Sniff::No
+            }
+        },
+        read: sur::read,
+    },
+    Reader {
+        name: "mnt",
+        aliases: &["mountains"],
+        description: "Digital Surf MountainsMap document .mnt (OLE compound file)",
+        extensions: &["mnt"],
+        binary: true,
+        sniff: mnt::sniff,
+        read: mnt::read,
+    },
+    Reader {
+        name: "metropro",
+        aliases: &["zygo"],
+        description: "Zygo MetroPro .dat",
+        extensions: &["dat"],
+        binary: true,
+        sniff: metropro::sniff,
+        read: metropro::read,
+    },
+    Reader {
+        name: "opd",
+        aliases: &["wyko"],
+        description: "Veeco/Bruker Wyko Vision .opd",
+        extensions: &["opd"],
+        binary: true,
+        sniff: |b| {
+            if b.get(2..11) == Some(b"Directory") {
+                Sniff::Magic
+            } else {
+                Sniff::No
+            }
+        },
+        read: opd::read,
+    },
+    Reader {
+        name: "al3d",
+        aliases: &["alicona"],
+        description: "Alicona Imaging .al3d",
+        extensions: &["al3d"],
+        binary: true,
+        sniff: |b| starts(b, b"AliconaImaging"),
+        read: al3d::read,
+    },
+    Reader {
+        name: "nid",
+        aliases: &["nanosurf", "ezd"],
+        description: "Nanosurf easyScan .nid/.ezd (multi-channel)",
+        extensions: &["nid", "ezd"],
+        binary: true,
+        sniff: |b| starts(b, b"[DataSet]"),
+        read: nid::read,
+    },
+    Reader {
+        name: "ibw",
+        aliases: &["igor", "asylum"],
+        description: "Igor binary wave .ibw (Asylum Research; multi-channel)",
+        extensions: &["ibw"],
+        binary: true,
+        sniff: ibw::sniff,
+        read: ibw::read,
+    },
+    Reader {
+        name: "park",
+        aliases: &["psia", "tiff", "tif"],
+        description: "Park Systems TIFF (private tags 50432–50435)",
+        extensions: &["tiff", "tif"],
+        binary: true,
+        sniff: park::sniff,
+        read: park::read,
+    },
+    Reader {
+        name: "mi",
+        aliases: &["picoview", "keysight"],
+        description: "Keysight/Agilent PicoView .mi (multi-channel)",
+        extensions: &["mi"],
+        binary: true,
+        sniff: |b| starts(b, b"fileType      Image"),
+        read: mi::read,
+    },
+    Reader {
+        name: "wsxm",
+        aliases: &["stp", "top"],
+        description: "WSxM .stp/.top",
+        extensions: &["stp", "top", "tom"],
+        binary: true,
+        sniff: |b| starts(b, b"WSxM file copyright"),
+        read: wsxm::read,
+    },
+    Reader {
+        name: "frt",
+        aliases: &["microprof"],
+        description: "FRT MicroProf .frt",
+        extensions: &["frt"],
+        binary: true,
+        sniff: |b| starts(b, b"FRTM_GLIDERV"),
+        read: frt::read,
+    },
+    Reader {
+        name: "tmd",
+        aliases: &["truemap"],
+        description: "TrueMap .tmd",
+        extensions: &["tmd"],
+        binary: true,
+        sniff: |b| starts(b, b"Binary TrueMap Data File"),
+        read: tmd::read,
+    },
+    Reader {
+        name: "dektak",
+        aliases: &[],
+        description: "Bruker Dektak CSV profile",
+        extensions: &["csv"],
+        binary: false,
+        sniff: dektak::sniff,
+        read: dektak::read,
+    },
+    Reader {
+        name: "matrix",
+        aliases: &["asc", "txt", "gwyddion"],
+        description: "text matrix (Gwyddion export in any locale, key=value / key: value headers)",
+        extensions: &["txt", "asc", "dat", "csv"],
+        binary: false,
+        sniff: matrix::sniff,
+        read: matrix::read,
+    },
+    Reader {
+        name: "xyz",
+        aliases: &["csv", "columns"],
+        description: "column text: x z profiles or x y z maps (CSV/TSV, unit headers, UTF-16)",
+        extensions: &["xyz", "csv", "txt", "asc", "dat", "prf"],
+        binary: false,
+        sniff: xyz::sniff,
+        read: xyz::read,
+    },
+];
+
+/// `x3p, sdf, …` for error messages.
+pub fn supported_list() -> String {
+    READERS
+        .iter()
+        .map(|r| {
+            if r.extensions.is_empty() {
+                r.name.to_string()
+            } else {
+                format!("{} (.{})", r.name, r.extensions.join("/."))
+            }
+        })
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+/// The `--format` help text.
+pub fn format_help() -> String {
+    let mut s = String::from("Force the file format instead of detecting it:");
+    for r in READERS {
+        s.push_str(&format!("\n  {:<10} {}", r.name, r.description));
+    }
+    s
+}
+
+/// Guess the format: a magic number wins, then content checks (with the extension as
+/// tie-breaker), then the extension of a binary format alone.
+pub fn detect(name: &str, bytes: &[u8]) -> Option<Format> {
+    let ext = Path::new(name)
+        .extension()
+        .map(|e| e.to_string_lossy().to_ascii_lowercase())
+        .unwrap_or_default();
+    let head = &bytes[..bytes.len().min(1 << 16)];
+    let mut best: Option<(u8, &'static Reader)> = None;
+    for r in READERS {
+        let s = (r.sniff)(head);
+        if s == Sniff::No {
+            continue;
+        }
+        let score = 2 * s as u8 + u8::from(r.extensions.contains(&ext.as_str()));
+        if best.is_none_or(|(b, _)| score > b) {
+            best = Some((score, r));
+        }
+    }
+    if let Some((_, r)) = best {
+        return Some(Format(r));
+    }
+    READERS
+        .iter()
+        .find(|r| r.binary && r.extensions.contains(&ext.as_str()))
+        .map(Format)
+}

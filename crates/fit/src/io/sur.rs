@@ -1,0 +1,182 @@
+//! Digital Surf `.sur` (MountainsMap): a 512-byte little-endian header per object
+//! ("DIGITAL SURF", object type, point size 16 or 32 bits, zmin/zmax, points per line,
+//! lines, x/y spacing and z step as float32, nine 16-byte axis names and units, unit
+//! ratios, comment and private-zone sizes, offsets), the comment and private zones, then
+//! int16/int32 data, x fastest. Heights are `raw × z step` in the z unit. When the
+//! header flags special points, values outside `[zmin, zmax]` are points that were not
+//! measured. `DSCOMPRESSED` files hold the same layout with zlib-compressed data.
+
+use super::binary::Cursor;
+use super::{Ctx, Decoded, Raw, Unit, Want, check_spacing, checked_grid, units};
+use crate::ReadError;
+use std::io::Read;
+
+const HEADER: usize = 512;
+
+/// Read a Digital Surf file (first object).
+pub(crate) fn read(ctx: Ctx<'_>, bytes: &[u8], want: Want<'_>) -> Result<Decoded, ReadError> {
+    if bytes.len() < HEADER {
+        return Err(ctx.short("header", HEADER as u64, bytes.len() as u64));
+    }
+    let compressed = bytes.starts_with(b"DSCOMPRESSED");
+    let short = || ctx.short("header", HEADER as u64, bytes.len() as u64);
+    let mut c = Cursor::le(bytes, 12);
+    let _format = c.u16().ok_or_else(short)?;
+    let nobjects = c.u16().ok_or_else(short)?;
+    let _version = c.u16().ok_or_else(short)?;
+    let object_type = c.u16().ok_or_else(short)?;
+    c.skip(60).ok_or_else(short)?; // object and operator names
+    let _material = c.u16().ok_or_else(short)?;
+    let _acquisition = c.u16().ok_or_else(short)?;
+    let _range = c.u16().ok_or_else(short)?;
+    let special_points = c.u16().ok_or_else(short)?;
+    let _absolute = c.u16().ok_or_else(short)?;
+    c.skip(8).ok_or_else(short)?;
+    let bits = c.u16().ok_or_else(short)?;
+    let zmin = c.i32().ok_or_else(short)?;
+    let zmax = c.i32().ok_or_else(short)?;
+    let nx = c.i32().ok_or_else(short)?;
+    let ny = c.i32().ok_or_else(short)?;
+    let total = c.u32().ok_or_else(short)?;
+    let sx = c.f32().ok_or_else(short)?;
+    let sy = c.f32().ok_or_else(short)?;
+    let sz = c.f32().ok_or_else(short)?;
+    let mut names = Vec::new();
+    for _ in 0..9 {
+        names.push(c.text(16).ok_or_else(short)?);
+    }
+    // names: axis x, y, z; step units x, y, z; length units x, y, z.
+    c.skip(12 + 6 + 12).ok_or_else(short)?; // unit ratios, imprint/inversion/levelling, obsolete
+    c.skip(14 + 4).ok_or_else(short)?; // date, duration
+    let compressed_size = c.u32().ok_or_else(short)?;
+    c.skip(6).ok_or_else(short)?;
+    let comment = c.u16().ok_or_else(short)? as usize;
+    let private = c.u16().ok_or_else(short)? as usize;
+    if !(object_type == 1 || object_type == 2) {
+        return Err(ctx.err(
+            "object type",
+            format!("object type {object_type} is not a profile (1) or surface (2)"),
+            "export the topography as a single surface from MountainsMap",
+        ));
+    }
+    let kind = match bits {
+        16 => super::binary::Sample::I16,
+        32 => super::binary::Sample::I32,
+        b => {
+            return Err(ctx.err(
+                "size of points",
+                format!("{b}-bit points are not supported"),
+                "expected 16 or 32",
+            ));
+        }
+    };
+    if nx <= 0 || ny <= 0 {
+        return Err(ctx.err(
+            "number of points",
+            format!("grid {nx} × {ny} is not positive"),
+            "the header is corrupt",
+        ));
+    }
+    if total as u64 != nx as u64 * ny as u64 {
+        return Err(ctx.err(
+            "total number of points",
+            format!("{total} ≠ {nx} × {ny}"),
+            "the header is corrupt",
+        ));
+    }
+    let start = HEADER + comment + private;
+    let body = bytes.get(start..).ok_or_else(|| {
+        ctx.short(
+            "comment and private zones",
+            start as u64,
+            bytes.len() as u64,
+        )
+    })?;
+    let inflated;
+    let data: &[u8] = if compressed {
+        let cs = (compressed_size as usize).min(body.len());
+        let need = (total as u64).saturating_mul(kind.size() as u64);
+        if need > (cs as u64).saturating_mul(1100).saturating_add(4096) {
+            return Err(ctx.short("compressed data", need, cs as u64));
+        }
+        let mut out = Vec::with_capacity((need as usize).min(cs.saturating_mul(16)));
+        flate2::read::ZlibDecoder::new(&body[..cs])
+            .take(need)
+            .read_to_end(&mut out)
+            .map_err(|e| {
+                ctx.err(
+                    "compressed data",
+                    format!("cannot decompress ({e})"),
+                    "the file is corrupt",
+                )
+            })?;
+        inflated = out;
+        &inflated
+    } else {
+        body
+    };
+    let n = checked_grid(
+        ctx,
+        "number of points × lines",
+        nx as u64,
+        ny as u64,
+        kind.size() as u64,
+        data.len() as u64,
+    )?;
+    let raw = super::binary::decode(data, kind, true, n)
+        .ok_or_else(|| ctx.short("data", (n * kind.size()) as u64, data.len() as u64))?;
+    let unit = |i: usize, what: &str| -> Result<f64, ReadError> {
+        let u = names[i].trim();
+        units::length_factor(u).ok_or_else(|| {
+            ctx.err(
+                what,
+                format!("`{u}` is not a length unit"),
+                "export a topography (lengths in m, mm, µm or nm)",
+            )
+        })
+    };
+    let (ux, uy, uz) = (
+        unit(3, "x step unit")?,
+        unit(4, "y step unit")?,
+        unit(5, "z step unit")?,
+    );
+    let dx = check_spacing(ctx, "x spacing", sx as f64 * ux)?;
+    let dy = if ny == 1 {
+        dx
+    } else {
+        check_spacing(ctx, "y spacing", sy as f64 * uy)?
+    };
+    let q = sz as f64 * uz;
+    let mut invalid = 0usize;
+    let heights = raw
+        .into_iter()
+        .map(|v| {
+            if special_points != 0 && (v < zmin as f64 || v > zmax as f64) {
+                invalid += 1;
+                f64::NAN
+            } else {
+                v * q
+            }
+        })
+        .collect();
+    let mut out = Raw {
+        nx: nx as usize,
+        ny: ny as usize,
+        heights,
+        height_unit: Unit::Known(1.0),
+        spacing: Some((dx, dy)),
+        lateral_unit: Unit::Known(1.0),
+        channel: names[2].clone(),
+        notes: Vec::new(),
+    };
+    if invalid > 0 {
+        out.notes
+            .push(format!("{invalid} points were not measured"));
+    }
+    if nobjects > 1 {
+        out.notes.push(format!(
+            "the file holds {nobjects} objects; the first was read"
+        ));
+    }
+    Decoded::single(ctx, want, out)
+}

@@ -1,0 +1,50 @@
+//! TrueMap `.tmd`: a 32-byte magic (`Binary TrueMap Data File v2.0`), a 24-byte comment,
+//! u32 columns and rows, float32 lengths x and y and offsets (mm), then float32 heights
+//! in mm, x fastest. Non-finite values are invalid.
+
+use super::binary::{Cursor, Sample, decode};
+use super::{Ctx, Decoded, Raw, Unit, Want, check_spacing, checked_grid};
+use crate::ReadError;
+
+const HEADER: usize = 32 + 24 + 4 + 4 + 4 * 4;
+
+/// Read a TrueMap file.
+pub(crate) fn read(ctx: Ctx<'_>, bytes: &[u8], want: Want<'_>) -> Result<Decoded, ReadError> {
+    if !bytes.starts_with(b"Binary TrueMap Data File") {
+        return Err(ctx.err(
+            "magic",
+            "missing `Binary TrueMap Data File`",
+            "not a TrueMap file",
+        ));
+    }
+    if bytes.len() < HEADER {
+        return Err(ctx.short("header", HEADER as u64, bytes.len() as u64));
+    }
+    let mut c = Cursor::le(bytes, 56);
+    let short = || ctx.short("header", HEADER as u64, bytes.len() as u64);
+    let nx = c.u32().ok_or_else(short)? as u64;
+    let ny = c.u32().ok_or_else(short)? as u64;
+    let lx = c.f32().ok_or_else(short)?;
+    let ly = c.f32().ok_or_else(short)?;
+    let data = &bytes[HEADER..];
+    let n = checked_grid(ctx, "columns × rows", nx, ny, 4, data.len() as u64)?;
+    let raw = decode(data, Sample::F32, true, n)
+        .ok_or_else(|| ctx.short("data", n as u64 * 4, data.len() as u64))?;
+    let dx = check_spacing(ctx, "x length", lx / nx as f64)?;
+    let dy = if ny == 1 {
+        dx
+    } else {
+        check_spacing(ctx, "y length", ly / ny as f64)?
+    };
+    let out = Raw {
+        nx: nx as usize,
+        ny: ny as usize,
+        heights: raw,
+        height_unit: Unit::Known(1e-3),
+        spacing: Some((dx, dy)),
+        lateral_unit: Unit::Known(1e-3),
+        channel: "height".into(),
+        notes: Vec::new(),
+    };
+    Decoded::single(ctx, want, out)
+}
