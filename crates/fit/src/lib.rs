@@ -13,6 +13,8 @@
 //! reference-table length `L = 2π·Lc`, where `Lc` is the Matérn range of physics.md §2.
 
 pub mod error;
+pub mod explicit_brdf;
+pub mod field_spectrum;
 pub mod fill;
 pub mod io;
 pub mod kc;
@@ -23,8 +25,10 @@ pub mod pipeline;
 pub mod plots;
 pub mod psd;
 pub mod rng;
+pub mod sampled_kc;
 pub mod sha256;
 pub mod stats;
+pub mod surrogate;
 pub mod synth;
 pub mod topography;
 pub mod two_scale;
