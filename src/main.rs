@@ -7,6 +7,7 @@ mod cmd_brdf;
 mod cmd_brdf_plot;
 mod cmd_compare;
 mod cmd_fit;
+mod cmd_judge;
 mod cmd_render;
 mod models;
 
@@ -40,6 +41,8 @@ enum Command {
     Fit(cmd_fit::FitArgs),
     /// Render one surface with every model at three viewing angles into a labelled image grid.
     Compare(cmd_compare::CompareArgs),
+    /// Judge every model against the scan's own wave-optical BRDF (and a measured one).
+    Judge(cmd_judge::JudgeArgs),
 }
 
 fn main() -> std::process::ExitCode {
@@ -51,6 +54,7 @@ fn main() -> std::process::ExitCode {
         Some(Command::Brdf(cmd)) => cmd_brdf::run(cmd),
         Some(Command::Fit(args)) => cmd_fit::run(args),
         Some(Command::Compare(args)) => cmd_compare::run(args),
+        Some(Command::Judge(args)) => cmd_judge::run(args),
     };
     match result {
         Ok(()) => std::process::ExitCode::SUCCESS,
