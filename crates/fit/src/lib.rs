@@ -24,6 +24,7 @@ pub mod ndf;
 pub mod pipeline;
 pub mod plots;
 pub mod psd;
+pub mod resample;
 pub mod rng;
 pub mod sampled_kc;
 pub mod sha256;
