@@ -236,10 +236,17 @@ pub fn run(args: JudgeArgs) -> anyhow::Result<()> {
             )
         })
         .collect();
+    let mut geometry = Vec::new();
+    for &l in &args.lambda {
+        for &t in &args.theta_i {
+            geometry.push((models::wavenumber(l), t.to_radians().cos()));
+        }
+    }
     let fitted = Fitted {
         analysis: &analysis,
         splits,
         fresnel: fresnel_name.clone(),
+        geometry,
     };
 
     // The explicit reference (and its Gaussian surrogate).

@@ -1,7 +1,8 @@
 //! The model table of `lustre judge`: every model it fits from a scan, what each assumes,
 //! and how it is built (through `brdf eval`'s builder where one exists).
 
-use brdf::wave::{GhsFull, GhsOptions, TabulatedPsd};
+use brdf::wave::measured_psd::TabulatedCorrelation;
+use brdf::wave::{GhsFull, GhsOptions, RadialPsd, TabulatedPsd, hankel};
 use brdf::{Bxdf, Fresnel, Ior, Metal};
 use fit::pipeline::Analysis;
 use fit::two_scale::{BetaSource, TwoScale as Split};
@@ -29,6 +30,8 @@ pub(super) struct Fitted<'a> {
     /// Two-scale splits by cutoff multiple (errors kept as text).
     pub(super) splits: Vec<(f64, Result<Split, String>)>,
     pub(super) fresnel: String,
+    /// Wavenumbers k [rad/µm] and incidence cosines judged (for table checks).
+    pub(super) geometry: Vec<(f64, f64)>,
 }
 
 pub(super) type Built = Result<Candidate, (String, String)>;
@@ -267,10 +270,20 @@ pub(super) fn make_measured_psd(f: &Fitted, _: &[f64]) -> Vec<Built> {
     let sigma = table.sigma_um();
     match GhsFull::with_options(table, fresnel, GhsOptions::default()) {
         Ok(m) => {
+            let table_error = match check_table(&m, &f.geometry) {
+                Ok(e) => e,
+                Err(e) => return vec![Err((label, e))],
+            };
             let params = json!({"model": "measured_psd", "fresnel": f.fresnel,
                 "psd_source": f.analysis.table.1, "psd_points": f.analysis.table.0.zeta.len(),
                 "psd_tail_exponent": tail, "psd_tail_exponent_clamped": clamped,
-                "sigma_um": sigma, "energy": "raw"});
+                "sigma_um": sigma, "energy": "raw",
+                "table_max_relative_error": table_error});
+            let label = if table_error > 0.01 {
+                format!("{label} (table ±{:.0} %)", 100.0 * table_error)
+            } else {
+                label
+            };
             vec![Ok(Candidate {
                 model: "measured_psd".into(),
                 key: "measured_psd".into(),
@@ -282,6 +295,51 @@ pub(super) fn make_measured_psd(f: &Fitted, _: &[f64]) -> Vec<Built> {
         }
         Err(e) => vec![Err((label, e.to_string()))],
     }
+}
+
+/// Largest relative error of a table this judge still ranks (0.3 ≈ 0.11 in log10, about the
+/// reference's own noise floor); the measured value is reported with the model.
+const TABLE_TOLERANCE: f64 = 0.3;
+
+/// Compares the model's S̃ table with the direct Hankel transform of the same covariance
+/// (`brdf::wave::hankel::s_tilde_direct`, the reference method of physics.md §4.1) at the
+/// judged specular g = (2kσ cosθi)² and a quarter of it, for u from 0 to the hemisphere's
+/// 2kL, where S̃ is above 1e−3 of its peak. Returns the largest relative error; a table off by
+/// more than [`TABLE_TOLERANCE`] is refused (the judge would rank the table, not the model).
+/// (At this commit the measured-PSD tables of the real scans are off by 7–9 %, of a
+/// synthetic KC map by orders of magnitude: a `brdf::wave` issue, reported.)
+fn check_table(m: &GhsFull<TabulatedPsd>, geometry: &[(f64, f64)]) -> Result<f64, String> {
+    let psd = m.psd();
+    let corr = TabulatedCorrelation::new(psd);
+    let (sigma, l) = (psd.sigma_um(), psd.length_um());
+    let mut worst = 0.0f64;
+    for &(k, ci) in geometry {
+        let gs = (2.0 * k * sigma * ci).powi(2);
+        for g in [gs, 0.25 * gs] {
+            if g < 1e-6 {
+                continue;
+            }
+            let peak = hankel::s_tilde_direct(&corr, 0.0, g);
+            for f in [0.0, 0.01, 0.03, 0.1, 0.3, 1.0] {
+                let u = f * 2.0 * k * l;
+                let want = hankel::s_tilde_direct(&corr, u, g);
+                if want < 1e-3 * peak {
+                    continue;
+                }
+                let got = m.s_tilde(u, g);
+                let err = (got / want - 1.0).abs();
+                worst = worst.max(err);
+                if !(err <= TABLE_TOLERANCE) {
+                    return Err(format!(
+                        "its full-GHS table disagrees with the direct Hankel transform: \
+                         S̃(u {u:.3}, g {g:.3e}) = {got:.4e} vs {want:.4e} \
+                         (brdf::wave table of a measured PSD)"
+                    ));
+                }
+            }
+        }
+    }
+    Ok(worst)
 }
 
 pub(super) fn two_scale_candidate(f: &Fitted, m: f64) -> Built {
