@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 
 use brdf::wave::{GhsFull, KcPsd};
-use brdf::{Bxdf, DVec3, Fresnel};
+use brdf::{Bxdf, Fresnel};
 use fit::kc::KcParams;
 use fit::sampled_kc::PointSampledKc;
 use serde_json::Value;
