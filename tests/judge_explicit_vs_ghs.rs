@@ -491,3 +491,100 @@ fn tile_expectation_is_the_kernel_smoothed_ghs() {
         }
     }
 }
+
+/// The 1-D version: a profile of an isotropic Gaussian surface (here the rows of point-sampled
+/// KC maps). Its field periodogram P̂₁(ζx; q) has expectation Σ_m ∫ S(ζx + 2πm/dx, ζy; g) dζy,
+/// the line marginal of the 2-D GHS kernel (aliased along x only), which the explicit profile
+/// BRDF k·P̂₁ = ∫ f do_y reproduces. Band: scatter between realisations.
+#[test]
+fn profile_explicit_equals_the_line_marginal_of_ghs() {
+    let (n, dx) = (256usize, 1.0);
+    for (gamma, g, lc) in [(2.0, 0.1, 8.0), (2.0, 3.0, 8.0), (4.0, 0.3, 6.0), (4.0, 5.0, 12.0)] {
+        let synth = PointSampledKc::new(
+            n,
+            n,
+            dx,
+            KcParams {
+                sigma: 1.0,
+                lc,
+                gamma,
+            },
+        );
+        let ghs = GhsFull::new(KcPsd::new(1.0, lc, gamma).unwrap(), Fresnel::One).unwrap();
+        let q = g.sqrt();
+        let dz = 2.0 * std::f64::consts::PI / (n as f64 * dx);
+        let z_alias = 2.0 * std::f64::consts::PI / dx;
+        // ∫ S(ζx, ζy) dζy by Gauss–Legendre on geometric panels in ζy up to the table's reach.
+        let (gx, gw) = brdf::wave::hankel::gauss_legendre::<4>();
+        let marginal = |zx: f64| -> f64 {
+            let mut edges = vec![0.0, 1e-4];
+            while *edges.last().unwrap() < 30.0 {
+                let e = edges.last().unwrap() * 1.5;
+                edges.push(e.min(30.0));
+            }
+            let mut s = 0.0;
+            for p in edges.windows(2) {
+                let (c, h) = (0.5 * (p[0] + p[1]), 0.5 * (p[1] - p[0]));
+                for (x, w) in gx.iter().zip(&gw) {
+                    for zy in [c - h * x, c + h * x] {
+                        let u = lc * (zx * zx + zy * zy).sqrt();
+                        s += w * h * lc * lc * ghs.s_tilde(u, g);
+                    }
+                }
+            }
+            2.0 * s
+        };
+        let bins: Vec<(usize, f64)> = (2..n / 2)
+            .map(|ix| {
+                let zx = ix as f64 * dz;
+                let r: f64 = (-RINGS..=RINGS)
+                    .map(|m| marginal(zx + m as f64 * z_alias))
+                    .sum();
+                (ix, r)
+            })
+            .collect();
+        let edges = [2.0, 8.0, 32.0, 128.0];
+        let reps = 8;
+        let mut per = vec![Vec::new(); edges.len() - 1];
+        for rep in 0..reps {
+            let map = synth.realise(300 + rep);
+            let mut sums = vec![(0.0, 0usize); edges.len() - 1];
+            for row in 0..n {
+                let line = fit::Topography {
+                    nx: n,
+                    ny: 1,
+                    heights: map.heights[row * n..(row + 1) * n].to_vec(),
+                    ..map.clone()
+                };
+                let sp = field_spectrum(&line, q, Window::Rect).unwrap();
+                for &(ix, r) in &bins {
+                    if let Some(j) = (0..edges.len() - 1)
+                        .find(|&j| (ix as f64) >= edges[j] && (ix as f64) < edges[j + 1])
+                    {
+                        // ±ζx are both the marginal at |ζx| (isotropy).
+                        sums[j].0 += (sp.at(ix, 0) + sp.at(n - ix, 0)) / (2.0 * r);
+                        sums[j].1 += 1;
+                    }
+                }
+            }
+            for (j, (s, c)) in sums.into_iter().enumerate() {
+                per[j].push(s / c as f64);
+            }
+        }
+        for (j, v) in per.iter().enumerate() {
+            let m = v.iter().sum::<f64>() / reps as f64;
+            let se = (v.iter().map(|x| (x - m).powi(2)).sum::<f64>()
+                / (reps - 1) as f64
+                / reps as f64)
+                .sqrt();
+            let z = (m - 1.0) / se;
+            println!(
+                "profile γ {gamma} g {g}: bins [{}, {}): explicit/GHS marginal {m:.4} ± {se:.4} (z {z:+.2})",
+                edges[j],
+                edges[j + 1]
+            );
+            // 7 degrees of freedom: two-sided 99.9 % t quantile.
+            assert!(z.abs() <= 5.41 && se < 0.05, "γ {gamma} g {g} bins {j}: z {z}, se {se}");
+        }
+    }
+}
