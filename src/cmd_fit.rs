@@ -150,7 +150,7 @@ fn parse_pair(flag: &str, v: &str) -> anyhow::Result<(f64, f64)> {
     Ok((a, b))
 }
 
-fn read_options(a: &ScanArgs) -> anyhow::Result<ReadOptions> {
+pub(crate) fn read_options(a: &ScanArgs) -> anyhow::Result<ReadOptions> {
     let units = match &a.units {
         Some(u) => Some(Units::parse(u).with_context(|| {
             format!(
@@ -241,7 +241,7 @@ fn channels(args: ChannelsArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
-fn level_of(a: &ScanArgs) -> Option<Level> {
+pub(crate) fn level_of(a: &ScanArgs) -> Option<Level> {
     a.level.as_deref().and_then(Level::from_name)
 }
 

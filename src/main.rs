@@ -7,6 +7,7 @@ mod cmd_brdf;
 mod cmd_brdf_plot;
 mod cmd_compare;
 mod cmd_fit;
+mod cmd_judge;
 mod cmd_preview;
 mod cmd_render;
 mod cmd_scenes;
@@ -46,6 +47,8 @@ enum Command {
     Scenes(cmd_scenes::ScenesArgs),
     /// Render a material on the preview object under a daylight sky (or studio lights).
     Preview(cmd_preview::PreviewArgs),
+    /// Judge every model against the scan's own wave-optical BRDF (and a measured one).
+    Judge(cmd_judge::JudgeArgs),
 }
 
 fn main() -> std::process::ExitCode {
@@ -59,6 +62,7 @@ fn main() -> std::process::ExitCode {
         Some(Command::Compare(args)) => cmd_compare::run(args),
         Some(Command::Scenes(args)) => cmd_scenes::run(args),
         Some(Command::Preview(args)) => cmd_preview::run(args),
+        Some(Command::Judge(args)) => cmd_judge::run(args),
     };
     match result {
         Ok(()) => std::process::ExitCode::SUCCESS,

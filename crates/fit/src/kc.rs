@@ -334,7 +334,7 @@ pub fn fit_weighted(
     };
     let l_lo = (1e-3 / xhi).max(to_l(LC_BOUNDS_M.0));
     let l_hi = (1e3 / xlo).min(to_l(LC_BOUNDS_M.1));
-    if !(l_lo < l_hi) {
+    if l_lo.partial_cmp(&l_hi) != Some(std::cmp::Ordering::Less) {
         return Err(FitError::data(
             "K-correlation fit",
             format!("the band {xlo:e}…{xhi:e} lies outside the lengths the renderer accepts"),

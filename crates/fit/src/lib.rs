@@ -14,6 +14,8 @@
 
 pub mod anisotropy;
 pub mod error;
+pub mod explicit_brdf;
+pub mod field_spectrum;
 pub mod fill;
 pub mod io;
 pub mod kc;
@@ -23,9 +25,12 @@ pub mod ndf;
 pub mod pipeline;
 pub mod plots;
 pub mod psd;
+pub mod resample;
 pub mod rng;
+pub mod sampled_kc;
 pub mod sha256;
 pub mod stats;
+pub mod surrogate;
 pub mod synth;
 pub mod topography;
 pub mod two_scale;

@@ -325,8 +325,8 @@ fn finite(v: f64) -> f64 {
     if v.is_finite() { v } else { -1.0 }
 }
 
-/// Largest Lc the two-scale model accepts [µm] (`brdf::wave::two_scale::TwoScale::new`).
-const TWO_SCALE_LC_MAX_UM: f64 = 1e5;
+/// Largest Lc the two-scale model accepts [µm] (its micro scale is a `KcPsd`).
+const TWO_SCALE_LC_MAX_UM: f64 = brdf::wave::kc::LC_MAX_UM;
 
 /// K-correlation parameters in µm the renderer accepts; `Some(problem)` if they had to
 /// be brought into range.
@@ -337,8 +337,8 @@ pub fn renderer_kc(k: &KcParams) -> ((f64, f64, f64), Option<String>) {
     }
     let fix = |v: f64, lo: f64, hi: f64| if v.is_finite() { v.clamp(lo, hi) } else { lo };
     let out = (
-        fix(s, 0.0, brdf::wave::kc::LENGTH_MAX_UM),
-        fix(l, brdf::wave::kc::LC_MIN_UM, brdf::wave::kc::LENGTH_MAX_UM),
+        fix(s, 0.0, brdf::wave::kc::SIGMA_MAX_UM),
+        fix(l, brdf::wave::kc::LC_MIN_UM, brdf::wave::kc::LC_MAX_UM),
         fix(g, brdf::wave::kc::GAMMA_MIN, brdf::wave::kc::GAMMA_MAX),
     );
     (
@@ -384,7 +384,7 @@ pub fn renderer_psd(zeta: &[f64], p: &[f64]) -> (Vec<f64>, Vec<f64>, usize, Opti
         let n = z.len();
         (q[n - 1].ln() - q[n - 2].ln()) / (z[n - 1].ln() - z[n - 2].ln())
     };
-    while z.len() > 2 && !(slope(&z, &q) < -2.02) {
+    while z.len() > 2 && slope(&z, &q).partial_cmp(&-2.02) != Some(std::cmp::Ordering::Less) {
         z.pop();
         q.pop();
     }

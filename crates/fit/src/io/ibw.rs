@@ -172,7 +172,7 @@ pub(crate) fn read(ctx: Ctx<'_>, bytes: &[u8], want: Want<'_>) -> Result<Decoded
         ));
     }
     let per = checked_grid(ctx, "nDim", nx, ny, 1, u64::MAX)? as u64;
-    let total = per.checked_mul(nch).unwrap_or(u64::MAX);
+    let total = per.saturating_mul(nch);
     if total != npts {
         return Err(ctx.err(
             "npnts",

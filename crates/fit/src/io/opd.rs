@@ -34,7 +34,7 @@ pub(crate) fn read(ctx: Ctx<'_>, bytes: &[u8], want: Want<'_>) -> Result<Decoded
             "not a Wyko OPD file",
         ));
     }
-    if dir_len <= 0 || dir_len as usize % BLOCK != 0 {
+    if dir_len <= 0 || !(dir_len as usize).is_multiple_of(BLOCK) {
         return Err(ctx.err(
             "Directory",
             format!("directory length {dir_len} is not a positive multiple of {BLOCK}"),

@@ -140,13 +140,13 @@ pub(crate) fn read(ctx: Ctx<'_>, bytes: &[u8], want: Want<'_>) -> Result<Decoded
         unit(4, "y step unit")?,
         unit(5, "z step unit")?,
     );
-    let dx = check_spacing(ctx, "x spacing", sx as f64 * ux)?;
+    let dx = check_spacing(ctx, "x spacing", sx * ux)?;
     let dy = if ny == 1 {
         dx
     } else {
-        check_spacing(ctx, "y spacing", sy as f64 * uy)?
+        check_spacing(ctx, "y spacing", sy * uy)?
     };
-    let q = sz as f64 * uz;
+    let q = sz * uz;
     let mut invalid = 0usize;
     let heights = raw
         .into_iter()

@@ -1,0 +1,86 @@
+//! Phase-randomised Gaussian surrogate of a measured map: the same power spectrum, Gaussian
+//! heights. Comparing the explicit BRDF of a map with that of its surrogate isolates what the
+//! Gaussian-height assumption of GHS costs, with the spectrum, anisotropy, window and
+//! resolution held fixed.
+//!
+//! A measured map is mirror-extended to `2nx × 2ny` (even, so no edge jump adds spurious
+//! power), its Fourier amplitudes are kept and its phases replaced by those of white Gaussian
+//! noise (uniform and Hermitian-symmetric, so the result is real), and the first `nx × ny`
+//! block is returned; the block is not periodic, so analyse it with a taper. A periodic map
+//! ([`gaussian_surrogate_periodic`], e.g. a synthetic one) is randomised as it is and keeps its
+//! periodogram exactly. Every Fourier mode then has an independent uniform phase, so the
+//! heights are Gaussian by the central limit theorem while the periodogram is unchanged.
+
+use crate::rng::SplitMix64;
+use crate::{FitError, Topography};
+use rustfft::FftPlanner;
+use rustfft::num_complex::Complex;
+
+/// Gaussian surrogate of a levelled, NaN-free measured map or profile (mirror-extended).
+pub fn gaussian_surrogate(t: &Topography, seed: u64) -> Result<Topography, FitError> {
+    surrogate(t, seed, true)
+}
+
+/// Gaussian surrogate of a periodic map or profile, with exactly the same periodogram.
+pub fn gaussian_surrogate_periodic(t: &Topography, seed: u64) -> Result<Topography, FitError> {
+    surrogate(t, seed, false)
+}
+
+fn surrogate(t: &Topography, seed: u64, mirror: bool) -> Result<Topography, FitError> {
+    crate::field_spectrum::check(t)?;
+    let (nx, ny) = (t.nx, t.ny);
+    let f = if mirror { 2 } else { 1 };
+    let (mx, my) = (f * nx, if ny > 1 { f * ny } else { 1 });
+    let mut buf = vec![Complex::new(0.0, 0.0); mx * my];
+    for y in 0..my {
+        let sy = if y < ny { y } else { my - 1 - y };
+        for x in 0..mx {
+            let sx = if x < nx { x } else { mx - 1 - x };
+            buf[y * mx + x] = Complex::new(t.heights[sy * nx + sx], 0.0);
+        }
+    }
+    let mut rng = SplitMix64::new(seed);
+    let mut noise: Vec<Complex<f64>> = (0..mx * my)
+        .map(|_| Complex::new(rng.normal(), 0.0))
+        .collect();
+    let mut planner = FftPlanner::<f64>::new();
+    transform(&mut buf, mx, my, &mut planner, false);
+    transform(&mut noise, mx, my, &mut planner, false);
+    for (b, z) in buf.iter_mut().zip(&noise) {
+        let m = z.norm();
+        *b = if m > 0.0 {
+            *z * (b.norm() / m)
+        } else {
+            Complex::new(b.norm(), 0.0)
+        };
+    }
+    transform(&mut buf, mx, my, &mut planner, true);
+    let n = (mx * my) as f64;
+    let mut out = t.clone();
+    for y in 0..ny {
+        for x in 0..nx {
+            out.heights[y * nx + x] = buf[y * mx + x].re / n;
+        }
+    }
+    out.channel = format!("{} (Gaussian surrogate)", t.channel);
+    Ok(out)
+}
+
+fn transform(
+    buf: &mut [Complex<f64>],
+    nx: usize,
+    ny: usize,
+    planner: &mut FftPlanner<f64>,
+    inverse: bool,
+) {
+    if ny == 1 {
+        let p = if inverse {
+            planner.plan_fft_inverse(nx)
+        } else {
+            planner.plan_fft_forward(nx)
+        };
+        p.process(buf);
+    } else {
+        crate::synth::fft2(buf, nx, ny, planner, inverse);
+    }
+}

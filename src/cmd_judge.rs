@@ -1,0 +1,373 @@
+//! `lustre judge <scan>`: which scattering model is right for this surface, and what each
+//! assumption costs.
+//!
+//! Every model is fitted from the same scan, as `lustre fit` fits it (`fit::pipeline`), and
+//! compared in log space with the scan's own scalar-diffraction BRDF (`fit::explicit_brdf`:
+//! the Kirchhoff / Harvey–Shack far field of the levelled height map, averaged over tiles,
+//! with a confidence band) over the angular window where that reference can be trusted.
+//! Each model is smoothed with the tile window's spectral kernel before the comparison, so
+//! both sides have the same angular resolution.
+//!
+//! The models form one table ([`RECIPES`]); each row says what it assumes, so the differences
+//! between rows price the assumptions: Gaussian heights (the explicit BRDF of a Gaussian
+//! surrogate with the map's own spectrum, `fit::surrogate`), the K-correlation shape (full GHS
+//! with the KC fit against full GHS with the measured PSD), first-order truncation (SSA against
+//! full GHS), the two-scale split, and microfacet geometric optics.
+//!
+//! Geometry: the plane of incidence is the scan's x axis; i = (sinθi, 0, cosθi), the in-plane
+//! slice has φo = 180° on the specular side (signed θo > 0) and 0° on the backscatter side; the
+//! cross-plane slice passes through the mirror direction along y. For a profile the reference
+//! is the in-plane BRDF integrated over the out-of-plane direction cosine, and every model is
+//! integrated the same way (isotropy assumed). Outputs (atomic): `judge.json`, `judge_table.md`,
+//! `judge_points.csv`, `judge_slices.png` (in-plane slices with the band) and
+//! `judge_errors.png` (error against θi per model) in `-o`.
+
+mod compare;
+mod recipes;
+mod reference;
+mod report;
+
+use std::path::PathBuf;
+use std::time::Instant;
+
+use anyhow::{Context, anyhow, bail};
+use brdf::Metal;
+use fit::explicit_brdf::{ExplicitBrdf, TileOptions};
+use fit::io::ReadOptions;
+use fit::pipeline::{self, Options};
+use fit::two_scale::TwoScale as Split;
+use serde_json::Value;
+
+use crate::cmd_fit::ScanArgs;
+use compare::{Judged, angle_set, judge};
+use recipes::{Fitted, RECIPES, energy_check, fresnel_of, two_scale_candidate};
+use reference::judge_reference;
+use report::Report;
+
+/// Arguments of `lustre judge`.
+#[derive(clap::Args)]
+pub struct JudgeArgs {
+    /// Surface scan (any format `lustre fit` reads).
+    pub scan: PathBuf,
+    /// Metal for the Fresnel factor of every model and of the explicit BRDF (default: none,
+    /// R ≡ 1, which judges the geometry alone).
+    #[arg(long)]
+    pub metal: Option<String>,
+    /// Wavelengths [nm].
+    #[arg(long, value_delimiter = ',', default_values_t = vec![450.0, 550.0, 650.0])]
+    pub lambda: Vec<f64>,
+    /// Incidence angles [deg].
+    #[arg(long = "theta-i", value_delimiter = ',', default_values_t = vec![0.0, 45.0, 80.0])]
+    pub theta_i: Vec<f64>,
+    /// Print the report as JSON on stdout (it is always written to judge.json).
+    #[arg(long)]
+    pub json: bool,
+    /// Measured BRDF to rank the models against as well: CSV with a header naming
+    /// theta_i_deg, theta_o_deg, phi_o_deg, lambda_nm, brdf (any order).
+    #[arg(long)]
+    pub reference: Option<PathBuf>,
+    /// Output directory.
+    #[arg(short = 'o', long, default_value = "out/judge")]
+    pub out: PathBuf,
+    /// Two-scale cutoffs as multiples of 550 nm (the best cutoff is searched as well).
+    #[arg(long, value_delimiter = ',', default_values_t = vec![50.0, 100.0, 150.0])]
+    pub cutoff: Vec<f64>,
+    /// Directions per slice (in-plane; the cross-plane slice gets half as many).
+    #[arg(long, default_value_t = 90)]
+    pub angles: usize,
+    /// Tile edge in pixels for the speckle average (default: a quarter of the shorter side).
+    #[arg(long)]
+    pub tile: Option<usize>,
+    /// Use only the central N × N pixels (N points of a profile) for the explicit BRDF (the
+    /// models are still fitted from the whole scan).
+    #[arg(long)]
+    pub crop: Option<usize>,
+    /// Band-limited upsampling of the (cropped) map for the explicit BRDF, for scans whose
+    /// pixels are coarse against λ/(2·rms slope) (see `fit::resample`).
+    #[arg(long, default_value_t = 1)]
+    pub upsample: usize,
+    /// Skip the Gaussian-surrogate reference (halves the explicit computation).
+    #[arg(long)]
+    pub no_surrogate: bool,
+    /// Skip the PNG figures.
+    #[arg(long)]
+    pub no_plots: bool,
+    #[command(flatten)]
+    pub read: ScanArgs,
+}
+
+/// Multiples of 550 nm searched for the two-scale cutoff that fits best.
+const CUTOFF_SEARCH: [f64; 13] = [
+    2.0, 3.0, 5.0, 10.0, 20.0, 35.0, 50.0, 75.0, 100.0, 150.0, 200.0, 300.0, 500.0,
+];
+/// Kernel quadrature nodes per axis and their reach in tile frequency steps.
+const KERNEL_NODES: usize = 9;
+const KERNEL_REACH: f64 = 2.5;
+/// Values below this fraction of the slice's largest explicit value are floored before taking
+/// logarithms (a model that is zero there is wrong by at least this much, not infinitely).
+const LOG_FLOOR: f64 = 1e-6;
+const REFERENCE_LAMBDA_NM: f64 = brdf::paper::REFERENCE_LAMBDA_NM;
+/// Log-spaced points of the denoised measured-PSD table.
+const PSD_NODES: usize = 120;
+
+/// The scan flags read exactly as `lustre fit` reads them.
+fn read_options(a: &ScanArgs) -> anyhow::Result<ReadOptions> {
+    crate::cmd_fit::read_options(a)
+}
+
+fn check_args(args: &JudgeArgs) -> anyhow::Result<()> {
+    let (lo, hi) = (brdf::WAVELENGTH_MIN_NM, brdf::WAVELENGTH_MAX_NM);
+    if args.lambda.is_empty() || args.theta_i.is_empty() {
+        bail!("--lambda and --theta-i each need at least one value");
+    }
+    for &l in &args.lambda {
+        if !(lo..=hi).contains(&l) {
+            bail!("--lambda {l}: must lie in {lo}–{hi} nm");
+        }
+    }
+    for &t in &args.theta_i {
+        if !(0.0..89.0).contains(&t) {
+            bail!("--theta-i {t}: must lie in [0, 89) degrees");
+        }
+    }
+    for &c in &args.cutoff {
+        if !(c.is_finite() && c > 0.0) {
+            bail!("--cutoff {c}: must be a positive multiple of 550 nm");
+        }
+    }
+    if args.angles < 8 {
+        bail!("--angles {}: need at least 8", args.angles);
+    }
+    if let Some(t) = args.tile
+        && t < 8
+    {
+        bail!("--tile {t}: need at least 8 pixels");
+    }
+    if let Some(c) = args.crop
+        && c < 16
+    {
+        bail!("--crop {c}: need at least 16 pixels");
+    }
+    if !(1..=16).contains(&args.upsample) {
+        bail!("--upsample {}: must lie in 1..=16", args.upsample);
+    }
+    Ok(())
+}
+
+/// Runs `lustre judge`.
+pub fn run(args: JudgeArgs) -> anyhow::Result<()> {
+    check_args(&args)?;
+    let start = Instant::now();
+    let fresnel_name = match &args.metal {
+        None => "none".to_string(),
+        Some(m) if m.eq_ignore_ascii_case("none") => "none".to_string(),
+        Some(m) => Metal::from_name(m)
+            .map(|x| x.name().to_string())
+            .ok_or_else(|| {
+                anyhow!(
+                    "--metal {m}: unknown; use cu, au, ag, al, fe, cr, brass or stainless_steel"
+                )
+            })?,
+    };
+    let fresnel = fresnel_of(&fresnel_name)?;
+    let bytes = std::fs::read(&args.scan)
+        .with_context(|| format!("cannot read {}", args.scan.display()))?;
+    let topo = fit::io::read_bytes(
+        &args.scan.display().to_string(),
+        &bytes,
+        &read_options(&args.read)?,
+    )?;
+    let opts = Options {
+        cutoff_multiples: Vec::new(),
+        level: crate::cmd_fit::level_of(&args.read),
+        ..Options::default()
+    };
+    let analysis = pipeline::analyse(topo, None, &opts)
+        .with_context(|| format!("{}: analysing the scan", args.scan.display()))?;
+    let profile = analysis.scan.is_profile();
+    eprintln!(
+        "judge: {} — {} × {} points, pixel {:.4} µm, Sq {:.4} µm, rms slope {:.4} ({:.1} s)",
+        args.scan.display(),
+        analysis.scan.nx,
+        analysis.scan.ny,
+        analysis.scan.dx * 1e6,
+        analysis.stats.sq * 1e6,
+        analysis.stats.rms_slope(),
+        start.elapsed().as_secs_f64()
+    );
+
+    // Two-scale splits at the requested cutoffs and the search grid.
+    let mut multiples: Vec<f64> = args.cutoff.clone();
+    for m in CUTOFF_SEARCH {
+        if !multiples.contains(&m) {
+            multiples.push(m);
+        }
+    }
+    let range = analysis.kc.range;
+    let splits: Vec<(f64, Result<Split, String>)> = multiples
+        .iter()
+        .map(|&m| {
+            (
+                m,
+                fit::two_scale::split(
+                    &analysis.scan,
+                    &analysis.fit_psd,
+                    m,
+                    REFERENCE_LAMBDA_NM * 1e-9,
+                    (range.0 * (1.0 - 1e-9), range.1 * (1.0 + 1e-9)),
+                )
+                .map_err(|e| e.to_string()),
+            )
+        })
+        .collect();
+    let mut geometry = Vec::new();
+    for &l in &args.lambda {
+        for &t in &args.theta_i {
+            geometry.push((brdf::paper::wavenumber(l), t.to_radians().cos()));
+        }
+    }
+    let fitted = Fitted {
+        analysis: &analysis,
+        splits,
+        fresnel: fresnel_name.clone(),
+        geometry,
+    };
+
+    // The explicit reference (and its Gaussian surrogate).
+    let tiles = TileOptions {
+        size: args.tile,
+        ..TileOptions::default()
+    };
+    let base = match args.crop {
+        Some(c) => fit::resample::crop_center(&analysis.scan, c, if profile { 1 } else { c }),
+        None => analysis.scan.clone(),
+    };
+    let explicit = ExplicitBrdf::new(&fit::resample::upsample(&base, args.upsample)?, &tiles)?;
+    let surrogate = if args.no_surrogate {
+        None
+    } else {
+        let s = fit::surrogate::gaussian_surrogate(&base, 0x5eed)?;
+        Some(ExplicitBrdf::new(
+            &fit::resample::upsample(&s, args.upsample)?,
+            &tiles,
+        )?)
+    };
+    let mut sets = Vec::new();
+    for &theta_i in &args.theta_i {
+        for &lambda_nm in &args.lambda {
+            sets.push(angle_set(
+                &explicit,
+                surrogate.as_ref(),
+                &fresnel,
+                theta_i,
+                lambda_nm,
+                args.angles,
+            ));
+        }
+    }
+    eprintln!(
+        "judge: explicit BRDF at {} directions × {} (θi, λ), {} tiles of {}×{} px ({:.1} s)",
+        sets.first().map_or(0, |s| s.points.len()),
+        sets.len(),
+        explicit.tiles(),
+        explicit.tile_pixels().0,
+        explicit.tile_pixels().1,
+        start.elapsed().as_secs_f64()
+    );
+
+    // Models.
+    let nodes = explicit.kernel_nodes(KERNEL_NODES, KERNEL_REACH);
+    let mut judged = Vec::new();
+    let mut skipped: Vec<(String, String)> = Vec::new();
+    for r in &RECIPES {
+        for b in (r.make)(&fitted, &args.cutoff)
+            .into_iter()
+            .map(|b| b.and_then(|c| energy_check(c, &args)))
+        {
+            match b {
+                Ok(c) => judged.push(judge(c, &sets, &nodes, profile)),
+                Err((label, reason)) => skipped.push((format!("{label} [{}]", r.model), reason)),
+            }
+        }
+    }
+    // The two-scale cutoff that fits best, over the search grid.
+    let mut best: Option<Judged> = None;
+    for &m in &multiples {
+        if let Ok(c) = two_scale_candidate(&fitted, m).and_then(|c| energy_check(c, &args)) {
+            let j = judge(c, &sets, &nodes, profile);
+            let better = match &best {
+                None => j.overall.n > 0,
+                Some(b) => j.overall.rms() < b.overall.rms(),
+            };
+            if better {
+                best = Some(j);
+            }
+        }
+    }
+    if let Some(mut b) = best {
+        let m = b.c.params.get("cutoff_multiple").and_then(Value::as_f64);
+        b.c.key = "two_scale_best".into();
+        b.c.label = format!(
+            "two-scale, best cutoff {}λ (β {})",
+            m.unwrap_or(f64::NAN),
+            brdf::paper::short(
+                b.c.params
+                    .get("beta")
+                    .and_then(Value::as_f64)
+                    .unwrap_or(f64::NAN)
+            )
+        );
+        judged.push(b);
+    } else {
+        skipped.push((
+            "two-scale, best cutoff".into(),
+            "no cutoff could be fitted".into(),
+        ));
+    }
+    judged.sort_by(|a, b| {
+        let (x, y) = (a.overall.rms(), b.overall.rms());
+        x.is_nan().cmp(&y.is_nan()).then(x.total_cmp(&y))
+    });
+    eprintln!(
+        "judge: {} models judged, {} skipped ({:.1} s)",
+        judged.len(),
+        skipped.len(),
+        start.elapsed().as_secs_f64()
+    );
+
+    let reference = match &args.reference {
+        Some(p) => Some(judge_reference(p, &judged, &explicit, &fresnel)?),
+        None => None,
+    };
+    let report = Report {
+        args: &args,
+        analysis: &analysis,
+        explicit: &explicit,
+        sets: &sets,
+        judged: &judged,
+        skipped: &skipped,
+        reference: reference.as_ref(),
+        fresnel: &fresnel_name,
+    };
+    std::fs::create_dir_all(&args.out)
+        .with_context(|| format!("creating output directory {}", args.out.display()))?;
+    let json_text = serde_json::to_string_pretty(&report.json())?;
+    plot::write_atomic(&args.out.join("judge.json"), json_text.as_bytes())?;
+    let table = report.markdown();
+    plot::write_atomic(&args.out.join("judge_table.md"), table.as_bytes())?;
+    plot::write_atomic(&args.out.join("judge_points.csv"), report.csv().as_bytes())?;
+    if !args.no_plots {
+        report.plots(&args.out)?;
+    }
+    if args.json {
+        println!("{json_text}");
+    } else {
+        print!("{table}");
+    }
+    eprintln!(
+        "judge: wrote {} ({:.1} s)",
+        args.out.display(),
+        start.elapsed().as_secs_f64()
+    );
+    Ok(())
+}
