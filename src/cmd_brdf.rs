@@ -4,16 +4,21 @@
 //! writes one JSON line per query on stdout, in order:
 //!
 //! ```text
-//! {"model": "ggx"|"beckmann"|"ghs_ssa"|"ghs"|"two_scale",
-//!  "lambda_nm": 550, "theta_i_deg": 30, "theta_o_deg": 30, "phi_o_deg": 180,
-//!  "alpha": 0.1,                                  (ggx, beckmann)
-//!  "sigma_um": 0.1, "lc_um": 5, "gamma": 2.5,     (ghs_ssa, ghs, two_scale)
-//!  "energy": "raw"|"krywonos"|"sigma_rel",        (ghs_ssa, ghs; default raw)
-//!  "beta": 0.1,                                   (two_scale: exponential NDF scale)
-//!  "coherent": "macro_ndf"|"delta",               (two_scale; default macro_ndf)
-//!  "fresnel": "none"|<metal>, "metal": <metal>}
+//! {"lambda_nm": 550, "theta_i_deg": 30, "theta_o_deg": 30, "phi_o_deg": 180,
+//!  <material keys>}
 //! → {"f": <glossy BRDF, sr⁻¹>, "specular_weight": <delta weight>, "pdf": <sampling pdf of o, sr⁻¹>}
 //! ```
+//!
+//! The material keys are those of a scene's `[materials.NAME]` table and of
+//! a `lustre fit` material file (`brdf::spec::MaterialDesc`): every model
+//! (`ggx`, `beckmann`, `smooth`, `ghs_ssa`, `ghs`, `measured_psd`,
+//! `two_scale`) with its parameters (`alpha` or `alpha_x`/`alpha_y`,
+//! `alpha_beckmann`, `sigma_um`, `lc_um`, `gamma`, `energy`,
+//! `fresnel_angle`, `psd_csv`, `beta`, `coherent`) and one of `metal`,
+//! `nk = [n, k]`, `nk_csv` or `"fresnel": "one"`. `psd_csv` and `nk_csv` are
+//! read relative to the working directory. As a shorthand kept from the
+//! first version of this stream, `"fresnel": "none"` means R ≡ 1 and
+//! `"fresnel": <metal>` means `"metal": <metal>`.
 //!
 //! Geometry follows physics.md §1: i = (sinθi, 0, cosθi) at azimuth 0,
 //! o = (sinθo cosφo, sinθo sinφo, cosθo), so the mirror direction is
@@ -39,11 +44,11 @@ mod cache;
 
 use std::io::{BufRead, BufWriter, Write};
 
+use brdf::spec::{FileLoader, MaterialDesc, MaterialSpec, ModelKind, ModelSpec, SpecError};
 use brdf::wave::ghs::{hemisphere_g_max, hemisphere_u_max};
 use brdf::wave::ghs_table::TableResolution as GhsResolution;
-use brdf::wave::two_scale::{CoherentPart, TableResolution, TwoScale, TwoScaleParams};
-use brdf::wave::{Energy, GhsFull, GhsOptions, GhsSsa, KcPsd, RadialPsd};
-use brdf::{BrdfError, Bxdf, DVec3, Distribution, Fresnel, Ior, Metal, MicrofacetConductor};
+use brdf::wave::{GhsFull, RadialPsd};
+use brdf::{Bxdf, DVec3, Metal};
 pub use cache::ModelCache;
 use serde::Deserialize;
 use serde_json::{Map, Value, json};
@@ -179,64 +184,188 @@ fn line_text(bytes: &[u8], too_long: bool) -> Result<&str, QueryError> {
     })
 }
 
-/// Every key a query may have. Unknown keys are refused (serde lists these
-/// names in the message); values stay untyped here so that each can be
-/// checked with an error naming its key.
-#[derive(Deserialize, Default, Debug)]
-#[serde(deny_unknown_fields)]
-pub(crate) struct QueryFields {
-    model: Option<Value>,
-    lambda_nm: Option<Value>,
-    theta_i_deg: Option<Value>,
-    theta_o_deg: Option<Value>,
-    phi_o_deg: Option<Value>,
-    alpha: Option<Value>,
-    sigma_um: Option<Value>,
-    lc_um: Option<Value>,
-    gamma: Option<Value>,
-    energy: Option<Value>,
-    beta: Option<Value>,
-    coherent: Option<Value>,
-    fresnel: Option<Value>,
-    metal: Option<Value>,
-}
+/// The geometry keys of a query; every other key is a material key.
+const GEOMETRY: [&str; 4] = ["lambda_nm", "theta_i_deg", "theta_o_deg", "phi_o_deg"];
 
-impl QueryFields {
-    /// Parses one query line; unknown and repeated keys are errors naming the key.
-    fn parse(line: &str) -> Result<QueryFields, QueryError> {
-        // Syntax first (without building anything), so that a truncated
-        // line is reported as such and not by the first key serde meets.
-        if let Err(e) = serde_json::from_str::<serde::de::IgnoredAny>(line) {
-            return Err(QueryError::new("line", format!("not valid JSON: {e}")));
-        }
-        if !line.trim_start().starts_with('{') {
-            return Err(QueryError::new("line", "a query must be a JSON object"));
-        }
-        serde_json::from_str(line).map_err(field_error)
-    }
+/// A JSON object whose repeated keys are an error (a map would keep the
+/// last value silently).
+struct Object(Map<String, Value>);
 
-    /// The fields of a JSON object (as `plot` and `compare` build them).
-    pub(crate) fn from_map(q: &Map<String, Value>) -> Result<QueryFields, QueryError> {
-        QueryFields::deserialize(&Value::Object(q.clone())).map_err(field_error)
+impl<'de> Deserialize<'de> for Object {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Object, D::Error> {
+        struct V;
+        impl<'de> serde::de::Visitor<'de> for V {
+            type Value = Object;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str("a JSON object")
+            }
+            fn visit_map<A: serde::de::MapAccess<'de>>(self, mut m: A) -> Result<Object, A::Error> {
+                let mut out = Map::new();
+                while let Some(k) = m.next_key::<String>()? {
+                    if out.contains_key(&k) {
+                        return Err(serde::de::Error::custom(format!("duplicate key `{k}`")));
+                    }
+                    let v: Value = m.next_value()?;
+                    out.insert(k, v);
+                }
+                Ok(Object(out))
+            }
+        }
+        d.deserialize_map(V)
     }
 }
 
-/// A serde error about a query: unknown or repeated keys name the key.
-fn field_error(e: serde_json::Error) -> QueryError {
-    let msg = e.to_string();
-    let key = ["unknown field `", "duplicate field `"]
+/// Parses one query line into its keys; repeated keys are errors naming the key.
+fn parse_line(line: &str) -> Result<Map<String, Value>, QueryError> {
+    // Syntax first (without building anything), so that a truncated
+    // line is reported as such and not by the first key serde meets.
+    if let Err(e) = serde_json::from_str::<serde::de::IgnoredAny>(line) {
+        return Err(QueryError::new("line", format!("not valid JSON: {e}")));
+    }
+    if !line.trim_start().starts_with('{') {
+        return Err(QueryError::new("line", "a query must be a JSON object"));
+    }
+    match serde_json::from_str::<Object>(line) {
+        Ok(o) => Ok(o.0),
+        Err(e) => {
+            let msg = e.to_string();
+            match msg
+                .strip_prefix("duplicate key `")
+                .and_then(|rest| rest.split('`').next())
+            {
+                Some(k) => Err(QueryError::new(k, msg.clone())),
+                None => Err(QueryError::new("line", format!("not valid JSON: {msg}"))),
+            }
+        }
+    }
+}
+
+/// Reads the files a query names (`nk_csv`, `psd_csv`), relative to the
+/// working directory.
+struct EvalFiles;
+
+/// Largest CSV a query may name.
+const MAX_CSV_BYTES: u64 = 64 << 20;
+
+fn read_csv(path: &str, columns: usize) -> Result<Vec<Vec<f64>>, String> {
+    let len = std::fs::metadata(path)
+        .map_err(|e| format!("cannot read {path}: {e}"))?
+        .len();
+    if len > MAX_CSV_BYTES {
+        return Err(format!(
+            "{path}: {len} bytes is more than the {} MiB a table may have",
+            MAX_CSV_BYTES >> 20
+        ));
+    }
+    let text = std::fs::read_to_string(path).map_err(|e| format!("cannot read {path}: {e}"))?;
+    render::spectrum::parse_csv_rows(&text, columns).map_err(|e| format!("{path}: {e}"))
+}
+
+impl FileLoader for EvalFiles {
+    fn nk_table(&mut self, path: &str) -> Result<Vec<[f64; 3]>, String> {
+        Ok(read_csv(path, 3)?
+            .into_iter()
+            .map(|r| [r[0], r[1], r[2]])
+            .collect())
+    }
+    fn psd_table(&mut self, path: &str) -> Result<(Vec<f64>, Vec<f64>), String> {
+        Ok(read_csv(path, 2)?.into_iter().map(|r| (r[0], r[1])).unzip())
+    }
+}
+
+/// Names of the metals, for messages.
+fn metal_names() -> String {
+    Metal::ALL
         .iter()
-        .find_map(|p| msg.strip_prefix(p))
-        .and_then(|rest| rest.split('`').next());
-    match key {
-        Some(k) if e.is_data() => QueryError::new(k, msg.replace("field", "key")),
-        _ => QueryError::new("line", format!("not valid JSON: {msg}")),
+        .map(|m| m.name())
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+/// The typed material of a query's material keys (the geometry keys
+/// removed), validated by `brdf::spec` exactly as a scene material is.
+pub(crate) fn material_spec(keys: &Map<String, Value>) -> Result<MaterialSpec, QueryError> {
+    let mut q = keys.clone();
+    // The stream's shorthand: `"fresnel": <metal>` for `"metal": <metal>`.
+    if let Some(Value::String(f)) = q.get("fresnel").cloned()
+        && !["none", "one", "conductor"].contains(&f.as_str())
+    {
+        if Metal::from_name(&f).is_none() {
+            return Err(QueryError::new(
+                "fresnel",
+                format!(
+                    "unknown metal {f:?}; use \"none\" (R = 1) or one of {}",
+                    metal_names()
+                ),
+            ));
+        }
+        if q.contains_key("metal") {
+            return Err(QueryError::new(
+                "fresnel",
+                "give the metal once, as `fresnel` or as `metal`",
+            ));
+        }
+        q.remove("fresnel");
+        q.insert("metal".into(), Value::String(f));
     }
+    if !["fresnel", "metal", "nk", "nk_csv"]
+        .iter()
+        .any(|k| q.contains_key(*k))
+    {
+        return Err(QueryError::new(
+            "fresnel",
+            format!(
+                "missing `fresnel`: give \"none\" (R = 1) or a metal name ({}), \
+                 or `metal`, `nk` = [n, k] or `nk_csv`",
+                metal_names()
+            ),
+        ));
+    }
+    let desc = MaterialDesc::deserialize(&Value::Object(q.clone())).map_err(|e| {
+        let msg = e.to_string();
+        if let Some(k) = msg
+            .strip_prefix("unknown field `")
+            .and_then(|rest| rest.split('`').next())
+        {
+            return QueryError::new(
+                k,
+                format!(
+                    "{}; and the geometry keys {}",
+                    msg.replace("field", "key"),
+                    GEOMETRY.join(", ")
+                ),
+            );
+        }
+        // Which key: the first that fails alone (every key is optional).
+        let field = q
+            .iter()
+            .find(|(k, v)| {
+                let one: Map<String, Value> = [((*k).clone(), (*v).clone())].into_iter().collect();
+                MaterialDesc::deserialize(&Value::Object(one)).is_err()
+            })
+            .map_or("line".to_string(), |(k, _)| k.clone());
+        QueryError::new(field.clone(), format!("`{field}`: {msg}"))
+    })?;
+    if desc.include.is_some() {
+        return Err(QueryError::new(
+            "include",
+            "`include` is for scene files; give the material's parameters in the query",
+        ));
+    }
+    desc.into_spec(&mut EvalFiles).map_err(|e| {
+        // A query's isotropic `alpha` is checked as α_x = α_y.
+        let field = if e.field.starts_with("alpha") && q.contains_key("alpha") {
+            "alpha"
+        } else {
+            e.field
+        };
+        QueryError::new(field, e.message)
+    })
 }
 
 fn answer(line: &str, cache: &mut ModelCache) -> Result<Value, QueryError> {
-    let q = QueryFields::parse(line)?;
-    let lambda_nm = number(&q.lambda_nm, "lambda_nm")?;
+    let mut q = parse_line(line)?;
+    let lambda_nm = number(q.get("lambda_nm"), "lambda_nm")?;
     // `number` already rejected NaN and infinities.
     if lambda_nm <= 0.0 {
         return Err(QueryError::new(
@@ -251,15 +380,23 @@ fn answer(line: &str, cache: &mut ModelCache) -> Result<Value, QueryError> {
             format!("{lambda_nm} nm is outside the supported range {lo}–{hi} nm"),
         ));
     }
-    let theta_i = angle(&q.theta_i_deg, "theta_i_deg", 0.0, 90.0)?;
-    let theta_o = angle(&q.theta_o_deg, "theta_o_deg", 0.0, 90.0)?;
-    let phi_o = angle(&q.phi_o_deg, "phi_o_deg", -360.0, 360.0)?;
-    let spec = QueryModel::parse(&q)?;
-    let key = spec.key();
+    let theta_i = angle(q.get("theta_i_deg"), "theta_i_deg", 0.0, 90.0)?;
+    let theta_o = angle(q.get("theta_o_deg"), "theta_o_deg", 0.0, 90.0)?;
+    let phi_o = angle(q.get("phi_o_deg"), "phi_o_deg", -360.0, 360.0)?;
+    for k in GEOMETRY {
+        q.remove(k);
+    }
+    if !q.contains_key("model") {
+        return Err(QueryError::new(
+            "model",
+            format!("missing `model`: one of {}", ModelKind::names()),
+        ));
+    }
+    let spec = material_spec(&q)?;
+    // Every parameter the built model depends on (f64 Debug round-trips).
+    let key = format!("{spec:?}");
     if cache.models.get(&key).is_none() {
-        let model = spec
-            .build(Some(cache))
-            .map_err(|e| brdf_error(e, "model"))?;
+        let model = build(&spec, cache)?;
         cache.model_builds += 1;
         cache.models.insert(key.clone(), model, 1);
     }
@@ -272,6 +409,32 @@ fn answer(line: &str, cache: &mut ModelCache) -> Result<Value, QueryError> {
     let pdf = model.pdf(wi, wo, lambda_nm);
     let spec = model.specular(wi, lambda_nm).weight;
     Ok(json!({"f": f, "specular_weight": spec, "pdf": pdf}))
+}
+
+/// Builds a model, taking a full-GHS S̃ table from `cache` (it is built
+/// exactly as [`GhsFull::with_options`] builds it, so the model is the
+/// same either way: the table depends on γ and the ranges σ and Lc set,
+/// not on the metal, the energy option or the wavelength).
+fn build(spec: &MaterialSpec, cache: &mut ModelCache) -> Result<Box<dyn Bxdf>, QueryError> {
+    let err = |e: SpecError| QueryError::new(e.field, e.message);
+    match &spec.model {
+        ModelSpec::Ghs { surface, options } => {
+            let psd = surface.psd().map_err(|e| err(e.into()))?;
+            let fresnel = spec.fresnel.build().map_err(|e| err(e.into()))?;
+            let u_max = hemisphere_u_max(psd.length_um());
+            let g_max = hemisphere_g_max(psd.sigma_um());
+            let key = (psd.gamma().to_bits(), u_max.to_bits(), g_max.to_bits());
+            let table = cache
+                .table(key, || {
+                    psd.build_table(u_max, g_max, GhsResolution::default())
+                })
+                .map_err(|e| err(e.into()))?;
+            Ok(Box::new(
+                GhsFull::with_table(psd, fresnel, *options, table).map_err(|e| err(e.into()))?,
+            ))
+        }
+        _ => Ok(spec.build().map_err(err)?),
+    }
 }
 
 /// (sin, cos) of an angle in degrees, exact at multiples of 90°: the
@@ -304,7 +467,7 @@ fn direction(theta_deg: f64, phi_deg: f64) -> DVec3 {
     DVec3::new(st * cp, st * sp, ct)
 }
 
-fn number(v: &Option<Value>, field: &'static str) -> Result<f64, QueryError> {
+fn number(v: Option<&Value>, field: &'static str) -> Result<f64, QueryError> {
     match v {
         None | Some(Value::Null) => Err(QueryError::new(field, format!("missing `{field}`"))),
         Some(v) => v.as_f64().filter(|x| x.is_finite()).ok_or_else(|| {
@@ -313,7 +476,7 @@ fn number(v: &Option<Value>, field: &'static str) -> Result<f64, QueryError> {
     }
 }
 
-fn angle(v: &Option<Value>, field: &'static str, lo: f64, hi: f64) -> Result<f64, QueryError> {
+fn angle(v: Option<&Value>, field: &'static str, lo: f64, hi: f64) -> Result<f64, QueryError> {
     let x = number(v, field)?;
     if (lo..=hi).contains(&x) {
         Ok(x)
@@ -325,281 +488,11 @@ fn angle(v: &Option<Value>, field: &'static str, lo: f64, hi: f64) -> Result<f64
     }
 }
 
-fn text<'a>(v: &'a Option<Value>, field: &'static str) -> Result<Option<&'a str>, QueryError> {
-    match v {
-        None | Some(Value::Null) => Ok(None),
-        Some(Value::String(s)) => Ok(Some(s.as_str())),
-        Some(v) => Err(QueryError::new(
-            field,
-            format!("`{field}` must be a string, got {v}"),
-        )),
-    }
-}
-
-/// Maps a library error to the query field the user has to change.
-fn brdf_error(e: BrdfError, fallback: &'static str) -> QueryError {
-    let field = match &e {
-        // The query has one isotropic `alpha`.
-        BrdfError::OutOfRange { name, .. } if name.starts_with("alpha") => "alpha",
-        BrdfError::OutOfRange { name, .. } => name,
-        BrdfError::WavelengthOutOfRange { .. } => "lambda_nm",
-        _ => fallback,
-    };
-    QueryError::new(field, e.to_string())
-}
-
-/// The Fresnel choice of a query: its canonical name and the term.
-#[derive(Clone, Debug)]
-struct FresnelChoice {
-    name: String,
-    fresnel: Fresnel,
-}
-
-fn fresnel(q: &QueryFields) -> Result<FresnelChoice, QueryError> {
-    let (field, name) = match (text(&q.fresnel, "fresnel")?, text(&q.metal, "metal")?) {
-        (Some(f), _) => ("fresnel", f),
-        (None, Some(m)) => ("metal", m),
-        (None, None) => {
-            return Err(QueryError::new(
-                "fresnel",
-                "missing `fresnel`: give \"none\" (R = 1) or a metal name (cu, au, ag, al, fe, cr, brass, stainless_steel), or a `metal` field",
-            ));
-        }
-    };
-    if name.eq_ignore_ascii_case("none") {
-        return Ok(FresnelChoice {
-            name: "none".into(),
-            fresnel: Fresnel::One,
-        });
-    }
-    let metal = Metal::from_name(name).ok_or_else(|| {
-        QueryError::new(
-            field,
-            format!("unknown metal {name:?}; use \"none\" or one of cu, au, ag, al, fe, cr, brass, stainless_steel"),
-        )
-    })?;
-    Ok(FresnelChoice {
-        name: metal.name().into(),
-        fresnel: Fresnel::conductor(Ior::metal(metal)),
-    })
-}
-
-/// The model a query names, validated, before anything is built.
-#[derive(Clone, Debug)]
-enum QueryModel {
-    /// GGX (`ggx`) or Beckmann.
-    Microfacet {
-        ggx: bool,
-        alpha: f64,
-        fresnel: FresnelChoice,
-    },
-    /// GHS SSA or full GHS (`full`) on a KC surface.
-    Ghs {
-        full: bool,
-        psd: KcPsd,
-        energy: Energy,
-        fresnel: FresnelChoice,
-    },
-    /// Two-scale.
-    TwoScale {
-        psd: KcPsd,
-        beta: f64,
-        coherent: CoherentPart,
-        fresnel: FresnelChoice,
-    },
-}
-
-/// Bit patterns make keys exact: equal parameters share a model.
-fn bits(x: f64) -> String {
-    format!("{:016x}", x.to_bits())
-}
-
-impl QueryModel {
-    fn parse(q: &QueryFields) -> Result<QueryModel, QueryError> {
-        let model = text(&q.model, "model")?.ok_or_else(|| {
-            QueryError::new(
-                "model",
-                "missing `model`: one of ggx, beckmann, ghs_ssa, ghs, two_scale",
-            )
-        })?;
-        let fresnel = fresnel(q)?;
-        match model {
-            "ggx" | "beckmann" => Ok(QueryModel::Microfacet {
-                ggx: model == "ggx",
-                alpha: number(&q.alpha, "alpha")?,
-                fresnel,
-            }),
-            "ghs_ssa" | "ghs" => {
-                let psd = kc(q)?;
-                let energy = match text(&q.energy, "energy")?.unwrap_or("raw") {
-                    "raw" => Energy::Raw,
-                    "krywonos" => Energy::Krywonos,
-                    "sigma_rel" => Energy::SigmaRel,
-                    other => {
-                        return Err(QueryError::new(
-                            "energy",
-                            format!(
-                                "unknown energy option {other:?}; use raw, krywonos or sigma_rel"
-                            ),
-                        ));
-                    }
-                };
-                Ok(QueryModel::Ghs {
-                    full: model == "ghs",
-                    psd,
-                    energy,
-                    fresnel,
-                })
-            }
-            "two_scale" => {
-                let psd = kc(q)?;
-                let beta = number(&q.beta, "beta")?;
-                let coherent = match text(&q.coherent, "coherent")?.unwrap_or("macro_ndf") {
-                    "macro_ndf" => CoherentPart::MacroNdf,
-                    "delta" => CoherentPart::Delta,
-                    other => {
-                        return Err(QueryError::new(
-                            "coherent",
-                            format!("unknown coherent option {other:?}; use macro_ndf or delta"),
-                        ));
-                    }
-                };
-                Ok(QueryModel::TwoScale {
-                    psd,
-                    beta,
-                    coherent,
-                    fresnel,
-                })
-            }
-            other => Err(QueryError::new(
-                "model",
-                format!("unknown model {other:?}; use ggx, beckmann, ghs_ssa, ghs or two_scale"),
-            )),
-        }
-    }
-
-    /// The model cache key: every parameter the built model depends on.
-    fn key(&self) -> String {
-        match self {
-            QueryModel::Microfacet {
-                ggx,
-                alpha,
-                fresnel,
-            } => format!(
-                "{}/{}/{}",
-                if *ggx { "ggx" } else { "beckmann" },
-                bits(*alpha),
-                fresnel.name
-            ),
-            QueryModel::Ghs {
-                full,
-                psd,
-                energy,
-                fresnel,
-            } => format!(
-                "{}/{}/{}/{}/{energy:?}/{}",
-                if *full { "ghs" } else { "ghs_ssa" },
-                bits(psd.sigma_um()),
-                bits(psd.lc_um()),
-                bits(psd.gamma()),
-                fresnel.name
-            ),
-            QueryModel::TwoScale {
-                psd,
-                beta,
-                coherent,
-                fresnel,
-            } => format!(
-                "two_scale/{}/{}/{}/{}/{coherent:?}/{}",
-                bits(*beta),
-                bits(psd.sigma_um()),
-                bits(psd.lc_um()),
-                bits(psd.gamma()),
-                fresnel.name
-            ),
-        }
-    }
-
-    /// Builds the model, taking a full-GHS S̃ table from `cache` when given
-    /// (it is built exactly as [`GhsFull::with_options`] builds it, so the
-    /// model is the same either way).
-    fn build(&self, cache: Option<&mut ModelCache>) -> Result<Box<dyn Bxdf>, BrdfError> {
-        Ok(match self.clone() {
-            QueryModel::Microfacet {
-                ggx,
-                alpha,
-                fresnel,
-            } => {
-                let d = if ggx {
-                    Distribution::ggx(alpha, alpha)?
-                } else {
-                    Distribution::beckmann(alpha, alpha)?
-                };
-                Box::new(MicrofacetConductor::new(d, fresnel.fresnel)?)
-            }
-            QueryModel::Ghs {
-                full,
-                psd,
-                energy,
-                fresnel,
-            } => {
-                let opts = GhsOptions {
-                    energy,
-                    ..GhsOptions::default()
-                };
-                match (full, cache) {
-                    (false, _) => Box::new(GhsSsa::with_options(psd, fresnel.fresnel, opts)?),
-                    (true, None) => Box::new(GhsFull::with_options(psd, fresnel.fresnel, opts)?),
-                    (true, Some(cache)) => {
-                        let u_max = hemisphere_u_max(psd.length_um());
-                        let g_max = hemisphere_g_max(psd.sigma_um());
-                        let key = (psd.gamma().to_bits(), u_max.to_bits(), g_max.to_bits());
-                        let table = cache.table(key, || {
-                            psd.build_table(u_max, g_max, GhsResolution::default())
-                        })?;
-                        Box::new(GhsFull::with_table(psd, fresnel.fresnel, opts, table)?)
-                    }
-                }
-            }
-            QueryModel::TwoScale {
-                psd,
-                beta,
-                coherent,
-                fresnel,
-            } => Box::new(TwoScale::new(TwoScaleParams {
-                beta,
-                sigma_um: psd.sigma_um(),
-                lc_um: psd.lc_um(),
-                gamma: psd.gamma(),
-                fresnel: fresnel.fresnel,
-                coherent,
-                resolution: TableResolution::default(),
-            })?),
-        })
-    }
-}
-
-pub(crate) type Builder = Box<dyn FnOnce() -> Result<Box<dyn Bxdf>, BrdfError>>;
-
-/// The cache key and a builder for the model a set of query fields names
-/// (`plot` and `compare` build their models through this).
-pub(crate) fn model_spec(q: &Map<String, Value>) -> Result<(String, Builder), QueryError> {
-    let spec = QueryModel::parse(&QueryFields::from_map(q)?)?;
-    let key = spec.key();
-    Ok((key, Box::new(move || spec.build(None))))
-}
-
-/// The KC surface of a query, validated (errors name sigma_um, lc_um or gamma).
-fn kc(q: &QueryFields) -> Result<KcPsd, QueryError> {
-    let sigma = number(&q.sigma_um, "sigma_um")?;
-    let lc = number(&q.lc_um, "lc_um")?;
-    let gamma = number(&q.gamma, "gamma")?;
-    KcPsd::new(sigma, lc, gamma).map_err(|e| brdf_error(e, "sigma_um"))
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use brdf::Fresnel;
+    use brdf::wave::{GhsOptions, KcPsd};
 
     fn query(model: &str, extra: &str, metal: &str, ti: f64, to: f64, phi: f64) -> String {
         format!(

@@ -397,6 +397,8 @@ fn material(args: MaterialArgs) -> anyhow::Result<()> {
         notes: &topo.notes,
     };
     let doc = fit::material::build(&analysis, &prov);
+    // Every model the file offers must build as a scene `include` of it would.
+    fit::material::renderer_materials(&doc)?;
     fit::material::write_atomic(&args.output, &fit::material::to_toml(&doc)?)?;
     let m = &doc.material;
     eprintln!(

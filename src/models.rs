@@ -196,8 +196,8 @@ pub struct JsonModel {
 impl JsonModel {
     /// Builds the model through `brdf eval`'s builder.
     pub fn build(&self) -> anyhow::Result<Box<dyn brdf::Bxdf>> {
-        let (_, build) = crate::cmd_brdf::model_spec(&self.fields)
+        let spec = crate::cmd_brdf::material_spec(&self.fields)
             .map_err(|e| anyhow!("{}: field `{}`: {}", self.label, e.field, e.message))?;
-        build().map_err(|e| anyhow!("{}: {e}", self.label))
+        Ok(spec.build().map_err(|e| anyhow!("{}: {e}", self.label))?)
     }
 }

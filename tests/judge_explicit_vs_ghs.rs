@@ -11,6 +11,8 @@
 //! annuli of |ζ| (ratio explicit/reference per bin, averaged over bins and realisations);
 //! the band is 3 standard errors of that mean. Fixed seeds.
 
+use brdf::wave::ghs_table::{GhsTable, TableResolution};
+use brdf::wave::matern::Matern;
 use brdf::wave::{GhsFull, KcPsd};
 use brdf::{Bxdf, DVec3, Fresnel};
 use fit::explicit_brdf::{ExplicitBrdf, TileOptions};
@@ -92,15 +94,28 @@ fn run_case(gamma: f64, g: f64, seed: u64) -> Vec<Annulus> {
         gamma,
     };
     let synth = PointSampledKc::new(n, n, dx, params);
-    let kc = KcPsd::new(1.0, lc, gamma).unwrap();
-    let ghs = GhsFull::new(kc, Fresnel::One).unwrap();
+    // S̃ in the dimensionless u = Lc·ζ from the library's table, built over the aliased
+    // range this grid reaches: the maps are in pixel units, and Lc here (up to ~4e4 pixels
+    // for γ 1.5 at g 100) is outside the µm range `KcPsd` accepts for rendering.
+    let table = GhsTable::build(
+        &Matern::new((gamma - 1.0) / 2.0),
+        lc * z_alias * (RINGS as f64 + 1.0) * std::f64::consts::SQRT_2,
+        TableResolution::default(),
+    )
+    .unwrap();
+    let s_tilde = |u: f64, g: f64| table.s_tilde(u, g).unwrap_or(0.0);
+    // The unit-σ KC PSD at ζ = u/Lc.
+    let unit_psd = |u: f64| {
+        lc * lc * (gamma - 1.0) / (2.0 * std::f64::consts::PI)
+            * (1.0 + u * u).powf(-(gamma + 1.0) / 2.0)
+    };
     let q = g.sqrt();
     // Aliases beyond the summed rings: the kernel's tail g·p₁ (u ≫ W) outside the disk with the
     // area of the summed square, spread over one alias cell.
     let nu = (gamma - 1.0) / 2.0;
     let r_eq = (2 * RINGS + 1) as f64 * z_alias / std::f64::consts::PI.sqrt();
     let tail_mass = (1.0 + (lc * r_eq).powi(2)).powf(-nu) / (z_alias * z_alias);
-    let peak = lc * lc * ghs.s_tilde(0.0, g);
+    let peak = lc * lc * s_tilde(0.0, g);
     let rmax = (EDGES[EDGES.len() - 1] * s).min(0.8 * std::f64::consts::PI / dx);
     let reach = (rmax / dzeta).ceil() as isize;
     let mut bins = Vec::new();
@@ -117,11 +132,11 @@ fn run_case(gamma: f64, g: f64, seed: u64) -> Vec<Annulus> {
                     let ax = zx + mx as f64 * z_alias;
                     let ay = zy + my as f64 * z_alias;
                     let u = lc * (ax * ax + ay * ay).sqrt();
-                    ref_ghs += lc * lc * ghs.s_tilde(u, g);
-                    ref_ssa += -(-g).exp_m1() * kc.unit_psd(u / lc);
+                    ref_ghs += lc * lc * s_tilde(u, g);
+                    ref_ssa += -(-g).exp_m1() * unit_psd(u);
                 }
             }
-            if lc * lc * ghs.s_tilde(lc * r, g) < FLOOR * peak {
+            if lc * lc * s_tilde(lc * r, g) < FLOOR * peak {
                 continue;
             }
             let a = EDGES.iter().rposition(|e| r >= e * s).unwrap();

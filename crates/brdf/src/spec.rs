@@ -397,8 +397,12 @@ mod desc {
         /// A CSV `wavelength_nm,n,k` (resolved by the caller).
         #[serde(skip_serializing_if = "Option::is_none")]
         pub nk_csv: Option<String>,
-        /// A constant `[n, k]`.
-        #[serde(skip_serializing_if = "Option::is_none")]
+        /// A constant `[n, k]` (exactly two numbers).
+        #[serde(
+            default,
+            deserialize_with = "exact_nk",
+            skip_serializing_if = "Option::is_none"
+        )]
         pub nk: Option<[f64; 2]>,
         /// `conductor` (default) or `one`.
         #[serde(skip_serializing_if = "Option::is_none")]
@@ -445,6 +449,37 @@ mod desc {
         /// Which two-scale split of the included file.
         #[serde(skip_serializing_if = "Option::is_none")]
         pub cutoff: Option<String>,
+    }
+
+    /// `nk = [n, k]` from exactly two numbers: serde's array impl stops after
+    /// two and formats such as TOML do not complain about the rest, so
+    /// `nk = [0.2, 3.5, 9]` would otherwise pass as `[0.2, 3.5]`.
+    fn exact_nk<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Option<[f64; 2]>, D::Error> {
+        use serde::de::{Error, IgnoredAny, SeqAccess, Visitor};
+        struct Nk;
+        impl<'de> Visitor<'de> for Nk {
+            type Value = [f64; 2];
+            fn expecting(&self, f: &mut core::fmt::Formatter) -> core::fmt::Result {
+                f.write_str("an array of exactly two numbers [n, k]")
+            }
+            fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> Result<[f64; 2], A::Error> {
+                let n = seq
+                    .next_element()?
+                    .ok_or_else(|| A::Error::invalid_length(0, &self))?;
+                let k = seq
+                    .next_element()?
+                    .ok_or_else(|| A::Error::invalid_length(1, &self))?;
+                let mut len = 2;
+                while seq.next_element::<IgnoredAny>()?.is_some() {
+                    len += 1;
+                }
+                if len != 2 {
+                    return Err(A::Error::invalid_length(len, &self));
+                }
+                Ok([n, k])
+            }
+        }
+        d.deserialize_seq(Nk).map(Some)
     }
 
     /// Reads the files a description refers to (this crate does no I/O).

@@ -696,6 +696,76 @@ pub fn build(a: &Analysis, prov: &Provenance<'_>) -> MaterialFile {
     }
 }
 
+/// Every material the file offers, as the renderer builds it: `[material]`
+/// under each model it can name (GGX, Beckmann, GHS-SSA, GHS, the measured
+/// PSD when its table is usable, two-scale at each split), read back from the
+/// written TOML as a `brdf::spec::MaterialDesc` and resolved and built by
+/// `brdf::spec`, exactly as a scene `include` of the file would be. A file
+/// `lustre fit` writes passes this by construction; an error here is a bug in
+/// `build`, and `lustre fit` refuses to write the file.
+pub fn renderer_materials(
+    doc: &MaterialFile,
+) -> Result<Vec<(String, brdf::spec::MaterialSpec)>, FitError> {
+    use brdf::spec::{FileLoader, MaterialDesc, ModelKind};
+    struct Psd<'a>(&'a PsdTable);
+    impl FileLoader for Psd<'_> {
+        fn nk_table(&mut self, path: &str) -> Result<Vec<[f64; 3]>, String> {
+            Err(format!("a fit file names no n,k table ({path})"))
+        }
+        fn psd_table(&mut self, _: &str) -> Result<(Vec<f64>, Vec<f64>), String> {
+            Ok((self.0.zeta_rad_per_um.clone(), self.0.p_um4.clone()))
+        }
+    }
+    let bad = |what: &str, e: String| FitError::data("material file", format!("{what}: {e}"));
+    let text = to_toml(doc)?;
+    let mut table: toml::Table = text
+        .parse()
+        .map_err(|e: toml::de::Error| bad("TOML", e.to_string()))?;
+    let base: MaterialDesc = table
+        .remove("material")
+        .ok_or_else(|| bad("[material]", "missing".into()))?
+        .try_into()
+        .map_err(|e: toml::de::Error| bad("[material]", e.message().to_string()))?;
+    let mut out = Vec::new();
+    let mut build =
+        |name: String, desc: MaterialDesc, over: &MaterialDesc| -> Result<(), FitError> {
+            let spec = desc
+                .resolve(Some(over), &mut Psd(&doc.psd))
+                .map_err(|e| bad(&name, e.to_string()))?;
+            spec.build().map_err(|e| bad(&name, e.to_string()))?;
+            out.push((name, spec));
+            Ok(())
+        };
+    let with = |m: ModelKind| MaterialDesc {
+        model: Some(m),
+        ..MaterialDesc::default()
+    };
+    for m in [
+        ModelKind::Ggx,
+        ModelKind::Beckmann,
+        ModelKind::GhsSsa,
+        ModelKind::Ghs,
+    ] {
+        build(m.name().to_string(), with(m), &base)?;
+    }
+    if doc.psd.usable {
+        let mut b = base.clone();
+        b.psd_csv = Some("[psd]".into());
+        build("measured_psd".into(), with(ModelKind::MeasuredPsd), &b)?;
+    }
+    for (name, t) in &doc.two_scale.0 {
+        let b = MaterialDesc {
+            beta: Some(t.beta),
+            sigma_um: Some(t.sigma_um),
+            lc_um: Some(t.lc_um),
+            gamma: Some(t.gamma),
+            ..base.clone()
+        };
+        build(format!("two_scale {name}"), with(ModelKind::TwoScale), &b)?;
+    }
+    Ok(out)
+}
+
 /// Serialise with the header comment.
 pub fn to_toml(doc: &MaterialFile) -> Result<String, FitError> {
     let body = toml::to_string(doc).map_err(|e| FitError::data("material file", e.to_string()))?;

@@ -57,6 +57,14 @@ fn assert_renderer_accepts(doc: &material::MaterialFile, what: &str) {
             "{what}: model measured_psd with an unusable table"
         );
     }
+    // Every model of the file builds through brdf::spec, as a scene include does.
+    let built = material::renderer_materials(doc)
+        .unwrap_or_else(|e| panic!("{what}: renderer_materials: {e}"));
+    assert!(
+        built.len() >= 4 + doc.two_scale.0.len(),
+        "{what}: {} built",
+        built.len()
+    );
     // The document round-trips through TOML.
     let text = material::to_toml(doc).unwrap();
     let _: toml::Table = text.parse().unwrap();

@@ -130,8 +130,9 @@ pub fn sample_pixel(scene: &Scene, x: u32, y: u32, sample: u64) -> [f64; 3] {
 }
 
 /// XYZ estimate of one camera sample, or why it cannot be averaged: a
-/// wavelength's radiance estimate is NaN, infinite or negative. Radiance and
-/// the colour-matching functions are non-negative, so either means a model
+/// wavelength's radiance estimate is NaN, infinite, or negative in a scene
+/// whose emission spectra are all non-negative (see
+/// [`Scene::signed_radiance`](crate::Scene)). Either means a model
 /// misbehaved; the render loop counts and reports such samples instead of
 /// averaging them (one branch, never taken in a sound render).
 #[inline]
@@ -143,13 +144,11 @@ pub fn sample_pixel_checked(
 ) -> Result<[f64; 3], BadSample> {
     let cs = camera_sample(scene, x, y, sample);
     let r = &cs.radiance[..cs.n];
-    // `v < ∞` is false for NaN too.
-    if !r.iter().all(|v| (0.0..f64::INFINITY).contains(v)) {
-        return Err(if r.iter().all(|v| v.is_finite()) {
-            BadSample::Negative
-        } else {
-            BadSample::NonFinite
-        });
+    if !r.iter().all(|v| v.is_finite()) {
+        return Err(BadSample::NonFinite);
+    }
+    if !scene.signed_radiance && !r.iter().all(|v| *v >= 0.0) {
+        return Err(BadSample::Negative);
     }
     let cie = Cie::get();
     let mut xyz = [0.0; 3];

@@ -57,12 +57,6 @@ fn exact<'de, D: Deserializer<'de>, T: Deserialize<'de>, const N: usize>(
     Ok(Exact::<T, N>::deserialize(d)?.0)
 }
 
-fn exact_opt<'de, D: Deserializer<'de>, T: Deserialize<'de>, const N: usize>(
-    d: D,
-) -> Result<Option<[T; N]>, D::Error> {
-    Ok(Option::<Exact<T, N>>::deserialize(d)?.map(|e| e.0))
-}
-
 fn exact_spanned<'de, D: Deserializer<'de>, T: Deserialize<'de>, const N: usize>(
     d: D,
 ) -> Result<Spanned<[T; N]>, D::Error> {
@@ -212,127 +206,10 @@ impl Default for IntegratorDesc {
     }
 }
 
-/// The reflection model of a material.
-#[derive(Deserialize, Debug, Clone, Copy, PartialEq, Eq)]
-#[serde(rename_all = "snake_case")]
-pub enum ModelKind {
-    /// GGX microfacet conductor (`alpha` or `alpha_x`/`alpha_y`).
-    Ggx,
-    /// Beckmann microfacet conductor.
-    Beckmann,
-    /// A perfect mirror (delta reflection only).
-    Smooth,
-    /// GHS, single-scatter (SSA) approximation, KC surface.
-    GhsSsa,
-    /// Full GHS, KC surface.
-    Ghs,
-    /// Holzschuch–Pacanowski 2017 two-scale model.
-    TwoScale,
-    /// GHS with a measured (tabulated) PSD.
-    MeasuredPsd,
-}
-
-impl ModelKind {
-    /// The name used in scene files.
-    pub fn name(self) -> &'static str {
-        match self {
-            ModelKind::Ggx => "ggx",
-            ModelKind::Beckmann => "beckmann",
-            ModelKind::Smooth => "smooth",
-            ModelKind::GhsSsa => "ghs_ssa",
-            ModelKind::Ghs => "ghs",
-            ModelKind::TwoScale => "two_scale",
-            ModelKind::MeasuredPsd => "measured_psd",
-        }
-    }
-}
-
-/// What the Fresnel factor is.
-#[derive(Deserialize, Debug, Clone, Copy, PartialEq, Eq)]
-#[serde(rename_all = "snake_case")]
-pub enum FresnelKind {
-    /// Conductor Fresnel from the metal's n, k (default).
-    Conductor,
-    /// R ≡ 1 (white furnace tests).
-    One,
-}
-
-/// Energy handling of the GHS scattered lobe (docs/physics.md §5).
-#[derive(Deserialize, Debug, Clone, Copy, PartialEq, Eq)]
-#[serde(rename_all = "snake_case")]
-pub enum EnergyDesc {
-    /// The physics as written (reciprocal, not energy-normalised).
-    Raw,
-    /// Krywonos renormalisation of the scattered part.
-    Krywonos,
-    /// Band-limited relevant roughness σ_rel.
-    SigmaRel,
-}
-
-/// Which angle the Fresnel factor of the GHS scattered lobe uses (docs/physics.md §3.2).
-#[derive(Deserialize, Debug, Clone, Copy, PartialEq, Eq)]
-#[serde(rename_all = "snake_case")]
-pub enum FresnelAngleDesc {
-    /// R(i·h): reciprocal.
-    Halfway,
-    /// R(θi) everywhere.
-    Incident,
-}
-
-/// How the two-scale model treats the coherent part (docs/physics.md §8.3).
-#[derive(Deserialize, Debug, Clone, Copy, PartialEq, Eq)]
-#[serde(rename_all = "snake_case")]
-pub enum CoherentDesc {
-    /// Each microfacet mirrors its coherent part: the macro lobe is D.
-    MacroNdf,
-    /// A mirror delta of the mean plane (the paper's eq. 10).
-    Delta,
-}
-
-/// `[materials.NAME]`: a conductor. Keys given here override those of `include`.
-#[derive(Deserialize, Debug, Default, Clone)]
-#[serde(deny_unknown_fields)]
-pub struct MaterialDesc {
-    /// A material file written by `lustre fit` (relative to this scene file).
-    pub include: Option<PathBuf>,
-    /// Reflection model.
-    pub model: Option<ModelKind>,
-    /// Built-in metal by name (`stainless_steel`, `brass`, `cu`, `au`, `ag`, `al`, `fe`, `cr`).
-    pub metal: Option<String>,
-    /// n, k table: CSV `wavelength_nm,n,k` (relative to this scene file).
-    pub nk_csv: Option<PathBuf>,
-    /// Constant complex index `[n, k]`.
-    #[serde(default, deserialize_with = "exact_opt")]
-    pub nk: Option<[f64; 2]>,
-    /// `conductor` (default) or `one`.
-    pub fresnel: Option<FresnelKind>,
-    /// Isotropic microfacet roughness.
-    pub alpha: Option<f64>,
-    /// Anisotropic roughness along the surface tangent.
-    pub alpha_x: Option<f64>,
-    /// Anisotropic roughness along the bitangent.
-    pub alpha_y: Option<f64>,
-    /// Beckmann roughness (used instead of `alpha` when the model is beckmann).
-    pub alpha_beckmann: Option<f64>,
-    /// RMS height σ in µm.
-    pub sigma_um: Option<f64>,
-    /// Correlation (Matérn range) length Lc in µm.
-    pub lc_um: Option<f64>,
-    /// KC exponent γ (> 1).
-    pub gamma: Option<f64>,
-    /// Energy handling of GHS models (default raw).
-    pub energy: Option<EnergyDesc>,
-    /// Fresnel angle of the GHS scattered part: `halfway` (default) or `incident`.
-    pub fresnel_angle: Option<FresnelAngleDesc>,
-    /// Measured PSD for `measured_psd`: CSV `zeta_rad_per_um,p_um4` (relative to this file).
-    pub psd_csv: Option<PathBuf>,
-    /// Two-scale: width β of the exponential macro-scale NDF (HP17).
-    pub beta: Option<f64>,
-    /// Two-scale reading of the coherent part: `macro_ndf` (default) or `delta` (the paper's eq. 10).
-    pub coherent: Option<CoherentDesc>,
-    /// Which `[two_scale.NAME]` table of the included fit file to use.
-    pub cutoff: Option<String>,
-}
+/// `[materials.NAME]` is the flat material schema of `brdf::spec`, shared with
+/// `brdf eval` queries and `lustre fit` material files: unknown keys are
+/// refused there, and keys given in the scene override those of `include`.
+pub use brdf::spec::{FresnelKind, MaterialDesc, ModelKind};
 
 /// Optional placement of a shape.
 #[derive(Deserialize, Debug, Clone, Copy)]

@@ -102,6 +102,11 @@ pub struct Scene {
     pub inputs: Vec<InputFile>,
     /// One line describing what was prepared and how long it took.
     pub prepared: String,
+    /// Whether an emitter's spectrum may be negative at some wavelengths
+    /// (an RGB-lifted environment map, see [`crate::light::RgbLift`]): then a
+    /// negative estimate at one wavelength is part of an unbiased colour
+    /// average, and only non-finite samples are dropped.
+    pub signed_radiance: bool,
 }
 
 /// Parses a scene file's text into its description, with positioned errors.
@@ -528,6 +533,8 @@ pub fn load_str(path: &Path, text: &str) -> Result<Scene, SceneError> {
             }
         }
     }
+    let signed_radiance = environment
+        .is_some_and(|i| matches!(lights[i], LightKind::Environment(Environment::Map(_))));
     let lights = Lights {
         lights,
         environment,
@@ -590,6 +597,7 @@ pub fn load_str(path: &Path, text: &str) -> Result<Scene, SceneError> {
         fingerprint,
         inputs,
         prepared,
+        signed_radiance,
     })
 }
 
