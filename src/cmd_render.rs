@@ -42,9 +42,26 @@ pub struct RenderArgs {
     /// Time between checkpoints of the film while rendering: `30`, `30s`, `5m` (≥ 1 s).
     #[arg(long, value_name = "DURATION", default_value = "30")]
     pub checkpoint_every: String,
+    /// Write no `.film` (no checkpoints either): for one-off renders whose images are all
+    /// that is wanted. An interrupted render then keeps only its images.
+    #[arg(long, conflicts_with_all = ["resume", "film"])]
+    pub no_film: bool,
     /// Print nothing but errors.
     #[arg(long, short)]
     pub quiet: bool,
+}
+
+/// CPU seconds used by this process so far, all threads (Linux: `/proc/self/stat`;
+/// `None` elsewhere).
+fn process_cpu_seconds() -> Option<f64> {
+    let stat = std::fs::read_to_string("/proc/self/stat").ok()?;
+    // Fields after the command name, which is parenthesised and may hold spaces.
+    let rest = &stat[stat.rfind(')')? + 2..];
+    let f: Vec<&str> = rest.split_whitespace().collect();
+    // utime and stime are fields 14 and 15 of the file, 12 and 13 after the name.
+    let ticks: f64 = f.get(11)?.parse::<f64>().ok()? + f.get(12)?.parse::<f64>().ok()?;
+    // USER_HZ is 100 on every Linux ABI the renderer runs on.
+    Some(ticks / 100.0)
 }
 
 /// Arguments of the merge command.
@@ -236,8 +253,19 @@ pub fn render(args: RenderArgs) -> anyhow::Result<()> {
                 .as_deref()
                 .map_or_else(|| p.clone(), |s| with_suffix(&p, s))
         });
-        base.with_extension("film")
+        let film = base.with_extension("film");
+        // A shard's film is named after its range even when the image name was given, so
+        // two shards written with the same --exr never overwrite each other's samples.
+        match (&suffix, args.exr.is_some() || args.png.is_some()) {
+            (Some(s), true) => with_suffix(&film, s),
+            _ => film,
+        }
     });
+    if args.no_film && exr.is_none() && png.is_none() {
+        bail!(
+            "--no-film: the scene names no `exr` or `png` output and none was given; nothing would be written"
+        );
+    }
     if exr.is_none() && png.is_none() && !args.quiet {
         eprintln!(
             "note: the scene names no `exr` or `png` output; only the film {} is written",
@@ -296,9 +324,10 @@ pub fn render(args: RenderArgs) -> anyhow::Result<()> {
         time_limit,
         stop,
         progress: !args.quiet,
-        checkpoint: Some((film_path.clone(), checkpoint_every)),
+        checkpoint: (!args.no_film).then(|| (film_path.clone(), checkpoint_every)),
         ..RenderOptions::default()
     };
+    let cpu0 = process_cpu_seconds();
     let outcome = if todo.is_empty() {
         None
     } else {
@@ -309,24 +338,40 @@ pub fn render(args: RenderArgs) -> anyhow::Result<()> {
             &opts,
         )?)
     };
-    film.save(&film_path)?;
+    let cpu = match (cpu0, process_cpu_seconds()) {
+        (Some(a), Some(b)) => format!(", {:.2} CPU s", b - a),
+        _ => String::new(),
+    };
+    if !args.no_film {
+        film.save(&film_path)?;
+    }
     write_images(&film, exr.as_deref(), png.as_deref(), args.quiet)?;
     if !args.quiet {
         match outcome {
             Some(o) => {
                 eprintln!(
-                    "rendered samples {}..{} ({} spp in the film) in {:.2} s: {:.3e} samples/s; film {}",
+                    "rendered samples {}..{} ({} spp in the film) in {:.2} s wall{cpu}: {:.3e} samples/s; {}",
                     o.rendered.start,
                     o.rendered.end,
                     film.spp(),
                     o.elapsed.as_secs_f64(),
                     o.samples_per_second,
-                    film_path.display()
+                    if args.no_film {
+                        "no film written".to_string()
+                    } else {
+                        format!("film {}", film_path.display())
+                    }
                 );
                 if !o.complete {
                     eprintln!(
-                        "stopped early at sample {} of {}; continue with `--resume`",
-                        o.rendered.end, todo.end
+                        "stopped early at sample {} of {}; {}",
+                        o.rendered.end,
+                        todo.end,
+                        if args.no_film {
+                            "the images hold what was rendered (--no-film: nothing to resume from)"
+                        } else {
+                            "continue with `--resume`"
+                        }
                     );
                 }
             }
@@ -338,7 +383,11 @@ pub fn render(args: RenderArgs) -> anyhow::Result<()> {
     }
     // Printed even with --quiet: the image is wrong where these samples fell.
     if let Some(w) = dropped_warning(&film.dropped) {
-        eprintln!("{w} (film {})", film_path.display());
+        if args.no_film {
+            eprintln!("{w}");
+        } else {
+            eprintln!("{w} (film {})", film_path.display());
+        }
     }
     Ok(())
 }

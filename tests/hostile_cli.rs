@@ -152,3 +152,46 @@ fn corrupt_films_are_errors_naming_the_file() {
     assert_eq!(std::fs::read(d.join("ck.film")).unwrap(), flipped);
     let _ = std::fs::remove_dir_all(&d);
 }
+
+/// `--no-film` writes the images and no film; shards given the same `--exr` get films
+/// named after their ranges, so neither overwrites the other, and they merge.
+#[test]
+fn no_film_and_shard_films_named_after_their_range() {
+    let d = tempdir("no-film");
+    let out = lustre(&d, &["s.toml", "--no-film", "--png", "one.png", "--quiet"]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(d.join("one.png").exists());
+    assert!(!d.join("one.film").exists(), "--no-film wrote a film");
+    // A usage error from the argument parser (exit 2), naming the conflicting flag.
+    let out = lustre(&d, &["s.toml", "--no-film", "--resume"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("--resume"));
+
+    for range in ["0..1", "1..2"] {
+        let out = lustre(&d, &["s.toml", "--spp-range", range, "--exr", "img.exr"]);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(out.status.success(), "{err}");
+        assert!(err.contains("CPU s"), "summary without CPU seconds: {err}");
+    }
+    assert!(d.join("img.spp0-1.film").exists() && d.join("img.spp1-2.film").exists());
+    let out = lustre(
+        &d,
+        &[
+            "merge",
+            "img.spp0-1.film",
+            "img.spp1-2.film",
+            "--png",
+            "merged.png",
+        ],
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let _ = std::fs::remove_dir_all(&d);
+}

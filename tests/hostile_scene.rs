@@ -417,8 +417,8 @@ fn include_files_reject_unknown_keys_and_accept_what_fit_writes() {
         ("[fit]", "[fitt]", "fitt"),
         (
             "[material]\n",
-            "[material]\nenergy = \"krywonos\"\n",
-            "energy",
+            "[material]\nenergie = \"krywonos\"\n",
+            "energie",
         ),
     ] {
         assert!(FIT_FILE.contains(from), "test bug: {from}");

@@ -153,33 +153,52 @@ fn camera_errors_point_at_the_key() {
 #[test]
 fn two_scale_needs_beta() {
     let e = error(
-        "model = \"ggx\"",
-        "model = \"two_scale\"\nsigma_um = 0.1\nlc_um = 1.0\ngamma = 2.0",
+        "model = \"ggx\"\nmetal = \"brass\"\nalpha = 0.2",
+        "model = \"two_scale\"\nsigma_um = 0.1\nlc_um = 1.0\ngamma = 2.0\nmetal = \"brass\"",
     );
     assert!(e.contains("model `two_scale` needs `beta`"), "{e}");
     let e = error(
-        "model = \"ggx\"",
-        "model = \"two_scale\"\nsigma_um = 0.1\nlc_um = 1.0\ngamma = 2.0\nbeta = 0.1\ncoherent = \"both\"",
+        "model = \"ggx\"\nmetal = \"brass\"\nalpha = 0.2",
+        "model = \"two_scale\"\nsigma_um = 0.1\nlc_um = 1.0\ngamma = 2.0\nbeta = 0.1\ncoherent = \"both\"\nmetal = \"brass\"",
     );
     assert!(e.contains("macro_ndf") && e.contains("delta"), "{e}");
 }
 
 #[test]
 fn wave_models_need_their_parameters() {
-    let e = error("model = \"ggx\"", "model = \"ghs\"");
+    let e = error(
+        "model = \"ggx\"\nmetal = \"brass\"\nalpha = 0.2",
+        "model = \"ghs\"\nmetal = \"brass\"",
+    );
     assert!(e.contains("model `ghs` needs `sigma_um`"), "{e}");
     let e = error(
-        "model = \"ggx\"",
-        "model = \"ghs_ssa\"\nsigma_um = 0.1\nlc_um = 1.0\ngamma = 0.5",
+        "model = \"ggx\"\nmetal = \"brass\"\nalpha = 0.2",
+        "model = \"ghs_ssa\"\nsigma_um = 0.1\nlc_um = 1.0\ngamma = 0.5\nmetal = \"brass\"",
     );
     assert!(e.contains("gamma"), "{e}");
-    let e = error("model = \"ggx\"", "model = \"measured_psd\"");
+    let e = error(
+        "model = \"ggx\"\nmetal = \"brass\"\nalpha = 0.2",
+        "model = \"measured_psd\"\nmetal = \"brass\"",
+    );
     assert!(e.contains("psd_csv"), "{e}");
     let e = error(
-        "model = \"ggx\"",
-        "model = \"ghs\"\nsigma_um = 0.1\nlc_um = 1.0\ngamma = 2.0\nenergy = \"magic\"",
+        "model = \"ggx\"\nmetal = \"brass\"\nalpha = 0.2",
+        "model = \"ghs\"\nsigma_um = 0.1\nlc_um = 1.0\ngamma = 2.0\nenergy = \"magic\"\nmetal = \"brass\"",
     );
     assert!(e.contains("magic") && e.contains("krywonos"), "{e}");
+}
+
+#[test]
+fn keys_the_model_does_not_use_are_named() {
+    // Switching a material's model and leaving its old parameters is an error naming them.
+    let e = error(
+        "model = \"ggx\"",
+        "model = \"ghs\"\nsigma_um = 0.1\nlc_um = 1.0\ngamma = 2.0",
+    );
+    assert!(
+        e.contains("[materials.m]") && e.contains("model `ghs` does not use `alpha`"),
+        "{e}"
+    );
 }
 
 #[test]

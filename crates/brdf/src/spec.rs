@@ -29,6 +29,36 @@
 //! caller, which reads the files: this crate does no I/O. A key a model does
 //! not use is an error naming the key, so a misspelt or misplaced parameter
 //! never falls back to a default silently.
+//!
+//! ```
+//! use brdf::spec::{FresnelSpec, KcSpec, MaterialSpec, ModelSpec};
+//! use brdf::wave::GhsOptions;
+//! use brdf::Bxdf;
+//!
+//! // The paper's S280 (brass, σ 0.28 µm, Lc 5 µm, γ 3) under full GHS.
+//! let s280 = MaterialSpec {
+//!     model: ModelSpec::Ghs {
+//!         surface: KcSpec { sigma_um: 0.28, lc_um: 5.0, gamma: 3.0 },
+//!         options: GhsOptions::default(),
+//!     },
+//!     fresnel: FresnelSpec::Metal(brdf::Metal::BrassCu70Zn30),
+//! };
+//! let model = s280.build()?;
+//! let wi = brdf::frame::spherical(0.5, 0.0);
+//! let wo = brdf::frame::spherical(0.5, core::f64::consts::PI);
+//! assert!(model.eval(wi, wo, 550.0) > 0.0);
+//!
+//! // A parameter out of range names its key.
+//! let bad = MaterialSpec {
+//!     model: ModelSpec::Ghs {
+//!         surface: KcSpec { sigma_um: 0.28, lc_um: 5.0, gamma: 0.5 },
+//!         options: GhsOptions::default(),
+//!     },
+//!     ..s280
+//! };
+//! assert_eq!(bad.build().err().unwrap().field, "gamma");
+//! # Ok::<(), brdf::spec::SpecError>(())
+//! ```
 
 use alloc::boxed::Box;
 use alloc::format;

@@ -697,8 +697,9 @@ pub fn build(a: &Analysis, prov: &Provenance<'_>) -> MaterialFile {
 }
 
 /// Every material the file offers, as the renderer builds it: `[material]`
-/// under each model it can name (GGX, Beckmann, GHS-SSA, GHS, the measured
-/// PSD when its table is usable, two-scale at each split), read back from the
+/// with its own model, and under each model it can name (GGX, Beckmann,
+/// GHS-SSA, GHS where γ ≥ 1.05, the measured PSD when its table is usable,
+/// two-scale at each split), read back from the
 /// written TOML as a `brdf::spec::MaterialDesc` and resolved and built by
 /// `brdf::spec`, exactly as a scene `include` of the file would be. A file
 /// `lustre fit` writes passes this by construction; an error here is a bug in
@@ -740,13 +741,33 @@ pub fn renderer_materials(
         model: Some(m),
         ..MaterialDesc::default()
     };
+    // The file's own model is what a bare `include` of it renders.
+    if let Some(m) = base.model {
+        // An include hands the file's [psd] to `measured_psd` (see render's material.rs).
+        let own = MaterialDesc {
+            psd_csv: (m == ModelKind::MeasuredPsd).then(|| "[psd]".to_string()),
+            ..base.clone()
+        };
+        build(
+            format!("[material] ({})", m.name()),
+            MaterialDesc::default(),
+            &own,
+        )?;
+    }
+    // The full GHS is offered only where its series is representable (γ ≥ 1.05);
+    // below that a scene asking for it gets the library's message pointing to ghs_ssa.
+    let full_ok = base
+        .gamma
+        .is_some_and(|g| g >= brdf::wave::kc::GAMMA_MIN_FULL);
     for m in [
         ModelKind::Ggx,
         ModelKind::Beckmann,
         ModelKind::GhsSsa,
         ModelKind::Ghs,
     ] {
-        build(m.name().to_string(), with(m), &base)?;
+        if m != ModelKind::Ghs || full_ok {
+            build(m.name().to_string(), with(m), &base)?;
+        }
     }
     if doc.psd.usable {
         let mut b = base.clone();

@@ -62,11 +62,72 @@ struct Included {
     psd: Option<NamedPsd>,
 }
 
-/// The tables of a fit file the renderer reads. `[material]` is a
-/// `MaterialDesc` and refuses unknown keys; from `[two_scale.NAME]` and
-/// `[psd]` only the parameters are read (`lustre fit` writes provenance and
-/// reliability notes next to them); the diagnostics tables (`[fit]`,
-/// `[reliability]`, `[form]`, …) are not read.
+/// A `lustre fit` material file. `[material]` is a [`MaterialDesc`]; the
+/// parameters of `[two_scale.NAME]` and `[psd]` are read next to the
+/// provenance `lustre fit` writes there; the diagnostics tables are accepted
+/// whatever they hold. Every table refuses unknown keys, so a misspelt key in
+/// a hand-edited file is an error with its line and column.
+#[derive(serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+struct FitFile {
+    material: Option<MaterialDesc>,
+    #[serde(default)]
+    two_scale: std::collections::BTreeMap<String, FitSplit>,
+    psd: Option<FitPsd>,
+    /// Diagnostics of `lustre fit` (not read).
+    #[serde(default, rename = "provenance")]
+    _provenance: Option<toml::Table>,
+    #[serde(default, rename = "fit")]
+    _fit: Option<toml::Table>,
+    #[serde(default, rename = "kc_2d")]
+    _kc_2d: Option<toml::Table>,
+    #[serde(default, rename = "reliability")]
+    _reliability: Option<toml::Table>,
+    #[serde(default, rename = "form")]
+    _form: Option<toml::Table>,
+    #[serde(default, rename = "anisotropy")]
+    _anisotropy: Option<toml::Table>,
+}
+
+/// `[two_scale.NAME]`: the split's parameters and `lustre fit`'s notes on it.
+#[derive(serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+struct FitSplit {
+    beta: f64,
+    sigma_um: f64,
+    lc_um: f64,
+    gamma: f64,
+    #[serde(default, rename = "beta_source")]
+    _beta_source: Option<toml::Value>,
+    #[serde(default, rename = "cutoff_um")]
+    _cutoff_um: Option<toml::Value>,
+    #[serde(default, rename = "fit_f_range_per_m")]
+    _fit_f_range_per_m: Option<toml::Value>,
+    #[serde(default, rename = "kc_degenerate")]
+    _kc_degenerate: Option<toml::Value>,
+    #[serde(default, rename = "problem")]
+    _problem: Option<toml::Value>,
+}
+
+/// `[psd]`: the measured PSD and `lustre fit`'s notes on it.
+#[derive(serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+struct FitPsd {
+    zeta_rad_per_um: Vec<f64>,
+    p_um4: Vec<f64>,
+    #[serde(default, rename = "source")]
+    _source: Option<toml::Value>,
+    #[serde(default, rename = "integral_um2")]
+    _integral_um2: Option<toml::Value>,
+    #[serde(default, rename = "usable")]
+    _usable: Option<toml::Value>,
+    #[serde(default, rename = "dropped_bins")]
+    _dropped_bins: Option<toml::Value>,
+}
+
+/// Reads an included fit file: its `[material]` under the scene's keys, the
+/// chosen `[two_scale.NAME]` over it for `two_scale`, its `[psd]` for
+/// `measured_psd`.
 fn read_include(
     desc: &MaterialDesc,
     inc: &str,
@@ -77,23 +138,19 @@ fn read_include(
     let text = inputs
         .read_text(&path, "material file", MAX_TOML_BYTES)
         .map_err(|e| format!("include = \"{inc}\": {e}"))?;
-    let located = |e: toml::de::Error| {
+    let file: FitFile = toml::from_str(&text).map_err(|e| {
         let pos = e.span().map(|s| crate::error::line_column(&text, s.start));
         match pos {
             Some((l, c)) => format!("{}:{l}:{c}: {}", path.display(), e.message().trim()),
             None => format!("{}: {}", path.display(), e.message().trim()),
         }
-    };
-    let mut file: toml::Table = toml::from_str(&text).map_err(located)?;
-    let Some(material) = file.remove("material") else {
+    })?;
+    let Some(mut base) = file.material else {
         return Err(format!(
             "{}: a material file needs a [material] table (as written by `lustre fit`)",
             path.display()
         ));
     };
-    let mut base: MaterialDesc = material.try_into().map_err(|e: toml::de::Error| {
-        format!("{}: [material]: {}", path.display(), e.message().trim())
-    })?;
     if base.include.is_some() || base.cutoff.is_some() {
         return Err(format!(
             "{}: [material] cannot itself use `include` or `cutoff`",
@@ -108,17 +165,7 @@ fn read_include(
 
     let model = desc.model.or(base.model);
     if model == Some(ModelKind::TwoScale) {
-        let splits = match file.remove("two_scale") {
-            None => toml::Table::new(),
-            Some(toml::Value::Table(t)) => t,
-            Some(_) => {
-                return Err(format!(
-                    "{}: `two_scale` must be tables [two_scale.NAME]",
-                    path.display()
-                ));
-            }
-        };
-        let names: Vec<&str> = splits.keys().map(String::as_str).collect();
+        let names: Vec<&str> = file.two_scale.keys().map(String::as_str).collect();
         let listed = if names.is_empty() {
             "none".to_string()
         } else {
@@ -134,60 +181,25 @@ fn read_include(
                 ));
             }
         };
-        let Some(toml::Value::Table(t)) = splits.get(chosen) else {
+        let Some(t) = file.two_scale.get(chosen) else {
             return Err(format!(
                 "{}: no [two_scale.{chosen}] table; the file has: {listed}",
                 path.display()
             ));
         };
-        let number = |key: &str| -> Result<f64, String> {
-            match t.get(key) {
-                Some(toml::Value::Float(v)) => Ok(*v),
-                Some(toml::Value::Integer(v)) => Ok(*v as f64),
-                Some(_) => Err(format!(
-                    "{}: [two_scale.{chosen}] `{key}` must be a number",
-                    path.display()
-                )),
-                None => Err(format!(
-                    "{}: [two_scale.{chosen}] needs `{key}`",
-                    path.display()
-                )),
-            }
-        };
         // The split's micro scale replaces the whole-surface KC fit.
-        base.beta = Some(number("beta")?);
-        base.sigma_um = Some(number("sigma_um")?);
-        base.lc_um = Some(number("lc_um")?);
-        base.gamma = Some(number("gamma")?);
+        base.beta = Some(t.beta);
+        base.sigma_um = Some(t.sigma_um);
+        base.lc_um = Some(t.lc_um);
+        base.gamma = Some(t.gamma);
     }
-
-    let psd = match file.remove("psd") {
-        Some(toml::Value::Table(t)) if model == Some(ModelKind::MeasuredPsd) => {
-            let column = |key: &str| -> Result<Vec<f64>, String> {
-                let bad = || {
-                    format!(
-                        "{}: [psd] `{key}` must be an array of numbers",
-                        path.display()
-                    )
-                };
-                match t.get(key) {
-                    Some(toml::Value::Array(a)) => a
-                        .iter()
-                        .map(|v| match v {
-                            toml::Value::Float(x) => Ok(*x),
-                            toml::Value::Integer(x) => Ok(*x as f64),
-                            _ => Err(bad()),
-                        })
-                        .collect(),
-                    Some(_) => Err(bad()),
-                    None => Err(format!("{}: [psd] needs `{key}`", path.display())),
-                }
-            };
+    let psd = match file.psd {
+        Some(t) if model == Some(ModelKind::MeasuredPsd) => {
             let name = format!("[psd] of {inc}");
             if base.psd_csv.is_none() {
                 base.psd_csv = Some(name.clone());
             }
-            Some((name, (column("zeta_rad_per_um")?, column("p_um4")?)))
+            Some((name, (t.zeta_rad_per_um, t.p_um4)))
         }
         _ => None,
     };
