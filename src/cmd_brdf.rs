@@ -47,9 +47,11 @@ use std::io::{BufRead, BufWriter, Write};
 use brdf::spec::{FileLoader, MaterialDesc, MaterialSpec, ModelKind, ModelSpec, SpecError};
 use brdf::wave::ghs::{hemisphere_g_max, hemisphere_u_max};
 use brdf::wave::ghs_table::TableResolution as GhsResolution;
-use brdf::wave::{GhsFull, RadialPsd};
+use brdf::wave::two_scale::{TableResolution, TwoScale, TwoScaleParams};
+use brdf::wave::{GhsFull, GhsSsa, RadialPsd};
 use brdf::{Bxdf, DVec3, Metal};
 pub use cache::ModelCache;
+use cache::SurfaceModel;
 use serde::Deserialize;
 use serde_json::{Map, Value, json};
 
@@ -432,6 +434,56 @@ fn build(spec: &MaterialSpec, cache: &mut ModelCache) -> Result<Box<dyn Bxdf>, Q
             Ok(Box::new(
                 GhsFull::with_table(psd, fresnel, *options, table).map_err(|e| err(e.into()))?,
             ))
+        }
+        ModelSpec::GhsSsa { .. } | ModelSpec::TwoScale { .. } => {
+            // One build per surface; each metal is a clone sharing its tables.
+            let fresnel = spec.fresnel.build().map_err(|e| err(e.into()))?;
+            let key = format!("{:?}", spec.model);
+            if cache.surfaces.get(&key).is_none() {
+                let built = match &spec.model {
+                    ModelSpec::GhsSsa { surface, options } => SurfaceModel::Ssa(Box::new(
+                        GhsSsa::with_options(
+                            surface.psd().map_err(|e| err(e.into()))?,
+                            brdf::Fresnel::One,
+                            *options,
+                        )
+                        .map_err(|e| err(e.into()))?,
+                    )),
+                    ModelSpec::TwoScale {
+                        beta,
+                        surface,
+                        coherent,
+                    } => SurfaceModel::TwoScale(Box::new(
+                        TwoScale::new(TwoScaleParams {
+                            beta: *beta,
+                            sigma_um: surface.sigma_um,
+                            lc_um: surface.lc_um,
+                            gamma: surface.gamma,
+                            fresnel: brdf::Fresnel::One,
+                            coherent: *coherent,
+                            resolution: TableResolution::default(),
+                        })
+                        .map_err(|e| err(e.into()))?,
+                    )),
+                    _ => return Ok(spec.build().map_err(err)?),
+                };
+                cache.surfaces.insert(key.clone(), built, 1);
+            }
+            let Some(proto) = cache.surfaces.get(&key) else {
+                return Err(QueryError::new(
+                    "model",
+                    "internal error: surface not cached",
+                ));
+            };
+            let model: Box<dyn Bxdf> = match proto {
+                SurfaceModel::Ssa(m) => {
+                    Box::new(m.with_fresnel(fresnel).map_err(|e| err(e.into()))?)
+                }
+                SurfaceModel::TwoScale(m) => {
+                    Box::new(m.with_fresnel(fresnel).map_err(|e| err(e.into()))?)
+                }
+            };
+            Ok(model)
         }
         _ => Ok(spec.build().map_err(err)?),
     }

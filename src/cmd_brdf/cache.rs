@@ -98,11 +98,27 @@ pub struct ModelCache {
     pub models: Lru<String, Box<dyn Bxdf>>,
     /// Full-GHS S̃ tables by [`TableKey`].
     pub tables: Lru<TableKey, Arc<GhsTable>>,
+    /// GHS-SSA and two-scale models by every parameter but the Fresnel
+    /// term, which none of their tables depends on: another metal is a
+    /// `with_fresnel` clone, not a rebuild.
+    pub surfaces: Lru<String, SurfaceModel>,
     /// Models built so far (cache misses).
     pub model_builds: usize,
     /// S̃ tables built so far.
     pub table_builds: usize,
 }
+
+/// A model whose tables do not depend on its Fresnel term.
+#[derive(Clone)]
+pub enum SurfaceModel {
+    /// GHS smooth-surface approximation on a KC surface.
+    Ssa(Box<brdf::wave::GhsSsa>),
+    /// Two-scale.
+    TwoScale(Box<brdf::wave::two_scale::TwoScale>),
+}
+
+/// Fresnel-free models kept for `with_fresnel` (each holds its tables).
+pub const SURFACE_ENTRIES: usize = 256;
 
 impl Default for ModelCache {
     fn default() -> Self {
@@ -116,6 +132,7 @@ impl ModelCache {
         ModelCache {
             models: Lru::new(models, usize::MAX),
             tables: Lru::new(usize::MAX, table_bytes),
+            surfaces: Lru::new(SURFACE_ENTRIES, usize::MAX),
             model_builds: 0,
             table_builds: 0,
         }

@@ -194,6 +194,20 @@ impl<P: RadialPsd> GhsSsa<P> {
         Ok(model)
     }
 
+    /// The same surface under another Fresnel term. No table depends on the
+    /// Fresnel factor (the energy tables integrate the lobe with R = 1), so
+    /// they are shared instead of rebuilt: the result equals
+    /// `with_options(psd, fresnel, opts)` exactly, at the cost of a clone.
+    pub fn with_fresnel(&self, fresnel: Fresnel) -> Result<Self, BrdfError>
+    where
+        P: Clone,
+    {
+        fresnel.check_covers(WAVELENGTH_MIN_NM, WAVELENGTH_MAX_NM)?;
+        let mut m = self.clone();
+        m.common.fresnel = fresnel;
+        Ok(m)
+    }
+
     /// The surface PSD.
     pub fn psd(&self) -> &P {
         &self.psd

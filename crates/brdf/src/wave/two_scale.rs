@@ -687,6 +687,17 @@ const MIX_FLOOR: f64 = 0.05;
 const DELTA_MAX: f64 = 0.99;
 
 impl TwoScale {
+    /// The same surface under another Fresnel term. No table depends on the
+    /// Fresnel factor (the D̃_eff table and the energy cap use R = 1), so
+    /// they are shared instead of rebuilt: the result equals `new` with the
+    /// same parameters and `fresnel`, exactly, at the cost of a clone.
+    pub fn with_fresnel(&self, fresnel: Fresnel) -> Result<TwoScale, BrdfError> {
+        fresnel.check_covers(WAVELENGTH_MIN_NM, WAVELENGTH_MAX_NM)?;
+        let mut m = self.clone();
+        m.fresnel = fresnel;
+        Ok(m)
+    }
+
     /// Validates the parameters and builds the D̃_eff table.
     ///
     /// β ∈ [1e−4, 10]; σ ∈ [0, 10] µm, Lc ∈ [0.03, 1000] µm, γ ∈ [1.001, 100]
