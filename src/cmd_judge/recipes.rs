@@ -92,8 +92,16 @@ pub(super) fn spec(fields: Value, label: String) -> ModelSpec {
     }
 }
 
+/// Keys the report keeps next to a model's parameters (provenance of a two-scale split);
+/// they are not material keys, so they are left out when the model is built.
+const PROVENANCE_KEYS: [&str; 2] = ["cutoff_um", "cutoff_multiple"];
+
 pub(super) fn candidate(model: &str, key: String, assumes: &'static str, s: ModelSpec) -> Built {
-    match s.build() {
+    let mut material = s.clone();
+    for k in PROVENANCE_KEYS {
+        material.fields.remove(k);
+    }
+    match material.build() {
         Ok(bxdf) => Ok(Candidate {
             model: model.into(),
             key,
@@ -158,11 +166,10 @@ pub(super) fn make_ggx_kc(f: &Fitted, _: &[f64]) -> Vec<Built> {
         Ok(a) => a,
         Err(e) => return vec![Err((label, format!("{e:#}")))],
     };
-    let mut s = spec(
+    let s = spec(
         json!({"model": "ggx", "alpha": a, "fresnel": f.fresnel}),
         format!("GGX ≡ KC (α {} = 1/(2kLc))", short(a)),
     );
-    s.fields.insert("lc_um".into(), json!(lc));
     vec![candidate("ggx_kc", "ggx_kc".into(), RECIPES[2].assumes, s)]
 }
 
