@@ -90,10 +90,7 @@ pub fn sample_names() -> String {
     names.join(", ")
 }
 
-/// k = 2π/λ, rad/µm.
-pub fn wavenumber(lambda_nm: f64) -> f64 {
-    2000.0 * PI / lambda_nm
-}
+pub use crate::wave::wavenumber;
 
 /// Mean-square slope ⟨|∇h|²⟩ = ∫_{ζ<ζc} ζ² P(ζ) d²ζ of a KC spectrum below
 /// the radial frequency `zeta_c` (rad/µm). With x = Lc²ζ²:

@@ -67,7 +67,7 @@ use alloc::vec::Vec;
 
 use crate::wave::kc::KcPsd;
 use crate::wave::two_scale::{CoherentPart, TableResolution, TwoScale, TwoScaleParams};
-use crate::wave::{Energy, FresnelAngle, GhsFull, GhsOptions, GhsSsa, TabulatedPsd};
+use crate::wave::{GhsFull, GhsOptions, GhsSsa, TabulatedPsd};
 use crate::{
     BrdfError, Bxdf, Distribution, Fresnel, Ior, Metal, MicrofacetConductor, SmoothConductor,
 };
@@ -400,6 +400,7 @@ pub use desc::{FileLoader, FresnelKind, MaterialDesc, NoFiles};
 #[cfg(feature = "serde")]
 mod desc {
     use super::*;
+    use crate::wave::{Energy, FresnelAngle};
 
     /// `fresnel = …`: a conductor (default) or R ≡ 1.
     #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]

@@ -7,10 +7,11 @@
 use std::path::Path;
 use std::sync::OnceLock;
 
-/// Shortest wavelength rendered, nm (the CIE table's first row).
-pub const LAMBDA_MIN: f64 = 360.0;
+/// Shortest wavelength rendered, nm (the CIE table's first row; the range
+/// every `brdf` model is defined on).
+pub const LAMBDA_MIN: f64 = brdf::WAVELENGTH_MIN_NM;
 /// Longest wavelength rendered, nm (the CIE table's last row).
-pub const LAMBDA_MAX: f64 = 830.0;
+pub const LAMBDA_MAX: f64 = brdf::WAVELENGTH_MAX_NM;
 
 const CIE_1931_CSV: &str = include_str!("../../../data/spectra/cie1931_2deg_xyz.csv");
 const D65_CSV: &str = include_str!("../../../data/spectra/illuminant_D65.csv");

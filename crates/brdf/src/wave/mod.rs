@@ -102,9 +102,10 @@ impl Geometry {
     }
 }
 
-/// k = 2π/λ in rad/µm for λ in nm (0 for a non-positive or non-finite λ).
+/// k = 2π/λ in rad/µm for λ in nm (0 for a non-positive or non-finite λ):
+/// the one definition every crate uses.
 #[inline]
-pub(crate) fn wavenumber(lambda_nm: f64) -> f64 {
+pub fn wavenumber(lambda_nm: f64) -> f64 {
     if lambda_nm > 0.0 && lambda_nm.is_finite() {
         2000.0 * core::f64::consts::PI / lambda_nm
     } else {
