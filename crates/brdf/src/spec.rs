@@ -925,6 +925,7 @@ mod tests {
     #[cfg(feature = "serde")]
     mod desc {
         use super::super::*;
+        use crate::wave::{Energy, FresnelAngle};
         use alloc::string::ToString;
 
         fn desc(json: &str) -> Result<MaterialDesc, String> {
