@@ -477,7 +477,7 @@ pub fn run(args: PreviewArgs) -> anyhow::Result<()> {
             threads: args.threads,
             time_limit: Some(share.max(Duration::from_millis(100))),
             stop: stop.clone(),
-            progress: !args.quiet,
+            progress: crate::progress::bar(!args.quiet),
             pass_target: Duration::from_secs(1),
             ..RenderOptions::default()
         };

@@ -323,7 +323,7 @@ pub fn render(args: RenderArgs) -> anyhow::Result<()> {
         threads,
         time_limit,
         stop,
-        progress: !args.quiet,
+        progress: crate::progress::bar(!args.quiet),
         checkpoint: (!args.no_film).then(|| (film_path.clone(), checkpoint_every)),
         ..RenderOptions::default()
     };

@@ -38,5 +38,7 @@ pub mod wavelength;
 
 pub use error::{RenderError, SceneError};
 pub use film::Film;
-pub use render::{RenderOptions, RenderOutcome, render_range, render_range_in};
+pub use render::{
+    Progress, ProgressEvent, RenderOptions, RenderOutcome, render_range, render_range_in,
+};
 pub use scene::{Scene, load as load_scene, load_str};

@@ -9,7 +9,6 @@ use crate::error::RenderError;
 use crate::film::{Dropped, Film, to_fixed};
 use crate::integrator::sample_pixel_checked;
 use crate::scene::Scene;
-use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 pub use rayon::ThreadPool;
 use rayon::prelude::*;
 use std::ops::Range;
@@ -29,8 +28,8 @@ pub struct RenderOptions {
     pub time_limit: Option<Duration>,
     /// Set from outside (Ctrl-C) to stop after the current tile.
     pub stop: Arc<AtomicBool>,
-    /// Show a progress bar (only drawn when stderr is a terminal).
-    pub progress: bool,
+    /// Told how the render advances (the caller draws a bar, logs, or ignores it).
+    pub progress: Option<Progress>,
     /// Where to write the film after passes, and how often.
     pub checkpoint: Option<(PathBuf, Duration)>,
     /// Target duration of one pass.
@@ -43,10 +42,55 @@ impl Default for RenderOptions {
             threads: None,
             time_limit: None,
             stop: Arc::new(AtomicBool::new(false)),
-            progress: false,
+            progress: None,
             checkpoint: None,
             pass_target: Duration::from_secs(2),
         }
+    }
+}
+
+/// What the render loop reports while it runs.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ProgressEvent {
+    /// The render starts: `total` camera samples (pixels × samples per pixel) to go.
+    Start {
+        /// Camera samples this call will render if not stopped.
+        total: u64,
+    },
+    /// A tile of a pass finished: `samples` more camera samples (from any thread).
+    Advance {
+        /// Camera samples just finished.
+        samples: u64,
+    },
+    /// A pass was added to the film, which now holds `spp` samples per pixel.
+    Pass {
+        /// Samples per pixel in the film.
+        spp: u64,
+    },
+    /// The render loop ended (complete or stopped).
+    Finish,
+}
+
+/// A progress callback, called from the render threads (hence `Sync`).
+#[derive(Clone)]
+pub struct Progress(pub Arc<dyn Fn(ProgressEvent) + Send + Sync>);
+
+impl Progress {
+    /// Wraps a callback.
+    pub fn new(f: impl Fn(ProgressEvent) + Send + Sync + 'static) -> Progress {
+        Progress(Arc::new(f))
+    }
+
+    fn report(this: &Option<Progress>, e: ProgressEvent) {
+        if let Some(p) = this {
+            (p.0)(e);
+        }
+    }
+}
+
+impl std::fmt::Debug for Progress {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("Progress(callback)")
     }
 }
 
@@ -174,22 +218,12 @@ pub fn render_range_in(
     }
     let tiles = tiles(w, h);
     let pixels = w as u64 * h as u64;
-    let bar = if opts.progress && std::io::IsTerminal::is_terminal(&std::io::stderr()) {
-        let b = ProgressBar::with_draw_target(
-            Some(pixels.saturating_mul(range.end - range.start)),
-            ProgressDrawTarget::stderr_with_hz(4),
-        );
-        b.set_style(
-            ProgressStyle::with_template(
-                "{elapsed_precise} [{bar:40}] {percent:>3}% {msg} ETA {eta}",
-            )
-            .unwrap_or_else(|_| ProgressStyle::default_bar())
-            .progress_chars("=> "),
-        );
-        b
-    } else {
-        ProgressBar::hidden()
-    };
+    Progress::report(
+        &opts.progress,
+        ProgressEvent::Start {
+            total: pixels.saturating_mul(range.end - range.start),
+        },
+    );
 
     let mut next = range.start;
     let mut pass_spp = 1u64;
@@ -226,7 +260,13 @@ pub fn render_range_in(
                 .par_iter()
                 .map(|&t| {
                     let r = render_tile(scene, t, &pass, &local_stop);
-                    bar.inc(((t.x1 - t.x0) * (t.y1 - t.y0)) as u64 * (pass.end - pass.start));
+                    Progress::report(
+                        &opts.progress,
+                        ProgressEvent::Advance {
+                            samples: ((t.x1 - t.x0) * (t.y1 - t.y0)) as u64
+                                * (pass.end - pass.start),
+                        },
+                    );
                     r
                 })
                 .collect()
@@ -255,7 +295,7 @@ pub fn render_range_in(
         film.dropped.add(&pass_dropped);
         dropped.add(&pass_dropped);
         next = pass.end;
-        bar.set_message(format!("{} spp", film.spp()));
+        Progress::report(&opts.progress, ProgressEvent::Pass { spp: film.spp() });
         if let Some((path, every)) = &opts.checkpoint
             && last_checkpoint.elapsed() >= *every
             && next < range.end
@@ -274,7 +314,7 @@ pub fn render_range_in(
     }
     watcher.0.store(true, Ordering::Relaxed);
     let _ = watcher.1.join();
-    bar.finish_and_clear();
+    Progress::report(&opts.progress, ProgressEvent::Finish);
     result?;
     let elapsed = start.elapsed();
     let done = next - range.start;
