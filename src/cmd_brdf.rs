@@ -48,7 +48,7 @@ use brdf::spec::{FileLoader, MaterialDesc, MaterialSpec, ModelKind, ModelSpec, S
 use brdf::wave::ghs::{hemisphere_g_max, hemisphere_u_max};
 use brdf::wave::ghs_table::TableResolution as GhsResolution;
 use brdf::wave::two_scale::{TableResolution, TwoScale, TwoScaleParams};
-use brdf::wave::{GhsFull, GhsSsa, RadialPsd};
+use brdf::wave::{GhsFull, GhsSsa, RadialPsd, TableSource};
 use brdf::{Bxdf, DVec3, Metal};
 pub use cache::ModelCache;
 use cache::SurfaceModel;

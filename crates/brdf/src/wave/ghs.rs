@@ -30,12 +30,49 @@ use crate::math::finite_nonneg;
 use crate::model::{Bxdf, BxdfSample, Specular, WAVELENGTH_MAX_NM, WAVELENGTH_MIN_NM};
 use crate::{BrdfError, frame};
 
+/// A surface PSD whose full-GHS table this module can build. The statistics
+/// types (`kc`, `measured_psd`) describe a surface; which correlation each
+/// has, and how its S̃(u; g) table is built, is the model's business, so they
+/// do not depend on the table builder.
+pub trait TableSource: RadialPsd {
+    /// The S̃(u; g) table for u ≤ `u_max` and g ≤ `g_max`.
+    fn build_table(
+        &self,
+        u_max: f64,
+        g_max: f64,
+        res: TableResolution,
+    ) -> Result<GhsTable, BrdfError>;
+}
+
+impl TableSource for super::KcPsd {
+    fn build_table(
+        &self,
+        u_max: f64,
+        g_max: f64,
+        res: TableResolution,
+    ) -> Result<GhsTable, BrdfError> {
+        GhsTable::build_up_to(&super::matern::Matern::new(self.nu()), u_max, g_max, res)
+    }
+}
+
+impl TableSource for super::TabulatedPsd {
+    fn build_table(
+        &self,
+        u_max: f64,
+        g_max: f64,
+        res: TableResolution,
+    ) -> Result<GhsTable, BrdfError> {
+        let c = super::measured_psd::TabulatedCorrelation::new(self);
+        GhsTable::build_up_to(&c, u_max, g_max, res)
+    }
+}
+
 /// Probability of drawing from p₁ instead of the tabulated S̃ CDF.
 pub const DEFENSIVE_WEIGHT: f64 = 0.05;
 
 /// Full GHS model driven by a radial PSD and its S̃ table.
 #[derive(Clone, Debug)]
-pub struct GhsFull<P: RadialPsd = super::KcPsd> {
+pub struct GhsFull<P: TableSource = super::KcPsd> {
     psd: P,
     common: GhsCommon,
     table: Arc<GhsTable>,
@@ -54,7 +91,7 @@ pub fn hemisphere_g_max(sigma_um: f64) -> f64 {
     x * x
 }
 
-impl<P: RadialPsd> GhsFull<P> {
+impl<P: TableSource> GhsFull<P> {
     /// Raw energy, halfway Fresnel angle, default table resolution.
     pub fn new(psd: P, fresnel: Fresnel) -> Result<Self, BrdfError> {
         Self::with_options(psd, fresnel, GhsOptions::default())
@@ -285,7 +322,7 @@ impl<P: RadialPsd> GhsFull<P> {
     }
 }
 
-impl<P: RadialPsd> Bxdf for GhsFull<P> {
+impl<P: TableSource> Bxdf for GhsFull<P> {
     fn eval(&self, wi: DVec3, wo: DVec3, lambda_nm: f64) -> f64 {
         let f = self.raw_lobe(&self.common, wi, wo, lambda_nm);
         if f == 0.0 {

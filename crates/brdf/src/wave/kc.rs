@@ -226,20 +226,6 @@ impl super::RadialPsd for KcPsd {
     fn sample_u(&self, xi: f64) -> f64 {
         sample_u(self.nu(), xi)
     }
-    #[cfg(feature = "alloc")]
-    fn build_table(
-        &self,
-        u_max: f64,
-        g_max: f64,
-        res: super::ghs_table::TableResolution,
-    ) -> Result<super::ghs_table::GhsTable, BrdfError> {
-        super::ghs_table::GhsTable::build_up_to(
-            &super::matern::Matern::new(self.nu()),
-            u_max,
-            g_max,
-            res,
-        )
-    }
 }
 
 #[cfg(test)]

@@ -13,7 +13,7 @@ use alloc::vec::Vec;
 use core::f64::consts::PI;
 
 use super::RadialPsd;
-use super::ghs_table::{GhsTable, TableResolution, lagrange4};
+use super::ghs_table::lagrange4;
 use super::hankel::{Correlation, FftLog};
 use super::matern::Matern;
 use crate::BrdfError;
@@ -274,15 +274,6 @@ impl RadialPsd for TabulatedPsd {
     }
     fn sample_u(&self, xi: f64) -> f64 {
         self.sample_zeta(xi) * self.length
-    }
-    fn build_table(
-        &self,
-        u_max: f64,
-        g_max: f64,
-        res: TableResolution,
-    ) -> Result<GhsTable, BrdfError> {
-        let c = TabulatedCorrelation::new(self);
-        GhsTable::build_up_to(&c, u_max, g_max, res)
     }
 }
 

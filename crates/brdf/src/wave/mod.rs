@@ -38,7 +38,7 @@ pub mod two_scale;
 
 pub use energy::{Energy, FresnelAngle, GhsOptions};
 #[cfg(feature = "alloc")]
-pub use ghs::GhsFull;
+pub use ghs::{GhsFull, TableSource};
 pub use ghs_ssa::GhsSsa;
 pub use kc::KcPsd;
 #[cfg(feature = "alloc")]
@@ -60,14 +60,6 @@ pub trait RadialPsd {
     fn cdf_u(&self, u: f64) -> f64;
     /// Inverse of [`RadialPsd::cdf_u`] (may return +∞).
     fn sample_u(&self, xi: f64) -> f64;
-    /// Builds the full-GHS table of S̃(u; g) for u ≤ `u_max` and g ≤ `g_max`.
-    #[cfg(feature = "alloc")]
-    fn build_table(
-        &self,
-        u_max: f64,
-        g_max: f64,
-        res: ghs_table::TableResolution,
-    ) -> Result<ghs_table::GhsTable, crate::BrdfError>;
 }
 
 /// Shared per-query quantities of the GHS models.
