@@ -181,23 +181,3 @@ mod tests {
         }
     }
 }
-
-/// One model as `brdf eval` query fields plus a label: what `lustre judge` fits
-/// from a scan, built through the same parser and validation as `brdf eval`,
-/// so a row of its report can be replayed as an eval query.
-#[derive(Clone, Debug)]
-pub struct JsonModel {
-    /// Row label.
-    pub label: String,
-    /// `brdf eval` query fields (model, parameters, fresnel), without geometry.
-    pub fields: serde_json::Map<String, serde_json::Value>,
-}
-
-impl JsonModel {
-    /// Builds the model through `brdf eval`'s builder.
-    pub fn build(&self) -> anyhow::Result<Box<dyn brdf::Bxdf>> {
-        let spec = crate::cmd_brdf::material_spec(&self.fields)
-            .map_err(|e| anyhow!("{}: field `{}`: {}", self.label, e.field, e.message))?;
-        Ok(spec.build().map_err(|e| anyhow!("{}: {e}", self.label))?)
-    }
-}

@@ -11,8 +11,6 @@ use serde_json::{Map, Value, json};
 use super::{JudgeArgs, PSD_NODES, REFERENCE_LAMBDA_NM};
 use brdf::paper::{short, wavenumber};
 
-use crate::models::JsonModel as ModelSpec;
-
 /// A built model of the scan: one row of the report.
 pub(super) struct Candidate {
     /// Model family (`ggx`, `ggx_kc`, `ghs`, `measured_psd`, `two_scale`, …).
@@ -85,8 +83,8 @@ pub(super) const RECIPES: [Recipe; 7] = [
     },
 ];
 
-pub(super) fn spec(fields: Value, label: String) -> ModelSpec {
-    ModelSpec {
+pub(super) fn spec(fields: Value, label: String) -> JsonModel {
+    JsonModel {
         label,
         fields: fields.as_object().cloned().unwrap_or_default(),
     }
@@ -96,7 +94,7 @@ pub(super) fn spec(fields: Value, label: String) -> ModelSpec {
 /// they are not material keys, so they are left out when the model is built.
 const PROVENANCE_KEYS: [&str; 2] = ["cutoff_um", "cutoff_multiple"];
 
-pub(super) fn candidate(model: &str, key: String, assumes: &'static str, s: ModelSpec) -> Built {
+pub(super) fn candidate(model: &str, key: String, assumes: &'static str, s: JsonModel) -> Built {
     let mut material = s.clone();
     for k in PROVENANCE_KEYS {
         material.fields.remove(k);
@@ -442,4 +440,26 @@ pub(super) fn energy_check(c: Candidate, args: &JudgeArgs) -> Built {
         }
     }
     Ok(c)
+}
+
+/// One model as `brdf eval` query fields plus a label: what `lustre judge` fits
+/// from a scan, built through the same parser and validation as `brdf eval`,
+/// so a row of its report can be replayed as an eval query.
+#[derive(Clone, Debug)]
+pub(super) struct JsonModel {
+    /// Row label.
+    pub label: String,
+    /// `brdf eval` query fields (model, parameters, fresnel), without geometry.
+    pub fields: serde_json::Map<String, serde_json::Value>,
+}
+
+impl JsonModel {
+    /// Builds the model through `brdf eval`'s builder.
+    pub fn build(&self) -> anyhow::Result<Box<dyn brdf::Bxdf>> {
+        let spec = crate::cmd_brdf::material_spec(&self.fields)
+            .map_err(|e| anyhow::anyhow!("{}: field `{}`: {}", self.label, e.field, e.message))?;
+        Ok(spec
+            .build()
+            .map_err(|e| anyhow::anyhow!("{}: {e}", self.label))?)
+    }
 }
