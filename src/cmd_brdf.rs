@@ -394,14 +394,32 @@ fn answer(line: &str, cache: &mut ModelCache) -> Result<Value, QueryError> {
             format!("missing `model`: one of {}", ModelKind::names()),
         ));
     }
-    let spec = material_spec(&q)?;
-    // Every parameter the built model depends on (f64 Debug round-trips).
-    let key = format!("{spec:?}");
-    if cache.models.get(&key).is_none() {
-        let model = build(&spec, cache)?;
-        cache.model_builds += 1;
-        cache.models.insert(key.clone(), model, 1);
-    }
+    // The material keys as written map to the model's key once: repeated queries skip
+    // parsing, validation and key formatting. Queries naming files are resolved every
+    // time, so a table edited during the stream is read again.
+    let names_files = q.contains_key("nk_csv") || q.contains_key("psd_csv");
+    let text = (!names_files).then(|| Value::Object(q.clone()).to_string());
+    let known = text
+        .as_ref()
+        .and_then(|t| cache.resolved.get(t).cloned())
+        .filter(|k| cache.models.get(k).is_some());
+    let key = match known {
+        Some(k) => k,
+        None => {
+            let spec = material_spec(&q)?;
+            // Every parameter the built model depends on (f64 Debug round-trips).
+            let key = format!("{spec:?}");
+            if cache.models.get(&key).is_none() {
+                let model = build(&spec, cache)?;
+                cache.model_builds += 1;
+                cache.models.insert(key.clone(), model, 1);
+            }
+            if let Some(t) = text {
+                cache.resolved.insert(t, key.clone(), 1);
+            }
+            key
+        }
+    };
     let Some(model) = cache.models.get(&key) else {
         return Err(QueryError::new("model", "internal error: model not cached"));
     };

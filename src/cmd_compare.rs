@@ -95,22 +95,9 @@ fn sample_rows(s: &Surface, cutoffs: &[f64]) -> anyhow::Result<Vec<Row>> {
 
 /// Cutoff tables of a `lustre fit` file, ordered by their number (cutoff_50 < cutoff_100).
 fn material_rows(path: &Path) -> anyhow::Result<(String, Vec<Row>)> {
-    let text =
-        std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
-    let doc: toml::Table =
-        toml::from_str(&text).with_context(|| format!("parsing {}", path.display()))?;
-    let mat = doc
-        .get("material")
-        .and_then(toml::Value::as_table)
-        .ok_or_else(|| {
-            anyhow!(
-                "{}: no [material] table (expected a `lustre fit` material file)",
-                path.display()
-            )
-        })?;
+    let models::FitFile { doc, material, abs } = models::read_fit_file(path)?;
+    let mat = &material;
     let num = |t: &toml::Table, k: &str| t.get(k).and_then(toml::Value::as_float);
-    let abs =
-        std::fs::canonicalize(path).with_context(|| format!("resolving {}", path.display()))?;
     let row = |model: brdf::spec::ModelKind, cutoff: Option<String>| -> anyhow::Result<String> {
         models::desc_toml(&MaterialDesc {
             include: Some(abs.display().to_string()),

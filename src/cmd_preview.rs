@@ -241,21 +241,8 @@ fn sample_cells(s: &Surface, names: &[String], cutoff: f64) -> anyhow::Result<Ve
 }
 
 fn material_cells(path: &Path, names: &[String]) -> anyhow::Result<(String, Vec<Cell>)> {
-    let text =
-        std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
-    let doc: toml::Table =
-        toml::from_str(&text).with_context(|| format!("parsing {}", path.display()))?;
-    let mat = doc
-        .get("material")
-        .and_then(toml::Value::as_table)
-        .ok_or_else(|| {
-            anyhow!(
-                "{}: no [material] table (expected a `lustre fit` material file)",
-                path.display()
-            )
-        })?;
-    let abs =
-        std::fs::canonicalize(path).with_context(|| format!("resolving {}", path.display()))?;
+    let models::FitFile { doc, material, abs } = models::read_fit_file(path)?;
+    let mat = &material;
     let name = path
         .file_stem()
         .map_or_else(|| "material".into(), |s| s.to_string_lossy().into_owned());

@@ -163,6 +163,38 @@ pub fn lobe_rho(spec: &MaterialSpec, lambda_nm: f64) -> f64 {
     }
 }
 
+/// A `lustre fit` material file as `compare` and `preview` read it.
+pub struct FitFile {
+    /// The whole document (for its `[two_scale.*]` tables).
+    pub doc: toml::Table,
+    /// Its `[material]` table.
+    pub material: toml::Table,
+    /// The file's absolute path, for the `include` of generated scenes.
+    pub abs: std::path::PathBuf,
+}
+
+/// Reads a `lustre fit` material file; an error names the file and what is missing.
+pub fn read_fit_file(path: &std::path::Path) -> anyhow::Result<FitFile> {
+    use anyhow::Context;
+    let text =
+        std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
+    let doc: toml::Table =
+        toml::from_str(&text).with_context(|| format!("parsing {}", path.display()))?;
+    let material = doc
+        .get("material")
+        .and_then(toml::Value::as_table)
+        .cloned()
+        .ok_or_else(|| {
+            anyhow!(
+                "{}: no [material] table (expected a `lustre fit` material file)",
+                path.display()
+            )
+        })?;
+    let abs =
+        std::fs::canonicalize(path).with_context(|| format!("resolving {}", path.display()))?;
+    Ok(FitFile { doc, material, abs })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -102,6 +102,8 @@ pub struct ModelCache {
     /// term, which none of their tables depends on: another metal is a
     /// `with_fresnel` clone, not a rebuild.
     pub surfaces: Lru<String, SurfaceModel>,
+    /// A query's material keys as written (canonical JSON) → the key of its model.
+    pub resolved: Lru<String, String>,
     /// Models built so far (cache misses).
     pub model_builds: usize,
     /// S̃ tables built so far.
@@ -133,6 +135,7 @@ impl ModelCache {
             models: Lru::new(models, usize::MAX),
             tables: Lru::new(usize::MAX, table_bytes),
             surfaces: Lru::new(SURFACE_ENTRIES, usize::MAX),
+            resolved: Lru::new(models.saturating_mul(4), usize::MAX),
             model_builds: 0,
             table_builds: 0,
         }
