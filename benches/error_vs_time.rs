@@ -211,7 +211,7 @@ fn new_film(scene: &Scene) -> Film {
 
 /// Linear sRGB of every pixel, in f64.
 fn rgb(film: &Film) -> Vec<[f64; 3]> {
-    (0..film.sums.len())
+    (0..film.sums().len())
         .map(|i| xyz_to_srgb(film.xyz(i)))
         .collect()
 }

@@ -1,7 +1,7 @@
 //! `lustre [render] scene.toml` and `lustre merge`.
 
 use anyhow::{Context, bail};
-use render::film::Film;
+use render::film::{Film, ResumeError};
 use render::{RenderOptions, Scene};
 use std::ops::Range;
 use std::path::{Path, PathBuf};
@@ -200,13 +200,13 @@ fn write_images(
 ) -> anyhow::Result<()> {
     let rgb = film.rgb();
     if let Some(p) = exr {
-        render::output::write_exr(p, film.width, film.height, &rgb)?;
+        render::output::write_exr(p, film.width(), film.height(), &rgb)?;
         if !quiet {
             eprintln!("wrote {}", p.display());
         }
     }
     if let Some(p) = png {
-        render::output::write_png(p, film.width, film.height, &rgb)?;
+        render::output::write_png(p, film.width(), film.height(), &rgb)?;
         if !quiet {
             eprintln!("wrote {}", p.display());
         }
@@ -281,26 +281,17 @@ pub fn render(args: RenderArgs) -> anyhow::Result<()> {
     if args.resume {
         if film_path.exists() {
             let old = Film::load(&film_path)?;
-            if let Err(why) = old.check_compatible(&film) {
-                bail!(
-                    "{}: the checkpoint does not belong to this render: {why}; \
-                     remove it or choose another --film",
+            todo = match film.resume(old, target.clone()) {
+                Ok(todo) => todo,
+                Err(e @ ResumeError::Incompatible(_)) => bail!(
+                    "{}: {e}; remove it or choose another --film",
                     film_path.display()
-                );
-            }
-            if old.ranges.len() != 1 || old.ranges[0].start != target.start {
-                bail!(
-                    "{}: holds samples {:?}, not a prefix of {}..{}; use `lustre merge` for shards",
-                    film_path.display(),
-                    old.ranges,
-                    target.start,
-                    target.end
-                );
-            }
-            todo = old.ranges[0].end.min(target.end)..target.end;
-            film.ranges = old.ranges;
-            film.sums = old.sums;
-            film.dropped = old.dropped;
+                ),
+                Err(e @ ResumeError::NotAPrefix { .. }) => bail!(
+                    "{}: {e}; use `lustre merge` for shards",
+                    film_path.display()
+                ),
+            };
             if !args.quiet {
                 eprintln!(
                     "resuming from {}: {} spp done, {} to go",
@@ -382,7 +373,7 @@ pub fn render(args: RenderArgs) -> anyhow::Result<()> {
         }
     }
     // Printed even with --quiet: the image is wrong where these samples fell.
-    if let Some(w) = dropped_warning(&film.dropped) {
+    if let Some(w) = dropped_warning(film.dropped()) {
         if args.no_film {
             eprintln!("{w}");
         } else {
@@ -403,17 +394,18 @@ pub fn merge(args: MergeArgs) -> anyhow::Result<()> {
             .map_err(|m| anyhow::anyhow!("{}: cannot merge: {m}", p.display()))?;
     }
     if let Some(e) = args.exposure {
-        film.exposure = e;
+        film.set_exposure(e)
+            .map_err(|m| anyhow::anyhow!("--exposure: {m}"))?;
     }
     if !args.quiet {
         eprintln!(
             "merged {} film(s): samples {:?}, {} spp",
             args.inputs.len(),
-            film.ranges,
+            film.ranges(),
             film.spp()
         );
     }
-    if let Some(w) = dropped_warning(&film.dropped) {
+    if let Some(w) = dropped_warning(film.dropped()) {
         eprintln!("{w}");
     }
     if let Some(p) = &args.film {

@@ -66,7 +66,7 @@ fn preview_scenes_render_finite_and_deterministic() {
     for path in files {
         let text = std::fs::read_to_string(&path).unwrap();
         let scene = render::load_str(&path, &shrink(&text, 40, 30, 4)).unwrap();
-        assert!(scene.mesh.is_some() && scene.lights.environment.is_some());
+        assert!(scene.shapes.mesh.is_some() && scene.lights.environment.is_some());
         for y in 0..30 {
             for x in 0..40 {
                 for s in 0..4 {
@@ -86,12 +86,12 @@ fn preview_scenes_render_finite_and_deterministic() {
         let a = render(&scene, 4, 1);
         let b = render(&scene, 4, 2);
         assert_eq!(
-            a.sums,
-            b.sums,
+            a.sums(),
+            b.sums(),
             "{}: thread count changed the image",
             path.display()
         );
-        let n = a.sums.len();
+        let n = a.sums().len();
         let mean_y = (0..n).map(|i| a.xyz(i)[1]).sum::<f64>() / n as f64;
         let max_y = (0..n).map(|i| a.xyz(i)[1]).fold(0.0, f64::max);
         eprintln!(
@@ -155,7 +155,7 @@ fn object_pixels(scene: &Scene, film: &Film) -> (f64, f64, f64, usize) {
     for y in 0..cam.height {
         for x in 0..cam.width {
             let ray = cam.ray(x as f64 + 0.5, y as f64 + 0.5);
-            if scene.intersect(&ray, f64::INFINITY).is_some() {
+            if scene.shapes.intersect(&ray, f64::INFINITY).is_some() {
                 let v = film.xyz((y * cam.width + x) as usize)[1];
                 sum += v;
                 lo = lo.min(v);

@@ -70,7 +70,7 @@ fn check_furnace(mode: &str, tol: f64, pixel_tol: f64) {
         },
     )
     .unwrap();
-    let n = film.sums.len();
+    let n = film.sums().len();
     let ys: Vec<f64> = (0..n).map(|i| film.xyz(i)[1]).collect();
     let mean = ys.iter().sum::<f64>() / n as f64;
     let worst = ys.iter().map(|y| (y - 1.0).abs()).fold(0.0, f64::max);

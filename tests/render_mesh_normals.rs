@@ -91,7 +91,7 @@ fn render_y(dir: &std::path::Path, text: &str, seed: u64) -> Vec<f64> {
     scene.settings.seed = seed;
     let mut film = Film::new(32, 32, scene.fingerprint, seed, 0.0);
     render::render_range(&scene, &mut film, 0..64, &RenderOptions::default()).unwrap();
-    (0..film.sums.len()).map(|i| film.xyz(i)[1]).collect()
+    (0..film.sums().len()).map(|i| film.xyz(i)[1]).collect()
 }
 
 #[test]

@@ -71,7 +71,7 @@ spectrum = "constant"
     );
     let mut film = Film::new(24, 18, scene.fingerprint, 5, 0.0);
     render::render_range(&scene, &mut film, 0..32, &RenderOptions::default()).unwrap();
-    let ys: Vec<f64> = (0..film.sums.len()).map(|i| film.xyz(i)[1]).collect();
+    let ys: Vec<f64> = (0..film.sums().len()).map(|i| film.xyz(i)[1]).collect();
     let mean = ys.iter().sum::<f64>() / ys.len() as f64;
     let worst = ys.iter().map(|y| (y - 1.0).abs()).fold(0.0, f64::max);
     eprintln!("mesh furnace: mean Y {mean:.5}, worst |Y − 1| {worst:.4}");
@@ -81,7 +81,7 @@ spectrum = "constant"
     );
     // The cube must actually be in view: some camera rays hit it first.
     let cam_ray = scene.camera.ray(12.0, 9.0);
-    let hit = scene.intersect(&cam_ray, f64::INFINITY).unwrap();
+    let hit = scene.shapes.intersect(&cam_ray, f64::INFINITY).unwrap();
     assert!(matches!(hit.surface, render::scene::Surface::Material(0)));
     std::fs::remove_dir_all(&dir).unwrap();
 }

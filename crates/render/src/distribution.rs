@@ -1,52 +1,72 @@
-//! Piecewise-constant 1-D and 2-D distributions for importance sampling.
+//! Piecewise-constant 1-D and 2-D distributions for importance sampling:
+//! one 1-D type serves the wavelength pdf, environment-map rows and
+//! marginals, and the sky's table.
 
 /// A piecewise-constant density on [0, 1) with `n` equal bins.
+///
+/// Sampling inverts the CDF with a guide table (one cell per bin: the cell
+/// of `u` gives a start index, a short walk gives the exact answer), so the
+/// result is what a binary search would give, at O(1) expected cost.
 #[derive(Clone, Debug)]
 pub struct Distribution1D {
+    /// `cdf[i]` = probability of bins `< i`; `cdf[n]` = 1.
     cdf: Vec<f64>,
-    func: Vec<f64>,
+    /// Probability of each bin (weight / total).
+    pmf: Vec<f64>,
+    /// Sum of weights / n: the integral of the unnormalised density.
     integral: f64,
+    /// `guide[k]` = number of CDF entries ≤ k/n.
+    guide: Vec<u32>,
 }
 
 impl Distribution1D {
-    /// From non-negative bin weights. All-zero weights give a uniform density.
+    /// From bin weights; negative and non-finite weights count as 0, and
+    /// all-zero weights give a uniform density.
     pub fn new(weights: &[f64]) -> Distribution1D {
         let n = weights.len().max(1);
-        let mut func: Vec<f64> = weights
+        let mut w: Vec<f64> = weights
             .iter()
             .map(|w| if w.is_finite() { w.max(0.0) } else { 0.0 })
             .collect();
-        func.resize(n, 0.0);
-        let mut cdf = vec![0.0; n + 1];
-        for i in 0..n {
-            cdf[i + 1] = cdf[i] + func[i] / n as f64;
-        }
-        let integral = cdf[n];
-        if integral > 0.0 {
-            cdf.iter_mut().for_each(|c| *c /= integral);
+        w.resize(n, 0.0);
+        let total: f64 = w.iter().sum();
+        let (total, integral) = if total > 0.0 && total.is_finite() {
+            (total, total / n as f64)
         } else {
-            func.iter_mut().for_each(|f| *f = 1.0);
-            cdf.iter_mut()
-                .enumerate()
-                .for_each(|(i, c)| *c = i as f64 / n as f64);
+            w.iter_mut().for_each(|v| *v = 1.0);
+            (n as f64, 1.0)
+        };
+        let pmf: Vec<f64> = w.iter().map(|v| v / total).collect();
+        let mut cdf = Vec::with_capacity(n + 1);
+        let mut acc = 0.0;
+        cdf.push(0.0);
+        for w in &w {
+            acc += w / total;
+            cdf.push(acc);
         }
         cdf[n] = 1.0;
-        let integral = if integral > 0.0 { integral } else { 1.0 };
+        let guide = (0..n)
+            .map(|k| {
+                let u = k as f64 / n as f64;
+                cdf.partition_point(|&c| c <= u) as u32
+            })
+            .collect();
         Distribution1D {
             cdf,
-            func,
+            pmf,
             integral,
+            guide,
         }
     }
 
     /// Number of bins.
     pub fn len(&self) -> usize {
-        self.func.len()
+        self.pmf.len()
     }
 
     /// Whether there are no bins (never: at least one exists).
     pub fn is_empty(&self) -> bool {
-        self.func.is_empty()
+        self.pmf.is_empty()
     }
 
     /// Sum of weights / n: the integral of the unnormalised density.
@@ -54,22 +74,68 @@ impl Distribution1D {
         self.integral
     }
 
-    /// Draws x ∈ [0, 1); returns (x, density at x, bin).
-    pub fn sample(&self, u: f64) -> (f64, f64, usize) {
-        let n = self.func.len();
-        let i = (self.cdf.partition_point(|&c| c <= u).saturating_sub(1)).min(n - 1);
+    /// The CDF entries (`len() + 1` of them, from 0 to 1).
+    pub fn cdf(&self) -> &[f64] {
+        &self.cdf
+    }
+
+    /// The number of CDF entries ≤ `u` (`partition_point(|c| c <= u)`),
+    /// started from the guide's cell and walked to the exact answer, so the
+    /// result does not depend on how `u · n` rounds.
+    #[inline]
+    fn cdf_count_le(&self, u: f64) -> usize {
+        let cdf = &self.cdf[..];
+        let cell = if u > 0.0 {
+            ((u * self.guide.len() as f64) as usize).min(self.guide.len() - 1)
+        } else {
+            0
+        };
+        let mut p = self.guide[cell] as usize;
+        while p < cdf.len() && cdf[p] <= u {
+            p += 1;
+        }
+        while p > 0 && cdf[p - 1] > u {
+            p -= 1;
+        }
+        p
+    }
+
+    /// The bin of a uniform `u` ∈ [0, 1) and the position within it,
+    /// `t` ∈ [0, 1] (½ for a bin of probability 0).
+    #[inline]
+    pub fn sample_bin(&self, u: f64) -> (usize, f64) {
+        let i = self
+            .cdf_count_le(u)
+            .saturating_sub(1)
+            .min(self.pmf.len() - 1);
         let span = self.cdf[i + 1] - self.cdf[i];
         let t = if span > 0.0 {
-            ((u - self.cdf[i]) / span).clamp(0.0, 1.0 - f64::EPSILON)
+            ((u - self.cdf[i]) / span).clamp(0.0, 1.0)
         } else {
             0.5
         };
-        ((i as f64 + t) / n as f64, self.func[i] / self.integral, i)
+        (i, t)
     }
 
-    /// Density at bin `i`.
+    /// Draws x ∈ [0, 1); returns (x, density at x, bin).
+    #[inline]
+    pub fn sample(&self, u: f64) -> (f64, f64, usize) {
+        let (i, t) = self.sample_bin(u);
+        let n = self.pmf.len();
+        let x = (i as f64 + t.min(1.0 - f64::EPSILON)) / n as f64;
+        (x, self.pdf_bin(i), i)
+    }
+
+    /// Probability of bin `i`.
+    #[inline]
+    pub fn pmf(&self, i: usize) -> f64 {
+        self.pmf.get(i).copied().unwrap_or(0.0)
+    }
+
+    /// Density on [0, 1) in bin `i`.
+    #[inline]
     pub fn pdf_bin(&self, i: usize) -> f64 {
-        self.func.get(i).map_or(0.0, |f| f / self.integral)
+        self.pmf(i) * self.pmf.len() as f64
     }
 }
 
@@ -110,6 +176,38 @@ impl Distribution2D {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn guided_inversion_matches_binary_search_and_zero_bins_are_never_drawn() {
+        let mut w: Vec<f64> = (0..300).map(|i| ((i * 37) % 11) as f64).collect();
+        w[5] = f64::NAN;
+        w[6] = -3.0;
+        w[299] = 1e-300;
+        let d = Distribution1D::new(&w);
+        let mut us: Vec<f64> = d
+            .cdf()
+            .iter()
+            .flat_map(|&c| [c, c.next_up(), c.next_down()])
+            .filter(|u| (0.0..1.0).contains(u))
+            .collect();
+        us.extend((0..20_000).map(|k| (k as f64 + 0.5) / 20_000.0));
+        us.extend([0.0, 1.0f64.next_down()]);
+        for u in us {
+            let want = (d.cdf().partition_point(|&c| c <= u) - 1).min(d.len() - 1);
+            let (i, t) = d.sample_bin(u);
+            assert_eq!(i, want, "u = {u}");
+            assert!((0.0..=1.0).contains(&t));
+            let (x, p, j) = d.sample(u);
+            assert!((0.0..1.0).contains(&x) && j == i);
+            assert!(p > 0.0, "u = {u} drew bin {i} of weight {}", w[i]);
+        }
+        let sum: f64 = (0..d.len()).map(|i| d.pmf(i)).sum();
+        assert!((sum - 1.0).abs() < 1e-12);
+        // All-zero weights: uniform.
+        let z = Distribution1D::new(&[0.0, 0.0, f64::INFINITY]);
+        assert_eq!(z.pdf_bin(2), 1.0);
+        assert_eq!(z.sample(0.5).2, 1);
+    }
 
     #[test]
     fn samples_match_pdf() {

@@ -129,8 +129,30 @@ impl fmt::Display for Dropped {
 }
 
 /// Accumulated samples of one image.
+///
+/// The fields carry invariants (sums of exactly width × height pixels,
+/// sorted disjoint sample ranges, a fingerprint that says which scene the
+/// sums belong to), so they are private: a film is made empty
+/// ([`Film::new`], [`Film::for_scene`]), filled by the renderer, combined
+/// with [`Film::merge`] / [`Film::resume`], read from a `.film`, or
+/// assembled from checked [`FilmParts`].
 #[derive(Clone, Debug, PartialEq)]
 pub struct Film {
+    width: u32,
+    height: u32,
+    fingerprint: u64,
+    seed: u64,
+    exposure: f64,
+    inputs: Vec<InputFile>,
+    pub(crate) dropped: Dropped,
+    ranges: Vec<Range<u64>>,
+    pub(crate) sums: Vec<[i128; 3]>,
+}
+
+/// A film's contents as plain data, for tools that build or inspect films
+/// field by field; [`Film::from_parts`] checks them.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FilmParts {
     /// Width in pixels.
     pub width: u32,
     /// Height in pixels.
@@ -146,11 +168,42 @@ pub struct Film {
     pub inputs: Vec<InputFile>,
     /// Samples left out because their estimate was non-finite or negative.
     pub dropped: Dropped,
-    /// Sample-index ranges accumulated, sorted and disjoint.
+    /// Sample-index ranges accumulated: non-empty, sorted, with gaps between.
     pub ranges: Vec<Range<u64>>,
-    /// Fixed-point X, Y, Z sums per pixel.
+    /// Fixed-point X, Y, Z sums per pixel (see [`to_fixed`]), row-major from the top.
     pub sums: Vec<[i128; 3]>,
 }
+
+/// Why a checkpoint cannot be resumed.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum ResumeError {
+    /// It holds samples of another render (resolution, seed or inputs differ).
+    Incompatible(String),
+    /// It holds samples that are not one prefix of the requested range.
+    NotAPrefix {
+        /// The ranges the checkpoint holds.
+        held: Vec<Range<u64>>,
+        /// The range the render asks for.
+        target: Range<u64>,
+    },
+}
+
+impl fmt::Display for ResumeError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            ResumeError::Incompatible(why) => {
+                write!(f, "the checkpoint does not belong to this render: {why}")
+            }
+            ResumeError::NotAPrefix { held, target } => write!(
+                f,
+                "holds samples {held:?}, not a prefix of {}..{}",
+                target.start, target.end
+            ),
+        }
+    }
+}
+
+impl std::error::Error for ResumeError {}
 
 /// Converts one sample's XYZ to fixed point: `(v·2⁴⁰).round() as i128`,
 /// 0 for non-finite `v`.
@@ -207,15 +260,157 @@ impl Film {
     /// An empty film for `scene` (its resolution, fingerprint, inputs,
     /// seed and exposure).
     pub fn for_scene(scene: &crate::Scene) -> Film {
-        let mut f = Film::new(
+        Film::new(
             scene.camera.width,
             scene.camera.height,
             scene.fingerprint,
             scene.settings.seed,
             scene.settings.exposure,
-        );
-        f.inputs = scene.inputs.clone();
-        f
+        )
+        .with_inputs(scene.inputs.clone())
+    }
+
+    /// The film with `inputs` recorded as the files its scene was built from.
+    pub fn with_inputs(mut self, inputs: Vec<InputFile>) -> Film {
+        self.inputs = inputs;
+        self
+    }
+
+    /// A film from its parts, checked as a `.film` file is: resolution
+    /// within [`MAX_SIDE`] / [`MAX_PIXELS`], one sum per pixel, finite
+    /// exposure, ranges non-empty, sorted and disjoint, the first dropped
+    /// sample inside the image and present exactly when some were dropped.
+    pub fn from_parts(p: FilmParts) -> Result<Film, String> {
+        let FilmParts {
+            width,
+            height,
+            fingerprint,
+            seed,
+            exposure,
+            inputs,
+            dropped,
+            ranges,
+            sums,
+        } = p;
+        if width == 0 || height == 0 || width > MAX_SIDE || height > MAX_SIDE {
+            return Err(format!(
+                "resolution {width}×{height} (expected 1..={MAX_SIDE} each)"
+            ));
+        }
+        let pixels = width as u64 * height as u64;
+        if pixels > MAX_PIXELS {
+            return Err(format!("{width}×{height} is more than {MAX_PIXELS} pixels"));
+        }
+        if sums.len() as u64 != pixels {
+            return Err(format!(
+                "{} pixel sums for {width}×{height} pixels",
+                sums.len()
+            ));
+        }
+        if !exposure.is_finite() {
+            return Err(format!("exposure {exposure}"));
+        }
+        if let Some(a) = dropped.first
+            && (a.x >= width || a.y >= height)
+        {
+            return Err(format!(
+                "first dropped sample at pixel ({}, {}) outside {width}×{height}",
+                a.x, a.y
+            ));
+        }
+        if dropped.first.is_some() != (dropped.total() > 0) {
+            return Err("dropped-sample counts and location disagree".into());
+        }
+        for (i, r) in ranges.iter().enumerate() {
+            if r.start >= r.end || (i > 0 && ranges[i - 1].end >= r.start) {
+                return Err(format!(
+                    "sample range {}..{} is empty, unsorted or overlaps",
+                    r.start, r.end
+                ));
+            }
+        }
+        Ok(Film {
+            width,
+            height,
+            fingerprint,
+            seed,
+            exposure,
+            inputs,
+            dropped,
+            ranges,
+            sums,
+        })
+    }
+
+    /// The film's contents as plain data.
+    pub fn into_parts(self) -> FilmParts {
+        FilmParts {
+            width: self.width,
+            height: self.height,
+            fingerprint: self.fingerprint,
+            seed: self.seed,
+            exposure: self.exposure,
+            inputs: self.inputs,
+            dropped: self.dropped,
+            ranges: self.ranges,
+            sums: self.sums,
+        }
+    }
+
+    /// Width in pixels.
+    pub fn width(&self) -> u32 {
+        self.width
+    }
+
+    /// Height in pixels.
+    pub fn height(&self) -> u32 {
+        self.height
+    }
+
+    /// Fingerprint of the scene the samples belong to.
+    pub fn fingerprint(&self) -> u64 {
+        self.fingerprint
+    }
+
+    /// Seed the samples were drawn with.
+    pub fn seed(&self) -> u64 {
+        self.seed
+    }
+
+    /// Exposure (stops) applied when writing images.
+    pub fn exposure(&self) -> f64 {
+        self.exposure
+    }
+
+    /// Sets the exposure used by [`Film::rgb`] (it does not change the
+    /// samples, so it is no part of a film's identity); non-finite values
+    /// are refused.
+    pub fn set_exposure(&mut self, stops: f64) -> Result<(), String> {
+        if !stops.is_finite() {
+            return Err(format!("exposure {stops} is not finite"));
+        }
+        self.exposure = stops;
+        Ok(())
+    }
+
+    /// The files the scene was built from.
+    pub fn inputs(&self) -> &[InputFile] {
+        &self.inputs
+    }
+
+    /// Samples left out of the sums.
+    pub fn dropped(&self) -> &Dropped {
+        &self.dropped
+    }
+
+    /// Sample-index ranges accumulated, sorted and disjoint.
+    pub fn ranges(&self) -> &[Range<u64>] {
+        &self.ranges
+    }
+
+    /// Fixed-point X, Y, Z sums per pixel, row-major from the top.
+    pub fn sums(&self) -> &[[i128; 3]] {
+        &self.sums
     }
 
     /// Total samples per pixel accumulated.
@@ -253,7 +448,7 @@ impl Film {
     /// resolution, seed and fingerprint. The error names the input files
     /// that differ when the fingerprints do, as changes from this film's
     /// inputs ("then") to `other`'s ("now").
-    pub fn check_compatible(&self, other: &Film) -> Result<(), String> {
+    pub fn compatible_with(&self, other: &Film) -> Result<(), String> {
         if (self.width, self.height) != (other.width, other.height) {
             return Err(format!(
                 "resolution {}×{} differs from {}×{}",
@@ -280,7 +475,7 @@ impl Film {
     /// seed and hold disjoint sample ranges (a duplicated shard would count
     /// its samples twice). On error the film is unchanged.
     pub fn merge(&mut self, other: &Film) -> Result<(), String> {
-        self.check_compatible(other)?;
+        self.compatible_with(other)?;
         let mut ranges = self.ranges.clone();
         for r in &other.ranges {
             ranges = with_range(&ranges, r.clone())?;
@@ -293,6 +488,38 @@ impl Film {
         }
         self.dropped.add(&other.dropped);
         Ok(())
+    }
+
+    /// Continues from `checkpoint`, a film of the same render holding one
+    /// prefix of `target` (what an interrupted render of `target` leaves):
+    /// adopts its samples and returns the sample range still to render
+    /// (empty when the checkpoint already covers `target`). On error this
+    /// film is unchanged.
+    pub fn resume(
+        &mut self,
+        checkpoint: Film,
+        target: Range<u64>,
+    ) -> Result<Range<u64>, ResumeError> {
+        checkpoint
+            .compatible_with(self)
+            .map_err(ResumeError::Incompatible)?;
+        let [done] = checkpoint.ranges.as_slice() else {
+            return Err(ResumeError::NotAPrefix {
+                held: checkpoint.ranges,
+                target,
+            });
+        };
+        if done.start != target.start {
+            return Err(ResumeError::NotAPrefix {
+                held: checkpoint.ranges,
+                target,
+            });
+        }
+        let todo = done.end.min(target.end)..target.end;
+        self.ranges = checkpoint.ranges;
+        self.sums = checkpoint.sums;
+        self.dropped = checkpoint.dropped;
+        Ok(todo)
     }
 
     /// Serialises the film.
@@ -393,31 +620,17 @@ impl Film {
         let fingerprint = u64::from_le_bytes(r.array()?);
         let seed = u64::from_le_bytes(r.array()?);
         let exposure = f64::from_le_bytes(r.array()?);
-        if !exposure.is_finite() {
-            return Err(format!("corrupt film: exposure {exposure}"));
-        }
         let non_finite = u64::from_le_bytes(r.array()?);
         let negative = u64::from_le_bytes(r.array()?);
         let first_sample = u64::from_le_bytes(r.array()?);
         let first_x = u32::from_le_bytes(r.array()?);
         let first_y = u32::from_le_bytes(r.array()?);
-        let first = if first_sample == u64::MAX && first_x == u32::MAX && first_y == u32::MAX {
-            None
-        } else if first_x < width && first_y < height {
-            Some(DroppedAt {
+        let first = (first_sample != u64::MAX || first_x != u32::MAX || first_y != u32::MAX)
+            .then_some(DroppedAt {
                 x: first_x,
                 y: first_y,
                 sample: first_sample,
-            })
-        } else {
-            return Err(format!(
-                "corrupt film: first dropped sample at pixel ({first_x}, {first_y}) outside \
-                 {width}×{height}"
-            ));
-        };
-        if first.is_some() != (non_finite.saturating_add(negative) > 0) {
-            return Err("corrupt film: dropped-sample counts and location disagree".into());
-        }
+            });
         let n_inputs = u32::from_le_bytes(r.array()?) as usize;
         // Each input takes at least 20 bytes.
         if n_inputs > MAX_INPUTS || n_inputs.saturating_mul(20) > r.remaining() {
@@ -448,12 +661,6 @@ impl Film {
         for _ in 0..n_ranges {
             let a = u64::from_le_bytes(r.array()?);
             let b = u64::from_le_bytes(r.array()?);
-            // Written merged: non-empty, increasing, with gaps between.
-            if a >= b || ranges.last().is_some_and(|p| p.end >= a) {
-                return Err(format!(
-                    "corrupt film: sample range {a}..{b} is empty, unsorted or overlaps"
-                ));
-            }
             ranges.push(a..b);
         }
         let want = pixels as u128 * PIXEL_BYTES;
@@ -471,7 +678,7 @@ impl Film {
             }
             sums.push(px);
         }
-        Ok(Film {
+        Film::from_parts(FilmParts {
             width,
             height,
             fingerprint,
@@ -486,6 +693,7 @@ impl Film {
             ranges,
             sums,
         })
+        .map_err(|m| format!("corrupt film: {m}"))
     }
 
     /// Writes the film atomically.

@@ -213,7 +213,7 @@ pub fn trace(
     };
 
     for depth in 0..=settings.max_depth {
-        let Some(hit) = scene.intersect(&ray, f64::INFINITY) else {
+        let Some(hit) = scene.shapes.intersect(&ray, f64::INFINITY) else {
             let (em, pdf_l) = lights.environment(ray.d);
             add_emission(&mut out, &t, &q, &l_mis, em, pdf_l);
             break;
@@ -271,7 +271,7 @@ pub fn trace(
                         v.1 = 0.0;
                     }
                 }
-                if fp[..n].iter().any(|v| v.0 > 0.0) && !scene.occluded(&shadow, t_max) {
+                if fp[..n].iter().any(|v| v.0 > 0.0) && !scene.shapes.occluded(&shadow, t_max) {
                     let own: f64 = q[..n].iter().sum::<f64>() * ls.pdf;
                     let other: f64 = (0..n).map(|k| q[k] * fp[k].1).sum();
                     let w = mis_over_pdf(mis, own, other);

@@ -11,7 +11,7 @@
 //! let mut film = render::Film::new(scene.camera.width, scene.camera.height,
 //!     scene.fingerprint, scene.settings.seed, scene.settings.exposure);
 //! render::render_range(&scene, &mut film, 0..scene.settings.spp, &Default::default())?;
-//! render::output::write_exr("out.exr".as_ref(), film.width, film.height, &film.rgb())?;
+//! render::output::write_exr("out.exr".as_ref(), film.width(), film.height(), &film.rgb())?;
 //! # Ok::<(), render::RenderError>(())
 //! ```
 

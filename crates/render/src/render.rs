@@ -210,10 +210,11 @@ pub fn render_range_in(
 ) -> Result<RenderOutcome, RenderError> {
     let start = Instant::now();
     let (w, h) = (scene.camera.width, scene.camera.height);
-    if (film.width, film.height) != (w, h) {
+    if (film.width(), film.height()) != (w, h) {
         return Err(RenderError::Options(format!(
             "film is {}×{} but the scene renders {w}×{h}",
-            film.width, film.height
+            film.width(),
+            film.height()
         )));
     }
     let tiles = tiles(w, h);

@@ -16,6 +16,7 @@
 //! 3 530); for one wavelength per path it drops by 10 %.
 
 use crate::color::XYZ_TO_SRGB;
+use crate::distribution::Distribution1D;
 use crate::spectrum::Cie;
 
 /// Hero-wavelength count (Wilkie et al. 2014).
@@ -27,17 +28,11 @@ pub struct WavelengthSampler {
     lo: f64,
     hi: f64,
     bin: f64,
-    cdf: Vec<f64>,
+    dist: Distribution1D,
+    /// Density per nm of each bin (kept as `w / (Σw · bin)`, the form the
+    /// estimator has always used, rather than recomputed from the pmf).
     density: Vec<f64>,
-    /// `guide[k]` = number of CDF entries ≤ k/guide.len(): the start of the
-    /// search for `u` in cell k (see [`WavelengthSampler::sample`]).
-    guide: Vec<u32>,
 }
-
-/// Guide cells per wavelength bin: the densest bin (|r̄|+|ḡ|+|b̄| near 596 nm)
-/// holds ≈ 2.7× the mean probability, so with 4 cells per bin a cell spans at most
-/// about one CDF step and the search walks one or two entries.
-const GUIDE_CELLS_PER_BIN: usize = 4;
 
 impl WavelengthSampler {
     /// Builds the distribution over `[lo, hi]` ⊂ [360, 830] nm.
@@ -53,29 +48,13 @@ impl WavelengthSampler {
             })
             .collect();
         let total: f64 = weights.iter().sum();
-        let mut cdf = Vec::with_capacity(n + 1);
-        let mut acc = 0.0;
-        cdf.push(0.0);
-        for w in &weights {
-            acc += w / total;
-            cdf.push(acc);
-        }
-        cdf[n] = 1.0;
         let density = weights.iter().map(|w| w / (total * bin)).collect();
-        let cells = n * GUIDE_CELLS_PER_BIN;
-        let guide = (0..cells)
-            .map(|k| {
-                let u = k as f64 / cells as f64;
-                cdf.partition_point(|&c| c <= u) as u32
-            })
-            .collect();
         WavelengthSampler {
             lo,
             hi,
             bin,
-            cdf,
+            dist: Distribution1D::new(&weights),
             density,
-            guide,
         }
     }
 
@@ -86,31 +65,8 @@ impl WavelengthSampler {
 
     /// Draws λ from a uniform `u` ∈ [0, 1).
     pub fn sample(&self, u: f64) -> f64 {
-        let i = (self.cdf_count_le(u) - 1).min(self.density.len() - 1);
-        let span = self.cdf[i + 1] - self.cdf[i];
-        let t = if span > 0.0 {
-            ((u - self.cdf[i]) / span).clamp(0.0, 1.0)
-        } else {
-            0.5
-        };
+        let (i, t) = self.dist.sample_bin(u);
         (self.lo + (i as f64 + t) * self.bin).min(self.hi)
-    }
-
-    /// The number of CDF entries ≤ `u` (`partition_point(|c| c <= u)`),
-    /// started from the guide's cell and walked to the exact answer, so the
-    /// result does not depend on how `u · cells` rounds.
-    #[inline]
-    fn cdf_count_le(&self, u: f64) -> usize {
-        let cdf = &self.cdf[..];
-        let cell = ((u * self.guide.len() as f64) as usize).min(self.guide.len() - 1);
-        let mut p = self.guide[cell] as usize;
-        while p < cdf.len() && cdf[p] <= u {
-            p += 1;
-        }
-        while p > 0 && cdf[p - 1] > u {
-            p -= 1;
-        }
-        p
     }
 
     /// Density (per nm) of `lambda`.
@@ -203,30 +159,5 @@ mod tests {
         assert_eq!(a[1].to_bits(), b[0].to_bits());
         assert_eq!(a[0].to_bits(), b[3].to_bits());
         assert_eq!(s.stratified(0.7, 1)[0], s.sample(0.7));
-    }
-
-    #[test]
-    fn guided_sampling_matches_the_reference_bit_for_bit() {
-        use crate::rng::Rng;
-        let mut rng = Rng::for_sample(3, 1, 2);
-        for &(lo, hi) in &[(360.0, 830.0), (520.0, 540.0), (400.0, 401.5)] {
-            let s = WavelengthSampler::new(lo, hi);
-            let mut us: Vec<f64> = s
-                .cdf
-                .iter()
-                .flat_map(|&c| [c, c.next_up(), c.next_down()])
-                .filter(|u| (0.0..1.0).contains(u))
-                .collect();
-            us.extend((0..50_000).map(|_| rng.uniform()));
-            us.extend([0.0, 1.0f64.next_down()]);
-            for u in us {
-                let want_i = (s.cdf.partition_point(|&c| c <= u) - 1).min(s.density.len() - 1);
-                assert_eq!(
-                    (s.cdf_count_le(u) - 1).min(s.density.len() - 1),
-                    want_i,
-                    "u = {u}"
-                );
-            }
-        }
     }
 }

@@ -87,7 +87,7 @@ fn broken_material_samples_are_counted_located_and_left_out() {
 
     // Brute force: every camera sample, in (sample, row, column) order.
     let mut want = Dropped::default();
-    let mut sums = vec![[0.0f64; 3]; film.sums.len()];
+    let mut sums = vec![[0.0f64; 3]; film.sums().len()];
     for smp in 0..spp {
         for y in 0..s.camera.height {
             for x in 0..s.camera.width {
@@ -106,14 +106,14 @@ fn broken_material_samples_are_counted_located_and_left_out() {
     }
     assert!(want.non_finite > 0 && want.negative > 0, "{want:?}");
     assert_eq!(out.dropped, want);
-    assert_eq!(film.dropped, want);
+    assert_eq!(film.dropped(), &want);
     let first = want.first.unwrap();
     assert!(matches!(
         sample_pixel_checked(&s, first.x, first.y, first.sample),
         Err(BadSample::NonFinite | BadSample::Negative)
     ));
     // The film holds exactly the good samples (to fixed-point rounding).
-    for (i, (got, want)) in film.sums.iter().zip(&sums).enumerate() {
+    for (i, (got, want)) in film.sums().iter().zip(&sums).enumerate() {
         for k in 0..3 {
             let g = got[k] as f64 / (1u64 << 40) as f64;
             assert!(
@@ -126,7 +126,7 @@ fn broken_material_samples_are_counted_located_and_left_out() {
     }
     // The count travels through the film file.
     let back = Film::from_bytes(&film.to_bytes()).unwrap();
-    assert_eq!(back.dropped, want);
+    assert_eq!(back.dropped(), &want);
     let msg = want.to_string();
     assert!(
         msg.contains("sample(s) dropped") && msg.contains("first at pixel"),
@@ -140,6 +140,6 @@ fn a_sound_render_drops_nothing() {
     let mut film = Film::for_scene(&s);
     let out = render::render_range(&s, &mut film, 0..8, &RenderOptions::default()).unwrap();
     assert_eq!(out.dropped, Dropped::default());
-    assert_eq!(film.dropped.total(), 0);
-    assert!(film.sums.iter().any(|p| p[1] > 0));
+    assert_eq!(film.dropped().total(), 0);
+    assert!(film.sums().iter().any(|p| p[1] > 0));
 }

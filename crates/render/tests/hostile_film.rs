@@ -4,13 +4,12 @@
 //! panic, an abort (an attempt to allocate what the header claims) or a
 //! film silently accepted with other contents.
 
-use render::film::{BadSample, Film, MAX_PIXELS, MAX_SIDE};
+use render::film::{BadSample, Film, MAX_PIXELS, MAX_SIDE, ResumeError};
 use render::scene::InputFile;
 
 /// A small film with every section populated.
 fn sample_film() -> Film {
-    let mut f = Film::new(5, 3, 0x1234_5678_9abc_def0, 42, 0.5);
-    f.inputs = vec![
+    let mut f = Film::new(5, 3, 0x1234_5678_9abc_def0, 42, 0.5).with_inputs(vec![
         InputFile {
             name: "scene.toml".into(),
             len: 812,
@@ -21,19 +20,20 @@ fn sample_film() -> Film {
             len: 90_210,
             hash: 0xfeed_beef_cafe_f00d,
         },
-    ];
+    ]);
     f.add_range(0..64).unwrap();
     f.add_range(128..256).unwrap();
-    for (i, s) in f.sums.iter_mut().enumerate() {
+    let mut p = f.into_parts();
+    for (i, s) in p.sums.iter_mut().enumerate() {
         *s = [
             i as i128 * 1_000_003,
             -(i as i128),
             i128::MAX / (i as i128 + 2),
         ];
     }
-    f.dropped.record(BadSample::NonFinite, 2, 1, 17);
-    f.dropped.record(BadSample::Negative, 4, 2, 130);
-    f
+    p.dropped.record(BadSample::NonFinite, 2, 1, 17);
+    p.dropped.record(BadSample::Negative, 4, 2, 130);
+    Film::from_parts(p).unwrap()
 }
 
 /// Header offsets of format 2 (see film.rs).
@@ -226,7 +226,7 @@ fn crafted_headers_with_valid_checksums_are_refused_without_allocating() {
 
     for (what, bytes) in &cases {
         match Film::from_bytes(bytes) {
-            Ok(f) => panic!("crafted {what}: accepted as {}×{}", f.width, f.height),
+            Ok(f) => panic!("crafted {what}: accepted as {}×{}", f.width(), f.height()),
             Err(e) => assert!(!e.is_empty(), "{what}"),
         }
     }
@@ -249,21 +249,77 @@ fn load_errors_name_the_file() {
 #[test]
 fn merge_refuses_overlapping_or_duplicated_shards_and_keeps_high_indices_apart() {
     let base = sample_film();
-    let mut a = Film::new(5, 3, base.fingerprint, 42, 0.0);
-    a.add_range(0..10).unwrap();
+    let shard = |r: std::ops::Range<u64>| {
+        let mut f = Film::new(5, 3, base.fingerprint(), 42, 0.0);
+        f.add_range(r).unwrap();
+        f
+    };
+    let a = shard(0..10);
     let dup = a.clone();
     assert!(a.clone().merge(&dup).unwrap_err().contains("overlaps"));
-    let mut part = a.clone();
-    part.ranges.clear();
-    part.add_range(5..20).unwrap();
-    assert!(a.clone().merge(&part).is_err());
+    assert!(a.clone().merge(&shard(5..20)).is_err());
     // Indices past 2³² are samples of their own (the sampler no longer
     // wraps them), so such ranges merge as disjoint.
-    let mut high = a.clone();
-    high.ranges.clear();
-    high.add_range((1 << 32)..(1 << 32) + 10).unwrap();
+    let high = shard((1 << 32)..(1 << 32) + 10);
     let mut m = a.clone();
     m.merge(&high).unwrap();
     assert_eq!(m.spp(), 20);
     assert!(m.merge(&high).is_err());
+}
+
+#[test]
+fn from_parts_checks_what_a_film_file_is_checked_for() {
+    let good = sample_film().into_parts();
+    let refuse = |edit: &dyn Fn(&mut render::film::FilmParts), what: &str| {
+        let mut p = good.clone();
+        edit(&mut p);
+        let e = Film::from_parts(p).unwrap_err();
+        assert!(e.contains(what), "{what}: {e}");
+    };
+    refuse(&|p| p.sums.truncate(14), "pixel sums");
+    refuse(&|p| p.ranges = vec![0..10, 5..20], "overlaps");
+    refuse(&|p| p.ranges = vec![10..10, 20..30], "empty");
+    refuse(&|p| p.ranges = vec![20..30, 0..10], "unsorted");
+    refuse(&|p| p.exposure = f64::NAN, "exposure");
+    refuse(&|p| p.width = 0, "resolution");
+    refuse(&|p| p.dropped.first.as_mut().unwrap().x = 5, "outside 5×3");
+    refuse(&|p| p.dropped.first = None, "disagree");
+    assert_eq!(Film::from_parts(good.clone()).unwrap(), sample_film());
+}
+
+#[test]
+fn resume_adopts_a_prefix_and_leaves_the_film_unchanged_otherwise() {
+    let base = sample_film();
+    let empty = || Film::new(5, 3, base.fingerprint(), 42, 0.0);
+    let mut done = empty();
+    done.add_range(0..24).unwrap();
+
+    let mut f = empty();
+    assert_eq!(f.resume(done.clone(), 0..64), Ok(24..64));
+    assert_eq!(f.ranges(), std::slice::from_ref(&(0..24)));
+    // A checkpoint past the target leaves nothing to do.
+    let mut f = empty();
+    assert_eq!(f.resume(done.clone(), 0..16), Ok(16..16));
+
+    let refused = |checkpoint: Film, target: std::ops::Range<u64>| {
+        let mut f = empty();
+        let e = f.resume(checkpoint, target).unwrap_err();
+        assert_eq!(f, empty(), "film changed by a refused resume");
+        e
+    };
+    let other_seed = Film::new(5, 3, base.fingerprint(), 7, 0.0);
+    assert!(matches!(
+        refused(other_seed, 0..64),
+        ResumeError::Incompatible(m) if m.contains("seed")
+    ));
+    let mut shard = empty();
+    shard.add_range(8..24).unwrap();
+    assert!(matches!(
+        refused(shard, 0..64),
+        ResumeError::NotAPrefix { .. }
+    ));
+    let mut gaps = done.clone();
+    gaps.add_range(30..40).unwrap();
+    let e = refused(gaps, 0..64);
+    assert!(e.to_string().contains("not a prefix of 0..64"), "{e}");
 }

@@ -1,0 +1,534 @@
+//! Building a runtime [`Scene`] from its description, in named stages —
+//! camera, settings, materials (on first use), shapes, lights, wavelengths,
+//! and the fingerprint of every file read — each returning an error that
+//! points at the scene text it is about.
+
+use super::desc::{LightDesc, SceneDesc, ShapeDesc, TransformDesc};
+use super::inputs::{self, Inputs};
+use super::shapes::Shapes;
+use super::{ESTIMATOR, Scene, Settings, Surface};
+use crate::camera::Camera;
+use crate::error::SceneError;
+use crate::geometry::{Planar, Sphere, Transform};
+use crate::light::{EnvMap, Environment, LightKind, Lights};
+use crate::material::{Material, build_material};
+use crate::mesh::{MeshAccel, MeshSource, obj_from_bytes};
+use crate::sky::{Sky, SkyParams};
+use crate::spectrum::{LAMBDA_MAX, LAMBDA_MIN, Spectrum, parse_spectrum_with};
+use crate::wavelength::WavelengthSampler;
+use glam::DVec3;
+use std::collections::HashMap;
+use std::ops::Range;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// Builds a scene from its parsed description (`text` is the file's text,
+/// for error positions and the fingerprint).
+pub(super) fn build(path: &Path, text: &str, desc: &SceneDesc) -> Result<Scene, SceneError> {
+    let start = Instant::now();
+    let mut b = Builder::new(path, text, desc);
+    let camera = b.camera()?;
+    let settings = b.settings()?;
+    // Checked before any material is built: building can take milliseconds.
+    if desc.lights.is_empty() {
+        return Err(SceneError::new(
+            path,
+            "the scene has no lights: add a [[lights]] entry (point, sphere, rectangle, environment or sky)",
+        ));
+    }
+    let mut shapes = b.shapes()?;
+    let (lights, signed_radiance) = b.lights(&mut shapes)?;
+    let Some((lo, hi)) = lights.emission_range() else {
+        return Err(SceneError::new(
+            path,
+            "no light emits between 360 and 830 nm",
+        ));
+    };
+    let wavelengths = WavelengthSampler::new(lo, hi);
+    let n_tris: usize = shapes.meshes.iter().map(|m| m.triangles.len()).sum();
+    let shapes = Shapes {
+        planars: shapes.planars,
+        spheres: shapes.spheres,
+        mesh: (!shapes.meshes.is_empty()).then(|| MeshAccel::build(shapes.meshes)),
+    };
+    let (materials, inputs) = (b.materials, b.inputs.into_files());
+    let fingerprint = inputs::fingerprint(ESTIMATOR, &inputs);
+
+    let models: Vec<String> = materials
+        .iter()
+        .map(|m| format!("{} ({})", m.name, m.model.name()))
+        .collect();
+    let prepared = format!(
+        "prepared {}: {}×{} px, {} material(s) [{}], {} analytic shape(s), {}, {} light(s){}, λ {lo:.0}–{hi:.0} nm{} in {:.1} ms",
+        path.display(),
+        camera.width,
+        camera.height,
+        materials.len(),
+        models.join(", "),
+        shapes.analytic_count(),
+        if n_tris > 0 {
+            format!("BVH over {n_tris} triangle(s)")
+        } else {
+            "no BVH".into()
+        },
+        lights.len(),
+        if lights.environment.is_some() {
+            " incl. environment"
+        } else {
+            ", no environment sampling"
+        },
+        if lo > LAMBDA_MIN || hi < LAMBDA_MAX {
+            " (narrowed to the lights' emission)"
+        } else {
+            ""
+        },
+        start.elapsed().as_secs_f64() * 1e3
+    );
+
+    Ok(Scene {
+        path: path.to_path_buf(),
+        camera,
+        settings,
+        materials,
+        shapes,
+        lights,
+        wavelengths,
+        fingerprint,
+        inputs,
+        prepared,
+        signed_radiance,
+    })
+}
+
+/// Shapes as the shape and light stages collect them (meshes not yet in a BVH).
+struct ShapeLists {
+    planars: Vec<(Planar, Surface)>,
+    spheres: Vec<(Sphere, Surface)>,
+    meshes: Vec<MeshSource>,
+}
+
+/// The state the stages share: where relative files live, every file read
+/// so far (for the fingerprint), and the materials built so far.
+struct Builder<'a> {
+    path: &'a Path,
+    text: &'a str,
+    desc: &'a SceneDesc,
+    base: PathBuf,
+    inputs: Inputs,
+    materials: Vec<Material>,
+    material_index: HashMap<String, u32>,
+}
+
+impl<'a> Builder<'a> {
+    fn new(path: &'a Path, text: &'a str, desc: &'a SceneDesc) -> Builder<'a> {
+        let base = path
+            .parent()
+            .map_or_else(|| PathBuf::from("."), Path::to_path_buf);
+        let mut inputs = Inputs::new(&base);
+        inputs.record(inputs.name_of(path), normalised_text(text).as_bytes());
+        Builder {
+            path,
+            text,
+            desc,
+            base,
+            inputs,
+            materials: Vec::new(),
+            material_index: HashMap::new(),
+        }
+    }
+
+    /// An error at a byte span of the scene text.
+    fn at(&self, span: Range<usize>, msg: String) -> SceneError {
+        SceneError::at(self.path, self.text, span.start, msg)
+    }
+
+    /// Stage 1: the camera, with its resolution checked against the film's limits.
+    fn camera(&self) -> Result<Camera, SceneError> {
+        let cam = &self.desc.camera;
+        let [w, h] = *cam.resolution.get_ref();
+        if w == 0
+            || h == 0
+            || w > crate::film::MAX_SIDE
+            || h > crate::film::MAX_SIDE
+            || w as u64 * h as u64 > crate::film::MAX_PIXELS
+        {
+            return Err(self.at(
+                cam.resolution.span(),
+                format!(
+                    "resolution = [{w}, {h}] is invalid: expected 1..={} each and at most {} \
+                     pixels in all",
+                    crate::film::MAX_SIDE,
+                    crate::film::MAX_PIXELS
+                ),
+            ));
+        }
+        for v in [&cam.look_from, &cam.look_at, &cam.up] {
+            if !v.get_ref().iter().all(|x| x.is_finite()) {
+                return Err(self.at(v.span(), "[camera]: coordinates must be finite".into()));
+            }
+        }
+        Camera::new(
+            DVec3::from(*cam.look_from.get_ref()),
+            DVec3::from(*cam.look_at.get_ref()),
+            DVec3::from(*cam.up.get_ref()),
+            *cam.fov_deg.get_ref(),
+            w,
+            h,
+        )
+        .map_err(|m| {
+            // Point at the key the message is about (`up` may be defaulted: then the table).
+            let span = if m.contains("`look_at`") {
+                cam.look_at.span()
+            } else if m.contains("`up`") && !cam.up.span().is_empty() {
+                cam.up.span()
+            } else if m.contains("`up`") {
+                cam.look_at.span()
+            } else {
+                cam.fov_deg.span()
+            };
+            self.at(span, format!("[camera]: {m}"))
+        })
+    }
+
+    /// Stage 2: `[film]` and `[integrator]`.
+    fn settings(&self) -> Result<Settings, SceneError> {
+        let film = &self.desc.film;
+        if *film.spp.get_ref() == 0 {
+            return Err(self.at(film.spp.span(), "spp = 0 is invalid: expected ≥ 1".into()));
+        }
+        if !film.exposure.is_finite() {
+            return Err(SceneError::new(
+                self.path,
+                "[film]: exposure must be finite",
+            ));
+        }
+        let integrator = &self.desc.integrator;
+        let max_depth = *integrator.max_depth.get_ref();
+        if max_depth == 0 || max_depth > 1000 {
+            return Err(self.at(
+                integrator.max_depth.span(),
+                format!("max_depth = {max_depth} is invalid: expected 1..=1000"),
+            ));
+        }
+        Ok(Settings {
+            spp: *film.spp.get_ref(),
+            seed: film.seed,
+            max_depth,
+            rr_depth: integrator.rr_depth,
+            mode: integrator.wavelengths,
+            sampler: integrator.sampler,
+            mis: integrator.mis,
+            exr: film.exr.clone(),
+            png: film.png.clone(),
+            exposure: film.exposure,
+        })
+    }
+
+    /// Stage 3, on demand: the index of material `name`, built the first
+    /// time a shape uses it (materials nobody uses are never built).
+    fn material(&mut self, name: &str, span: Range<usize>) -> Result<u32, SceneError> {
+        if let Some(&i) = self.material_index.get(name) {
+            return Ok(i);
+        }
+        let Some(m) = self.desc.materials.get(name) else {
+            let names: Vec<&str> = self.desc.materials.keys().map(String::as_str).collect();
+            return Err(self.at(
+                span,
+                format!(
+                    "unknown material `{name}`; defined: {}",
+                    if names.is_empty() {
+                        "none (add a [materials.NAME] table)".into()
+                    } else {
+                        names.join(", ")
+                    }
+                ),
+            ));
+        };
+        let built = build_material(name, m.get_ref(), &self.base, &mut self.inputs)
+            .map_err(|e| self.at(m.span(), format!("[materials.{name}]: {e}")))?;
+        let i = self.materials.len() as u32;
+        self.materials.push(built);
+        self.material_index.insert(name.to_string(), i);
+        Ok(i)
+    }
+
+    /// Stage 4: `[[shapes]]`, with the materials they use.
+    fn shapes(&mut self) -> Result<ShapeLists, SceneError> {
+        let desc = self.desc;
+        let mut out = ShapeLists {
+            planars: Vec::new(),
+            spheres: Vec::new(),
+            meshes: Vec::new(),
+        };
+        for (i, s) in desc.shapes.iter().enumerate() {
+            let span = s.span();
+            let ctx = |m: String| self.at(span.clone(), format!("shapes[{i}]: {m}"));
+            match s.get_ref() {
+                ShapeDesc::Rectangle {
+                    size,
+                    material,
+                    transform: t,
+                } => {
+                    positive("size[0]", size[0])
+                        .and(positive("size[1]", size[1]))
+                        .map_err(ctx)?;
+                    let xf = transform(t).map_err(ctx)?;
+                    let m = self.material(material, span.clone())?;
+                    out.planars
+                        .push((Planar::rectangle(*size, &xf), Surface::Material(m)));
+                }
+                ShapeDesc::Disk {
+                    radius,
+                    material,
+                    transform: t,
+                } => {
+                    positive("radius", *radius).map_err(ctx)?;
+                    let xf = transform(t).map_err(ctx)?;
+                    let m = self.material(material, span.clone())?;
+                    out.planars
+                        .push((Planar::disk(*radius, &xf), Surface::Material(m)));
+                }
+                ShapeDesc::Sphere {
+                    center,
+                    radius,
+                    material,
+                } => {
+                    positive("radius", *radius).map_err(ctx)?;
+                    let c = finite3("center", *center).map_err(ctx)?;
+                    let m = self.material(material, span.clone())?;
+                    out.spheres.push((
+                        Sphere {
+                            center: c,
+                            radius: *radius,
+                        },
+                        Surface::Material(m),
+                    ));
+                }
+                ShapeDesc::Mesh {
+                    file,
+                    material,
+                    transform: t,
+                } => {
+                    let xf = transform(t).map_err(ctx)?;
+                    let m = self.material(material, span.clone())?;
+                    let full = self.base.join(file);
+                    let bytes = self
+                        .inputs
+                        .read(&full, "mesh file", inputs::MAX_BINARY_BYTES)
+                        .map_err(|m| self.at(span.clone(), format!("shapes[{i}]: {m}")))?;
+                    out.meshes.push(
+                        obj_from_bytes(&full, &bytes, &xf, m)
+                            .map_err(|m| self.at(span.clone(), format!("shapes[{i}]: {m}")))?,
+                    );
+                }
+            }
+        }
+        Ok(out)
+    }
+
+    /// A light's emission spectrum (D65 unless named), scaled to `scale`.
+    fn spectrum(&mut self, name: &Option<String>, scale: f64) -> Result<Spectrum, String> {
+        let inputs = &mut self.inputs;
+        parse_spectrum_with(
+            name.as_deref().unwrap_or("d65"),
+            &self.base,
+            &mut |p: &Path| inputs.read_text(p, "spectrum CSV", inputs::MAX_CSV_BYTES),
+        )
+        .and_then(|sp| sp.with_luminance(scale))
+    }
+
+    /// Stage 5: `[[lights]]`; emitting shapes join `shapes`. Also returns
+    /// whether some emitter's spectrum may be negative (see
+    /// [`Scene::signed_radiance`]).
+    fn lights(&mut self, shapes: &mut ShapeLists) -> Result<(Lights, bool), SceneError> {
+        let desc = self.desc;
+        let mut lights = Vec::new();
+        let mut environment = None;
+        for (i, l) in desc.lights.iter().enumerate() {
+            let span = l.span();
+            let err = |b: &Self, m: String| b.at(span.clone(), format!("lights[{i}]: {m}"));
+            let idx = lights.len() as u32;
+            match l.get_ref() {
+                LightDesc::Point {
+                    position,
+                    intensity,
+                    spectrum: s,
+                } => {
+                    positive("intensity", *intensity).map_err(|m| err(self, m))?;
+                    let position = finite3("position", *position).map_err(|m| err(self, m))?;
+                    let spectrum = self.spectrum(s, *intensity).map_err(|m| err(self, m))?;
+                    lights.push(LightKind::Point { position, spectrum });
+                }
+                LightDesc::Sphere {
+                    center,
+                    radius,
+                    radiance,
+                    spectrum: s,
+                } => {
+                    positive("radius", *radius)
+                        .and(positive("radiance", *radiance))
+                        .map_err(|m| err(self, m))?;
+                    let sphere = Sphere {
+                        center: finite3("center", *center).map_err(|m| err(self, m))?,
+                        radius: *radius,
+                    };
+                    let spectrum = self.spectrum(s, *radiance).map_err(|m| err(self, m))?;
+                    shapes.spheres.push((sphere, Surface::Emitter(idx)));
+                    lights.push(LightKind::Sphere { sphere, spectrum });
+                }
+                LightDesc::Rectangle {
+                    size,
+                    radiance,
+                    transform: t,
+                    two_sided,
+                    spectrum: s,
+                } => {
+                    positive("size[0]", size[0])
+                        .and(positive("size[1]", size[1]))
+                        .and(positive("radiance", *radiance))
+                        .map_err(|m| err(self, m))?;
+                    let shape = Planar::rectangle(*size, &transform(t).map_err(|m| err(self, m))?);
+                    let spectrum = self.spectrum(s, *radiance).map_err(|m| err(self, m))?;
+                    shapes.planars.push((shape, Surface::Emitter(idx)));
+                    lights.push(LightKind::Rectangle {
+                        shape,
+                        spectrum,
+                        two_sided: *two_sided,
+                    });
+                }
+                LightDesc::Environment {
+                    radiance,
+                    spectrum: s,
+                    file,
+                    rotate_deg,
+                } => {
+                    if environment.is_some() {
+                        return Err(err(self, "only one environment light is allowed".into()));
+                    }
+                    non_negative("radiance", *radiance).map_err(|m| err(self, m))?;
+                    let env = match file {
+                        Some(f) => {
+                            if s.is_some() {
+                                return Err(err(
+                                    self,
+                                    "an EXR environment takes its colour from the map; remove `spectrum`".into(),
+                                ));
+                            }
+                            if !rotate_deg.is_finite() {
+                                return Err(err(self, "rotate_deg must be finite".into()));
+                            }
+                            let full = self.base.join(f);
+                            let bytes = self
+                                .inputs
+                                .read(&full, "environment map", inputs::MAX_BINARY_BYTES)
+                                .map_err(|m| err(self, m))?;
+                            Environment::Map(
+                                EnvMap::from_exr_bytes(&full, &bytes, *radiance, *rotate_deg)
+                                    .map_err(|m| err(self, m))?,
+                            )
+                        }
+                        None => Environment::Constant(
+                            self.spectrum(s, (*radiance).max(1e-300))
+                                .map_err(|m| err(self, m))?,
+                        ),
+                    };
+                    environment = Some(lights.len());
+                    lights.push(LightKind::Environment(env));
+                }
+                LightDesc::Sky {
+                    sun_elevation_deg,
+                    sun_azimuth_deg,
+                    turbidity,
+                    scale,
+                    sun,
+                    ground_albedo,
+                } => {
+                    if environment.is_some() {
+                        return Err(err(
+                            self,
+                            "only one environment light is allowed (a sky is one)".into(),
+                        ));
+                    }
+                    let sky = Sky::new(SkyParams {
+                        turbidity: *turbidity,
+                        sun_elevation_deg: *sun_elevation_deg,
+                        sun_azimuth_deg: *sun_azimuth_deg,
+                        scale: *scale,
+                        sun: *sun,
+                        ground_albedo: *ground_albedo,
+                    })
+                    .map_err(|m| err(self, m))?;
+                    environment = Some(lights.len());
+                    lights.push(LightKind::Environment(Environment::Sky(Box::new(sky))));
+                }
+            }
+        }
+        let signed_radiance = environment
+            .is_some_and(|i| matches!(lights[i], LightKind::Environment(Environment::Map(_))));
+        Ok((
+            Lights {
+                lights,
+                environment,
+            },
+            signed_radiance,
+        ))
+    }
+}
+
+/// The scene text without the keys that do not change sample values
+/// (`[film]` spp, exr, png, exposure), as hashed into the fingerprint.
+fn normalised_text(text: &str) -> String {
+    let mut table: toml::Table = toml::from_str(text).unwrap_or_default();
+    if let Some(toml::Value::Table(film)) = table.get_mut("film") {
+        for k in ["spp", "exr", "png", "exposure"] {
+            film.remove(k);
+        }
+    }
+    table.to_string()
+}
+
+fn transform(t: &TransformDesc) -> Result<Transform, String> {
+    let all = t
+        .translate
+        .iter()
+        .chain(&t.rotate_deg)
+        .chain(std::iter::once(&t.scale));
+    if !all.into_iter().all(|v| v.is_finite()) {
+        return Err("transform values must be finite".into());
+    }
+    if t.scale <= 0.0 {
+        return Err(format!(
+            "transform.scale = {} is invalid: expected > 0",
+            t.scale
+        ));
+    }
+    Ok(Transform::new(t.rotate_deg, t.scale, t.translate))
+}
+
+fn positive(name: &str, v: f64) -> Result<f64, String> {
+    if v.is_finite() && v > 0.0 {
+        Ok(v)
+    } else {
+        Err(format!(
+            "{name} = {v} is invalid: expected a finite value > 0"
+        ))
+    }
+}
+
+fn non_negative(name: &str, v: f64) -> Result<f64, String> {
+    if v.is_finite() && v >= 0.0 {
+        Ok(v)
+    } else {
+        Err(format!(
+            "{name} = {v} is invalid: expected a finite value ≥ 0"
+        ))
+    }
+}
+
+fn finite3(name: &str, v: [f64; 3]) -> Result<DVec3, String> {
+    if v.iter().all(|x| x.is_finite()) {
+        Ok(DVec3::from(v))
+    } else {
+        Err(format!("{name} must be finite"))
+    }
+}
