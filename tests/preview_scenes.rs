@@ -71,13 +71,13 @@ fn preview_scenes_render_finite_and_deterministic() {
             for x in 0..40 {
                 for s in 0..4 {
                     let cs = camera_sample(&scene, x, y, s);
-                    for j in 0..cs.n {
+                    for j in 0..cs.wavelengths.len() {
                         let r = cs.radiance[j];
                         assert!(
                             r.is_finite() && r >= 0.0,
                             "{}: pixel ({x}, {y}) sample {s}: {r} at {} nm",
                             path.display(),
-                            cs.lambdas[j]
+                            cs.wavelengths.lambdas()[j]
                         );
                     }
                 }

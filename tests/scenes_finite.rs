@@ -73,12 +73,15 @@ fn first_bad_sample(scene: &Scene, spp: u64) -> Option<String> {
         for x in 0..cam.width {
             for s in 0..spp {
                 let cs = camera_sample(scene, x, y, s);
-                if let Some(j) =
-                    (0..cs.n).find(|&j| !(cs.radiance[j].is_finite() && cs.radiance[j] >= 0.0))
+                if let Some(j) = (0..cs.wavelengths.len())
+                    .find(|&j| !(cs.radiance[j].is_finite() && cs.radiance[j] >= 0.0))
                 {
                     return Some(format!(
                         "pixel ({x}, {y}) sample {s}: radiance {} at λ = {:.3} nm (mode {:?}, sampler {:?})",
-                        cs.radiance[j], cs.lambdas[j], scene.settings.mode, scene.settings.sampler
+                        cs.radiance[j],
+                        cs.wavelengths.lambdas()[j],
+                        scene.settings.mode,
+                        scene.settings.sampler
                     ));
                 }
             }

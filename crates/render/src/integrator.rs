@@ -29,7 +29,7 @@ use crate::sampler::Sampler;
 use crate::scene::desc::{MisHeuristic, WavelengthMode};
 use crate::scene::{Scene, Surface};
 use crate::spectrum::Cie;
-use crate::wavelength::HERO_COUNT;
+use crate::wavelength::{HERO_COUNT, SampledWavelengths};
 use brdf::frame::orthonormal_basis;
 use glam::DVec3;
 
@@ -95,11 +95,10 @@ fn mis_over_pdf(mis: MisHeuristic, own: f64, other: f64) -> f64 {
 /// One camera sample: its wavelengths and spectral radiance estimates.
 #[derive(Clone, Copy, Debug)]
 pub struct CameraSample {
-    /// Number of wavelengths carried (1, or [`HERO_COUNT`] in hero mode).
-    pub n: usize,
-    /// The wavelengths in nm; the first `n` are used.
-    pub lambdas: [f64; N],
-    /// Radiance estimates at each wavelength, wavelength pdf included.
+    /// The wavelengths carried (1, or [`HERO_COUNT`] in hero mode) and their pdfs.
+    pub wavelengths: SampledWavelengths,
+    /// Radiance estimates at each wavelength, wavelength pdf included; the
+    /// first `wavelengths.len()` are used.
     pub radiance: [f64; N],
 }
 
@@ -114,11 +113,10 @@ pub fn camera_sample(scene: &Scene, x: u32, y: u32, sample: u64) -> CameraSample
         WavelengthMode::Single => 1,
         WavelengthMode::Hero => N,
     };
-    let lambdas = scene.wavelengths.stratified(sampler.get_1d(), n);
-    let radiance = trace(scene, ray, &lambdas, n, &mut sampler);
+    let wavelengths = scene.wavelengths.sample_set(sampler.get_1d(), n);
+    let radiance = trace(scene, ray, &wavelengths, &mut sampler);
     CameraSample {
-        n,
-        lambdas,
+        wavelengths,
         radiance,
     }
 }
@@ -143,7 +141,8 @@ pub fn sample_pixel_checked(
     sample: u64,
 ) -> Result<[f64; 3], BadSample> {
     let cs = camera_sample(scene, x, y, sample);
-    let r = &cs.radiance[..cs.n];
+    let n = cs.wavelengths.len();
+    let r = &cs.radiance[..n];
     if !r.iter().all(|v| v.is_finite()) {
         return Err(BadSample::NonFinite);
     }
@@ -152,8 +151,8 @@ pub fn sample_pixel_checked(
     }
     let cie = Cie::get();
     let mut xyz = [0.0; 3];
-    for j in 0..cs.n {
-        let c = cie.xyz(cs.lambdas[j]);
+    for (j, &lambda) in cs.wavelengths.lambdas().iter().enumerate() {
+        let c = cie.xyz(lambda);
         for k in 0..3 {
             xyz[k] += cs.radiance[j] * c[k];
         }
@@ -170,17 +169,12 @@ pub fn sample_pixel_checked(
 pub fn trace(
     scene: &Scene,
     mut ray: Ray,
-    lambdas: &[f64; N],
-    n: usize,
+    wavelengths: &SampledWavelengths,
     sampler: &mut Sampler,
 ) -> [f64; N] {
-    let wl = &scene.wavelengths;
+    let (lambdas, pl, n) = (&wavelengths.lambda, &wavelengths.pdf, wavelengths.n);
     let lights = &scene.lights;
     let settings = &scene.settings;
-    let mut pl = [0.0; N];
-    for k in 0..n {
-        pl[k] = wl.pdf(lambdas[k]);
-    }
     let mut t = [0.0; N];
     let mut q = [0.0; N];
     let mut l_mis = [0.0; N];

@@ -94,6 +94,54 @@ impl WavelengthSampler {
         }
         out
     }
+
+    /// The wavelengths of one camera sample: [`stratified`](Self::stratified)
+    /// with the density of each member.
+    pub fn sample_set(&self, u: f64, count: usize) -> SampledWavelengths {
+        let count = count.clamp(1, HERO_COUNT);
+        let lambda = self.stratified(u, count);
+        let mut pdf = [0.0; HERO_COUNT];
+        for (p, &l) in pdf.iter_mut().zip(&lambda).take(count) {
+            *p = self.pdf(l);
+        }
+        SampledWavelengths {
+            n: count,
+            lambda,
+            pdf,
+        }
+    }
+}
+
+/// The wavelengths one camera sample carries (1, or [`HERO_COUNT`] hero
+/// wavelengths) with the density each was drawn with: the two travel
+/// together so that no estimate divides by another sample's pdf.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SampledWavelengths {
+    pub(crate) n: usize,
+    pub(crate) lambda: [f64; HERO_COUNT],
+    pub(crate) pdf: [f64; HERO_COUNT],
+}
+
+impl SampledWavelengths {
+    /// Number of wavelengths carried.
+    pub fn len(&self) -> usize {
+        self.n
+    }
+
+    /// Whether none are carried (never: at least one is).
+    pub fn is_empty(&self) -> bool {
+        self.n == 0
+    }
+
+    /// The wavelengths in nm.
+    pub fn lambdas(&self) -> &[f64] {
+        &self.lambda[..self.n]
+    }
+
+    /// The density (per nm) each wavelength was drawn with.
+    pub fn pdfs(&self) -> &[f64] {
+        &self.pdf[..self.n]
+    }
 }
 
 #[cfg(test)]
@@ -159,5 +207,11 @@ mod tests {
         assert_eq!(a[1].to_bits(), b[0].to_bits());
         assert_eq!(a[0].to_bits(), b[3].to_bits());
         assert_eq!(s.stratified(0.7, 1)[0], s.sample(0.7));
+        let set = s.sample_set(0.125, HERO_COUNT);
+        assert_eq!(set.lambdas(), &a[..]);
+        for (l, p) in set.lambdas().iter().zip(set.pdfs()) {
+            assert_eq!(*p, s.pdf(*l));
+        }
+        assert_eq!(s.sample_set(0.7, 1).lambdas(), &[s.sample(0.7)]);
     }
 }
