@@ -30,15 +30,16 @@ pub mod frame;
 pub mod fresnel;
 pub mod ior;
 mod ior_data;
-pub mod math;
 pub mod microfacet;
 mod model;
+pub mod numerics;
 #[cfg(feature = "alloc")]
 pub mod paper;
 #[cfg(feature = "alloc")]
 mod parallel;
 #[cfg(feature = "alloc")]
 pub mod spec;
+pub mod statistics;
 #[cfg(feature = "testing")]
 pub mod testing;
 pub mod wave;

@@ -13,7 +13,7 @@
 
 use crate::Topography;
 use crate::kc::KcParams;
-use crate::rng::SplitMix64;
+use crate::rng::{Normal, SplitMix64};
 use rustfft::FftPlanner;
 use rustfft::num_complex::Complex;
 use std::f64::consts::PI;

@@ -11,7 +11,7 @@
 //! periodogram exactly. Every Fourier mode then has an independent uniform phase, so the
 //! heights are Gaussian by the central limit theorem while the periodogram is unchanged.
 
-use crate::rng::SplitMix64;
+use crate::rng::{Normal, SplitMix64};
 use crate::{FitError, Topography};
 use rustfft::FftPlanner;
 use rustfft::num_complex::Complex;
