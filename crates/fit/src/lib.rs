@@ -15,6 +15,7 @@
 pub mod anisotropy;
 pub mod error;
 pub mod explicit_brdf;
+mod fft;
 pub mod field_spectrum;
 pub mod fill;
 pub mod io;

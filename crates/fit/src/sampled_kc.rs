@@ -83,7 +83,7 @@ impl PointSampledKc {
         let mut buf: Vec<Complex<f64>> =
             self.amp.iter().map(|a| Complex::new(a * a, 0.0)).collect();
         let mut planner = FftPlanner::<f64>::new();
-        crate::synth::fft2(&mut buf, nx, ny, &mut planner, true);
+        crate::fft::fft2(&mut buf, nx, ny, &mut planner, true);
         let n = (nx * ny) as f64;
         buf.iter().map(|c| c.re / n).collect()
     }
@@ -99,7 +99,7 @@ impl PointSampledKc {
             .map(|cj| Complex::new((-q * q * (c[0] - cj)).exp(), 0.0))
             .collect();
         let mut planner = FftPlanner::<f64>::new();
-        crate::synth::fft2(&mut buf, nx, ny, &mut planner, false);
+        crate::fft::fft2(&mut buf, nx, ny, &mut planner, false);
         let norm = self.dx * self.dx / (4.0 * PI * PI);
         let mut out: Vec<f64> = buf.iter().map(|v| v.re * norm).collect();
         out[0] = 0.0;
@@ -114,11 +114,11 @@ impl PointSampledKc {
             .map(|_| Complex::new(rng.normal(), 0.0))
             .collect();
         let mut planner = FftPlanner::<f64>::new();
-        crate::synth::fft2(&mut buf, nx, ny, &mut planner, false);
+        crate::fft::fft2(&mut buf, nx, ny, &mut planner, false);
         for (b, a) in buf.iter_mut().zip(&self.amp) {
             *b *= *a;
         }
-        crate::synth::fft2(&mut buf, nx, ny, &mut planner, true);
+        crate::fft::fft2(&mut buf, nx, ny, &mut planner, true);
         let n = (nx * ny) as f64;
         Topography {
             nx,

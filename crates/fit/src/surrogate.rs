@@ -44,8 +44,8 @@ fn surrogate(t: &Topography, seed: u64, mirror: bool) -> Result<Topography, FitE
         .map(|_| Complex::new(rng.normal(), 0.0))
         .collect();
     let mut planner = FftPlanner::<f64>::new();
-    transform(&mut buf, mx, my, &mut planner, false);
-    transform(&mut noise, mx, my, &mut planner, false);
+    crate::fft::fft_map(&mut buf, mx, my, &mut planner, false);
+    crate::fft::fft_map(&mut noise, mx, my, &mut planner, false);
     for (b, z) in buf.iter_mut().zip(&noise) {
         let m = z.norm();
         *b = if m > 0.0 {
@@ -54,7 +54,7 @@ fn surrogate(t: &Topography, seed: u64, mirror: bool) -> Result<Topography, FitE
             Complex::new(b.norm(), 0.0)
         };
     }
-    transform(&mut buf, mx, my, &mut planner, true);
+    crate::fft::fft_map(&mut buf, mx, my, &mut planner, true);
     let n = (mx * my) as f64;
     let mut out = t.clone();
     for y in 0..ny {
@@ -64,23 +64,4 @@ fn surrogate(t: &Topography, seed: u64, mirror: bool) -> Result<Topography, FitE
     }
     out.channel = format!("{} (Gaussian surrogate)", t.channel);
     Ok(out)
-}
-
-fn transform(
-    buf: &mut [Complex<f64>],
-    nx: usize,
-    ny: usize,
-    planner: &mut FftPlanner<f64>,
-    inverse: bool,
-) {
-    if ny == 1 {
-        let p = if inverse {
-            planner.plan_fft_inverse(nx)
-        } else {
-            planner.plan_fft_forward(nx)
-        };
-        p.process(buf);
-    } else {
-        crate::synth::fft2(buf, nx, ny, planner, inverse);
-    }
 }

@@ -3,6 +3,7 @@
 //! periodogram equals the target PSD at every resolved frequency.
 
 use crate::Topography;
+use crate::fft::{fft2, signed};
 use crate::kc::KcParams;
 use crate::rng::{Normal, SplitMix64};
 use rustfft::FftPlanner;
@@ -70,48 +71,4 @@ pub fn kc_profile(n: usize, dx: f64, params: KcParams, seed: u64) -> Topography 
         channel: "synthetic".into(),
         format: "synthetic",
     }
-}
-
-fn signed(k: usize, n: usize) -> f64 {
-    if k <= n / 2 {
-        k as f64
-    } else {
-        k as f64 - n as f64
-    }
-}
-
-/// In-place 2D complex FFT (unnormalised), row-major `ny × nx`.
-pub(crate) fn fft2(
-    buf: &mut [Complex<f64>],
-    nx: usize,
-    ny: usize,
-    planner: &mut FftPlanner<f64>,
-    inverse: bool,
-) {
-    use rayon::prelude::*;
-    let row = if inverse {
-        planner.plan_fft_inverse(nx)
-    } else {
-        planner.plan_fft_forward(nx)
-    };
-    buf.par_chunks_mut(nx).for_each(|r| row.process(r));
-    let col = if inverse {
-        planner.plan_fft_inverse(ny)
-    } else {
-        planner.plan_fft_forward(ny)
-    };
-    let mut t = transpose(buf, nx, ny);
-    t.par_chunks_mut(ny).for_each(|c| col.process(c));
-    let back = transpose(&t, ny, nx);
-    buf.copy_from_slice(&back);
-}
-
-fn transpose(a: &[Complex<f64>], nx: usize, ny: usize) -> Vec<Complex<f64>> {
-    let mut t = vec![Complex::new(0.0, 0.0); nx * ny];
-    for y in 0..ny {
-        for x in 0..nx {
-            t[x * ny + y] = a[y * nx + x];
-        }
-    }
-    t
 }
