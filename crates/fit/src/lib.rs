@@ -24,7 +24,6 @@ pub mod level;
 pub mod material;
 pub mod ndf;
 pub mod pipeline;
-pub mod plots;
 pub mod psd;
 pub mod resample;
 pub mod rng;

@@ -19,7 +19,6 @@ use crate::pipeline::Analysis;
 use crate::two_scale::BetaSource;
 use crate::{FitError, sha256};
 use serde::Serialize;
-use std::path::Path;
 
 const UM: f64 = 1e6;
 
@@ -813,26 +812,4 @@ pub fn to_toml(doc: &MaterialFile) -> Result<String, FitError> {
     }
     out.push_str(&body);
     Ok(out)
-}
-
-/// Write `text` to `path` atomically (temporary file in the same directory, then rename).
-pub fn write_atomic(path: &Path, text: &str) -> Result<(), FitError> {
-    let dir = path
-        .parent()
-        .filter(|p| !p.as_os_str().is_empty())
-        .unwrap_or(Path::new("."));
-    let name = path
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_else(|| "material".into());
-    let tmp = dir.join(format!(".{name}.tmp-{}", std::process::id()));
-    let err = |source| FitError::Write {
-        file: path.to_path_buf(),
-        source,
-    };
-    std::fs::write(&tmp, text).map_err(err)?;
-    std::fs::rename(&tmp, path).map_err(|e| {
-        let _ = std::fs::remove_file(&tmp);
-        err(e)
-    })
 }
