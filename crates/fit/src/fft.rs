@@ -1,9 +1,9 @@
-//! The FFT helpers of fit: the in-place 2D transform (rows in parallel, columns through a
-//! transpose), the 1D-or-2D transform of a map or profile, and the signed frequency index
-//! of a bin.
+//! The FFT helpers of fit: the in-place transform of a map (rows in parallel, columns
+//! through a transpose) or profile, and the signed frequency index of a bin.
 
-use rustfft::FftPlanner;
 use rustfft::num_complex::Complex;
+use rustfft::{Fft, FftPlanner};
+use std::sync::Arc;
 
 /// Signed index of FFT bin `k` of `n`: k for k ≤ n/2, k − n above (the frequency in
 /// units of the bin width).
@@ -15,7 +15,17 @@ pub(crate) fn signed(k: usize, n: usize) -> f64 {
     }
 }
 
-/// In-place 2D complex FFT (unnormalised), row-major `ny × nx`.
+/// The forward or inverse plan of length `n`.
+fn plan(planner: &mut FftPlanner<f64>, n: usize, inverse: bool) -> Arc<dyn Fft<f64>> {
+    if inverse {
+        planner.plan_fft_inverse(n)
+    } else {
+        planner.plan_fft_forward(n)
+    }
+}
+
+/// In-place complex FFT (unnormalised) of a row-major `ny × nx` map: 2D, or 1D for a
+/// profile (`ny == 1`, the same numbers as 2D with its length-1 column transforms).
 pub(crate) fn fft2(
     buf: &mut [Complex<f64>],
     nx: usize,
@@ -24,17 +34,13 @@ pub(crate) fn fft2(
     inverse: bool,
 ) {
     use rayon::prelude::*;
-    let row = if inverse {
-        planner.plan_fft_inverse(nx)
-    } else {
-        planner.plan_fft_forward(nx)
-    };
+    if ny == 1 {
+        plan(planner, nx, inverse).process(buf);
+        return;
+    }
+    let row = plan(planner, nx, inverse);
     buf.par_chunks_mut(nx).for_each(|r| row.process(r));
-    let col = if inverse {
-        planner.plan_fft_inverse(ny)
-    } else {
-        planner.plan_fft_forward(ny)
-    };
+    let col = plan(planner, ny, inverse);
     let mut t = transpose(buf, nx, ny);
     t.par_chunks_mut(ny).for_each(|c| col.process(c));
     let back = transpose(&t, ny, nx);
@@ -49,25 +55,4 @@ fn transpose(a: &[Complex<f64>], nx: usize, ny: usize) -> Vec<Complex<f64>> {
         }
     }
     t
-}
-
-/// In-place FFT of a row-major `ny × nx` map, or of a profile (`ny == 1`) by a 1D
-/// transform (unnormalised).
-pub(crate) fn fft_map(
-    buf: &mut [Complex<f64>],
-    nx: usize,
-    ny: usize,
-    planner: &mut FftPlanner<f64>,
-    inverse: bool,
-) {
-    if ny == 1 {
-        let p = if inverse {
-            planner.plan_fft_inverse(nx)
-        } else {
-            planner.plan_fft_forward(nx)
-        };
-        p.process(buf);
-    } else {
-        fft2(buf, nx, ny, planner, inverse);
-    }
 }

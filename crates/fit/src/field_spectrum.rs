@@ -184,7 +184,7 @@ pub fn field_spectrum(t: &Topography, q: f64, window: Window) -> Result<FieldSpe
         }
     }
     let mut planner = FftPlanner::<f64>::new();
-    crate::fft::fft_map(&mut buf, nx, ny, &mut planner, false);
+    crate::fft::fft2(&mut buf, nx, ny, &mut planner, false);
     let (dzx, dzy, scale) = if ny == 1 {
         (2.0 * PI / (nx as f64 * t.dx), 0.0, t.dx / (2.0 * PI * sw2))
     } else {

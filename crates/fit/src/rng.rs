@@ -16,3 +16,12 @@ impl Normal for SplitMix64 {
         (-2.0 * u.ln()).sqrt() * (2.0 * std::f64::consts::PI * v).cos()
     }
 }
+
+/// `n` standard normal deviates from `seed` as complex numbers (zero imaginary part): the
+/// white noise that spectral synthesis filters by the square root of a PSD.
+pub(crate) fn white_noise(n: usize, seed: u64) -> Vec<rustfft::num_complex::Complex<f64>> {
+    let mut rng = SplitMix64::new(seed);
+    (0..n)
+        .map(|_| rustfft::num_complex::Complex::new(rng.normal(), 0.0))
+        .collect()
+}

@@ -13,7 +13,6 @@
 
 use crate::Topography;
 use crate::kc::KcParams;
-use crate::rng::{Normal, SplitMix64};
 use rustfft::FftPlanner;
 use rustfft::num_complex::Complex;
 use std::f64::consts::PI;
@@ -109,10 +108,7 @@ impl PointSampledKc {
     /// One realisation (zero mean).
     pub fn realise(&self, seed: u64) -> Topography {
         let (nx, ny) = (self.nx, self.ny);
-        let mut rng = SplitMix64::new(seed);
-        let mut buf: Vec<Complex<f64>> = (0..nx * ny)
-            .map(|_| Complex::new(rng.normal(), 0.0))
-            .collect();
+        let mut buf = crate::rng::white_noise(nx * ny, seed);
         let mut planner = FftPlanner::<f64>::new();
         crate::fft::fft2(&mut buf, nx, ny, &mut planner, false);
         for (b, a) in buf.iter_mut().zip(&self.amp) {

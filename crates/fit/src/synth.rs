@@ -5,18 +5,13 @@
 use crate::Topography;
 use crate::fft::{fft2, signed};
 use crate::kc::KcParams;
-use crate::rng::{Normal, SplitMix64};
 use rustfft::FftPlanner;
-use rustfft::num_complex::Complex;
 use std::f64::consts::PI;
 
 /// An `nx × ny` map with pixel `dx` (square pixels) whose 2D PSD is the K-correlation
 /// `params` (physics.md form). The DC term is zero.
 pub fn kc_surface(nx: usize, ny: usize, dx: f64, params: KcParams, seed: u64) -> Topography {
-    let mut rng = SplitMix64::new(seed);
-    let mut buf: Vec<Complex<f64>> = (0..nx * ny)
-        .map(|_| Complex::new(rng.normal(), 0.0))
-        .collect();
+    let mut buf = crate::rng::white_noise(nx * ny, seed);
     let mut planner = FftPlanner::<f64>::new();
     fft2(&mut buf, nx, ny, &mut planner, false);
     let (dfx, dfy) = (1.0 / (nx as f64 * dx), 1.0 / (ny as f64 * dx));
@@ -49,8 +44,7 @@ pub fn kc_surface(nx: usize, ny: usize, dx: f64, params: KcParams, seed: u64) ->
 
 /// A profile of `n` points whose one-sided PSD is the 1D K-correlation form.
 pub fn kc_profile(n: usize, dx: f64, params: KcParams, seed: u64) -> Topography {
-    let mut rng = SplitMix64::new(seed);
-    let mut buf: Vec<Complex<f64>> = (0..n).map(|_| Complex::new(rng.normal(), 0.0)).collect();
+    let mut buf = crate::rng::white_noise(n, seed);
     let mut planner = FftPlanner::<f64>::new();
     planner.plan_fft_forward(n).process(&mut buf);
     for (k, c) in buf.iter_mut().enumerate() {
