@@ -6,6 +6,9 @@
 //! * microfacet conductors: GGX (Trowbridge–Reitz) and Beckmann, isotropic and
 //!   anisotropic, height-correlated Smith shadowing, visible-normal sampling;
 //! * exact unpolarised conductor Fresnel with measured n + ik spectra.
+//! * wave-optical models ([`wave`]: GHS, two-scale) driven by surface statistics
+//!   ([`statistics`]: K-correlation and tabulated PSDs, the exponential NDF), on
+//!   the transforms and quadratures of [`numerics`].
 //!
 //! Every model implements [`Bxdf`]. Directions live in the local shading
 //! frame (normal = +z) and point *away* from the surface; wavelengths are in

@@ -6,7 +6,7 @@
 //! * [`s_tilde_direct`]: composite 16-point Gauss–Legendre on panels that
 //!   resolve both the kernel and the Bessel oscillation — the accurate,
 //!   slow reference (no allocation);
-//! * [`FftLog`] (feature `alloc`): Hamilton's FFTLog on a logarithmic grid,
+//! * `FftLog` (crate-internal, feature `alloc`): Hamilton's FFTLog on a logarithmic grid,
 //!   all u at once in O(N log N) — the table generator.
 //!
 //! Both subtract the cusp. With A = 1 − e^{−g} and ε = (A/g)^{1/(2ν)}, the

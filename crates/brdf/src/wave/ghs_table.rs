@@ -20,7 +20,7 @@
 //! window starts on it), evaluated once per table.
 //!
 //! What the transform cannot resolve is not tabulated from it:
-//! * below 1e−12 of a row's peak ([`RELIABLE`]) S̃ is carried by its exact
+//! * below 1e−12 of a row's peak (`RELIABLE`) S̃ is carried by its exact
 //!   asymptote and the row's own Gaussian continuation (`tail_safe_row`);
 //!   steps between nodes are bounded so the interpolation cannot overshoot
 //!   (γ = 12 once gave 2.8e17 sr⁻¹ 31° off the mirror);
@@ -540,7 +540,7 @@ impl GhsTable {
 
     /// [`GhsTable::build`] with rows only up to g = `g_max` (clamped to
     /// [`G_MIN`, `G_MAX`]): a surface of rms height σ never reaches
-    /// g > (2 k_max σ)² in the visible range ([`hemisphere_g_max`]), and rows
+    /// g > (2 k_max σ)² in the visible range ([`hemisphere_g_max`](super::ghs::hemisphere_g_max)), and rows
     /// it cannot use are most of the build time for smooth surfaces. Above
     /// `g_max` the last rows' shape is stretched by the extrapolated width,
     /// as above [`G_MAX`] in a full table.

@@ -32,7 +32,7 @@
 //! **Energy.** Even with G₂ from the lobe's own Smith Λ, the albedo can
 //! exceed 1 at grazing incidence (1.037 at 88° for β 0.05, Lc 0.5 µm,
 //! γ 1.5), because the NDF changes with θd across the lobe. Such materials
-//! get the reciprocal cap of [`super::albedo_cap`]: the glossy part is
+//! get the reciprocal cap of `albedo_cap`: the glossy part is
 //! divided by max(1, C(θi), C(θo)) with C = E/(1 − S) tabulated at
 //! construction; [`TwoScale::is_energy_capped`] says whether it was needed.
 //!
@@ -204,7 +204,7 @@ impl TwoScale {
         Ok(m)
     }
 
-    /// The energy cap of [`super::albedo_cap`] for this material and reading:
+    /// The energy cap of `albedo_cap` for this material and reading:
     /// C(μ, k) = E/(1 − S) from the uncapped glossy part with F = 1.
     fn build_cap(&self) -> Option<AlbedoCap> {
         let k_lo = super::wavenumber(WAVELENGTH_MAX_NM);
