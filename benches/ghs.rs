@@ -17,10 +17,11 @@ use std::hint::black_box;
 use std::time::{Duration, Instant};
 
 use brdf::microfacet::{Distribution, MicrofacetConductor};
+use brdf::statistics::KcPsd;
+use brdf::statistics::matern::Matern;
 use brdf::wave::ghs::hemisphere_u_max;
 use brdf::wave::ghs_table::{GhsTable, TableResolution};
-use brdf::wave::matern::Matern;
-use brdf::wave::{GhsFull, GhsOptions, GhsSsa, KcPsd};
+use brdf::wave::{GhsFull, GhsOptions, GhsSsa};
 use brdf::{Bxdf, Fresnel, Ior, Metal};
 use criterion::{Criterion, criterion_group, criterion_main};
 

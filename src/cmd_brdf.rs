@@ -45,10 +45,11 @@ mod cache;
 use std::io::{BufRead, BufWriter, Write};
 
 use brdf::spec::{FileLoader, MaterialDesc, MaterialSpec, ModelKind, ModelSpec, SpecError};
+use brdf::statistics::RadialPsd;
 use brdf::wave::ghs::{hemisphere_g_max, hemisphere_u_max};
 use brdf::wave::ghs_table::TableResolution as GhsResolution;
 use brdf::wave::two_scale::{TableResolution, TwoScale, TwoScaleParams};
-use brdf::wave::{GhsFull, GhsSsa, RadialPsd, TableSource};
+use brdf::wave::{GhsFull, GhsSsa, TableSource};
 use brdf::{Bxdf, DVec3, Metal};
 pub use cache::ModelCache;
 use cache::SurfaceModel;
@@ -562,7 +563,8 @@ fn angle(v: Option<&Value>, field: &'static str, lo: f64, hi: f64) -> Result<f64
 mod tests {
     use super::*;
     use brdf::Fresnel;
-    use brdf::wave::{GhsOptions, KcPsd};
+    use brdf::statistics::KcPsd;
+    use brdf::wave::GhsOptions;
 
     fn query(model: &str, extra: &str, metal: &str, ti: f64, to: f64, phi: f64) -> String {
         format!(

@@ -118,7 +118,7 @@ fn surfaces(args: &PlotArgs) -> anyhow::Result<Vec<Surface>> {
                 kc.len()
             );
         };
-        brdf::wave::KcPsd::new(sigma, lc, gamma).context("--kc")?;
+        brdf::statistics::KcPsd::new(sigma, lc, gamma).context("--kc")?;
         out.push(Surface {
             name: format!("kc_{sigma}_{lc}_{gamma}"),
             kc: brdf::spec::KcSpec {

@@ -4,6 +4,8 @@
 //! whole analysis and writes the material file plus PSD/NDF plots (PNG and CSV) next to it;
 //! `lustre fit stats <scan> --json` prints the headline numbers for scripting.
 
+mod plots;
+
 use anyhow::Context;
 use fit::io::{ChannelSel, Format, ReadOptions, Units};
 use fit::level::Level;
@@ -399,7 +401,9 @@ fn material(args: MaterialArgs) -> anyhow::Result<()> {
     let doc = fit::material::build(&analysis, &prov);
     // Every model the file offers must build as a scene `include` of it would.
     fit::material::renderer_materials(&doc)?;
-    fit::material::write_atomic(&args.output, &fit::material::to_toml(&doc)?)?;
+    let text = fit::material::to_toml(&doc)?;
+    plot::write_atomic(&args.output, text.as_bytes())
+        .with_context(|| format!("cannot write {}", args.output.display()))?;
     let m = &doc.material;
     eprintln!(
         "wrote {}: model {}, Sq {:.4} µm, rms slope {:.4}, KC σ {:.4} µm Lc {:.4} µm γ {:.3}{}, GGX α {:.4}, Beckmann α {:.4}",
@@ -437,13 +441,13 @@ fn material(args: MaterialArgs) -> anyhow::Result<()> {
     eprintln!("model: {}", r.model);
     if !args.no_plots {
         // The material file is written; a plot that cannot be drawn is only a warning.
-        match fit::plots::write(&analysis, &args.output) {
+        match plots::write(&analysis, &args.output) {
             Ok(paths) => {
                 for path in paths {
                     eprintln!("wrote {}", path.display());
                 }
             }
-            Err(e) => eprintln!("warning: plots not written: {e}"),
+            Err(e) => eprintln!("warning: plots not written: plot: {e}"),
         }
     }
     Ok(())

@@ -6,8 +6,9 @@ use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
+use brdf::statistics::KcPsd;
 use brdf::wave::two_scale::{CoherentPart, TableResolution, TwoScale, TwoScaleParams};
-use brdf::wave::{Energy, GhsFull, GhsOptions, GhsSsa, KcPsd};
+use brdf::wave::{Energy, GhsFull, GhsOptions, GhsSsa};
 use brdf::{Bxdf, DVec3, Distribution, Fresnel, Ior, Metal, MicrofacetConductor};
 
 fn lustre() -> Command {

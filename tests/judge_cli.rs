@@ -6,7 +6,9 @@
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-use brdf::wave::{GhsFull, KcPsd};
+use brdf::statistics::KcPsd;
+
+use brdf::wave::GhsFull;
 use brdf::{Bxdf, Fresnel};
 use fit::kc::KcParams;
 use fit::sampled_kc::PointSampledKc;

@@ -11,9 +11,10 @@
 //! annuli of |ζ| (ratio explicit/reference per bin, averaged over bins and realisations);
 //! the band is 3 standard errors of that mean. Fixed seeds.
 
+use brdf::statistics::KcPsd;
+use brdf::statistics::matern::Matern;
+use brdf::wave::GhsFull;
 use brdf::wave::ghs_table::{GhsTable, TableResolution};
-use brdf::wave::matern::Matern;
-use brdf::wave::{GhsFull, KcPsd};
 use brdf::{Bxdf, DVec3, Fresnel};
 use fit::explicit_brdf::{ExplicitBrdf, TileOptions};
 use fit::field_spectrum::{Window, field_spectrum};
@@ -31,7 +32,7 @@ fn lobe_w(gamma: f64, g: f64) -> f64 {
     } else if nu > 1.0 {
         (g / (2.0 * (nu - 1.0))).sqrt()
     } else {
-        let lg = |x: f64| brdf::wave::special::ln_gamma_complex(x, 0.0).0;
+        let lg = |x: f64| brdf::numerics::special::ln_gamma_complex(x, 0.0).0;
         let c = (lg(1.0 - nu) - lg(1.0 + nu)).exp() / 4f64.powf(nu);
         (g * c).powf(1.0 / (2.0 * nu))
     }

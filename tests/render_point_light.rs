@@ -2,8 +2,9 @@
 //! directly from `brdf`: L = ∫ f(λ) cosθ_i I(λ)/d² ȳ(λ) dλ / ∫ȳ dλ.
 //! The reference reads the CIE and D65 tables itself and integrates at 1 nm.
 
+use brdf::statistics::KcPsd;
+use brdf::wave::GhsSsa;
 use brdf::wave::two_scale::{CoherentPart, TableResolution, TwoScale, TwoScaleParams};
-use brdf::wave::{GhsSsa, KcPsd};
 use brdf::{Bxdf, Distribution, Fresnel, Ior, Metal, MicrofacetConductor};
 use glam::DVec3;
 use render::integrator::sample_pixel;

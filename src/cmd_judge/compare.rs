@@ -103,7 +103,7 @@ pub(super) fn marginal(m: &dyn Bxdf, wi: DVec3, ox: f64, lambda_nm: f64) -> f64 
     if y_max <= 0.0 {
         return 0.0;
     }
-    let (x, w) = brdf::wave::hankel::gauss_legendre::<2>();
+    let (x, w) = brdf::numerics::quadrature::gauss_legendre::<2>();
     let mut edges = vec![0.0];
     let mut e = 1e-5 * y_max;
     while e < y_max {

@@ -1,8 +1,10 @@
 //! The model table of `lustre judge`: every model it fits from a scan, what each assumes,
 //! and how it is built (through `brdf eval`'s builder where one exists).
 
-use brdf::wave::measured_psd::TabulatedCorrelation;
-use brdf::wave::{GhsFull, GhsOptions, RadialPsd, TabulatedPsd, hankel};
+use brdf::numerics::hankel;
+use brdf::statistics::measured_psd::TabulatedCorrelation;
+use brdf::statistics::{RadialPsd, TabulatedPsd};
+use brdf::wave::{GhsFull, GhsOptions};
 use brdf::{Bxdf, Fresnel, Ior, Metal};
 use fit::pipeline::Analysis;
 use fit::two_scale::{BetaSource, TwoScale as Split};
@@ -317,7 +319,7 @@ pub(super) fn make_measured_psd(f: &Fitted, _: &[f64]) -> Vec<Built> {
 const TABLE_TOLERANCE: f64 = 0.3;
 
 /// Compares the model's S̃ table with the direct Hankel transform of the same covariance
-/// (`brdf::wave::hankel::s_tilde_direct`, the reference method of physics.md §4.1) at the
+/// (`brdf::numerics::hankel::s_tilde_direct`, the reference method of physics.md §4.1) at the
 /// judged specular g = (2kσ cosθi)² and a quarter of it, for u from 0 to the hemisphere's
 /// 2kL, where S̃ is above 1e−3 of its peak. Returns the largest relative error; a table off by
 /// more than [`TABLE_TOLERANCE`] is refused (the judge would rank the table, not the model).

@@ -5,8 +5,8 @@ use glam::DVec3;
 /// Unit vector with polar angle `theta` from +z and azimuth `phi` from +x.
 #[inline]
 pub fn spherical(theta: f64, phi: f64) -> DVec3 {
-    let (st, ct) = crate::math::sincos(theta);
-    let (sp, cp) = crate::math::sincos(phi);
+    let (st, ct) = crate::numerics::math::sincos(theta);
+    let (sp, cp) = crate::numerics::math::sincos(phi);
     DVec3::new(st * cp, st * sp, ct)
 }
 

@@ -6,6 +6,9 @@
 //! * microfacet conductors: GGX (Trowbridge–Reitz) and Beckmann, isotropic and
 //!   anisotropic, height-correlated Smith shadowing, visible-normal sampling;
 //! * exact unpolarised conductor Fresnel with measured n + ik spectra.
+//! * wave-optical models ([`wave`]: GHS, two-scale) driven by surface statistics
+//!   ([`statistics`]: K-correlation and tabulated PSDs, the exponential NDF), on
+//!   the transforms and quadratures of [`numerics`].
 //!
 //! Every model implements [`Bxdf`]. Directions live in the local shading
 //! frame (normal = +z) and point *away* from the surface; wavelengths are in
@@ -30,15 +33,16 @@ pub mod frame;
 pub mod fresnel;
 pub mod ior;
 mod ior_data;
-pub mod math;
 pub mod microfacet;
 mod model;
+pub mod numerics;
 #[cfg(feature = "alloc")]
 pub mod paper;
 #[cfg(feature = "alloc")]
 mod parallel;
 #[cfg(feature = "alloc")]
 pub mod spec;
+pub mod statistics;
 #[cfg(feature = "testing")]
 pub mod testing;
 pub mod wave;

@@ -169,7 +169,10 @@ pub fn microfacet_alpha(surface: &KcSpec, rule: AlphaRule, lambda_nm: f64) -> f6
 /// the cutoff of an exact KC spectrum returns it.
 pub fn two_scale_beta(surface: &KcSpec, cutoff_um: f64) -> f64 {
     let beta = libm::sqrt(slope_variance_below(surface, 2.0 * PI / cutoff_um) / 6.0);
-    beta.clamp(crate::wave::epd::BETA_MIN, crate::wave::epd::BETA_MAX)
+    beta.clamp(
+        crate::statistics::epd::BETA_MIN,
+        crate::statistics::epd::BETA_MAX,
+    )
 }
 
 /// A KC spectrum sampled as a table (the `measured_psd` path without a

@@ -65,9 +65,10 @@ use alloc::format;
 use alloc::string::{String, ToString};
 use alloc::vec::Vec;
 
-use crate::wave::kc::KcPsd;
+use crate::statistics::TabulatedPsd;
+use crate::statistics::kc::KcPsd;
 use crate::wave::two_scale::{CoherentPart, TableResolution, TwoScale, TwoScaleParams};
-use crate::wave::{GhsFull, GhsOptions, GhsSsa, TabulatedPsd};
+use crate::wave::{GhsFull, GhsOptions, GhsSsa};
 use crate::{
     BrdfError, Bxdf, Distribution, Fresnel, Ior, Metal, MicrofacetConductor, SmoothConductor,
 };
@@ -319,7 +320,7 @@ impl MaterialSpec {
             ModelSpec::GhsSsa { surface, .. } | ModelSpec::Ghs { surface, .. } => {
                 let psd = surface.psd()?;
                 if self.model.kind() == ModelKind::Ghs
-                    && psd.gamma() < crate::wave::kc::GAMMA_MIN_FULL
+                    && psd.gamma() < crate::statistics::kc::GAMMA_MIN_FULL
                 {
                     return Err(SpecError::new(
                         "gamma",
@@ -327,7 +328,7 @@ impl MaterialSpec {
                             "{} is below {} for the full GHS (its lobe spans more decades than \
                              f64 holds); use ghs_ssa",
                             psd.gamma(),
-                            crate::wave::kc::GAMMA_MIN_FULL
+                            crate::statistics::kc::GAMMA_MIN_FULL
                         ),
                     ));
                 }
@@ -341,7 +342,7 @@ impl MaterialSpec {
                     .map_err(|e| SpecError::new("psd", e.to_string()))?;
             }
             ModelSpec::TwoScale { beta, surface, .. } => {
-                crate::wave::epd::ExponentialNdf::new(*beta)?;
+                crate::statistics::epd::ExponentialNdf::new(*beta)?;
                 surface.psd()?;
             }
         }

@@ -8,7 +8,7 @@
 //! direct P_KC/D cross-check.
 
 use brdf::frame::spherical;
-use brdf::wave::KcPsd;
+use brdf::statistics::KcPsd;
 use brdf::wave::ggx_kc::{
     ggx_d, ggx_d_via_kc, ggx_d_via_kc_paper, half_vector, kc_from_ggx, kc_from_ggx_slope_space,
     paper_relative_error, ssa_lobe_slope_space,

@@ -5,11 +5,12 @@
 use std::collections::HashMap;
 use std::sync::Arc;
 
+use brdf::statistics::KcPsd;
+use brdf::statistics::matern::Matern;
 use brdf::testing::{Chi2Config, chi2_test, sidak};
 use brdf::wave::ghs::hemisphere_u_max;
 use brdf::wave::ghs_table::{GhsTable, TableResolution};
-use brdf::wave::matern::Matern;
-use brdf::wave::{GhsFull, GhsOptions, GhsSsa, KcPsd};
+use brdf::wave::{GhsFull, GhsOptions, GhsSsa};
 use brdf::{Bxdf, DVec3, Fresnel};
 
 /// (γ, σ µm, Lc µm, θi°, λ nm)

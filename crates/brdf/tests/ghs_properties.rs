@@ -5,12 +5,11 @@
 
 use std::f64::consts::PI;
 
+use brdf::numerics::poisson;
+use brdf::statistics::{KcPsd, RadialPsd, TabulatedPsd};
 use brdf::testing::{Chi2Config, Pcg32, chi2_test};
 use brdf::wave::energy::hemispherical_integral;
-use brdf::wave::poisson;
-use brdf::wave::{
-    Energy, FresnelAngle, GhsFull, GhsOptions, GhsSsa, KcPsd, RadialPsd, TabulatedPsd,
-};
+use brdf::wave::{Energy, FresnelAngle, GhsFull, GhsOptions, GhsSsa};
 use brdf::{Bxdf, DVec3, Fresnel, Ior, Metal};
 
 fn dir(theta: f64, phi: f64) -> DVec3 {

@@ -3,8 +3,9 @@
 //! albedos (white furnace against the reference albedos, not against 1),
 //! and the Krywonos K. R ≡ 1 throughout, raw energy unless stated.
 
+use brdf::statistics::KcPsd;
 use brdf::wave::energy::hemispherical_integral;
-use brdf::wave::{Energy, GhsFull, GhsOptions, GhsSsa, KcPsd};
+use brdf::wave::{Energy, GhsFull, GhsOptions, GhsSsa};
 use brdf::{Bxdf, DVec3, Fresnel};
 use serde_json::Value;
 

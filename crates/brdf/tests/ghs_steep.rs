@@ -10,11 +10,11 @@
 
 use std::f64::consts::PI;
 
+use brdf::numerics::hankel::{lobe_width, s_tilde_direct};
+use brdf::statistics::kc::KcPsd;
+use brdf::statistics::matern::Matern;
 use brdf::wave::ghs::hemisphere_u_max;
 use brdf::wave::ghs_table::{GhsTable, TableResolution};
-use brdf::wave::hankel::{lobe_width, s_tilde_direct};
-use brdf::wave::kc::KcPsd;
-use brdf::wave::matern::Matern;
 use brdf::wave::{GhsFull, GhsOptions};
 use brdf::{Bxdf, Fresnel, frame};
 

@@ -6,10 +6,11 @@
 use std::f64::consts::{FRAC_PI_2, TAU};
 use std::sync::{Arc, OnceLock};
 
+use brdf::statistics::KcPsd;
+use brdf::statistics::matern::Matern;
 use brdf::wave::ghs::hemisphere_u_max;
 use brdf::wave::ghs_table::{GhsTable, TableResolution};
-use brdf::wave::matern::Matern;
-use brdf::wave::{Energy, GhsFull, GhsOptions, GhsSsa, KcPsd};
+use brdf::wave::{Energy, GhsFull, GhsOptions, GhsSsa};
 use brdf::{Bxdf, DVec3, Fresnel, Ior, Metal};
 use proptest::prelude::*;
 

@@ -5,10 +5,10 @@
 //! that both generators sit at their ~1e−18 absolute round-off floor).
 //! Also: table rows against the independent direct Hankel transform.
 
+use brdf::numerics::hankel::{lobe_width, s_tilde_direct};
+use brdf::statistics::matern::Matern;
 use brdf::wave::ghs::hemisphere_u_max;
 use brdf::wave::ghs_table::{GhsTable, TableResolution};
-use brdf::wave::hankel::{lobe_width, s_tilde_direct};
-use brdf::wave::matern::Matern;
 
 #[test]
 fn default_table_error_is_below_1e3() {
@@ -66,9 +66,9 @@ fn truncated_table_agrees_and_is_guarded() {
     // inside that range it is the full table (same rows), and a shared table
     // too short for a rougher surface is refused.
     use brdf::Fresnel;
+    use brdf::statistics::kc::KcPsd;
     use brdf::wave::GhsOptions;
     use brdf::wave::ghs::{GhsFull, hemisphere_g_max};
-    use brdf::wave::kc::KcPsd;
     use std::sync::Arc;
     let res = TableResolution::default();
     let m = Matern::new(0.75);

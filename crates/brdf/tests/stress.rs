@@ -9,9 +9,10 @@
 
 use brdf::frame::spherical;
 use brdf::microfacet::{Distribution, MicrofacetConductor, NdfKind};
+use brdf::statistics::KcPsd;
 use brdf::wave::ghs_table::GhsTable;
 use brdf::wave::two_scale::{CoherentPart, TwoScale, TwoScaleParams};
-use brdf::wave::{Energy, FresnelAngle, GhsFull, GhsOptions, GhsSsa, KcPsd, TableSource};
+use brdf::wave::{Energy, FresnelAngle, GhsFull, GhsOptions, GhsSsa, TableSource};
 use brdf::{Bxdf, Fresnel, Ior, Metal, SmoothConductor};
 use proptest::prelude::*;
 use proptest::test_runner::{Config, RngAlgorithm, TestRng, TestRunner};

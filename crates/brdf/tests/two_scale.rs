@@ -7,9 +7,9 @@ use std::f64::consts::{FRAC_PI_2, PI, TAU};
 use std::time::Instant;
 
 use brdf::frame::spherical;
+use brdf::statistics::epd::ExponentialNdf;
 use brdf::testing::quadrature::{Cubature, Rect, Tolerance};
 use brdf::testing::{Chi2Config, albedo_quadrature, albedo_sampled, chi2_test, sidak};
-use brdf::wave::epd::ExponentialNdf;
 use brdf::wave::two_scale::{CoherentPart, TableResolution, TwoScale, TwoScaleParams};
 use brdf::{Bxdf, DVec3, Fresnel, Ior, Metal};
 use proptest::prelude::*;

@@ -17,13 +17,14 @@
 use std::f64::consts::{FRAC_PI_2, PI, TAU};
 use std::sync::{Arc, OnceLock};
 
+use brdf::statistics::kc::{LC_MAX_UM, LC_MIN_UM, SIGMA_MAX_UM};
+use brdf::statistics::matern::Matern;
+use brdf::statistics::{KcPsd, TabulatedPsd};
 use brdf::testing::Pcg32;
 use brdf::wave::ghs::hemisphere_u_max;
 use brdf::wave::ghs_table::{GhsTable, TableResolution};
-use brdf::wave::kc::{LC_MAX_UM, LC_MIN_UM, SIGMA_MAX_UM};
-use brdf::wave::matern::Matern;
 use brdf::wave::two_scale::{CoherentPart, TwoScale, TwoScaleParams};
-use brdf::wave::{Energy, GhsFull, GhsOptions, GhsSsa, KcPsd, TabulatedPsd};
+use brdf::wave::{Energy, GhsFull, GhsOptions, GhsSsa};
 use brdf::{Bxdf, DVec3, Fresnel, Ior, Metal};
 
 /// γ with a shared table, spanning the accepted range (tables sized for
@@ -271,7 +272,7 @@ fn random_tabulated(rng: &mut Pcg32) -> (TabulatedPsd, String) {
 
 #[test]
 fn measured_psd_within_the_order_bound() {
-    use brdf::wave::RadialPsd;
+    use brdf::statistics::RadialPsd;
     let mut rng = Pcg32::new(11, 5);
     let mut n = 0;
     for _ in 0..24 {

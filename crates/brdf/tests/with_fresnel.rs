@@ -2,8 +2,9 @@
 //! result must be the model built from scratch with that term, bit for bit
 //! (`brdf eval` serves metals from one build per surface this way).
 
+use brdf::statistics::KcPsd;
 use brdf::wave::two_scale::{CoherentPart, TableResolution, TwoScale, TwoScaleParams};
-use brdf::wave::{Energy, GhsOptions, GhsSsa, KcPsd};
+use brdf::wave::{Energy, GhsOptions, GhsSsa};
 use brdf::{Bxdf, Fresnel, Ior, Metal, frame};
 
 fn same(a: &dyn Bxdf, b: &dyn Bxdf, what: &str) {

@@ -46,14 +46,6 @@ pub enum FitError {
         /// Explanation, including how to fix it when possible.
         problem: String,
     },
-    /// Writing an output file failed.
-    #[error("cannot write {file}: {source}")]
-    Write {
-        /// Output file.
-        file: PathBuf,
-        /// Underlying error.
-        source: std::io::Error,
-    },
 }
 
 impl FitError {

@@ -86,8 +86,8 @@ impl FieldSpectrum {
     /// Signed frequency of bin `(ix, iy)` [rad/m].
     pub fn zeta(&self, ix: usize, iy: usize) -> (f64, f64) {
         (
-            signed(ix, self.nx) * self.dzeta_x,
-            signed(iy, self.ny) * self.dzeta_y,
+            crate::fft::signed(ix, self.nx) * self.dzeta_x,
+            crate::fft::signed(iy, self.ny) * self.dzeta_y,
         )
     }
 
@@ -138,14 +138,6 @@ impl FieldSpectrum {
     }
 }
 
-fn signed(k: usize, n: usize) -> f64 {
-    if k <= n / 2 {
-        k as f64
-    } else {
-        k as f64 - n as f64
-    }
-}
-
 /// Periodogram of `exp(−i q h)` of a levelled, NaN-free map or profile with `window`.
 /// `q` is in rad per unit of height (rad/m for SI heights).
 pub fn field_spectrum(t: &Topography, q: f64, window: Window) -> Result<FieldSpectrum, FitError> {
@@ -192,11 +184,7 @@ pub fn field_spectrum(t: &Topography, q: f64, window: Window) -> Result<FieldSpe
         }
     }
     let mut planner = FftPlanner::<f64>::new();
-    if ny == 1 {
-        planner.plan_fft_forward(nx).process(&mut buf);
-    } else {
-        crate::synth::fft2(&mut buf, nx, ny, &mut planner, false);
-    }
+    crate::fft::fft2(&mut buf, nx, ny, &mut planner, false);
     let (dzx, dzy, scale) = if ny == 1 {
         (2.0 * PI / (nx as f64 * t.dx), 0.0, t.dx / (2.0 * PI * sw2))
     } else {

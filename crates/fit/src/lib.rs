@@ -5,7 +5,7 @@
 //! * [`fill`], [`level`] prepare the map; [`stats`] gives Sq/Sdq; [`psd`] computes Welch
 //!   line PSDs and radially averaged 2D PSDs; [`kc`] fits the K-correlation model;
 //!   [`ndf`] builds and fits normal distributions; [`two_scale`] splits a surface at a
-//!   cutoff period; [`material`] writes the TOML material file the renderer includes.
+//!   cutoff period; [`material`] builds the TOML material file the renderer includes.
 //! * [`synth`] generates surfaces with a prescribed K-correlation PSD (for tests and benches).
 //!
 //! Conventions: spatial frequencies `f` are in cycles per metre unless a name says
@@ -15,6 +15,7 @@
 pub mod anisotropy;
 pub mod error;
 pub mod explicit_brdf;
+mod fft;
 pub mod field_spectrum;
 pub mod fill;
 pub mod io;
@@ -23,7 +24,6 @@ pub mod level;
 pub mod material;
 pub mod ndf;
 pub mod pipeline;
-pub mod plots;
 pub mod psd;
 pub mod resample;
 pub mod rng;

@@ -7,7 +7,7 @@
 //! `∫ P d²ζ = σ²` (µm⁴).
 //!
 //! Every parameter written is one the renderer accepts: each is checked with the
-//! renderer's own constructors (`brdf::wave::KcPsd::new`, `brdf::Distribution::ggx`,
+//! renderer's own constructors (`brdf::statistics::KcPsd::new`, `brdf::Distribution::ggx`,
 //! `TabulatedPsd::new`, the exponential NDF's β range) and brought into range if needed.
 //! What is unreliable — a degenerate K-correlation fit, a clamped α, a PSD table the
 //! renderer cannot use, a two-scale split without a measured β, form left in the
@@ -19,7 +19,6 @@ use crate::pipeline::Analysis;
 use crate::two_scale::BetaSource;
 use crate::{FitError, sha256};
 use serde::Serialize;
-use std::path::Path;
 
 const UM: f64 = 1e6;
 
@@ -326,20 +325,28 @@ fn finite(v: f64) -> f64 {
 }
 
 /// Largest Lc the two-scale model accepts [µm] (its micro scale is a `KcPsd`).
-const TWO_SCALE_LC_MAX_UM: f64 = brdf::wave::kc::LC_MAX_UM;
+const TWO_SCALE_LC_MAX_UM: f64 = brdf::statistics::kc::LC_MAX_UM;
 
 /// K-correlation parameters in µm the renderer accepts; `Some(problem)` if they had to
 /// be brought into range.
 pub fn renderer_kc(k: &KcParams) -> ((f64, f64, f64), Option<String>) {
     let (s, l, g) = (k.sigma * UM, k.lc * UM, k.gamma);
-    if brdf::wave::KcPsd::new(s, l, g).is_ok() {
+    if brdf::statistics::KcPsd::new(s, l, g).is_ok() {
         return ((s, l, g), None);
     }
     let fix = |v: f64, lo: f64, hi: f64| if v.is_finite() { v.clamp(lo, hi) } else { lo };
     let out = (
-        fix(s, 0.0, brdf::wave::kc::SIGMA_MAX_UM),
-        fix(l, brdf::wave::kc::LC_MIN_UM, brdf::wave::kc::LC_MAX_UM),
-        fix(g, brdf::wave::kc::GAMMA_MIN, brdf::wave::kc::GAMMA_MAX),
+        fix(s, 0.0, brdf::statistics::kc::SIGMA_MAX_UM),
+        fix(
+            l,
+            brdf::statistics::kc::LC_MIN_UM,
+            brdf::statistics::kc::LC_MAX_UM,
+        ),
+        fix(
+            g,
+            brdf::statistics::kc::GAMMA_MIN,
+            brdf::statistics::kc::GAMMA_MAX,
+        ),
     );
     (
         out,
@@ -389,7 +396,7 @@ pub fn renderer_psd(zeta: &[f64], p: &[f64]) -> (Vec<f64>, Vec<f64>, usize, Opti
         q.pop();
     }
     let dropped = zeta.len() - z.len();
-    let problem = match brdf::wave::TabulatedPsd::new(&z, &q) {
+    let problem = match brdf::statistics::TabulatedPsd::new(&z, &q) {
         Ok(_) => None,
         Err(e) => Some(format!("the renderer rejects the PSD table: {e}")),
     };
@@ -442,14 +449,16 @@ pub fn build(a: &Analysis, prov: &Provenance<'_>) -> MaterialFile {
                 } else {
                     l
                 };
-                let beta = if brdf::wave::epd::ExponentialNdf::new(t.beta).is_ok() {
+                let beta = if brdf::statistics::epd::ExponentialNdf::new(t.beta).is_ok() {
                     t.beta
                 } else {
                     let c = if t.beta.is_finite() {
-                        t.beta
-                            .clamp(brdf::wave::epd::BETA_MIN, brdf::wave::epd::BETA_MAX)
+                        t.beta.clamp(
+                            brdf::statistics::epd::BETA_MIN,
+                            brdf::statistics::epd::BETA_MAX,
+                        )
                     } else {
-                        brdf::wave::epd::BETA_MIN
+                        brdf::statistics::epd::BETA_MIN
                     };
                     problems.push(format!(
                         "β {:.4e} {} set to {c}",
@@ -758,7 +767,7 @@ pub fn renderer_materials(
     // below that a scene asking for it gets the library's message pointing to ghs_ssa.
     let full_ok = base
         .gamma
-        .is_some_and(|g| g >= brdf::wave::kc::GAMMA_MIN_FULL);
+        .is_some_and(|g| g >= brdf::statistics::kc::GAMMA_MIN_FULL);
     for m in [
         ModelKind::Ggx,
         ModelKind::Beckmann,
@@ -803,26 +812,4 @@ pub fn to_toml(doc: &MaterialFile) -> Result<String, FitError> {
     }
     out.push_str(&body);
     Ok(out)
-}
-
-/// Write `text` to `path` atomically (temporary file in the same directory, then rename).
-pub fn write_atomic(path: &Path, text: &str) -> Result<(), FitError> {
-    let dir = path
-        .parent()
-        .filter(|p| !p.as_os_str().is_empty())
-        .unwrap_or(Path::new("."));
-    let name = path
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_else(|| "material".into());
-    let tmp = dir.join(format!(".{name}.tmp-{}", std::process::id()));
-    let err = |source| FitError::Write {
-        file: path.to_path_buf(),
-        source,
-    };
-    std::fs::write(&tmp, text).map_err(err)?;
-    std::fs::rename(&tmp, path).map_err(|e| {
-        let _ = std::fs::remove_file(&tmp);
-        err(e)
-    })
 }

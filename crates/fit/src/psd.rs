@@ -204,11 +204,7 @@ pub fn radial(t: &Topography) -> Result<RadialPsd, FitError> {
                 };
                 let fx = kx as f64 * dkx;
                 for (ky, c) in col.iter().enumerate() {
-                    let kys = if ky <= ny / 2 {
-                        ky as f64
-                    } else {
-                        ky as f64 - ny as f64
-                    };
+                    let kys = crate::fft::signed(ky, ny);
                     let z = 2.0 * std::f64::consts::PI * (fx * fx + (kys * dky).powi(2)).sqrt();
                     let b = (z / dz).round() as usize;
                     if b == 0 || b >= nbins || z > zmax {

@@ -1,33 +1,27 @@
-//! A small deterministic generator (SplitMix64) with normal deviates, for synthesis and
-//! tests; fixed seeds give identical surfaces on every platform.
+//! The deterministic generator of synthesis and tests: brdf's SplitMix64 (one source for
+//! the workspace's models and tests), with normal deviates; fixed seeds give identical
+//! surfaces on every platform.
 
-/// SplitMix64 state.
-#[derive(Debug, Clone)]
-pub struct SplitMix64(u64);
+pub use brdf::numerics::splitmix::SplitMix64;
 
-impl SplitMix64 {
-    /// New generator from a seed.
-    pub fn new(seed: u64) -> Self {
-        SplitMix64(seed)
-    }
-
-    /// Next 64 random bits.
-    pub fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-
-    /// Uniform in (0, 1).
-    pub fn uniform(&mut self) -> f64 {
-        ((self.next_u64() >> 11) as f64 + 0.5) / (1u64 << 53) as f64
-    }
-
+/// Standard normal deviates from a generator.
+pub trait Normal {
     /// Standard normal deviate (Box–Muller).
-    pub fn normal(&mut self) -> f64 {
+    fn normal(&mut self) -> f64;
+}
+
+impl Normal for SplitMix64 {
+    fn normal(&mut self) -> f64 {
         let (u, v) = (self.uniform(), self.uniform());
         (-2.0 * u.ln()).sqrt() * (2.0 * std::f64::consts::PI * v).cos()
     }
+}
+
+/// `n` standard normal deviates from `seed` as complex numbers (zero imaginary part): the
+/// white noise that spectral synthesis filters by the square root of a PSD.
+pub(crate) fn white_noise(n: usize, seed: u64) -> Vec<rustfft::num_complex::Complex<f64>> {
+    let mut rng = SplitMix64::new(seed);
+    (0..n)
+        .map(|_| rustfft::num_complex::Complex::new(rng.normal(), 0.0))
+        .collect()
 }

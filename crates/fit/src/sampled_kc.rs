@@ -13,7 +13,6 @@
 
 use crate::Topography;
 use crate::kc::KcParams;
-use crate::rng::SplitMix64;
 use rustfft::FftPlanner;
 use rustfft::num_complex::Complex;
 use std::f64::consts::PI;
@@ -83,7 +82,7 @@ impl PointSampledKc {
         let mut buf: Vec<Complex<f64>> =
             self.amp.iter().map(|a| Complex::new(a * a, 0.0)).collect();
         let mut planner = FftPlanner::<f64>::new();
-        crate::synth::fft2(&mut buf, nx, ny, &mut planner, true);
+        crate::fft::fft2(&mut buf, nx, ny, &mut planner, true);
         let n = (nx * ny) as f64;
         buf.iter().map(|c| c.re / n).collect()
     }
@@ -99,7 +98,7 @@ impl PointSampledKc {
             .map(|cj| Complex::new((-q * q * (c[0] - cj)).exp(), 0.0))
             .collect();
         let mut planner = FftPlanner::<f64>::new();
-        crate::synth::fft2(&mut buf, nx, ny, &mut planner, false);
+        crate::fft::fft2(&mut buf, nx, ny, &mut planner, false);
         let norm = self.dx * self.dx / (4.0 * PI * PI);
         let mut out: Vec<f64> = buf.iter().map(|v| v.re * norm).collect();
         out[0] = 0.0;
@@ -109,16 +108,13 @@ impl PointSampledKc {
     /// One realisation (zero mean).
     pub fn realise(&self, seed: u64) -> Topography {
         let (nx, ny) = (self.nx, self.ny);
-        let mut rng = SplitMix64::new(seed);
-        let mut buf: Vec<Complex<f64>> = (0..nx * ny)
-            .map(|_| Complex::new(rng.normal(), 0.0))
-            .collect();
+        let mut buf = crate::rng::white_noise(nx * ny, seed);
         let mut planner = FftPlanner::<f64>::new();
-        crate::synth::fft2(&mut buf, nx, ny, &mut planner, false);
+        crate::fft::fft2(&mut buf, nx, ny, &mut planner, false);
         for (b, a) in buf.iter_mut().zip(&self.amp) {
             *b *= *a;
         }
-        crate::synth::fft2(&mut buf, nx, ny, &mut planner, true);
+        crate::fft::fft2(&mut buf, nx, ny, &mut planner, true);
         let n = (nx * ny) as f64;
         Topography {
             nx,

@@ -11,7 +11,6 @@
 //! periodogram exactly. Every Fourier mode then has an independent uniform phase, so the
 //! heights are Gaussian by the central limit theorem while the periodogram is unchanged.
 
-use crate::rng::SplitMix64;
 use crate::{FitError, Topography};
 use rustfft::FftPlanner;
 use rustfft::num_complex::Complex;
@@ -39,13 +38,10 @@ fn surrogate(t: &Topography, seed: u64, mirror: bool) -> Result<Topography, FitE
             buf[y * mx + x] = Complex::new(t.heights[sy * nx + sx], 0.0);
         }
     }
-    let mut rng = SplitMix64::new(seed);
-    let mut noise: Vec<Complex<f64>> = (0..mx * my)
-        .map(|_| Complex::new(rng.normal(), 0.0))
-        .collect();
+    let mut noise = crate::rng::white_noise(mx * my, seed);
     let mut planner = FftPlanner::<f64>::new();
-    transform(&mut buf, mx, my, &mut planner, false);
-    transform(&mut noise, mx, my, &mut planner, false);
+    crate::fft::fft2(&mut buf, mx, my, &mut planner, false);
+    crate::fft::fft2(&mut noise, mx, my, &mut planner, false);
     for (b, z) in buf.iter_mut().zip(&noise) {
         let m = z.norm();
         *b = if m > 0.0 {
@@ -54,7 +50,7 @@ fn surrogate(t: &Topography, seed: u64, mirror: bool) -> Result<Topography, FitE
             Complex::new(b.norm(), 0.0)
         };
     }
-    transform(&mut buf, mx, my, &mut planner, true);
+    crate::fft::fft2(&mut buf, mx, my, &mut planner, true);
     let n = (mx * my) as f64;
     let mut out = t.clone();
     for y in 0..ny {
@@ -64,23 +60,4 @@ fn surrogate(t: &Topography, seed: u64, mirror: bool) -> Result<Topography, FitE
     }
     out.channel = format!("{} (Gaussian surrogate)", t.channel);
     Ok(out)
-}
-
-fn transform(
-    buf: &mut [Complex<f64>],
-    nx: usize,
-    ny: usize,
-    planner: &mut FftPlanner<f64>,
-    inverse: bool,
-) {
-    if ny == 1 {
-        let p = if inverse {
-            planner.plan_fft_inverse(nx)
-        } else {
-            planner.plan_fft_forward(nx)
-        };
-        p.process(buf);
-    } else {
-        crate::synth::fft2(buf, nx, ny, planner, inverse);
-    }
 }

@@ -3,19 +3,15 @@
 //! periodogram equals the target PSD at every resolved frequency.
 
 use crate::Topography;
+use crate::fft::{fft2, signed};
 use crate::kc::KcParams;
-use crate::rng::SplitMix64;
 use rustfft::FftPlanner;
-use rustfft::num_complex::Complex;
 use std::f64::consts::PI;
 
 /// An `nx × ny` map with pixel `dx` (square pixels) whose 2D PSD is the K-correlation
 /// `params` (physics.md form). The DC term is zero.
 pub fn kc_surface(nx: usize, ny: usize, dx: f64, params: KcParams, seed: u64) -> Topography {
-    let mut rng = SplitMix64::new(seed);
-    let mut buf: Vec<Complex<f64>> = (0..nx * ny)
-        .map(|_| Complex::new(rng.normal(), 0.0))
-        .collect();
+    let mut buf = crate::rng::white_noise(nx * ny, seed);
     let mut planner = FftPlanner::<f64>::new();
     fft2(&mut buf, nx, ny, &mut planner, false);
     let (dfx, dfy) = (1.0 / (nx as f64 * dx), 1.0 / (ny as f64 * dx));
@@ -48,8 +44,7 @@ pub fn kc_surface(nx: usize, ny: usize, dx: f64, params: KcParams, seed: u64) ->
 
 /// A profile of `n` points whose one-sided PSD is the 1D K-correlation form.
 pub fn kc_profile(n: usize, dx: f64, params: KcParams, seed: u64) -> Topography {
-    let mut rng = SplitMix64::new(seed);
-    let mut buf: Vec<Complex<f64>> = (0..n).map(|_| Complex::new(rng.normal(), 0.0)).collect();
+    let mut buf = crate::rng::white_noise(n, seed);
     let mut planner = FftPlanner::<f64>::new();
     planner.plan_fft_forward(n).process(&mut buf);
     for (k, c) in buf.iter_mut().enumerate() {
@@ -70,48 +65,4 @@ pub fn kc_profile(n: usize, dx: f64, params: KcParams, seed: u64) -> Topography 
         channel: "synthetic".into(),
         format: "synthetic",
     }
-}
-
-fn signed(k: usize, n: usize) -> f64 {
-    if k <= n / 2 {
-        k as f64
-    } else {
-        k as f64 - n as f64
-    }
-}
-
-/// In-place 2D complex FFT (unnormalised), row-major `ny × nx`.
-pub(crate) fn fft2(
-    buf: &mut [Complex<f64>],
-    nx: usize,
-    ny: usize,
-    planner: &mut FftPlanner<f64>,
-    inverse: bool,
-) {
-    use rayon::prelude::*;
-    let row = if inverse {
-        planner.plan_fft_inverse(nx)
-    } else {
-        planner.plan_fft_forward(nx)
-    };
-    buf.par_chunks_mut(nx).for_each(|r| row.process(r));
-    let col = if inverse {
-        planner.plan_fft_inverse(ny)
-    } else {
-        planner.plan_fft_forward(ny)
-    };
-    let mut t = transpose(buf, nx, ny);
-    t.par_chunks_mut(ny).for_each(|c| col.process(c));
-    let back = transpose(&t, ny, nx);
-    buf.copy_from_slice(&back);
-}
-
-fn transpose(a: &[Complex<f64>], nx: usize, ny: usize) -> Vec<Complex<f64>> {
-    let mut t = vec![Complex::new(0.0, 0.0); nx * ny];
-    for y in 0..ny {
-        for x in 0..nx {
-            t[x * ny + y] = a[y * nx + x];
-        }
-    }
-    t
 }

@@ -8,6 +8,7 @@
 //! 1/Λ, `⟨|∇h|²⟩ = 2∫₀^{1/Λ}(2πf)² P1 df = 6β²` (isotropy assumed), and KC is fitted to
 //! that PSD above 1/Λ.
 
+use crate::fft::{fft2, signed};
 use crate::kc::{self, KcFit};
 use crate::psd::{self, Psd1d, WelchOptions};
 use crate::{FitError, Topography, ndf};
@@ -139,25 +140,17 @@ pub fn gaussian_lowpass(t: &Topography, cutoff: f64) -> Topography {
         }
     }
     let mut planner = FftPlanner::<f64>::new();
-    crate::synth::fft2(&mut buf, mx, my, &mut planner, false);
+    fft2(&mut buf, mx, my, &mut planner, false);
     let alpha2 = 2f64.ln() / std::f64::consts::PI;
     let k = std::f64::consts::PI * alpha2 * cutoff * cutoff;
     for ky in 0..my {
-        let fy = if ky <= my / 2 {
-            ky as f64
-        } else {
-            ky as f64 - my as f64
-        } / (my as f64 * t.dy);
+        let fy = signed(ky, my) / (my as f64 * t.dy);
         for kx in 0..mx {
-            let fx = if kx <= mx / 2 {
-                kx as f64
-            } else {
-                kx as f64 - mx as f64
-            } / (mx as f64 * t.dx);
+            let fx = signed(kx, mx) / (mx as f64 * t.dx);
             buf[ky * mx + kx] *= (-k * (fx * fx + fy * fy)).exp();
         }
     }
-    crate::synth::fft2(&mut buf, mx, my, &mut planner, true);
+    fft2(&mut buf, mx, my, &mut planner, true);
     let n = (mx * my) as f64;
     let mut out = t.clone();
     for y in 0..ny {

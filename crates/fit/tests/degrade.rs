@@ -7,6 +7,7 @@ use fit::kc::{Degeneracy, KcParams};
 use fit::level::{self, Level};
 use fit::material::{self, Provenance};
 use fit::pipeline::{Options, analyse, summarise};
+use fit::rng::Normal;
 use fit::{Topography, stats, synth};
 use std::path::PathBuf;
 
@@ -32,7 +33,7 @@ fn prov<'a>(file: &'a str, bytes: &'a [u8], notes: &'a [String]) -> Provenance<'
 /// constructors.
 fn assert_renderer_accepts(doc: &material::MaterialFile, what: &str) {
     let m = &doc.material;
-    brdf::wave::KcPsd::new(m.sigma_um, m.lc_um, m.gamma)
+    brdf::statistics::KcPsd::new(m.sigma_um, m.lc_um, m.gamma)
         .unwrap_or_else(|e| panic!("{what}: [material] KC rejected: {e}"));
     brdf::Distribution::ggx(m.alpha, m.alpha).unwrap_or_else(|e| panic!("{what}: alpha {e}"));
     brdf::Distribution::beckmann(m.alpha_beckmann, m.alpha_beckmann)
@@ -41,14 +42,14 @@ fn assert_renderer_accepts(doc: &material::MaterialFile, what: &str) {
         brdf::Distribution::ggx(x, y).unwrap_or_else(|e| panic!("{what}: alpha_x/y {e}"));
     }
     for (name, t) in &doc.two_scale.0 {
-        brdf::wave::KcPsd::new(t.sigma_um, t.lc_um, t.gamma)
+        brdf::statistics::KcPsd::new(t.sigma_um, t.lc_um, t.gamma)
             .unwrap_or_else(|e| panic!("{what}: {name} KC {e}"));
         assert!(t.lc_um <= 1e5, "{what}: {name} lc {}", t.lc_um);
-        brdf::wave::epd::ExponentialNdf::new(t.beta)
+        brdf::statistics::epd::ExponentialNdf::new(t.beta)
             .unwrap_or_else(|e| panic!("{what}: {name} β {e}"));
     }
     if doc.psd.usable {
-        brdf::wave::TabulatedPsd::new(&doc.psd.zeta_rad_per_um, &doc.psd.p_um4)
+        brdf::statistics::TabulatedPsd::new(&doc.psd.zeta_rad_per_um, &doc.psd.p_um4)
             .unwrap_or_else(|e| panic!("{what}: psd {e}"));
     }
     if m.model == "measured_psd" {

@@ -4,7 +4,7 @@
 
 use fit::kc::{self, KcParams};
 use fit::psd::{self, Psd1d, WelchOptions};
-use fit::rng::SplitMix64;
+use fit::rng::{Normal, SplitMix64};
 use fit::{Topography, ndf, sha256, synth, two_scale};
 use std::f64::consts::PI;
 

@@ -138,15 +138,7 @@ impl fmt::Display for Dropped {
 /// assembled from checked [`FilmParts`].
 #[derive(Clone, Debug, PartialEq)]
 pub struct Film {
-    width: u32,
-    height: u32,
-    fingerprint: u64,
-    seed: u64,
-    exposure: f64,
-    inputs: Vec<InputFile>,
-    pub(crate) dropped: Dropped,
-    ranges: Vec<Range<u64>>,
-    pub(crate) sums: Vec<[i128; 3]>,
+    p: FilmParts,
 }
 
 /// A film's contents as plain data, for tools that build or inspect films
@@ -245,15 +237,17 @@ impl Film {
     /// An empty film.
     pub fn new(width: u32, height: u32, fingerprint: u64, seed: u64, exposure: f64) -> Film {
         Film {
-            width,
-            height,
-            fingerprint,
-            seed,
-            exposure,
-            inputs: Vec::new(),
-            dropped: Dropped::default(),
-            ranges: Vec::new(),
-            sums: vec![[0; 3]; width as usize * height as usize],
+            p: FilmParts {
+                width,
+                height,
+                fingerprint,
+                seed,
+                exposure,
+                inputs: Vec::new(),
+                dropped: Dropped::default(),
+                ranges: Vec::new(),
+                sums: vec![[0; 3]; width as usize * height as usize],
+            },
         }
     }
 
@@ -272,7 +266,7 @@ impl Film {
 
     /// The film with `inputs` recorded as the files its scene was built from.
     pub fn with_inputs(mut self, inputs: Vec<InputFile>) -> Film {
-        self.inputs = inputs;
+        self.p.inputs = inputs;
         self
     }
 
@@ -284,13 +278,11 @@ impl Film {
         let FilmParts {
             width,
             height,
-            fingerprint,
-            seed,
             exposure,
-            inputs,
-            dropped,
-            ranges,
-            sums,
+            ref dropped,
+            ref ranges,
+            ref sums,
+            ..
         } = p;
         if width == 0 || height == 0 || width > MAX_SIDE || height > MAX_SIDE {
             return Err(format!(
@@ -329,57 +321,44 @@ impl Film {
                 ));
             }
         }
-        Ok(Film {
-            width,
-            height,
-            fingerprint,
-            seed,
-            exposure,
-            inputs,
-            dropped,
-            ranges,
-            sums,
-        })
+        Ok(Film { p })
+    }
+
+    /// Mutable sums and dropped counts, for the render loop (which keeps
+    /// the invariants: it adds to existing pixels and records ranges with
+    /// [`Film::add_range`]).
+    pub(crate) fn accumulators(&mut self) -> (&mut [[i128; 3]], &mut Dropped) {
+        (&mut self.p.sums, &mut self.p.dropped)
     }
 
     /// The film's contents as plain data.
     pub fn into_parts(self) -> FilmParts {
-        FilmParts {
-            width: self.width,
-            height: self.height,
-            fingerprint: self.fingerprint,
-            seed: self.seed,
-            exposure: self.exposure,
-            inputs: self.inputs,
-            dropped: self.dropped,
-            ranges: self.ranges,
-            sums: self.sums,
-        }
+        self.p
     }
 
     /// Width in pixels.
     pub fn width(&self) -> u32 {
-        self.width
+        self.p.width
     }
 
     /// Height in pixels.
     pub fn height(&self) -> u32 {
-        self.height
+        self.p.height
     }
 
     /// Fingerprint of the scene the samples belong to.
     pub fn fingerprint(&self) -> u64 {
-        self.fingerprint
+        self.p.fingerprint
     }
 
     /// Seed the samples were drawn with.
     pub fn seed(&self) -> u64 {
-        self.seed
+        self.p.seed
     }
 
     /// Exposure (stops) applied when writing images.
     pub fn exposure(&self) -> f64 {
-        self.exposure
+        self.p.exposure
     }
 
     /// Sets the exposure used by [`Film::rgb`] (it does not change the
@@ -389,40 +368,41 @@ impl Film {
         if !stops.is_finite() {
             return Err(format!("exposure {stops} is not finite"));
         }
-        self.exposure = stops;
+        self.p.exposure = stops;
         Ok(())
     }
 
     /// The files the scene was built from.
     pub fn inputs(&self) -> &[InputFile] {
-        &self.inputs
+        &self.p.inputs
     }
 
     /// Samples left out of the sums.
     pub fn dropped(&self) -> &Dropped {
-        &self.dropped
+        &self.p.dropped
     }
 
     /// Sample-index ranges accumulated, sorted and disjoint.
     pub fn ranges(&self) -> &[Range<u64>] {
-        &self.ranges
+        &self.p.ranges
     }
 
     /// Fixed-point X, Y, Z sums per pixel, row-major from the top.
     pub fn sums(&self) -> &[[i128; 3]] {
-        &self.sums
+        &self.p.sums
     }
 
     /// Total samples per pixel accumulated.
     pub fn spp(&self) -> u64 {
-        self.ranges
+        self.p
+            .ranges
             .iter()
             .fold(0u64, |a, r| a.saturating_add(r.end - r.start))
     }
 
     /// Records that samples `r` have been added; errors if they overlap.
     pub fn add_range(&mut self, r: Range<u64>) -> Result<(), String> {
-        self.ranges = with_range(&self.ranges, r)?;
+        self.p.ranges = with_range(&self.p.ranges, r)?;
         Ok(())
     }
 
@@ -433,13 +413,13 @@ impl Film {
             return [0.0; 3];
         }
         let k = 1.0 / (SCALE * n as f64 * Cie::get().y_integral());
-        self.sums[i].map(|s| s as f64 * k)
+        self.p.sums[i].map(|s| s as f64 * k)
     }
 
     /// Linear sRGB of every pixel with the exposure applied.
     pub fn rgb(&self) -> Vec<[f32; 3]> {
-        let gain = self.exposure.exp2();
-        (0..self.sums.len())
+        let gain = self.p.exposure.exp2();
+        (0..self.p.sums.len())
             .map(|i| xyz_to_srgb(self.xyz(i)).map(|v| (v * gain) as f32))
             .collect()
     }
@@ -449,14 +429,14 @@ impl Film {
     /// that differ when the fingerprints do, as changes from this film's
     /// inputs ("then") to `other`'s ("now").
     pub fn compatible_with(&self, other: &Film) -> Result<(), String> {
-        if (self.width, self.height) != (other.width, other.height) {
+        if (self.p.width, self.p.height) != (other.p.width, other.p.height) {
             return Err(format!(
                 "resolution {}×{} differs from {}×{}",
-                other.width, other.height, self.width, self.height
+                other.p.width, other.p.height, self.p.width, self.p.height
             ));
         }
-        if self.fingerprint != other.fingerprint {
-            let diff = describe_differences(&other.inputs, &self.inputs);
+        if self.p.fingerprint != other.p.fingerprint {
+            let diff = describe_differences(&other.p.inputs, &self.p.inputs);
             return Err(if diff.is_empty() {
                 "rendered from a different scene or by a different lustre version \
                  (fingerprints differ, input files agree)"
@@ -465,8 +445,11 @@ impl Film {
                 format!("rendered from different inputs: {}", diff.join("; "))
             });
         }
-        if self.seed != other.seed {
-            return Err(format!("seed {} differs from {}", other.seed, self.seed));
+        if self.p.seed != other.p.seed {
+            return Err(format!(
+                "seed {} differs from {}",
+                other.p.seed, self.p.seed
+            ));
         }
         Ok(())
     }
@@ -476,17 +459,17 @@ impl Film {
     /// its samples twice). On error the film is unchanged.
     pub fn merge(&mut self, other: &Film) -> Result<(), String> {
         self.compatible_with(other)?;
-        let mut ranges = self.ranges.clone();
-        for r in &other.ranges {
+        let mut ranges = self.p.ranges.clone();
+        for r in &other.p.ranges {
             ranges = with_range(&ranges, r.clone())?;
         }
-        self.ranges = ranges;
-        for (a, b) in self.sums.iter_mut().zip(&other.sums) {
+        self.p.ranges = ranges;
+        for (a, b) in self.p.sums.iter_mut().zip(&other.p.sums) {
             for k in 0..3 {
                 a[k] = a[k].saturating_add(b[k]);
             }
         }
-        self.dropped.add(&other.dropped);
+        self.p.dropped.add(&other.p.dropped);
         Ok(())
     }
 
@@ -503,37 +486,37 @@ impl Film {
         checkpoint
             .compatible_with(self)
             .map_err(ResumeError::Incompatible)?;
-        let [done] = checkpoint.ranges.as_slice() else {
+        let [done] = checkpoint.p.ranges.as_slice() else {
             return Err(ResumeError::NotAPrefix {
-                held: checkpoint.ranges,
+                held: checkpoint.p.ranges,
                 target,
             });
         };
         if done.start != target.start {
             return Err(ResumeError::NotAPrefix {
-                held: checkpoint.ranges,
+                held: checkpoint.p.ranges,
                 target,
             });
         }
         let todo = done.end.min(target.end)..target.end;
-        self.ranges = checkpoint.ranges;
-        self.sums = checkpoint.sums;
-        self.dropped = checkpoint.dropped;
+        self.p.ranges = checkpoint.p.ranges;
+        self.p.sums = checkpoint.p.sums;
+        self.p.dropped = checkpoint.p.dropped;
         Ok(todo)
     }
 
     /// Serialises the film.
     pub fn to_bytes(&self) -> Vec<u8> {
-        let mut out = Vec::with_capacity(128 + self.sums.len() * 48);
+        let mut out = Vec::with_capacity(128 + self.p.sums.len() * 48);
         out.extend_from_slice(MAGIC);
-        out.extend_from_slice(&self.width.to_le_bytes());
-        out.extend_from_slice(&self.height.to_le_bytes());
-        out.extend_from_slice(&self.fingerprint.to_le_bytes());
-        out.extend_from_slice(&self.seed.to_le_bytes());
-        out.extend_from_slice(&self.exposure.to_le_bytes());
-        out.extend_from_slice(&self.dropped.non_finite.to_le_bytes());
-        out.extend_from_slice(&self.dropped.negative.to_le_bytes());
-        let first = self.dropped.first.unwrap_or(DroppedAt {
+        out.extend_from_slice(&self.p.width.to_le_bytes());
+        out.extend_from_slice(&self.p.height.to_le_bytes());
+        out.extend_from_slice(&self.p.fingerprint.to_le_bytes());
+        out.extend_from_slice(&self.p.seed.to_le_bytes());
+        out.extend_from_slice(&self.p.exposure.to_le_bytes());
+        out.extend_from_slice(&self.p.dropped.non_finite.to_le_bytes());
+        out.extend_from_slice(&self.p.dropped.negative.to_le_bytes());
+        let first = self.p.dropped.first.unwrap_or(DroppedAt {
             x: u32::MAX,
             y: u32::MAX,
             sample: u64::MAX,
@@ -541,7 +524,7 @@ impl Film {
         out.extend_from_slice(&first.sample.to_le_bytes());
         out.extend_from_slice(&first.x.to_le_bytes());
         out.extend_from_slice(&first.y.to_le_bytes());
-        let inputs = &self.inputs[..self.inputs.len().min(MAX_INPUTS)];
+        let inputs = &self.p.inputs[..self.p.inputs.len().min(MAX_INPUTS)];
         out.extend_from_slice(&(inputs.len() as u32).to_le_bytes());
         for f in inputs {
             let mut name = f.name.as_bytes();
@@ -558,12 +541,12 @@ impl Film {
             out.extend_from_slice(&f.len.to_le_bytes());
             out.extend_from_slice(&f.hash.to_le_bytes());
         }
-        out.extend_from_slice(&(self.ranges.len() as u32).to_le_bytes());
-        for r in &self.ranges {
+        out.extend_from_slice(&(self.p.ranges.len() as u32).to_le_bytes());
+        for r in &self.p.ranges {
             out.extend_from_slice(&r.start.to_le_bytes());
             out.extend_from_slice(&r.end.to_le_bytes());
         }
-        for s in &self.sums {
+        for s in &self.p.sums {
             for v in s {
                 out.extend_from_slice(&v.to_le_bytes());
             }
@@ -770,11 +753,11 @@ mod tests {
     #[test]
     fn round_trip_and_range_bookkeeping() {
         let mut f = Film::new(3, 2, 42, 7, 0.5);
-        f.sums[4] = [1, -2, i128::MAX / 3];
+        f.p.sums[4] = [1, -2, i128::MAX / 3];
         f.add_range(0..4).unwrap();
         f.add_range(8..10).unwrap();
         f.add_range(4..8).unwrap();
-        assert_eq!(f.ranges, vec![0..10]);
+        assert_eq!(f.p.ranges, vec![0..10]);
         assert!(f.add_range(9..12).is_err());
         let g = Film::from_bytes(&f.to_bytes()).unwrap();
         assert_eq!(f, g);
@@ -787,12 +770,12 @@ mod tests {
         let mut a = Film::new(2, 2, 1, 0, 0.0);
         a.add_range(0..5).unwrap();
         let mut b = a.clone();
-        b.ranges.clear();
+        b.p.ranges.clear();
         b.add_range(5..9).unwrap();
-        b.sums[0] = [3, 3, 3];
+        b.p.sums[0] = [3, 3, 3];
         a.merge(&b).unwrap();
         assert_eq!(a.spp(), 9);
-        assert_eq!(a.sums[0], [3, 3, 3]);
+        assert_eq!(a.p.sums[0], [3, 3, 3]);
         let c = Film::new(2, 2, 2, 0, 0.0);
         assert!(a.merge(&c).unwrap_err().contains("different scene"));
         let before = a.clone();
@@ -800,7 +783,7 @@ mod tests {
         assert_eq!(a, before, "a refused merge leaves the film unchanged");
         // A shard holding new samples and a duplicate is refused as a whole.
         let mut d = b.clone();
-        d.ranges = vec![0..2, 20..30];
+        d.p.ranges = vec![0..2, 20..30];
         assert!(a.merge(&d).is_err());
         assert_eq!(a, before);
     }
@@ -813,21 +796,21 @@ mod tests {
             hash,
         };
         let mut a = Film::new(2, 1, 1, 0, 0.0);
-        a.inputs = vec![file("scene.toml", 1), file("fit.toml", 2)];
+        a.p.inputs = vec![file("scene.toml", 1), file("fit.toml", 2)];
         a.add_range(0..4).unwrap();
-        a.dropped.record(BadSample::Negative, 1, 0, 3);
-        a.dropped.record(BadSample::NonFinite, 0, 0, 2);
+        a.p.dropped.record(BadSample::Negative, 1, 0, 3);
+        a.p.dropped.record(BadSample::NonFinite, 0, 0, 2);
         let mut b = Film::new(2, 1, 9, 0, 0.0);
-        b.inputs = vec![file("scene.toml", 1), file("fit.toml", 5)];
+        b.p.inputs = vec![file("scene.toml", 1), file("fit.toml", 5)];
         let e = a.merge(&b).unwrap_err();
         assert!(e.contains("`fit.toml` changed"), "{e}");
         assert!(!e.contains("scene.toml"), "{e}");
 
         let g = Film::from_bytes(&a.to_bytes()).unwrap();
         assert_eq!(g, a);
-        assert_eq!(g.dropped.total(), 2);
+        assert_eq!(g.p.dropped.total(), 2);
         assert_eq!(
-            g.dropped.first,
+            g.p.dropped.first,
             Some(DroppedAt {
                 x: 0,
                 y: 0,
@@ -835,14 +818,14 @@ mod tests {
             })
         );
         let mut c = a.clone();
-        c.ranges.clear();
+        c.p.ranges.clear();
         c.add_range(4..8).unwrap();
-        c.dropped = Dropped::default();
-        c.dropped.record(BadSample::Negative, 1, 0, 1);
+        c.p.dropped = Dropped::default();
+        c.p.dropped.record(BadSample::Negative, 1, 0, 1);
         a.merge(&c).unwrap();
-        assert_eq!((a.dropped.non_finite, a.dropped.negative), (1, 2));
-        assert_eq!(a.dropped.first.unwrap().sample, 1);
-        let msg = a.dropped.to_string();
+        assert_eq!((a.p.dropped.non_finite, a.p.dropped.negative), (1, 2));
+        assert_eq!(a.p.dropped.first.unwrap().sample, 1);
+        let msg = a.p.dropped.to_string();
         assert!(
             msg.starts_with(
                 "3 sample(s) dropped (1 non-finite, 2 negative), first at pixel (1, 0) sample 1"

@@ -280,12 +280,13 @@ pub fn render_range_in(
             break;
         }
         let mut pass_dropped = Dropped::default();
+        let (film_sums, film_dropped) = film.accumulators();
         for (t, (sums, d)) in tiles.iter().zip(results.into_iter().flatten()) {
             pass_dropped.add(&d);
             let mut k = 0;
             for y in t.y0..t.y1 {
                 for x in t.x0..t.x1 {
-                    let px = &mut film.sums[(y * w + x) as usize];
+                    let px = &mut film_sums[(y * w + x) as usize];
                     for c in 0..3 {
                         px[c] = px[c].saturating_add(sums[k][c]);
                     }
@@ -293,7 +294,7 @@ pub fn render_range_in(
                 }
             }
         }
-        film.dropped.add(&pass_dropped);
+        film_dropped.add(&pass_dropped);
         dropped.add(&pass_dropped);
         next = pass.end;
         Progress::report(&opts.progress, ProgressEvent::Pass { spp: film.spp() });

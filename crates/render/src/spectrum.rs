@@ -242,14 +242,20 @@ impl Table {
             p -= 1;
         }
         let i = p.clamp(1, rows.len() - 1);
-        let (a, b) = (rows[i - 1], rows[i]);
-        let t = if b[0] > a[0] {
-            (lambda - a[0]) / (b[0] - a[0])
-        } else {
-            0.0
-        };
-        a[1] + t * (b[1] - a[1])
+        lerp_rows(rows[i - 1], rows[i], lambda)
     }
+}
+
+/// Linear interpolation at `lambda` between rows `a` and `b` (λ, value);
+/// `a`'s value where the two share a wavelength.
+#[inline]
+fn lerp_rows(a: [f64; 2], b: [f64; 2], lambda: f64) -> f64 {
+    let t = if b[0] > a[0] {
+        (lambda - a[0]) / (b[0] - a[0])
+    } else {
+        0.0
+    };
+    a[1] + t * (b[1] - a[1])
 }
 
 /// Linear interpolation in rows sorted by wavelength by binary search; the
@@ -265,13 +271,7 @@ fn interpolate(rows: &[[f64; 2]], lambda: f64) -> f64 {
     let i = rows
         .partition_point(|r| r[0] <= lambda)
         .clamp(1, rows.len() - 1);
-    let (a, b) = (rows[i - 1], rows[i]);
-    let t = if b[0] > a[0] {
-        (lambda - a[0]) / (b[0] - a[0])
-    } else {
-        0.0
-    };
-    a[1] + t * (b[1] - a[1])
+    lerp_rows(rows[i - 1], rows[i], lambda)
 }
 
 /// Parses numeric CSV rows with exactly `columns` fields, skipping one

@@ -12,7 +12,7 @@ pub(super) fn d(h: DVec3, ax: f64, ay: f64) -> f64 {
     let x = h.x / ax;
     let y = h.y / ay;
     let e = (x * x + y * y) / z2;
-    let num = crate::math::exp(-e);
+    let num = crate::numerics::math::exp(-e);
     // Near the horizon cos⁴θ underflows before e^{−tan²θ/α²} does not:
     // the limit is 0, not 0/0.
     if num == 0.0 {

@@ -3,8 +3,8 @@
 use super::{COS_HORIZON, Distribution, NdfKind};
 use crate::error::BrdfError;
 use crate::fresnel::Fresnel;
-use crate::math::finite_nonneg;
 use crate::model::{Bxdf, BxdfSample, Specular, WAVELENGTH_MAX_NM, WAVELENGTH_MIN_NM};
+use crate::numerics::math::finite_nonneg;
 use glam::DVec3;
 
 /// A rough conductor: f = F(i·h) D(h) G2(i, o) / (4 cosθi cosθo).

@@ -39,7 +39,7 @@ pub(super) fn sample_visible_unnormalised(wi: DVec3, ax: f64, ay: f64, u: [f64; 
     let a = l + s.z;
     let ua = u[1] * a;
     let l_sin = libm::sqrt((ua * (2.0 * l - ua)).max(0.0));
-    let (sp, cp) = crate::math::sincos_2pi(u[0]);
+    let (sp, cp) = crate::numerics::math::sincos_2pi(u[0]);
     DVec3::new(
         ax * (l_sin * cp + s.x),
         ay * (l_sin * sp + s.y),

@@ -8,7 +8,7 @@
 //! * glossy directions are histogrammed in cells of the sphere, and each
 //!   cell's expected count is N ∫_cell pdf dω, integrated by adaptive
 //!   cubature ([`super::quadrature`]);
-//! * delta samples are expected N · [`Specular::probability`] times;
+//! * delta samples are expected N · [`Specular::probability`](crate::Specular::probability) times;
 //! * lost samples are expected N (1 − P_delta − ∫_{S²} pdf dω) times.
 //!
 //! **Adaptive binning.** Cells are rectangles in (z = cosθ, φ − φ_mirror),

@@ -15,31 +15,17 @@ use core::cmp::Ordering;
 const ORDER: usize = 8;
 
 /// Nodes and weights of the `ORDER`-point Gauss–Legendre rule on [−1, 1]:
-/// roots of P_n by Newton's method from Tricomi's initial guesses.
+/// the positive half from [`crate::numerics::quadrature::gauss_legendre`],
+/// then its mirror images, in decreasing order of the node.
 fn gauss_legendre() -> ([f64; ORDER], [f64; ORDER]) {
-    let n = ORDER;
+    let (xh, wh) = crate::numerics::quadrature::gauss_legendre::<{ ORDER / 2 }>();
     let mut x = [0.0; ORDER];
     let mut w = [0.0; ORDER];
-    for i in 0..n {
-        let mut z = libm::cos(core::f64::consts::PI * (i as f64 + 0.75) / (n as f64 + 0.5));
-        let mut dp = 1.0;
-        for _ in 0..100 {
-            // Three-term recurrence for P_n(z) and its derivative.
-            let (mut p0, mut p1) = (1.0, z);
-            for k in 2..=n {
-                let p2 = ((2 * k - 1) as f64 * z * p1 - (k - 1) as f64 * p0) / k as f64;
-                p0 = p1;
-                p1 = p2;
-            }
-            dp = n as f64 * (z * p1 - p0) / (z * z - 1.0);
-            let dz = p1 / dp;
-            z -= dz;
-            if libm::fabs(dz) < 1e-16 {
-                break;
-            }
-        }
-        x[i] = z;
-        w[i] = 2.0 / ((1.0 - z * z) * dp * dp);
+    for i in 0..ORDER / 2 {
+        x[i] = xh[i];
+        w[i] = wh[i];
+        x[ORDER - 1 - i] = -xh[i];
+        w[ORDER - 1 - i] = wh[i];
     }
     (x, w)
 }

@@ -14,13 +14,10 @@ pub struct Pcg32 {
 
 const MULTIPLIER: u64 = 6_364_136_223_846_793_005;
 
-/// SplitMix64 finaliser: spreads nearby user seeds (0, 1, 2, …) over the
+/// One SplitMix64 step: spreads nearby user seeds (0, 1, 2, …) over the
 /// whole state space before they enter PCG.
-fn splitmix64(mut z: u64) -> u64 {
-    z = z.wrapping_add(0x9E37_79B9_7F4A_7C15);
-    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-    z ^ (z >> 31)
+fn splitmix64(z: u64) -> u64 {
+    crate::numerics::splitmix::SplitMix64::new(z).next_u64()
 }
 
 impl Pcg32 {

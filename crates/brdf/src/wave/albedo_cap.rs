@@ -19,7 +19,7 @@ use core::f64::consts::PI;
 
 use glam::DVec3;
 
-use super::quadrature::{gl4_nodes, panel_edges};
+use crate::numerics::quadrature::{gl4_nodes, panel_edges};
 
 /// Incidence angles of the table, degrees: denser towards grazing, where
 /// the excess lives. C is smooth and slowly rising below 60° (measured

@@ -6,8 +6,8 @@ use core::f64::consts::{FRAC_PI_2, PI};
 
 use glam::DVec3;
 
-use super::hankel::gauss_legendre;
 use crate::model::{WAVELENGTH_MAX_NM, WAVELENGTH_MIN_NM};
+use crate::numerics::quadrature::gauss_legendre;
 
 /// How the scattered part is normalised (physics.md §5).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -62,15 +62,15 @@ pub struct GhsOptions {
 }
 
 /// Nodes in θi of the energy tables (uniform in θ up to 90° − 1e−3 rad).
-pub const TABLE_THETA_NODES: usize = 64;
+pub(crate) const TABLE_THETA_NODES: usize = 64;
 /// Nodes in λ of the energy tables (uniform over 360–830 nm).
-pub const TABLE_LAMBDA_NODES: usize = 16;
+pub(crate) const TABLE_LAMBDA_NODES: usize = 16;
 const THETA_LAST: f64 = FRAC_PI_2 - 1e-3;
 
 /// A smooth function of (θi, λ) on a fixed grid, 4×4-point Lagrange
 /// interpolation, clamped to the grid. Fixed size: no allocation.
 #[derive(Clone, Debug, PartialEq)]
-pub struct EnergyTable {
+pub(crate) struct EnergyTable {
     data: [f64; TABLE_THETA_NODES * TABLE_LAMBDA_NODES],
 }
 
@@ -218,7 +218,7 @@ pub fn hemispherical_integral(wi: DVec3, lobe_rho: f64, mut f: impl FnMut(DVec3)
 /// Fraction of a unit-mass radial density (given by its radial CDF in u)
 /// that falls inside the propagating disk, for a lobe centred on the mirror
 /// direction: (1/π)∫₀^π F(kL·ρmax(φ)) dφ.
-pub fn in_disk_fraction(sin_i: f64, kl: f64, cdf_u: impl Fn(f64) -> f64) -> f64 {
+pub(crate) fn in_disk_fraction(sin_i: f64, kl: f64, cdf_u: impl Fn(f64) -> f64) -> f64 {
     let (gx, gw) = gauss_legendre::<16>();
     let mut acc = 0.0;
     for k in 0..32 {
@@ -256,7 +256,7 @@ mod tests {
         // KC: F = 1 − (1 + k²Lc²)^{−ν} at normal incidence.
         let nu = 0.75;
         let kl = 3.0;
-        let got = in_disk_fraction(0.0, kl, |u| super::super::kc::cdf_u(nu, u));
+        let got = in_disk_fraction(0.0, kl, |u| crate::statistics::kc::cdf_u(nu, u));
         let want = 1.0 - libm::pow(1.0 + kl * kl, -nu);
         assert!((got - want).abs() < 1e-14);
     }

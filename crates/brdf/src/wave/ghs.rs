@@ -24,10 +24,13 @@ use glam::DVec3;
 use super::energy::{GhsOptions, hemispherical_integral};
 use super::ghs_ssa::GhsCommon;
 use super::ghs_table::{G_MIN, GhsTable, TableResolution};
-use super::{Geometry, RadialPsd, direction_from_u, wavenumber};
+use super::{Geometry, direction_from_u, wavenumber};
 use crate::fresnel::Fresnel;
-use crate::math::finite_nonneg;
 use crate::model::{Bxdf, BxdfSample, Specular, WAVELENGTH_MAX_NM, WAVELENGTH_MIN_NM};
+use crate::numerics::math::finite_nonneg;
+use crate::statistics::matern::Matern;
+use crate::statistics::measured_psd::TabulatedCorrelation;
+use crate::statistics::{KcPsd, RadialPsd, TabulatedPsd};
 use crate::{BrdfError, frame};
 
 /// A surface PSD whose full-GHS table this module can build. The statistics
@@ -44,35 +47,35 @@ pub trait TableSource: RadialPsd {
     ) -> Result<GhsTable, BrdfError>;
 }
 
-impl TableSource for super::KcPsd {
+impl TableSource for KcPsd {
     fn build_table(
         &self,
         u_max: f64,
         g_max: f64,
         res: TableResolution,
     ) -> Result<GhsTable, BrdfError> {
-        GhsTable::build_up_to(&super::matern::Matern::new(self.nu()), u_max, g_max, res)
+        GhsTable::build_up_to(&Matern::new(self.nu()), u_max, g_max, res)
     }
 }
 
-impl TableSource for super::TabulatedPsd {
+impl TableSource for TabulatedPsd {
     fn build_table(
         &self,
         u_max: f64,
         g_max: f64,
         res: TableResolution,
     ) -> Result<GhsTable, BrdfError> {
-        let c = super::measured_psd::TabulatedCorrelation::new(self);
+        let c = TabulatedCorrelation::new(self);
         GhsTable::build_up_to(&c, u_max, g_max, res)
     }
 }
 
 /// Probability of drawing from p₁ instead of the tabulated S̃ CDF.
-pub const DEFENSIVE_WEIGHT: f64 = 0.05;
+pub(crate) const DEFENSIVE_WEIGHT: f64 = 0.05;
 
 /// Full GHS model driven by a radial PSD and its S̃ table.
 #[derive(Clone, Debug)]
-pub struct GhsFull<P: TableSource = super::KcPsd> {
+pub struct GhsFull<P: TableSource = KcPsd> {
     psd: P,
     common: GhsCommon,
     table: Arc<GhsTable>,
@@ -188,7 +191,7 @@ impl<P: TableSource> GhsFull<P> {
             return 0.0;
         }
         let ln_u = if u > 0.0 {
-            crate::math::ln(u)
+            crate::numerics::math::ln(u)
         } else {
             f64::NEG_INFINITY
         };
@@ -207,7 +210,7 @@ impl<P: TableSource> GhsFull<P> {
     #[inline]
     fn ln_u(geo: &Geometry) -> f64 {
         if geo.u2 > 0.0 {
-            0.5 * crate::math::ln(geo.u2)
+            0.5 * crate::numerics::math::ln(geo.u2)
         } else {
             f64::NEG_INFINITY
         }
@@ -231,7 +234,7 @@ impl<P: TableSource> GhsFull<P> {
     fn s_tilde_at(&self, ln_u: f64, u: f64, g: f64) -> f64 {
         match self.table.s_tilde_rest_ln_u(ln_u, g) {
             Some(rest) if self.table.first_order_apart() => {
-                rest + g * crate::math::exp(-g) * self.psd.unit_psd_u(u)
+                rest + g * crate::numerics::math::exp(-g) * self.psd.unit_psd_u(u)
             }
             Some(v) => v,
             None => -libm::expm1(-g) * self.psd.unit_psd_u(u),
@@ -243,7 +246,7 @@ impl<P: TableSource> GhsFull<P> {
     #[inline]
     pub fn proposal_density(&self, gs: f64, u: f64) -> f64 {
         let ln_u = if u > 0.0 {
-            crate::math::ln(u)
+            crate::numerics::math::ln(u)
         } else {
             f64::NEG_INFINITY
         };
@@ -310,7 +313,7 @@ impl<P: TableSource> GhsFull<P> {
     /// order-weights Pois(g | m ≥ 1): draws m, then sums m independent p₁
     /// vectors; returns |u|. Costs O(m) — for tests and validation.
     pub fn sample_orders_exact(&self, g: f64, mut next: impl FnMut() -> f64) -> f64 {
-        let m = super::poisson::sample_conditioned(g, next());
+        let m = crate::numerics::poisson::sample_conditioned(g, next());
         let (mut x, mut y) = (0.0, 0.0);
         for _ in 0..m {
             let r = self.psd.sample_u(next());

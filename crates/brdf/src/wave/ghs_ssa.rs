@@ -11,10 +11,11 @@
 use glam::DVec3;
 
 use super::energy::{Energy, EnergyTable, GhsOptions, hemispherical_integral, in_disk_fraction};
-use super::{Geometry, RadialPsd, direction_from_u, wavenumber};
+use super::{Geometry, direction_from_u, wavenumber};
 use crate::fresnel::Fresnel;
-use crate::math::finite_nonneg;
 use crate::model::{Bxdf, BxdfSample, Specular, WAVELENGTH_MAX_NM, WAVELENGTH_MIN_NM};
+use crate::numerics::math::finite_nonneg;
+use crate::statistics::{KcPsd, RadialPsd};
 use crate::{BrdfError, frame};
 
 /// Reflectance, specular weight and energy factor shared by the GHS models.
@@ -73,7 +74,7 @@ impl GhsCommon {
     pub fn choice(&self, ci: f64, lambda_nm: f64) -> (f64, f64) {
         let t = 2.0 * wavenumber(lambda_nm) * self.sigma_eff(ci, lambda_nm) * ci;
         let gs = t * t;
-        (crate::math::exp(-gs), gs)
+        (crate::numerics::math::exp(-gs), gs)
     }
 
     /// (specular weight R_s A_s, delta probability, g_s).
@@ -156,7 +157,7 @@ impl GhsCommon {
 
 /// The GHS smooth-surface approximation driven by a radial PSD.
 #[derive(Clone, Debug, PartialEq)]
-pub struct GhsSsa<P: RadialPsd = super::KcPsd> {
+pub struct GhsSsa<P: RadialPsd = KcPsd> {
     psd: P,
     common: GhsCommon,
 }

@@ -1,12 +1,13 @@
-//! Wave-optical reflection from rough surfaces: the K-correlation PSD and the
-//! generalized Harvey–Shack (GHS) models of `docs/physics.md` §2–5, 9–11.
+//! The wave-optical reflection models of `docs/physics.md` §3–11, driven by
+//! the surface statistics of [`crate::statistics`]:
 //!
-//! * [`KcPsd`] and [`TabulatedPsd`]: the surface statistics, behind the
-//!   [`RadialPsd`] trait;
-//! * [`GhsSsa`]: the smooth-surface approximation (specular delta R·A plus
-//!   the scattered lobe R(1−A)k²P/σ²);
+//! * [`GhsSsa`]: the smooth-surface approximation of generalized
+//!   Harvey–Shack (specular delta R·A plus the scattered lobe R(1−A)k²P/σ²);
 //! * [`GhsFull`]: all diffraction orders, from a per-surface table of the
 //!   Hankel transform ([`ghs_table`]), needs the `alloc` feature;
+//! * [`two_scale::TwoScale`]: the Holzschuch–Pacanowski two-scale model (its
+//!   D̃_eff table is built by the crate-internal `two_scale_table`), `alloc`;
+//! * [`ggx_kc`]: the GGX ↔ K-correlation identity;
 //! * [`Energy`] and [`FresnelAngle`]: the switches of physics.md §5 and §3.2.
 
 // `!(x > 0.0)` is used on purpose throughout: it rejects NaN together with
@@ -15,52 +16,24 @@
 
 #[cfg(feature = "alloc")]
 mod albedo_cap;
-pub mod bessel01;
 pub mod energy;
-pub mod epd;
 pub mod ggx_kc;
 #[cfg(feature = "alloc")]
 pub mod ghs;
 pub mod ghs_ssa;
 #[cfg(feature = "alloc")]
 pub mod ghs_table;
-pub mod hankel;
-pub mod kc;
-pub mod matern;
-#[cfg(feature = "alloc")]
-pub mod measured_psd;
-pub mod poisson;
-#[cfg(feature = "alloc")]
-mod quadrature;
-pub mod special;
 #[cfg(feature = "alloc")]
 pub mod two_scale;
+#[cfg(feature = "alloc")]
+mod two_scale_table;
 
 pub use energy::{Energy, FresnelAngle, GhsOptions};
 #[cfg(feature = "alloc")]
 pub use ghs::{GhsFull, TableSource};
 pub use ghs_ssa::GhsSsa;
-pub use kc::KcPsd;
-#[cfg(feature = "alloc")]
-pub use measured_psd::TabulatedPsd;
 
 use glam::DVec3;
-
-/// An isotropic surface height PSD as the GHS models use it: in the
-/// dimensionless frequency u = L·ζ (ζ in rad/µm) with a length L of the
-/// surface's choosing (Lc for [`KcPsd`]).
-pub trait RadialPsd {
-    /// rms height σ, µm.
-    fn sigma_um(&self) -> f64;
-    /// The length L, µm, with u = L·ζ.
-    fn length_um(&self) -> f64;
-    /// Unit-mass PSD in the u-plane, p(u) = P(u/L)/(σ²L²), ∫ p d²u = 1.
-    fn unit_psd_u(&self, u: f64) -> f64;
-    /// Mass of p inside radius u.
-    fn cdf_u(&self, u: f64) -> f64;
-    /// Inverse of [`RadialPsd::cdf_u`] (may return +∞).
-    fn sample_u(&self, xi: f64) -> f64;
-}
 
 /// Shared per-query quantities of the GHS models.
 #[derive(Clone, Copy, Debug)]

@@ -49,6 +49,19 @@ pub struct Hit {
     pub shading_n: Option<DVec3>,
 }
 
+impl Hit {
+    /// A hit on an analytic shape (intersected in f64, shaded with its geometric normal).
+    #[inline]
+    pub fn analytic(geo: HitGeometry, surface: Surface) -> Hit {
+        Hit {
+            geo,
+            surface,
+            mesh: false,
+            shading_n: None,
+        }
+    }
+}
+
 /// Render settings from `[film]` and `[integrator]`.
 #[derive(Clone, Debug)]
 pub struct Settings {

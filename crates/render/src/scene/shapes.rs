@@ -30,23 +30,13 @@ impl Shapes {
         for (p, s) in &self.planars {
             if let Some(g) = p.intersect(ray, 0.0, t_max) {
                 t_max = g.t;
-                best = Some(Hit {
-                    geo: g,
-                    surface: *s,
-                    mesh: false,
-                    shading_n: None,
-                });
+                best = Some(Hit::analytic(g, *s));
             }
         }
         for (sp, s) in &self.spheres {
             if let Some(g) = sp.intersect(ray, 0.0, t_max) {
                 t_max = g.t;
-                best = Some(Hit {
-                    geo: g,
-                    surface: *s,
-                    mesh: false,
-                    shading_n: None,
-                });
+                best = Some(Hit::analytic(g, *s));
             }
         }
         if let Some(m) = &self.mesh

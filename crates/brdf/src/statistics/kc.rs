@@ -23,7 +23,7 @@ pub const GAMMA_MIN_FULL: f64 = 1.05;
 /// far below any measurable difference and Γ(ν) approaches overflow.
 pub const GAMMA_MAX: f64 = 100.0;
 /// Largest accepted rms height σ, µm. The full-GHS tables hold g up to
-/// (2k(360 nm)·10 µm)² = 1.2e5 < [`super::ghs_table::G_MAX`] without
+/// (2k(360 nm)·10 µm)² = 1.2e5 < [`crate::wave::ghs_table::G_MAX`] without
 /// extrapolation, and every model is validated up to here (stress tests);
 /// rougher surfaces are in the geometric-optics regime: use a microfacet model.
 pub const SIGMA_MAX_UM: f64 = 10.0;
@@ -148,7 +148,7 @@ impl KcPsd {
         let bf = b * f;
         let log_shape = -0.5 * g * libm::log1p(bf * bf);
         2.0 * self.sigma_um * self.sigma_um * b / libm::sqrt(PI)
-            * crate::math::exp(log_norm + log_shape)
+            * crate::numerics::math::exp(log_norm + log_shape)
     }
 
     /// 2-D PSD in the cycles convention, µm⁴ (per (cycle/µm)²):
@@ -177,7 +177,7 @@ pub(crate) fn p1(nu: f64, u: f64) -> f64 {
     if !u2.is_finite() {
         return 0.0;
     }
-    nu / PI * crate::math::exp(-(nu + 1.0) * libm::log1p(u2))
+    nu / PI * crate::numerics::math::exp(-(nu + 1.0) * libm::log1p(u2))
 }
 
 /// Radial CDF of p₁ in u: 1 − (1+u²)^{−ν}, via expm1 so small u keeps its

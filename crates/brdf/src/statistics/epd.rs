@@ -13,7 +13,7 @@
 //! of HP17 Eqs. 49–50, with P⁻¹(2, ξ) in place of scipy's `gammaincinv`).
 
 use crate::error::{BrdfError, check_range};
-use crate::wave::bessel01::smith_lambda_exp;
+use crate::numerics::bessel01::smith_lambda_exp;
 use core::f64::consts::PI;
 use glam::DVec3;
 
@@ -50,7 +50,7 @@ impl ExponentialNdf {
             return 0.0;
         }
         let c2 = cos_t * cos_t;
-        crate::math::exp(-r) / (2.0 * PI * self.beta * self.beta * c2 * c2)
+        crate::numerics::math::exp(-r) / (2.0 * PI * self.beta * self.beta * c2 * c2)
     }
 
     /// D(h) in sr⁻¹ for a unit half vector `h` (0 below the horizon).
@@ -146,7 +146,7 @@ fn r_minus_log1p(r: f64) -> f64 {
 /// φ ≈ r²/2 − r³/3 and the iteration is done in the variable r itself with φ
 /// evaluated by the cancellation-free series. Returns +∞ for ξ ≥ 1 and 0 for
 /// ξ ≤ 0 or NaN.
-pub fn inverse_gamma2_cdf(xi: f64) -> f64 {
+pub(crate) fn inverse_gamma2_cdf(xi: f64) -> f64 {
     if !(xi > 0.0) {
         return 0.0;
     }

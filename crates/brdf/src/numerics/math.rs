@@ -1,11 +1,5 @@
 //! Small numerical helpers shared by the models.
 
-/// `sqrt(max(x, 0))`: square root that treats round-off negatives as zero.
-#[inline]
-pub fn safe_sqrt(x: f64) -> f64 {
-    libm::sqrt(x.max(0.0))
-}
-
 /// Clamps a float to a finite, non-negative value (NaN → 0); the last line of
 /// defence that keeps every public evaluation finite and ≥ 0.
 #[inline]
@@ -52,19 +46,8 @@ pub fn ln(x: f64) -> f64 {
     }
 }
 
-/// xʸ: the platform's version with `std`, libm's without.
-#[inline]
-pub fn powf(x: f64, y: f64) -> f64 {
-    #[cfg(feature = "std")]
-    {
-        x.powf(y)
-    }
-    #[cfg(not(feature = "std"))]
-    {
-        libm::pow(x, y)
-    }
-}
-
+// Only the two-scale tables (alloc) use it.
+#[cfg(feature = "alloc")]
 /// asinh x for x ≥ 0 (NaN stays NaN), as ln(x + √(x² + 1)) with the
 /// platform's ln: several times cheaper than libm's asinh. There is no
 /// cancellation for x ≥ 0; the absolute error is a few 1e−16 (the relative

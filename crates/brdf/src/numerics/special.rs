@@ -5,7 +5,7 @@
 use core::f64::consts::PI;
 
 /// Euler–Mascheroni constant.
-pub const EULER_GAMMA: f64 = 0.577_215_664_901_532_9;
+pub(crate) const EULER_GAMMA: f64 = 0.577_215_664_901_532_9;
 
 /// Taylor coefficients of 1/Γ(z) = Σ c_k z^k, k = 1…20 (Abramowitz & Stegun
 /// 6.1.34); `RGAMMA[k-1] = c_k`.
@@ -67,7 +67,7 @@ fn temme_gammas(mu: f64) -> (f64, f64, f64, f64) {
 ///
 /// Temme's series for x ≤ 2 and Steed's continued fraction (Temme's CF2)
 /// for x > 2, as in Numerical Recipes' `bessik`; relative accuracy ~1e−15.
-pub fn bessel_k_pair_scaled(mu: f64, x: f64) -> (f64, f64) {
+pub(crate) fn bessel_k_pair_scaled(mu: f64, x: f64) -> (f64, f64) {
     const EPS: f64 = 1e-16;
     if x <= 2.0 {
         let (gam1, gam2, gampl, gammi) = temme_gammas(mu);
@@ -148,8 +148,10 @@ pub fn bessel_k_pair_scaled(mu: f64, x: f64) -> (f64, f64) {
     }
 }
 
+// Only the tests use K_ν of any order (the models need the pair at |μ| ≤ ½).
+#[cfg(test)]
 /// eˣ K_ν(x) for real ν ≥ 0 and x > 0, by upward recurrence from |μ| ≤ ½.
-pub fn bessel_k_scaled(nu: f64, x: f64) -> f64 {
+pub(crate) fn bessel_k_scaled(nu: f64, x: f64) -> f64 {
     let n = libm::floor(nu + 0.5);
     let mu = nu - n;
     let (mut k0, mut k1) = bessel_k_pair_scaled(mu, x);
@@ -211,24 +213,6 @@ pub fn ln_gamma_complex(re: f64, im: f64) -> (f64, f64) {
         pr = t;
     }
     (sr - acc_r, si - acc_i)
-}
-
-/// (e^t − 1 − t), accurate for small |t| (series) and large t.
-#[inline]
-pub fn expm1_minus_t(t: f64) -> f64 {
-    if t.abs() < 0.1 {
-        let mut term = t * t * 0.5;
-        let mut sum = term;
-        let mut k = 3.0;
-        while term.abs() > 1e-18 * sum.abs() && k < 30.0 {
-            term *= t / k;
-            sum += term;
-            k += 1.0;
-        }
-        sum
-    } else {
-        libm::expm1(t) - t
-    }
 }
 
 #[cfg(test)]
@@ -337,18 +321,6 @@ mod tests {
             assert!((r1 - r0 - lr).abs() < 1e-13 * r0.abs().max(1.0), "{a} {b}");
             let d = libm::remainder(i1 - i0 - li, 2.0 * PI);
             assert!(d.abs() < 1e-13 * i0.abs().max(1.0), "{a} {b}: {d}");
-        }
-    }
-
-    #[test]
-    fn expm1_minus_t_series() {
-        for &t in &[1e-10f64, -1e-5, 0.05, -0.099, 0.1, 2.0, -3.0] {
-            let want = if t.abs() > 1e-3 {
-                libm::expm1(t) - t
-            } else {
-                t * t / 2.0 + t * t * t / 6.0 + t * t * t * t / 24.0
-            };
-            assert!((expm1_minus_t(t) / want - 1.0).abs() < 1e-13, "{t}");
         }
     }
 }

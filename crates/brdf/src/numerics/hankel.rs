@@ -6,7 +6,7 @@
 //! * [`s_tilde_direct`]: composite 16-point Gauss–Legendre on panels that
 //!   resolve both the kernel and the Bessel oscillation — the accurate,
 //!   slow reference (no allocation);
-//! * [`FftLog`] (feature `alloc`): Hamilton's FFTLog on a logarithmic grid,
+//! * `FftLog` (crate-internal, feature `alloc`): Hamilton's FFTLog on a logarithmic grid,
 //!   all u at once in O(N log N) — the table generator.
 //!
 //! Both subtract the cusp. With A = 1 − e^{−g} and ε = (A/g)^{1/(2ν)}, the
@@ -17,8 +17,7 @@
 
 use core::f64::consts::PI;
 
-use super::kc;
-use super::matern::Matern;
+use super::quadrature::gauss_legendre;
 
 /// The normalised covariance M(x) of a surface (x = r/L), with the unit
 /// PSD p(u) = L² P(u/L)/σ² that is its Hankel transform.
@@ -46,26 +45,10 @@ pub trait Correlation {
 /// [`Correlation::separate_first_order`]).
 pub const FIRST_ORDER_APART_BELOW_NU: f64 = 0.25;
 
-/// The K-correlation surface: Matérn covariance and p₁.
-impl Correlation for Matern {
-    fn m(&self, x: f64) -> f64 {
-        self.value(x)
-    }
-    fn one_minus_m(&self, x: f64) -> f64 {
-        self.one_minus(x)
-    }
-    fn unit_psd_u(&self, u: f64) -> f64 {
-        kc::p1(self.nu(), u)
-    }
-    fn cusp_nu(&self) -> f64 {
-        self.nu()
-    }
-}
-
 /// The GHS kernel h(x) = e^{−g(1−M)} − e^{−g}, formed without cancellation:
 /// e^{−g}·expm1(gM) for small g, exp(−g(1−M)) − e^{−g} otherwise.
 #[inline]
-pub fn kernel<C: Correlation + ?Sized>(c: &C, x: f64, g: f64) -> f64 {
+pub(crate) fn kernel<C: Correlation + ?Sized>(c: &C, x: f64, g: f64) -> f64 {
     if g < 1.0 {
         kernel_small_g(c.m(x), g)
     } else {
@@ -73,10 +56,11 @@ pub fn kernel<C: Correlation + ?Sized>(c: &C, x: f64, g: f64) -> f64 {
     }
 }
 
+#[cfg(feature = "alloc")]
 /// [`kernel`] from M(x) and 1 − M(x) already at hand (the table builder
 /// evaluates them once per point of a lattice shared by all its rows).
 #[inline]
-pub fn kernel_from(m: f64, one_minus_m: f64, g: f64) -> f64 {
+pub(crate) fn kernel_from(m: f64, one_minus_m: f64, g: f64) -> f64 {
     if g < 1.0 {
         kernel_small_g(m, g)
     } else {
@@ -86,27 +70,29 @@ pub fn kernel_from(m: f64, one_minus_m: f64, g: f64) -> f64 {
 
 #[inline]
 fn kernel_small_g(m: f64, g: f64) -> f64 {
-    crate::math::exp(-g) * libm::expm1(g * m)
+    crate::numerics::math::exp(-g) * libm::expm1(g * m)
 }
 
 #[inline]
 fn kernel_large_g(one_minus_m: f64, g: f64) -> f64 {
-    crate::math::exp(-g * one_minus_m) - crate::math::exp(-g)
+    crate::numerics::math::exp(-g * one_minus_m) - crate::numerics::math::exp(-g)
 }
 
+#[cfg(feature = "alloc")]
 /// e^{−g}·(e^{gM} − 1 − gM): the kernel without its first diffraction order
 /// e^{−g} g M, whose transform g e^{−g} p(u) is known exactly. The series
 /// below gM = ½ keeps full relative accuracy where the two nearly cancel.
 #[inline]
-pub fn kernel_without_first_order(m: f64, one_minus_m: f64, g: f64) -> f64 {
+pub(crate) fn kernel_without_first_order(m: f64, one_minus_m: f64, g: f64) -> f64 {
     let t = g * m;
     if t < 0.5 {
-        crate::math::exp(-g) * exp_minus_1_minus_x(t)
+        crate::numerics::math::exp(-g) * exp_minus_1_minus_x(t)
     } else {
-        kernel_from(m, one_minus_m, g) - crate::math::exp(-g) * t
+        kernel_from(m, one_minus_m, g) - crate::numerics::math::exp(-g) * t
     }
 }
 
+#[cfg(feature = "alloc")]
 /// e^t − 1 − t for |t| ≤ ½, by its Taylor series (relative error < 1e−16).
 #[inline]
 fn exp_minus_1_minus_x(t: f64) -> f64 {
@@ -121,46 +107,47 @@ fn exp_minus_1_minus_x(t: f64) -> f64 {
     sum
 }
 
+#[cfg(feature = "alloc")]
 /// Cusp-subtraction parameters (A', ε') for the kernel without its first
 /// order: its value at 0 is A' = 1 − e^{−g} − g e^{−g} and its leading
 /// non-analytic term −g(1 − e^{−g}) a x^{2ν}, so A' M(x/ε') matches both with
 /// ε'^{2ν} = A'/(g(1 − e^{−g})).
 #[inline]
-pub fn cusp_params_without_first_order(nu: f64, g: f64) -> (f64, f64) {
+pub(crate) fn cusp_params_without_first_order(nu: f64, g: f64) -> (f64, f64) {
     let b = -libm::expm1(-g);
     let a = if g < 0.5 {
-        crate::math::exp(-g) * exp_minus_1_minus_x(g)
+        crate::numerics::math::exp(-g) * exp_minus_1_minus_x(g)
     } else {
-        b - g * crate::math::exp(-g)
+        b - g * crate::numerics::math::exp(-g)
     };
-    let eps = crate::math::exp(crate::math::ln(a / (g * b)) / (2.0 * nu));
+    let eps = crate::numerics::math::exp(crate::numerics::math::ln(a / (g * b)) / (2.0 * nu));
     (a, eps)
 }
 
 /// Cusp-subtraction parameters (A, ε) for this g.
 #[inline]
-pub fn cusp_params(nu: f64, g: f64) -> (f64, f64) {
+pub(crate) fn cusp_params(nu: f64, g: f64) -> (f64, f64) {
     let a = -libm::expm1(-g);
-    let eps = crate::math::exp(crate::math::ln(a / g) / (2.0 * nu));
+    let eps = crate::numerics::math::exp(crate::numerics::math::ln(a / g) / (2.0 * nu));
     (a, eps)
 }
 
 /// Width scale of the kernel in x: the root x_s of g(1 − M(x_s)) = 1 − e^{−g}
 /// (→ 1 − M = 1/g for large g; M(x_s) ≈ g/2 for small g). Smooth in g, so
 /// the lobe width W = sqrt(1 + 1/x_s²) built on it interpolates well.
-pub fn kernel_width<C: Correlation + ?Sized>(c: &C, g: f64) -> f64 {
+pub(crate) fn kernel_width<C: Correlation + ?Sized>(c: &C, g: f64) -> f64 {
     if !(g > 0.0) {
         return f64::INFINITY;
     }
     let target = -libm::expm1(-g) / g;
     // 1 − M increases from 0 to 1; bracket in ln x.
     let (mut lo, mut hi) = (-700.0f64, 8.0f64);
-    if c.one_minus_m(crate::math::exp(hi)) < target {
-        return crate::math::exp(hi);
+    if c.one_minus_m(crate::numerics::math::exp(hi)) < target {
+        return crate::numerics::math::exp(hi);
     }
     for _ in 0..200 {
         let mid = 0.5 * (lo + hi);
-        if c.one_minus_m(crate::math::exp(mid)) < target {
+        if c.one_minus_m(crate::numerics::math::exp(mid)) < target {
             lo = mid;
         } else {
             hi = mid;
@@ -169,7 +156,7 @@ pub fn kernel_width<C: Correlation + ?Sized>(c: &C, g: f64) -> f64 {
             break;
         }
     }
-    crate::math::exp(0.5 * (lo + hi))
+    crate::numerics::math::exp(0.5 * (lo + hi))
 }
 
 /// Lobe width W(g) in u used to scale tables: sqrt(1 + 1/x_s²).
@@ -180,37 +167,6 @@ pub fn lobe_width<C: Correlation + ?Sized>(c: &C, g: f64) -> f64 {
     } else {
         1.0
     }
-}
-
-/// Nodes and weights of n-point Gauss–Legendre on [−1, 1], positive half
-/// (n even): `nodes[i]`, `weights[i]` for i < n/2, with the mirror images
-/// implied. Newton iteration on P_n, accurate to round-off.
-pub fn gauss_legendre<const H: usize>() -> ([f64; H], [f64; H]) {
-    let n = 2 * H;
-    let mut x = [0.0; H];
-    let mut w = [0.0; H];
-    for i in 0..H {
-        let mut z = libm::cos(PI * (i as f64 + 0.75) / (n as f64 + 0.5));
-        let mut dp = 1.0;
-        for _ in 0..100 {
-            let mut p0 = 1.0;
-            let mut p1 = z;
-            for k in 2..=n {
-                let p2 = ((2 * k - 1) as f64 * z * p1 - (k - 1) as f64 * p0) / k as f64;
-                p0 = p1;
-                p1 = p2;
-            }
-            dp = n as f64 * (z * p1 - p0) / (z * z - 1.0);
-            let dz = p1 / dp;
-            z -= dz;
-            if dz.abs() < 1e-16 {
-                break;
-            }
-        }
-        x[i] = z;
-        w[i] = 2.0 / ((1.0 - z * z) * dp * dp);
-    }
-    (x, w)
 }
 
 /// Smallest x in [x0, 1e6] at which the decreasing function `f` drops below
@@ -284,7 +240,7 @@ pub fn s_tilde_direct<C: Correlation + ?Sized>(c: &C, u: f64, g: f64) -> f64 {
 }
 
 #[cfg(feature = "alloc")]
-pub use fftlog::FftLog;
+pub(crate) use fftlog::FftLog;
 
 #[cfg(feature = "alloc")]
 mod fftlog {
@@ -424,7 +380,7 @@ mod fftlog {
                 let li = w * core::f64::consts::LN_2 + a_i - b_i;
                 // phase e^{−2πi m/N}
                 let ph = li - 2.0 * PI * m as f64 / n as f64;
-                let mag = crate::math::exp(lr) / n as f64;
+                let mag = crate::numerics::math::exp(lr) / n as f64;
                 let (s, c) = libm::sincos(ph);
                 *slot = (mag * c, mag * s);
             }
@@ -441,10 +397,10 @@ mod fftlog {
                     .collect(),
                 kernel,
                 bias_in: (0..n)
-                    .map(|i| crate::math::exp((2.0 - q) * i as f64 * dt))
+                    .map(|i| crate::numerics::math::exp((2.0 - q) * i as f64 * dt))
                     .collect(),
                 bias_out: (0..n)
-                    .map(|j| crate::math::exp(-q * j as f64 * dt))
+                    .map(|j| crate::numerics::math::exp(-q * j as f64 * dt))
                     .collect(),
             }
         }
@@ -452,11 +408,6 @@ mod fftlog {
         /// Number of grid points.
         pub fn len(&self) -> usize {
             self.n
-        }
-
-        /// Always false (a plan has at least one point).
-        pub fn is_empty(&self) -> bool {
-            false
         }
 
         /// Grid spacing in ln x and ln u.
@@ -474,7 +425,7 @@ mod fftlog {
             re.resize(n, 0.0);
             im.resize(h, 0.0);
             // x_n = f_n·bias, packed as z_k = x_{2k} + i x_{2k+1}.
-            let scale_in = crate::math::exp((2.0 - self.q) * t0);
+            let scale_in = crate::numerics::math::exp((2.0 - self.q) * t0);
             let (zr, zi) = (&mut re[..h], &mut im[..h]);
             for k in 0..h {
                 let at = |i: usize| f.get(i).map_or(0.0, |&v| v * scale_in * self.bias_in[i]);
@@ -525,7 +476,7 @@ mod fftlog {
             }
             self.fft.run(zr, zi);
             let s0 = -(t0 + (n - 1) as f64 * self.dt);
-            let scale_out = crate::math::exp(-self.q * s0);
+            let scale_out = crate::numerics::math::exp(-self.q * s0);
             // Unpack from the back so the real parts in re[..h] are read
             // before they are overwritten.
             for k in (0..h).rev() {
@@ -540,29 +491,18 @@ mod fftlog {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::statistics::matern::Matern;
 
     fn closed_form_gamma2(u: f64, g: f64) -> f64 {
         // γ = 2: p_m(u) = m/(2π(m²+u²)^{3/2}); S̃ = Σ w_m p_m.
         let (lo, hi) = super::super::poisson::term_range(g, 1e-18);
         let mut s = 0.0;
         for m in lo..=hi {
-            let w = crate::math::exp(super::super::poisson::log_weight(m, g));
+            let w = crate::numerics::math::exp(super::super::poisson::log_weight(m, g));
             let mf = m as f64;
             s += w * mf / (2.0 * PI * libm::pow(mf * mf + u * u, 1.5));
         }
         s
-    }
-
-    #[test]
-    fn gauss_legendre_integrates_polynomials() {
-        let (x, w) = gauss_legendre::<8>();
-        let mut s = 0.0;
-        let mut s_w = 0.0;
-        for i in 0..8 {
-            s += 2.0 * w[i] * x[i] * x[i] * x[i] * x[i] * x[i] * x[i] * x[i] * x[i] * x[i] * x[i];
-            s_w += 2.0 * w[i];
-        }
-        assert!((s - 2.0 / 11.0).abs() < 1e-15 && (s_w - 2.0).abs() < 1e-14);
     }
 
     #[test]
@@ -592,13 +532,13 @@ mod tests {
             let plan = FftLog::with_bias(n, dt, q);
             let f: Vec<f64> = (0..n)
                 .map(|i| {
-                    let x = crate::math::exp(t0 + i as f64 * dt);
-                    crate::math::exp(-x) * (1.0 + 0.3 * libm::sin(7.0 * i as f64))
+                    let x = crate::numerics::math::exp(t0 + i as f64 * dt);
+                    crate::numerics::math::exp(-x) * (1.0 + 0.3 * libm::sin(7.0 * i as f64))
                 })
                 .collect();
             let (mut re, mut im) = (Vec::new(), Vec::new());
             plan.transform(t0, &f, &mut re, &mut im);
-            let scale_in = crate::math::exp((2.0 - q) * t0);
+            let scale_in = crate::numerics::math::exp((2.0 - q) * t0);
             let x: Vec<f64> = (0..n).map(|i| f[i] * scale_in * plan.bias_in[i]).collect();
             let dft = |v: &dyn Fn(usize) -> (f64, f64), k: usize| {
                 (0..n).fold((0.0, 0.0), |(ar, ai), i| {
@@ -620,7 +560,7 @@ mod tests {
                 })
                 .collect();
             let s0 = -(t0 + (n - 1) as f64 * dt);
-            let scale_out = crate::math::exp(-q * s0);
+            let scale_out = crate::numerics::math::exp(-q * s0);
             let want: Vec<f64> = (0..n)
                 .map(|j| dft(&|m| y[m], j).0 * scale_out * plan.bias_out[j])
                 .collect();
@@ -664,14 +604,14 @@ mod tests {
         let plan = FftLog::new(n, dt);
         let t0 = -45.0;
         let f: Vec<f64> = (0..n)
-            .map(|i| crate::math::exp(-crate::math::exp(t0 + i as f64 * dt)))
+            .map(|i| crate::numerics::math::exp(-crate::numerics::math::exp(t0 + i as f64 * dt)))
             .collect();
         let (mut re, mut im) = (Vec::new(), Vec::new());
         plan.transform(t0, &f, &mut re, &mut im);
         let s0 = -(t0 + (n - 1) as f64 * dt);
         let mut worst: f64 = 0.0;
         for (j, v) in re.iter().enumerate() {
-            let u = crate::math::exp(s0 + j as f64 * dt);
+            let u = crate::numerics::math::exp(s0 + j as f64 * dt);
             if (1e-4..1e4).contains(&u) {
                 let want = libm::pow(1.0 + u * u, -1.5);
                 worst = worst.max((v / want - 1.0).abs());
@@ -680,16 +620,16 @@ mod tests {
         assert!(worst < 1e-8, "exp: {worst}");
         let f: Vec<f64> = (0..n)
             .map(|i| {
-                let x = crate::math::exp(t0 + i as f64 * dt);
-                crate::math::exp(-0.5 * x * x)
+                let x = crate::numerics::math::exp(t0 + i as f64 * dt);
+                crate::numerics::math::exp(-0.5 * x * x)
             })
             .collect();
         plan.transform(t0, &f, &mut re, &mut im);
         let mut worst: f64 = 0.0;
         for (j, v) in re.iter().enumerate() {
-            let u = crate::math::exp(s0 + j as f64 * dt);
+            let u = crate::numerics::math::exp(s0 + j as f64 * dt);
             if (1e-4..6.0).contains(&u) {
-                let want = crate::math::exp(-0.5 * u * u);
+                let want = crate::numerics::math::exp(-0.5 * u * u);
                 worst = worst.max((v - want).abs() / want.max(1e-6));
             }
         }

@@ -13,10 +13,10 @@ use alloc::vec::Vec;
 use core::f64::consts::PI;
 
 use super::RadialPsd;
-use super::ghs_table::lagrange4;
-use super::hankel::{Correlation, FftLog};
 use super::matern::Matern;
 use crate::BrdfError;
+use crate::numerics::hankel::{Correlation, FftLog};
+use crate::numerics::interp::lagrange4;
 
 /// Radial PSD given by samples (ζ_j in rad/µm, P_j in µm⁴).
 #[derive(Clone, Debug, PartialEq)]
@@ -60,9 +60,12 @@ impl TabulatedPsd {
         }
         let ln_zeta: Vec<f64> = zeta_rad_per_um
             .iter()
-            .map(|z| crate::math::ln(*z))
+            .map(|z| crate::numerics::math::ln(*z))
             .collect();
-        let ln_p: Vec<f64> = psd_um4.iter().map(|p| crate::math::ln(*p)).collect();
+        let ln_p: Vec<f64> = psd_um4
+            .iter()
+            .map(|p| crate::numerics::math::ln(*p))
+            .collect();
         let slope_hi = (ln_p[n - 1] - ln_p[n - 2]) / (ln_zeta[n - 1] - ln_zeta[n - 2]);
         if !(slope_hi < -2.02) {
             return Err(BrdfError::InvalidTable {
@@ -120,19 +123,21 @@ impl TabulatedPsd {
     /// P(ζ), µm⁴.
     pub fn psd(&self, zeta: f64) -> f64 {
         if !(zeta > 0.0) {
-            return crate::math::exp(self.ln_p[0]);
+            return crate::numerics::math::exp(self.ln_p[0]);
         }
-        let lz = crate::math::ln(zeta);
+        let lz = crate::numerics::math::ln(zeta);
         let n = self.ln_zeta.len();
         if lz <= self.ln_zeta[0] {
-            return crate::math::exp(self.ln_p[0]);
+            return crate::numerics::math::exp(self.ln_p[0]);
         }
         if lz >= self.ln_zeta[n - 1] {
-            return crate::math::exp(self.ln_p[n - 1] + self.slope_hi * (lz - self.ln_zeta[n - 1]));
+            return crate::numerics::math::exp(
+                self.ln_p[n - 1] + self.slope_hi * (lz - self.ln_zeta[n - 1]),
+            );
         }
         let j = self.segment(lz);
         let t = (lz - self.ln_zeta[j]) / (self.ln_zeta[j + 1] - self.ln_zeta[j]);
-        crate::math::exp(self.ln_p[j] + t * (self.ln_p[j + 1] - self.ln_p[j]))
+        crate::numerics::math::exp(self.ln_p[j] + t * (self.ln_p[j + 1] - self.ln_p[j]))
     }
 
     /// P/σ², µm².
@@ -160,17 +165,17 @@ impl TabulatedPsd {
             return 0.0;
         }
         let n = self.ln_zeta.len();
-        let lz = crate::math::ln(zeta);
+        let lz = crate::numerics::math::ln(zeta);
         if lz <= self.ln_zeta[0] {
-            let z0 = crate::math::exp(self.ln_zeta[0]);
+            let z0 = crate::numerics::math::exp(self.ln_zeta[0]);
             return self.cum[0] * (zeta / z0) * (zeta / z0);
         }
         if lz >= self.ln_zeta[n - 1] {
-            let zl = crate::math::exp(self.ln_zeta[n - 1]);
+            let zl = crate::numerics::math::exp(self.ln_zeta[n - 1]);
             let b2 = self.slope_hi + 2.0;
             let m = 2.0
                 * PI
-                * crate::math::exp(self.ln_p[n - 1])
+                * crate::numerics::math::exp(self.ln_p[n - 1])
                 * zl
                 * zl
                 * (libm::expm1(b2 * (lz - self.ln_zeta[n - 1])) / b2)
@@ -201,18 +206,18 @@ impl TabulatedPsd {
         }
         let n = self.ln_zeta.len();
         if xi < self.cum[0] {
-            return crate::math::exp(self.ln_zeta[0]) * libm::sqrt(xi / self.cum[0]);
+            return crate::numerics::math::exp(self.ln_zeta[0]) * libm::sqrt(xi / self.cum[0]);
         }
         if xi >= self.cum[n - 1] {
-            let zl = crate::math::exp(self.ln_zeta[n - 1]);
+            let zl = crate::numerics::math::exp(self.ln_zeta[n - 1]);
             let b2 = self.slope_hi + 2.0;
             let target = (xi - self.cum[n - 1]) * self.sigma2
-                / (2.0 * PI * crate::math::exp(self.ln_p[n - 1]) * zl * zl);
+                / (2.0 * PI * crate::numerics::math::exp(self.ln_p[n - 1]) * zl * zl);
             let z = 1.0 + b2 * target;
             return if z <= 0.0 {
                 f64::INFINITY
             } else {
-                zl * crate::math::exp(crate::math::ln(z) / b2)
+                zl * crate::numerics::math::exp(crate::numerics::math::ln(z) / b2)
             };
         }
         let (mut lo, mut hi) = (0usize, n - 1);
@@ -225,16 +230,16 @@ impl TabulatedPsd {
             }
         }
         let j = lo;
-        let zj = crate::math::exp(self.ln_zeta[j]);
+        let zj = crate::numerics::math::exp(self.ln_zeta[j]);
         let b2 = self.seg_slope(j) + 2.0;
         let target = (xi - self.cum[j]) * self.sigma2
-            / (2.0 * PI * crate::math::exp(self.ln_p[j]) * zj * zj);
+            / (2.0 * PI * crate::numerics::math::exp(self.ln_p[j]) * zj * zj);
         let ln_ratio = if libm::fabs(b2) < 1e-9 {
             target
         } else {
             libm::log1p(b2 * target) / b2
         };
-        zj * crate::math::exp(ln_ratio.clamp(0.0, self.ln_zeta[j + 1] - self.ln_zeta[j]))
+        zj * crate::numerics::math::exp(ln_ratio.clamp(0.0, self.ln_zeta[j + 1] - self.ln_zeta[j]))
     }
 
     /// Exponent ν_t of the tail, P ∝ ζ^{−(2ν_t + 2)}.
@@ -250,7 +255,7 @@ fn seg_mass(lz0: f64, lp0: f64, lz1: f64, lp1: f64) -> f64 {
         return 0.0;
     }
     let b2 = (lp1 - lp0) / d + 2.0;
-    let base = 2.0 * PI * crate::math::exp(lp0 + 2.0 * lz0);
+    let base = 2.0 * PI * crate::numerics::math::exp(lp0 + 2.0 * lz0);
     if libm::fabs(b2 * d) < 1e-12 {
         base * d
     } else {
@@ -313,9 +318,9 @@ impl TabulatedCorrelation {
         let nu = p.tail_nu();
         let nl = p.ln_zeta.len();
         // tail amplitude in u: p(u) = B u^{slope} for u ≥ u_last
-        let u_last = crate::math::exp(p.ln_zeta[nl - 1]) * p.length;
-        let b =
-            p.unit_psd_u_inner(u_last) * crate::math::exp(-p.slope_hi * crate::math::ln(u_last));
+        let u_last = crate::numerics::math::exp(p.ln_zeta[nl - 1]) * p.length;
+        let b = p.unit_psd_u_inner(u_last)
+            * crate::numerics::math::exp(-p.slope_hi * crate::numerics::math::ln(u_last));
         // The KC of the same tail with Lc = 1 has mass πB/ν. A last segment
         // far steeper than the body (a roll-off appended past the data)
         // makes that astronomically large, and r = p − c·p₁ then cancels
@@ -327,14 +332,14 @@ impl TabulatedCorrelation {
         } else {
             (
                 1.0,
-                crate::math::exp(-crate::math::ln(tail_mass) / (2.0 * nu)),
+                crate::numerics::math::exp(-crate::numerics::math::ln(tail_mass) / (2.0 * nu)),
             )
         };
         let plan = FftLog::with_bias(n, dt, 0.5);
         let tu0 = -51.0;
         let f: Vec<f64> = (0..n)
             .map(|i| {
-                let u = crate::math::exp(tu0 + i as f64 * dt);
+                let u = crate::numerics::math::exp(tu0 + i as f64 * dt);
                 let tail = c * lc_tail * lc_tail * super::kc::p1(nu, lc_tail * u);
                 2.0 * PI * (p.unit_psd_u_inner(u) - tail)
             })
@@ -348,7 +353,7 @@ impl TabulatedCorrelation {
         // would dominate.
         let mut m2 = 0.0;
         for (i, fi) in f.iter().enumerate() {
-            let u = crate::math::exp(tu0 + i as f64 * dt);
+            let u = crate::numerics::math::exp(tu0 + i as f64 * dt);
             if u > u_last {
                 break;
             }
@@ -356,7 +361,7 @@ impl TabulatedCorrelation {
         }
         // r ≈ B(ν + 1)u^{slope−2}/Lc'² beyond the last sample.
         m2 += 2.0 * PI * b * (nu + 1.0) / (lc_tail * lc_tail)
-            * crate::math::exp((p.slope_hi + 2.0) * crate::math::ln(u_last))
+            * crate::numerics::math::exp((p.slope_hi + 2.0) * crate::numerics::math::ln(u_last))
             / (-(p.slope_hi + 2.0));
         // switch where the quadratic form reaches 1e−6
         let x_switch = libm::sqrt(4e-6 / m2.abs().max(1e-300));
@@ -375,9 +380,9 @@ impl TabulatedCorrelation {
         // The transform leaves ~1e−9 of noise where M has decayed; cut M to
         // zero beyond the last point where |M| > 1e−6 (×2 margin) so the
         // kernel e^{−g}(e^{gM} − 1) really vanishes at large separations.
-        let mut x_cut = crate::math::exp(t0);
+        let mut x_cut = crate::numerics::math::exp(t0);
         for i in (0..n).rev() {
-            let x = crate::math::exp(t0 + i as f64 * dt);
+            let x = crate::numerics::math::exp(t0 + i as f64 * dt);
             if libm::fabs(t.m_full(x)) > 1e-6 {
                 x_cut = 2.0 * x;
                 break;
@@ -393,7 +398,7 @@ impl TabulatedCorrelation {
 
     fn m_r(&self, x: f64) -> f64 {
         let n = self.m_r.len();
-        let pos = (crate::math::ln(x) - self.t0) / self.dt;
+        let pos = (crate::numerics::math::ln(x) - self.t0) / self.dt;
         if pos >= (n - 2) as f64 {
             return 0.0;
         }
@@ -458,9 +463,11 @@ mod tests {
     fn kc_samples(k: &KcPsd, n: usize, lo: f64, hi: f64) -> (Vec<f64>, Vec<f64>) {
         let z: Vec<f64> = (0..n)
             .map(|i| {
-                crate::math::exp(
-                    crate::math::ln(lo)
-                        + (crate::math::ln(hi) - crate::math::ln(lo)) * i as f64 / (n - 1) as f64,
+                crate::numerics::math::exp(
+                    crate::numerics::math::ln(lo)
+                        + (crate::numerics::math::ln(hi) - crate::numerics::math::ln(lo))
+                            * i as f64
+                            / (n - 1) as f64,
                 )
             })
             .collect();

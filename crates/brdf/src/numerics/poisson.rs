@@ -13,15 +13,17 @@ pub fn log_weight(m: u64, g: f64) -> f64 {
         return -g;
     }
     let x = m as f64;
-    -0.5 * crate::math::ln(2.0 * core::f64::consts::PI * x) - stirling_error(x) - bd0(x, g)
+    -0.5 * crate::numerics::math::ln(2.0 * core::f64::consts::PI * x)
+        - stirling_error(x)
+        - bd0(x, g)
 }
 
 /// ln Γ(n+1) − [(n+½) ln n − n + ½ ln 2π].
 fn stirling_error(n: f64) -> f64 {
     if n < 16.0 {
         return libm::lgamma(n + 1.0)
-            - ((n + 0.5) * crate::math::ln(n) - n
-                + 0.5 * crate::math::ln(2.0 * core::f64::consts::PI));
+            - ((n + 0.5) * crate::numerics::math::ln(n) - n
+                + 0.5 * crate::numerics::math::ln(2.0 * core::f64::consts::PI));
     }
     let n2 = 1.0 / (n * n);
     (1.0 / 12.0 - n2 * (1.0 / 360.0 - n2 * (1.0 / 1260.0 - n2 * (1.0 / 1680.0 - n2 / 1188.0)))) / n
@@ -45,18 +47,18 @@ fn bd0(x: f64, g: f64) -> f64 {
             j += 1.0;
         }
     }
-    x * crate::math::ln(x / g) + g - x
+    x * crate::numerics::math::ln(x / g) + g - x
 }
 
 /// ln(1 − e^{−g}), the log of the mass of all orders m ≥ 1.
 #[inline]
-pub fn log_scattered_mass(g: f64) -> f64 {
-    crate::math::ln(-libm::expm1(-g))
+pub(crate) fn log_scattered_mass(g: f64) -> f64 {
+    crate::numerics::math::ln(-libm::expm1(-g))
 }
 
 /// ln of the weight conditioned on m ≥ 1: w_m/(1 − e^{−g}) = g^m/(m! expm1(g)).
 #[inline]
-pub fn log_conditioned_weight(m: u64, g: f64) -> f64 {
+pub(crate) fn log_conditioned_weight(m: u64, g: f64) -> f64 {
     log_weight(m, g) - log_scattered_mass(g)
 }
 
@@ -77,17 +79,17 @@ pub fn term_range(g: f64, eps: f64) -> (u64, u64) {
     if !(g > 0.0) {
         return (1, 1);
     }
-    let stop = crate::math::ln(eps) - 3.0;
+    let stop = crate::numerics::math::ln(eps) - 3.0;
     let m0 = mode(g);
     let lw0 = log_conditioned_weight(m0, g);
-    let lg = crate::math::ln(g);
+    let lg = crate::numerics::math::ln(g);
     let mut lo = m0;
     let mut lw = lw0;
     while lo > 1 {
         if lw < stop {
             break;
         }
-        lw += crate::math::ln(lo as f64) - lg;
+        lw += crate::numerics::math::ln(lo as f64) - lg;
         lo -= 1;
     }
     let mut hi = m0;
@@ -96,12 +98,13 @@ pub fn term_range(g: f64, eps: f64) -> (u64, u64) {
         if lw < stop {
             break;
         }
-        lw += lg - crate::math::ln((hi + 1) as f64);
+        lw += lg - crate::numerics::math::ln((hi + 1) as f64);
         hi += 1;
     }
     (lo, hi)
 }
 
+#[cfg(feature = "alloc")]
 /// Draws an order m ≥ 1 from Poisson(g) conditioned on m ≥ 1, by inversion
 /// starting at the mode (chop-down search both ways), from one uniform ξ.
 ///
@@ -110,7 +113,7 @@ pub fn term_range(g: f64, eps: f64) -> (u64, u64) {
 /// holding all but 1e−17 of the mass, so nothing overflows and g > 709 needs
 /// no special case. Cost O(√g) per draw. For g < 1e−12, m = 1
 /// (P(m ≥ 2 | m ≥ 1) < 1e−12).
-pub fn sample_conditioned(g: f64, xi: f64) -> u64 {
+pub(crate) fn sample_conditioned(g: f64, xi: f64) -> u64 {
     if !(g >= 1e-12) {
         return 1;
     }
@@ -175,14 +178,18 @@ mod tests {
         for &g in &[1e-6, 1e-3, 0.5, 3.0, 40.0, 700.0, 710.0, 1e4] {
             let (lo, hi) = term_range(g, 1e-17);
             let s: f64 = (lo..=hi)
-                .map(|m| crate::math::exp(log_conditioned_weight(m, g)))
+                .map(|m| crate::numerics::math::exp(log_conditioned_weight(m, g)))
                 .sum();
             assert!((s - 1.0).abs() < 1e-13, "g={g}: {s}");
         }
         // Direct formula where it is safe.
         let g: f64 = 2.5;
-        let direct = crate::math::exp(-g) * g.powi(3) / 6.0 / (1.0 - crate::math::exp(-g));
-        assert!((crate::math::exp(log_conditioned_weight(3, g)) / direct - 1.0).abs() < 1e-14);
+        let direct = crate::numerics::math::exp(-g) * g.powi(3)
+            / 6.0
+            / (1.0 - crate::numerics::math::exp(-g));
+        assert!(
+            (crate::numerics::math::exp(log_conditioned_weight(3, g)) / direct - 1.0).abs() < 1e-14
+        );
     }
 
     #[test]
@@ -222,7 +229,7 @@ mod tests {
                 let p = if g < 1e-12 {
                     if m == 1 { 1.0 } else { 0.0 }
                 } else {
-                    crate::math::exp(log_conditioned_weight(m, g))
+                    crate::numerics::math::exp(log_conditioned_weight(m, g))
                 };
                 let f = counts[m as usize] as f64 / n as f64;
                 assert!((f - p).abs() < 2.0 / n as f64, "g={g} m={m}: {f} vs {p}");

@@ -1,18 +1,14 @@
-//! PNG plots (and the same data as CSV) of an analysis: the PSD with its fits on log-log
+//! PNG plots (and the same data as CSV) of a `lustre fit` analysis: the PSD with its fits on log-log
 //! axes and the NDF with its GGX/Beckmann fits. Files are written next to the material file
 //! as `<stem>_psd.png/.csv` and `<stem>_ndf.png/.csv`.
 
-use crate::pipeline::Analysis;
-use crate::{FitError, ndf};
-use plot::{Axis, LineStyle, Marker, Plot, Series};
+use fit::ndf;
+use fit::pipeline::Analysis;
+use plot::{Axis, LineStyle, Marker, Plot, PlotError, Series};
 use std::path::{Path, PathBuf};
 
-fn perr(e: plot::PlotError) -> FitError {
-    FitError::data("plot", e.to_string())
-}
-
 /// Write the plots; returns the files written.
-pub fn write(a: &Analysis, material: &Path) -> Result<Vec<PathBuf>, FitError> {
+pub fn write(a: &Analysis, material: &Path) -> Result<Vec<PathBuf>, PlotError> {
     let stem = material
         .file_stem()
         .map(|s| s.to_string_lossy().into_owned())
@@ -77,9 +73,9 @@ pub fn write(a: &Analysis, material: &Path) -> Result<Vec<PathBuf>, FitError> {
         );
     }
     let png = dir.join(format!("{stem}_psd.png"));
-    psd_plot.save_png(&png, 900, 650).map_err(perr)?;
+    psd_plot.save_png(&png, 900, 650)?;
     let csv = dir.join(format!("{stem}_psd.csv"));
-    psd_plot.save_csv(&csv).map_err(perr)?;
+    psd_plot.save_csv(&csv)?;
     written.extend([png, csv]);
 
     if let Some(h) = &a.ndf.ndf {
@@ -114,10 +110,37 @@ pub fn write(a: &Analysis, material: &Path) -> Result<Vec<PathBuf>, FitError> {
                     .width(2.0),
             );
         let png = dir.join(format!("{stem}_ndf.png"));
-        ndf_plot.save_png(&png, 900, 650).map_err(perr)?;
+        ndf_plot.save_png(&png, 900, 650)?;
         let csv = dir.join(format!("{stem}_ndf.csv"));
-        ndf_plot.save_csv(&csv).map_err(perr)?;
+        ndf_plot.save_csv(&csv)?;
         written.extend([png, csv]);
     }
     Ok(written)
+}
+
+#[cfg(test)]
+mod tests {
+    use fit::io::{ReadOptions, read_path};
+    use fit::pipeline::{Options, analyse};
+    use std::path::PathBuf;
+
+    /// PNG and CSV for the PSD and the NDF, next to the material file.
+    #[test]
+    fn plots_of_a_map_are_written_next_to_the_material_file() {
+        let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("data/surfaces/di-6.di");
+        let scan = read_path(&path, &ReadOptions::default()).unwrap();
+        let a = analyse(scan, None, &Options::default()).unwrap();
+        let out = std::env::temp_dir().join(format!("fit-plots-{}.toml", std::process::id()));
+        let files = super::write(&a, &out).unwrap();
+        assert_eq!(files.len(), 4);
+        for f in &files {
+            let b = std::fs::read(f).unwrap();
+            if f.extension().is_some_and(|e| e == "png") {
+                assert!(b.starts_with(b"\x89PNG"), "{}", f.display());
+            } else {
+                assert!(b.len() > 100, "{}", f.display());
+            }
+            std::fs::remove_file(f).unwrap();
+        }
+    }
 }

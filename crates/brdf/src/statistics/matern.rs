@@ -6,7 +6,8 @@
 //! relative accuracy at small x (g(1 − M) with g up to 1e4), which the
 //! cancellation-free series of §2.3 gives for non-integer ν.
 
-use super::special::{EULER_GAMMA, bessel_k_pair_scaled};
+use crate::numerics::hankel::Correlation;
+use crate::numerics::special::{EULER_GAMMA, bessel_k_pair_scaled};
 
 /// Below this distance from an integer, ν is treated with the Bessel form
 /// (the series' Γ(1 − ν) pole makes its terms cancel).
@@ -86,15 +87,16 @@ impl Matern {
     /// done on the Matérn functions themselves (no overflow for large ν).
     fn bessel_form(&self, x: f64) -> f64 {
         let nu = self.nu;
-        if x > 745.0 + 2.0 * nu * crate::math::ln(x.max(1.0)) + 50.0 {
+        if x > 745.0 + 2.0 * nu * crate::numerics::math::ln(x.max(1.0)) + 50.0 {
             return 0.0;
         }
         if nu < 1.5 {
             let (mu, which) = if nu <= 0.5 { (nu, 0) } else { (nu - 1.0, 1) };
             let (k0, k1) = bessel_k_pair_scaled(mu, x);
             let k = if which == 0 { k0 } else { k1 };
-            return crate::math::exp(
-                self.log_norm + nu * crate::math::ln(x) + crate::math::ln(k) - x,
+            return crate::numerics::math::exp(
+                self.log_norm + nu * crate::numerics::math::ln(x) + crate::numerics::math::ln(k)
+                    - x,
             );
         }
         // a ∈ [½, 3/2): M_a and M_{a+1} directly, then
@@ -108,12 +110,12 @@ impl Matern {
         } else {
             (k1, 2.0 * (mu + 1.0) / x * k1 + k0)
         };
-        let lx = crate::math::ln(x);
+        let lx = crate::numerics::math::ln(x);
         let m_of = |order: f64, k: f64| {
-            crate::math::exp(
+            crate::numerics::math::exp(
                 (1.0 - order) * core::f64::consts::LN_2 - libm::lgamma(order)
                     + order * lx
-                    + crate::math::ln(k)
+                    + crate::numerics::math::ln(k)
                     - x,
             )
         };
@@ -135,7 +137,8 @@ impl Matern {
         let nu = self.nu;
         let t = 0.25 * x * x;
         // first sum
-        let mut term = crate::math::exp(nu * crate::math::ln(t) - self.lgamma_1p_nu);
+        let mut term =
+            crate::numerics::math::exp(nu * crate::numerics::math::ln(t) - self.lgamma_1p_nu);
         let mut s1 = term;
         let mut k = 1.0;
         while k < 60.0 {
@@ -168,10 +171,26 @@ impl Matern {
         let n = libm::round(self.nu);
         let x2 = x * x;
         if n <= 1.0 {
-            0.25 * x2 * (crate::math::ln(4.0 / x2) + 1.0 - 2.0 * EULER_GAMMA)
+            0.25 * x2 * (crate::numerics::math::ln(4.0 / x2) + 1.0 - 2.0 * EULER_GAMMA)
         } else {
             x2 / (4.0 * (self.nu - 1.0))
         }
+    }
+}
+
+/// The K-correlation surface: Matérn covariance and p₁.
+impl Correlation for Matern {
+    fn m(&self, x: f64) -> f64 {
+        self.value(x)
+    }
+    fn one_minus_m(&self, x: f64) -> f64 {
+        self.one_minus(x)
+    }
+    fn unit_psd_u(&self, u: f64) -> f64 {
+        super::kc::p1(self.nu(), u)
+    }
+    fn cusp_nu(&self) -> f64 {
+        self.nu()
     }
 }
 
@@ -182,7 +201,7 @@ mod tests {
     #[test]
     fn closed_forms() {
         for &x in &[1e-8, 1e-3, 0.2, 0.999, 1.0, 1.5, 4.0, 20.0, 200.0] {
-            let e = crate::math::exp(-x);
+            let e = crate::numerics::math::exp(-x);
             let m12 = Matern::new(0.5);
             let m32 = Matern::new(1.5);
             let m52 = Matern::new(2.5);
