@@ -3,42 +3,15 @@
 
 use crate::PlotError;
 use image::{ExtendedColorType, ImageEncoder, RgbImage, codecs::png::PngEncoder};
-use std::io::Write;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 /// Writes `bytes` to `path` atomically (temporary file in the same folder + rename).
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), PlotError> {
-    let name = path
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_default();
-    if name.is_empty() {
-        return Err(PlotError::Io {
-            action: "writing",
-            path: path.to_path_buf(),
-            source: std::io::Error::new(std::io::ErrorKind::InvalidInput, "path has no file name"),
-        });
-    }
-    let tmp: PathBuf = path.with_file_name(format!(".{name}.tmp-{}", std::process::id()));
-    fn io<'a>(action: &'static str, p: &'a Path) -> impl FnOnce(std::io::Error) -> PlotError + 'a {
-        move |source| PlotError::Io {
-            action,
-            path: p.to_path_buf(),
-            source,
-        }
-    }
-    let result = (|| {
-        let mut f = std::fs::File::create(&tmp).map_err(io("creating temporary file", &tmp))?;
-        f.write_all(bytes).map_err(io("writing", &tmp))?;
-        f.sync_all().map_err(io("flushing", &tmp))?;
-        drop(f);
-        std::fs::rename(&tmp, path).map_err(io("renaming temporary file to", path))
-    })();
-    if result.is_err() {
-        // Best effort: the temporary file may not even exist if creation failed.
-        let _ = std::fs::remove_file(&tmp);
-    }
-    result
+    atomic_write::write_atomic(path, bytes).map_err(|e| PlotError::Io {
+        action: e.action,
+        path: e.path,
+        source: e.source,
+    })
 }
 
 /// Encodes an RGB image as PNG in memory.

@@ -25,7 +25,6 @@ use crate::error::RenderError;
 use crate::scene::inputs::{InputFile, describe_differences};
 use crate::spectrum::Cie;
 use std::fmt;
-use std::io::Write;
 use std::ops::Range;
 use std::path::Path;
 
@@ -681,7 +680,7 @@ impl Film {
 
     /// Writes the film atomically.
     pub fn save(&self, path: &Path) -> Result<(), RenderError> {
-        crate::output::write_atomic(path, |f| f.write_all(&self.to_bytes()))
+        crate::output::write_atomic(path, &self.to_bytes())
     }
 
     /// Reads a film file; a corrupt film is an error naming the file.

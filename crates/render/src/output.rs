@@ -4,37 +4,13 @@
 
 use crate::color::to_u8;
 use crate::error::RenderError;
-use std::fs::File;
-use std::io::{BufWriter, Write};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
-fn temp_path(path: &Path) -> PathBuf {
-    let name = path
-        .file_name()
-        .map_or_else(|| "out".into(), |n| n.to_string_lossy().into_owned());
-    path.with_file_name(format!(".{name}.tmp{}", std::process::id()))
-}
-
-/// Writes `path` through `write` into a temporary file, then renames it into place.
-pub fn write_atomic(
-    path: &Path,
-    write: impl FnOnce(&mut BufWriter<File>) -> std::io::Result<()>,
-) -> Result<(), RenderError> {
-    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
-        std::fs::create_dir_all(dir).map_err(|e| RenderError::io(dir, e))?;
-    }
-    let tmp = temp_path(path);
-    let result = (|| {
-        let mut w = BufWriter::new(File::create(&tmp)?);
-        write(&mut w)?;
-        let f = w.into_inner().map_err(|e| e.into_error())?;
-        f.sync_all()?;
-        std::fs::rename(&tmp, path)
-    })();
-    result.map_err(|e| {
-        let _ = std::fs::remove_file(&tmp);
-        RenderError::io(path, e)
-    })
+/// Writes `bytes` to `path` atomically (temporary file, sync, rename),
+/// creating the folder if missing (renders name output folders freely).
+pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), RenderError> {
+    atomic_write::create_parent(path).map_err(|e| RenderError::io(&e.path, e.source))?;
+    atomic_write::write_atomic(path, bytes).map_err(|e| RenderError::io(path, e.source))
 }
 
 /// Writes a linear-sRGB float EXR (channels R, G, B; f32).
@@ -59,7 +35,7 @@ pub fn write_exr(
             path: path.to_path_buf(),
             message: e.to_string(),
         })?;
-    write_atomic(path, |f| f.write_all(bytes.get_ref()))
+    write_atomic(path, bytes.get_ref())
 }
 
 /// Writes an 8-bit sRGB PNG (values clamped to [0, 1] before encoding).
@@ -86,7 +62,7 @@ pub fn write_png(
         path: path.to_path_buf(),
         message: e.to_string(),
     })?;
-    write_atomic(path, |f| f.write_all(bytes.get_ref()))
+    write_atomic(path, bytes.get_ref())
 }
 
 /// Reads back a float RGB EXR as (width, height, pixels); used by tests and tools.

@@ -4,18 +4,13 @@
 //! sample index), so an image depends only on which samples were taken,
 //! never on thread scheduling or on how sample ranges were split into shards.
 
-/// SplitMix64 (Steele, Lea & Flood 2014): a 64-bit state advanced by a Weyl
-/// sequence and finalised by a strong mixer; passes BigCrush.
+use brdf::numerics::splitmix::{SplitMix64, mix};
+
+/// SplitMix64 (Steele, Lea & Flood 2014; brdf's one implementation) seeded
+/// per camera sample; passes BigCrush.
 #[derive(Clone, Debug)]
 pub struct Rng {
-    state: u64,
-}
-
-#[inline]
-fn mix(mut z: u64) -> u64 {
-    z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-    z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-    z ^ (z >> 31)
+    inner: SplitMix64,
 }
 
 impl Rng {
@@ -25,15 +20,14 @@ impl Rng {
         let a = mix(seed ^ 0x6a09_e667_f3bc_c909);
         let b = mix(a ^ pixel.wrapping_mul(0x9e37_79b9_7f4a_7c15));
         Rng {
-            state: mix(b ^ sample.wrapping_mul(0xd1b5_4a32_d192_ed03)),
+            inner: SplitMix64::new(mix(b ^ sample.wrapping_mul(0xd1b5_4a32_d192_ed03))),
         }
     }
 
     /// Next 64 random bits.
     #[inline]
     pub fn next_u64(&mut self) -> u64 {
-        self.state = self.state.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        mix(self.state)
+        self.inner.next_u64()
     }
 
     /// Uniform in [0, 1) with 53 random bits.

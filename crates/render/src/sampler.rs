@@ -28,6 +28,7 @@
 
 use crate::rng::Rng;
 use crate::scene::desc::SamplerKind;
+use brdf::numerics::splitmix::mix;
 
 /// Random numbers for one camera sample.
 #[derive(Clone, Debug)]
@@ -113,14 +114,6 @@ fn lk_permute(mut x: u32, seed: u32) -> u32 {
     x ^= x.wrapping_mul(0xc7af_e638);
     x ^= x.wrapping_mul(0x8d22_f6e6);
     x
-}
-
-/// SplitMix64's finaliser.
-#[inline]
-fn mix(mut z: u64) -> u64 {
-    z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-    z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-    z ^ (z >> 31)
 }
 
 /// A 32-bit fraction to [0, 1); the 2^−33 offset centres the point in its
