@@ -40,18 +40,9 @@ pub struct Sampler {
     /// Sobol: per-pixel (and per block of 2³² samples) hash, mixed with the
     /// draw number into scramble seeds.
     pixel_seed: u64,
-    /// Sobol: the next padded dimension to compute.
+    /// Sobol: the next padded dimension.
     next_draw: u32,
-    /// Sobol: draws computed ahead, in blocks of [`BLOCK`]: the hash chains
-    /// of one draw are long and serial, those of a block run in parallel.
-    buf: [[f64; 2]; BLOCK],
-    /// Sobol: the next unused entry of `buf` (`BLOCK` = empty).
-    pos: usize,
 }
-
-/// Draws computed per refill: enough for a direct-lighting path (pixel, λ,
-/// light choice + point, lobe choice + direction).
-const BLOCK: usize = 6;
 
 /// Sobol generator matrix of dimension 1 (primitive polynomial x + 1) as
 /// byte-indexed XOR tables over the *bit-reversed* index, with bit-reversed
@@ -123,6 +114,23 @@ fn to_unit(x: u32) -> f64 {
     (x as f64 + 0.5) * (1.0 / 4_294_967_296.0)
 }
 
+/// Seeds of padded draw `draw`: the index shuffle (low 32 bits) and the
+/// scramble of its first dimension (high 32 bits).
+#[inline]
+fn draw_seed(pixel_seed: u64, draw: u32) -> u64 {
+    mix(pixel_seed ^ (draw as u64).wrapping_mul(0xd1b5_4a32_d192_ed03))
+}
+
+/// First dimension of padded draw `draw` (see [`sobol_draw`]); a 1-D draw
+/// needs only this, which saves the second dimension's table lookups,
+/// hash and bit reversal.
+#[inline]
+fn sobol_draw_x(index_rev: u32, h: u64) -> (u32, f64) {
+    let shuffled_rev = lk_permute(index_rev, h as u32);
+    let x = lk_permute(reverse(shuffled_rev), (h >> 32) as u32).reverse_bits();
+    (shuffled_rev, to_unit(x))
+}
+
 /// Padded draw `draw` of the sample with reversed index `index_rev`.
 ///
 /// In the reversed domain an Owen scramble is a single `lk_permute`:
@@ -131,12 +139,10 @@ fn to_unit(x: u32) -> f64 {
 /// scramble is rev(lk(rev(C·i′))).
 #[inline]
 fn sobol_draw(index_rev: u32, pixel_seed: u64, draw: u32) -> [f64; 2] {
-    let h = mix(pixel_seed ^ (draw as u64).wrapping_mul(0xd1b5_4a32_d192_ed03));
-    let h2 = mix(h);
-    let shuffled_rev = lk_permute(index_rev, h as u32);
-    let x = lk_permute(reverse(shuffled_rev), (h >> 32) as u32).reverse_bits();
-    let y = lk_permute(sobol1_rev(shuffled_rev), h2 as u32).reverse_bits();
-    [to_unit(x), to_unit(y)]
+    let h = draw_seed(pixel_seed, draw);
+    let (shuffled_rev, x) = sobol_draw_x(index_rev, h);
+    let y = lk_permute(sobol1_rev(shuffled_rev), mix(h) as u32).reverse_bits();
+    [x, to_unit(y)]
 }
 
 impl Sampler {
@@ -156,27 +162,14 @@ impl Sampler {
             index_rev: (sample as u32).reverse_bits(),
             pixel_seed,
             next_draw: 0,
-            buf: [[0.0; 2]; BLOCK],
-            pos: BLOCK,
         }
     }
 
     #[inline]
-    fn next_sobol(&mut self) -> [f64; 2] {
-        if self.pos == BLOCK {
-            for (k, b) in self.buf.iter_mut().enumerate() {
-                *b = sobol_draw(
-                    self.index_rev,
-                    self.pixel_seed,
-                    self.next_draw.wrapping_add(k as u32),
-                );
-            }
-            self.next_draw = self.next_draw.wrapping_add(BLOCK as u32);
-            self.pos = 0;
-        }
-        let v = self.buf[self.pos];
-        self.pos += 1;
-        v
+    fn next_draw(&mut self) -> u32 {
+        let d = self.next_draw;
+        self.next_draw = d.wrapping_add(1);
+        d
     }
 
     /// One uniform number in [0, 1) (a padded dimension of its own).
@@ -184,7 +177,10 @@ impl Sampler {
     pub fn get_1d(&mut self) -> f64 {
         match self.kind {
             SamplerKind::Independent => self.rng.uniform(),
-            SamplerKind::Sobol => self.next_sobol()[0],
+            SamplerKind::Sobol => {
+                let d = self.next_draw();
+                sobol_draw_x(self.index_rev, draw_seed(self.pixel_seed, d)).1
+            }
         }
     }
 
@@ -193,7 +189,10 @@ impl Sampler {
     pub fn get_2d(&mut self) -> [f64; 2] {
         match self.kind {
             SamplerKind::Independent => [self.rng.uniform(), self.rng.uniform()],
-            SamplerKind::Sobol => self.next_sobol(),
+            SamplerKind::Sobol => {
+                let d = self.next_draw();
+                sobol_draw(self.index_rev, self.pixel_seed, d)
+            }
         }
     }
 

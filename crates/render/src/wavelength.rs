@@ -53,7 +53,7 @@ impl WavelengthSampler {
             lo,
             hi,
             bin,
-            dist: Distribution1D::new(&weights),
+            dist: Distribution1D::with_guide(&weights, 4),
             density,
         }
     }
