@@ -14,6 +14,11 @@
 //!   table rows are built on all cores, so on an idle machine this is what a
 //!   user waits); `startup_cpu/*`: CPU time of the whole process for it.
 //!
+//! * `plates_cpu/*`: camera samples per CPU-second on the Mitsuba peer's GGX
+//!   and Beckmann copper plates (`benches/peer/lustre/`, written by
+//!   `mitsuba_plate.py --write-lustre-scenes`), one thread, Sobol and
+//!   independent samplers (their ratio is the sampler overhead).
+//!
 //! `cargo bench --bench render`
 
 use criterion::measurement::Measurement;
@@ -64,6 +69,36 @@ fn throughput<M: Measurement + 'static>(c: &mut Criterion<M>, group: &str) {
     g.finish();
 }
 
+/// Camera samples per CPU-second on the Mitsuba peer's plates (1 thread,
+/// so the figure is per core), with the default Sobol sampler and with
+/// white noise: their ratio is the sampler's overhead.
+fn plates<M: Measurement + 'static>(c: &mut Criterion<M>, group: &str) {
+    let mut g = c.benchmark_group(group);
+    g.sample_size(10).measurement_time(Duration::from_secs(10));
+    let pool = render::render::thread_pool(Some(1)).expect("pool");
+    for plate in ["ggx_cu_45deg", "beckmann_cu_45deg"] {
+        let path = scene_path(&format!("benches/peer/lustre/{plate}.toml"));
+        let text = std::fs::read_to_string(&path).expect("plate scene");
+        for sampler in ["sobol", "independent"] {
+            let text = text.replace(
+                "[integrator]\n",
+                &format!("[integrator]\nsampler = \"{sampler}\"\n"),
+            );
+            let scene = render::load_str(&path, &text).expect("plate scene");
+            let samples = scene.camera.width as u64 * scene.camera.height as u64 * SPP;
+            g.throughput(Throughput::Elements(samples));
+            g.bench_function(format!("{plate}_{sampler}"), |b| {
+                b.iter(|| black_box(render_spp(&pool, &scene)))
+            });
+        }
+    }
+    g.finish();
+}
+
+fn plates_cpu(c: &mut Criterion<Cpu>) {
+    plates(c, "plates_cpu");
+}
+
 fn wall(c: &mut Criterion) {
     throughput(c, "wall");
 }
@@ -111,7 +146,7 @@ criterion_group!(wall_clock, wall, startup_wall);
 criterion_group! {
     name = cpu_time;
     config = Criterion::default().with_measurement(Cpu(PROCESS));
-    targets = cpu
+    targets = cpu, plates_cpu
 }
 criterion_group! {
     name = startup_time;
