@@ -232,16 +232,14 @@ impl super::RadialPsd for KcPsd {
 mod tests {
     use super::*;
 
-    /// Radial quadrature ∫₀^Z 2π ζ f(ζ) dζ by composite Simpson in t = ln(1+Lc²ζ²)-like
-    /// substitution; good enough to 1e-10 for these smooth integrands.
-    fn radial_mass(f: impl Fn(f64) -> f64, zmax: f64, n: usize) -> f64 {
-        // substitute ζ = sinh(s) to spread nodes over decades
+    /// ∫₀^Z g(x) dx by composite Simpson (n even) in x = sinh(s), which
+    /// spreads the nodes over decades; good to 1e-10 for these smooth integrands.
+    fn sinh_simpson(g: impl Fn(f64) -> f64, zmax: f64, n: usize) -> f64 {
         let smax = libm::asinh(zmax);
         let h = smax / n as f64;
         let mut acc = 0.0;
         for i in 0..=n {
             let s = i as f64 * h;
-            let z = libm::sinh(s);
             let w = if i == 0 || i == n {
                 1.0
             } else if i % 2 == 1 {
@@ -249,9 +247,14 @@ mod tests {
             } else {
                 2.0
             };
-            acc += w * 2.0 * PI * z * f(z) * libm::cosh(s);
+            acc += w * g(libm::sinh(s)) * libm::cosh(s);
         }
         acc * h / 3.0
+    }
+
+    /// Radial quadrature ∫₀^Z 2π ζ f(ζ) dζ.
+    fn radial_mass(f: impl Fn(f64) -> f64, zmax: f64, n: usize) -> f64 {
+        sinh_simpson(|z| 2.0 * PI * z * f(z), zmax, n)
     }
 
     #[test]
@@ -309,39 +312,12 @@ mod tests {
         assert!((m / 0.04 - 1.0).abs() < 2e-6, "{m}");
         // 1-D one-sided profile PSD integrates to σ² and equals the line
         // integral of the 2-D cycles PSD (×2 for one-sided).
-        let n = 200000;
-        let fmax = 1e4;
-        let smax = libm::asinh(fmax);
-        let h = smax / n as f64;
-        let mut acc = 0.0;
-        for i in 0..=n {
-            let s = i as f64 * h;
-            let w = if i == 0 || i == n {
-                1.0
-            } else if i % 2 == 1 {
-                4.0
-            } else {
-                2.0
-            };
-            acc += w * p.psd_1d_cycles(libm::sinh(s)) * libm::cosh(s);
-        }
-        acc *= h / 3.0;
+        let (n, fmax) = (200000, 1e4);
+        let acc = sinh_simpson(|f| p.psd_1d_cycles(f), fmax, n);
         assert!((acc / 0.04 - 1.0).abs() < 1e-4, "{acc}");
         let fx = 0.3;
-        let mut line = 0.0;
-        for i in 0..=n {
-            let s = i as f64 * h;
-            let fy = libm::sinh(s);
-            let w = if i == 0 || i == n {
-                1.0
-            } else if i % 2 == 1 {
-                4.0
-            } else {
-                2.0
-            };
-            line += w * p.psd_cycles(libm::hypot(fx, fy)) * libm::cosh(s);
-        }
-        line *= 2.0 * 2.0 * h / 3.0; // both signs of fy, one-sided in fx
+        // Both signs of fy, one-sided in fx.
+        let line = 2.0 * 2.0 * sinh_simpson(|fy| p.psd_cycles(libm::hypot(fx, fy)), fmax, n);
         assert!((line / p.psd_1d_cycles(fx) - 1.0).abs() < 1e-6);
     }
 
