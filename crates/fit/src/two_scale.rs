@@ -60,7 +60,9 @@ pub fn split(
     }
     let f_cut = 1.0 / cutoff;
     let fits_map = t.size_x() >= 2.0 * cutoff && (t.is_profile() || t.size_y() >= 2.0 * cutoff);
-    if fits_map {
+    // Only the map branch computes a PSD of its own; it must outlive the branch.
+    let residual_psd;
+    let (beta, beta_source, kc_psd) = if fits_map {
         let large = gaussian_lowpass(t, cutoff);
         let (sx, sy) = ndf::slopes(&large);
         let beta = if t.is_profile() {
@@ -73,46 +75,16 @@ pub fn split(
         for (r, l) in residual.heights.iter_mut().zip(&large.heights) {
             *r -= l;
         }
-        let rpsd = psd::welch(&residual, &WelchOptions::default())?;
-        let kc = kc::fit(
-            kc::Form::Profile1d,
-            &rpsd.f,
-            &rpsd.p,
-            f_cut.max(f_min),
-            f_max,
-        )?;
-        return Ok(TwoScale {
-            multiple,
-            cutoff,
-            beta,
-            beta_source: BetaSource::Map,
-            kc,
-        });
-    }
-    let below: Vec<(f64, f64)> = line_psd
-        .f
-        .iter()
-        .zip(&line_psd.p)
-        .filter(|(f, p)| **f > 0.0 && **f < f_cut && p.is_finite())
-        .map(|(f, p)| (*f, *p))
-        .collect();
-    let (beta, source) = if below.len() >= 3 {
-        // Trapezoid over the bins, starting from f = 0 with the first bin's value.
-        let mut var_x = 0.0;
-        let mut prev = (0.0, 0.0);
-        for &(f, p) in &below {
-            let g = (2.0 * std::f64::consts::PI * f).powi(2) * p;
-            var_x += 0.5 * (g + prev.1) * (f - prev.0);
-            prev = (f, g);
-        }
-        ((2.0 * var_x / 6.0).sqrt(), BetaSource::Psd)
+        residual_psd = psd::welch(&residual, &WelchOptions::default())?;
+        (beta, BetaSource::Map, &residual_psd)
     } else {
-        (0.0, BetaSource::Unresolved)
+        let (beta, source) = line_psd_beta(line_psd, f_cut);
+        (beta, source, line_psd)
     };
     let kc = kc::fit(
         kc::Form::Profile1d,
-        &line_psd.f,
-        &line_psd.p,
+        &kc_psd.f,
+        &kc_psd.p,
         f_cut.max(f_min),
         f_max,
     )?;
@@ -120,16 +92,71 @@ pub fn split(
         multiple,
         cutoff,
         beta,
-        beta_source: source,
+        beta_source,
         kc,
     })
+}
+
+/// β from the slope variance of the line PSD below `f_cut`; unresolved when fewer than
+/// three bins lie there.
+fn line_psd_beta(line_psd: &Psd1d, f_cut: f64) -> (f64, BetaSource) {
+    let below: Vec<(f64, f64)> = line_psd
+        .f
+        .iter()
+        .zip(&line_psd.p)
+        .filter(|(f, p)| **f > 0.0 && **f < f_cut && p.is_finite())
+        .map(|(f, p)| (*f, *p))
+        .collect();
+    if below.len() < 3 {
+        return (0.0, BetaSource::Unresolved);
+    }
+    // Trapezoid over the bins, starting from f = 0 with the first bin's value.
+    let mut var_x = 0.0;
+    let mut prev = (0.0, 0.0);
+    for &(f, p) in &below {
+        let g = (2.0 * std::f64::consts::PI * f).powi(2) * p;
+        var_x += 0.5 * (g + prev.1) * (f - prev.0);
+        prev = (f, g);
+    }
+    ((2.0 * var_x / 6.0).sqrt(), BetaSource::Psd)
 }
 
 /// ISO 16610-61 Gaussian low-pass with cutoff period `cutoff` [m], applied by FFT to the
 /// mirror-extended map (so the map edges do not wrap around).
 pub fn gaussian_lowpass(t: &Topography, cutoff: f64) -> Topography {
+    let (mut buf, mx, my) = extended(t, true);
+    let mut planner = FftPlanner::<f64>::new();
+    crate::synth::fft2(&mut buf, mx, my, &mut planner, false);
+    let alpha2 = 2f64.ln() / std::f64::consts::PI;
+    let k = std::f64::consts::PI * alpha2 * cutoff * cutoff;
+    for ky in 0..my {
+        let fy = fft_frequency(ky, my, t.dy);
+        for kx in 0..mx {
+            let fx = fft_frequency(kx, mx, t.dx);
+            buf[ky * mx + kx] *= (-k * (fx * fx + fy * fy)).exp();
+        }
+    }
+    crate::synth::fft2(&mut buf, mx, my, &mut planner, true);
+    first_block(t, &buf, mx, my)
+}
+
+/// Frequency [cycles/m] of bin `k` of an `m`-point FFT at spacing `d`; bins past the middle
+/// are the negative frequencies.
+fn fft_frequency(k: usize, m: usize, d: f64) -> f64 {
+    let k = if k <= m / 2 {
+        k as f64
+    } else {
+        k as f64 - m as f64
+    };
+    k / (m as f64 * d)
+}
+
+/// `t` as a complex `(buffer, mx, my)` for an FFT: mirror-extended to `2nx × 2ny` (`2nx × 1`
+/// for a profile) when `mirror`, so a non-periodic map has no edge jump; as it is otherwise.
+pub(crate) fn extended(t: &Topography, mirror: bool) -> (Vec<Complex<f64>>, usize, usize) {
     let (nx, ny) = (t.nx, t.ny);
-    let (mx, my) = (2 * nx, if ny > 1 { 2 * ny } else { 1 });
+    let f = if mirror { 2 } else { 1 };
+    let (mx, my) = (f * nx, if ny > 1 { f * ny } else { 1 });
     let mut buf = vec![Complex::new(0.0, 0.0); mx * my];
     for y in 0..my {
         let sy = if y < ny { y } else { my - 1 - y };
@@ -138,31 +165,22 @@ pub fn gaussian_lowpass(t: &Topography, cutoff: f64) -> Topography {
             buf[y * mx + x] = Complex::new(t.heights[sy * nx + sx], 0.0);
         }
     }
-    let mut planner = FftPlanner::<f64>::new();
-    crate::synth::fft2(&mut buf, mx, my, &mut planner, false);
-    let alpha2 = 2f64.ln() / std::f64::consts::PI;
-    let k = std::f64::consts::PI * alpha2 * cutoff * cutoff;
-    for ky in 0..my {
-        let fy = if ky <= my / 2 {
-            ky as f64
-        } else {
-            ky as f64 - my as f64
-        } / (my as f64 * t.dy);
-        for kx in 0..mx {
-            let fx = if kx <= mx / 2 {
-                kx as f64
-            } else {
-                kx as f64 - mx as f64
-            } / (mx as f64 * t.dx);
-            buf[ky * mx + kx] *= (-k * (fx * fx + fy * fy)).exp();
-        }
-    }
-    crate::synth::fft2(&mut buf, mx, my, &mut planner, true);
+    (buf, mx, my)
+}
+
+/// The `nx × ny` block of an unnormalised inverse FFT of an [`extended`] buffer, as a copy
+/// of `t` with those heights.
+pub(crate) fn first_block(
+    t: &Topography,
+    buf: &[Complex<f64>],
+    mx: usize,
+    my: usize,
+) -> Topography {
     let n = (mx * my) as f64;
     let mut out = t.clone();
-    for y in 0..ny {
-        for x in 0..nx {
-            out.heights[y * nx + x] = buf[y * mx + x].re / n;
+    for y in 0..t.ny {
+        for x in 0..t.nx {
+            out.heights[y * t.nx + x] = buf[y * mx + x].re / n;
         }
     }
     out
