@@ -170,17 +170,8 @@ fn materials(args: &PlotArgs, s: &Surface) -> anyhow::Result<Vec<Labelled>> {
 }
 
 fn check_args(args: &PlotArgs) -> anyhow::Result<()> {
-    let (lo, hi) = (brdf::WAVELENGTH_MIN_NM, brdf::WAVELENGTH_MAX_NM);
-    for &l in &args.lambda_nm {
-        if !(lo..=hi).contains(&l) {
-            bail!("--lambda-nm {l}: must lie in {lo}–{hi} nm");
-        }
-    }
-    for &t in &args.theta_i {
-        if !(0.0..90.0).contains(&t) {
-            bail!("--theta-i {t}: must lie in [0, 90) degrees");
-        }
-    }
+    models::check_wavelengths("--lambda-nm", &args.lambda_nm)?;
+    models::check_incidence(&args.theta_i, 90.0)?;
     if args.lambda_nm.is_empty() || args.theta_i.is_empty() || args.models.is_empty() {
         bail!("--lambda-nm, --theta-i and --models each need at least one value");
     }
@@ -210,8 +201,15 @@ pub fn run(args: PlotArgs) -> anyhow::Result<()> {
             })
             .collect::<anyhow::Result<_>>()?;
         let title = format!("{}: {}", s.name, s.describe());
+        let fig = Figure {
+            args: &args,
+            surface: s,
+            specs: &specs,
+            built: &built,
+            title: &title,
+        };
         let mut images = Vec::new();
-        let slices = slice_plot(&args, s, &specs, &built, &title)?;
+        let slices = slice_plot(&fig)?;
         let stem = s.name.to_lowercase();
         let png = args.out.join(format!("{stem}_slices.png"));
         let (img, report) = slices.0.render(w, h)?;
@@ -223,7 +221,7 @@ pub fn run(args: PlotArgs) -> anyhow::Result<()> {
         note(&args, &png, &report.skipped);
         images.push(img);
         if args.albedo_angles > 0 {
-            let (p, csv) = albedo_plot(&args, s, &specs, &built, &title)?;
+            let (p, csv) = albedo_plot(&fig)?;
             let png = args.out.join(format!("{stem}_albedo.png"));
             let (img, report) = p.render(w, h)?;
             plot::save_png(&img, &png)?;
@@ -314,8 +312,36 @@ fn direction(theta_deg: f64, phi_deg: f64) -> DVec3 {
     brdf::frame::spherical(theta_deg.to_radians(), phi_deg.to_radians())
 }
 
-fn csv_fields_header() -> &'static str {
-    "fresnel,alpha,sigma_um,lc_um,gamma,beta"
+/// One surface's materials, built, as both of its plots read them.
+struct Figure<'a> {
+    args: &'a PlotArgs,
+    surface: &'a Surface,
+    specs: &'a [Labelled],
+    built: &'a [Box<dyn Bxdf>],
+    title: &'a str,
+}
+
+/// CSV header: who (surface, model, label), the plot's own `columns`, then the material's
+/// parameters, so every row can be recomputed on its own.
+fn csv_header(columns: &str) -> String {
+    format!("surface,model,label,{columns},fresnel,alpha,sigma_um,lc_um,gamma,beta\n")
+}
+
+/// One CSV row in the [`csv_header`] layout; `values` fill the plot's own columns.
+fn csv_row(
+    csv: &mut String,
+    s: &Surface,
+    m: &Labelled,
+    values: std::fmt::Arguments<'_>,
+) -> std::fmt::Result {
+    writeln!(
+        csv,
+        "{},{},{},{values},{}",
+        s.name,
+        m.spec.model.kind().name(),
+        quote(&m.label),
+        csv_fields(m)
+    )
 }
 
 /// The material's parameters as CSV columns (empty where the model has none).
@@ -342,16 +368,10 @@ fn quote(s: &str) -> String {
     }
 }
 
-fn slice_plot(
-    args: &PlotArgs,
-    s: &Surface,
-    specs: &[Labelled],
-    built: &[Box<dyn Bxdf>],
-    title: &str,
-) -> anyhow::Result<(Plot, String)> {
-    let mut csv = format!(
-        "surface,model,label,lambda_nm,theta_i_deg,theta_o_deg,phi_o_deg,theta_o_signed_deg,beta_minus_beta0,brdf_per_sr,{}\n",
-        csv_fields_header()
+fn slice_plot(fig: &Figure<'_>) -> anyhow::Result<(Plot, String)> {
+    let (args, s, title) = (fig.args, fig.surface, fig.title);
+    let mut csv = csv_header(
+        "lambda_nm,theta_i_deg,theta_o_deg,phi_o_deg,theta_o_signed_deg,beta_minus_beta0,brdf_per_sr",
     );
     let x_label = match args.x {
         SliceAxis::Theta => "θo [deg]  (< 0: backscatter side)",
@@ -360,7 +380,7 @@ fn slice_plot(
     let mut series = Vec::new();
     let mut y_max = 0.0f64;
     let multi_lambda = args.lambda_nm.len() > 1;
-    for (mi, (spec, model)) in specs.iter().zip(built).enumerate() {
+    for (mi, (spec, model)) in fig.specs.iter().zip(fig.built).enumerate() {
         for (ti, &theta_i) in args.theta_i.iter().enumerate() {
             for (li, &lambda) in args.lambda_nm.iter().enumerate() {
                 let wi = direction(theta_i, 0.0);
@@ -371,13 +391,11 @@ fn slice_plot(
                     let f = model.eval(wi, wo, lambda);
                     let signed = if phi_o == 180.0 { theta_o } else { -theta_o };
                     let db = -wo.x - wi.x;
-                    writeln!(
-                        csv,
-                        "{},{},{},{lambda},{theta_i},{theta_o},{phi_o},{signed},{db},{f},{}",
-                        s.name,
-                        spec.spec.model.kind().name(),
-                        quote(&spec.label),
-                        csv_fields(spec)
+                    csv_row(
+                        &mut csv,
+                        s,
+                        spec,
+                        format_args!("{lambda},{theta_i},{theta_o},{phi_o},{signed},{db},{f}"),
                     )?;
                     xs.push(if args.x == SliceAxis::Theta {
                         signed
@@ -430,23 +448,17 @@ pub fn albedo_angles(n: usize) -> Vec<f64> {
     (0..n).map(|j| 89.0 * j as f64 / (n - 1) as f64).collect()
 }
 
-fn albedo_plot(
-    args: &PlotArgs,
-    s: &Surface,
-    specs: &[Labelled],
-    built: &[Box<dyn Bxdf>],
-    title: &str,
-) -> anyhow::Result<(Plot, String)> {
-    let mut csv = format!(
-        "surface,model,label,lambda_nm,theta_i_deg,lobe_rho,scattered_albedo,specular_weight,total_albedo,tis,{}\n",
-        csv_fields_header()
+fn albedo_plot(fig: &Figure<'_>) -> anyhow::Result<(Plot, String)> {
+    let (args, s, title) = (fig.args, fig.surface, fig.title);
+    let mut csv = csv_header(
+        "lambda_nm,theta_i_deg,lobe_rho,scattered_albedo,specular_weight,total_albedo,tis",
     );
     let mut p = Plot::new(format!("{title}, directional albedo"))
         .x_axis(Axis::linear("θi [deg]").range(0.0, 90.0))
         .y_axis(Axis::linear("albedo (solid) · TIS (dashed)").range(0.0, 1.05))
         .legend(Legend::Outside);
     let multi_lambda = args.lambda_nm.len() > 1;
-    for (mi, (spec, model)) in specs.iter().zip(built).enumerate() {
+    for (mi, (spec, model)) in fig.specs.iter().zip(fig.built).enumerate() {
         for (li, &lambda) in args.lambda_nm.iter().enumerate() {
             let rho = models::lobe_rho(&spec.spec, lambda);
             let (mut xs, mut total, mut tis) = (Vec::new(), Vec::new(), Vec::new());
@@ -458,13 +470,11 @@ fn albedo_plot(
                 let spec_w = model.specular(wi, lambda).weight;
                 let t = scattered + spec_w;
                 let r = if t > 0.0 { scattered / t } else { 0.0 };
-                writeln!(
-                    csv,
-                    "{},{},{},{lambda},{theta_i},{rho},{scattered},{spec_w},{t},{r},{}",
-                    s.name,
-                    spec.spec.model.kind().name(),
-                    quote(&spec.label),
-                    csv_fields(spec)
+                csv_row(
+                    &mut csv,
+                    s,
+                    spec,
+                    format_args!("{lambda},{theta_i},{rho},{scattered},{spec_w},{t},{r}"),
                 )?;
                 xs.push(theta_i);
                 total.push(t);

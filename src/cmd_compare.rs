@@ -24,8 +24,8 @@ use plot::ImageGrid;
 use render::{Film, RenderOptions};
 
 use crate::cmd_brdf_plot::parse_size;
+use crate::cmd_preview::to_srgb8;
 use brdf::paper::{AlphaRule, PaperModel};
-use brdf::spec::MaterialDesc;
 
 use crate::models::{self, Surface};
 
@@ -98,14 +98,7 @@ fn material_rows(path: &Path) -> anyhow::Result<(String, Vec<Row>)> {
     let models::FitFile { doc, material, abs } = models::read_fit_file(path)?;
     let mat = &material;
     let num = |t: &toml::Table, k: &str| t.get(k).and_then(toml::Value::as_float);
-    let row = |model: brdf::spec::ModelKind, cutoff: Option<String>| -> anyhow::Result<String> {
-        models::desc_toml(&MaterialDesc {
-            include: Some(abs.display().to_string()),
-            model: Some(model),
-            cutoff,
-            ..MaterialDesc::default()
-        })
-    };
+    let row = |model, cutoff| models::fit_material_toml(&abs, model, cutoff);
     use brdf::spec::ModelKind;
     let mut rows = vec![
         Row {
@@ -160,16 +153,7 @@ fn material_rows(path: &Path) -> anyhow::Result<(String, Vec<Row>)> {
 
 /// The scene of one cell: the bundled sample scenes' plate, camera and lights.
 pub fn scene_text(view_deg: f64, width: u32, height: u32, spp: u64, material: &str) -> String {
-    let t = view_deg.to_radians();
-    let cam = [0.0, t.cos(), t.sin()];
-    // At normal view the light sits 1° further out so camera and light do not coincide.
-    let tl = view_deg.max(1.0).to_radians();
-    let light = [0.0, 1.2 * tl.cos(), -1.2 * tl.sin()];
-    let up = if view_deg < 1.0 {
-        "[0.0, 0.0, -1.0]"
-    } else {
-        "[0.0, 1.0, 0.0]"
-    };
+    let (cam, light, up) = crate::cmd_scenes::plate_view(view_deg);
     let v = |p: [f64; 3]| format!("[{:.9}, {:.9}, {:.9}]", p[0], p[1], p[2]);
     format!(
         "[camera]\nlook_from = {}\nlook_at = [0.0, 0.0, 0.0]\nup = {up}\nfov_deg = 14.0\nresolution = [{width}, {height}]\n\n\
@@ -181,17 +165,6 @@ pub fn scene_text(view_deg: f64, width: u32, height: u32, spp: u64, material: &s
         v(cam),
         v(light)
     )
-}
-
-/// Linear sRGB → 8-bit sRGB (IEC 61966-2-1 transfer curve, clamped).
-fn to_srgb8(v: f32) -> u8 {
-    let x = f64::from(v).clamp(0.0, 1.0);
-    let e = if x <= 0.003_130_8 {
-        12.92 * x
-    } else {
-        1.055 * x.powf(1.0 / 2.4) - 0.055
-    };
-    (e * 255.0 + 0.5) as u8
 }
 
 /// Runs `lustre compare`.

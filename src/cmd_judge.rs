@@ -116,20 +116,11 @@ fn read_options(a: &ScanArgs) -> anyhow::Result<ReadOptions> {
 }
 
 fn check_args(args: &JudgeArgs) -> anyhow::Result<()> {
-    let (lo, hi) = (brdf::WAVELENGTH_MIN_NM, brdf::WAVELENGTH_MAX_NM);
     if args.lambda.is_empty() || args.theta_i.is_empty() {
         bail!("--lambda and --theta-i each need at least one value");
     }
-    for &l in &args.lambda {
-        if !(lo..=hi).contains(&l) {
-            bail!("--lambda {l}: must lie in {lo}–{hi} nm");
-        }
-    }
-    for &t in &args.theta_i {
-        if !(0.0..89.0).contains(&t) {
-            bail!("--theta-i {t}: must lie in [0, 89) degrees");
-        }
-    }
+    crate::models::check_wavelengths("--lambda", &args.lambda)?;
+    crate::models::check_incidence(&args.theta_i, 89.0)?;
     for &c in &args.cutoff {
         if !(c.is_finite() && c > 0.0) {
             bail!("--cutoff {c}: must be a positive multiple of 550 nm");

@@ -21,7 +21,7 @@ use render::{Film, RenderOptions};
 use crate::cmd_brdf_plot::parse_size;
 use crate::cmd_render::parse_duration;
 use brdf::paper::PaperModel;
-use brdf::spec::{MaterialDesc, ModelKind};
+use brdf::spec::ModelKind;
 
 use crate::models::{self, Surface};
 
@@ -262,14 +262,7 @@ fn material_cells(path: &Path, names: &[String]) -> anyhow::Result<(String, Vec<
         .map(|t| t.keys().cloned().collect())
         .unwrap_or_default();
     let mut cells = Vec::new();
-    let row = |model: ModelKind, cutoff: Option<String>| -> anyhow::Result<String> {
-        models::desc_toml(&MaterialDesc {
-            include: Some(abs.display().to_string()),
-            model: Some(model),
-            cutoff,
-            ..MaterialDesc::default()
-        })
-    };
+    let row = |model, cutoff| models::fit_material_toml(&abs, model, cutoff);
     for n in names {
         let Some(kind) = ModelKind::from_name(n.trim()) else {
             bail!("--models {n}: unknown model; use {}", ModelKind::names());
@@ -302,7 +295,7 @@ fn material_cells(path: &Path, names: &[String]) -> anyhow::Result<(String, Vec<
 }
 
 /// Linear sRGB → 8-bit sRGB (IEC 61966-2-1 transfer curve, clamped).
-fn to_srgb8(v: f32) -> u8 {
+pub fn to_srgb8(v: f32) -> u8 {
     let x = f64::from(v).clamp(0.0, 1.0);
     let e = if x <= 0.003_130_8 {
         12.92 * x

@@ -106,6 +106,24 @@ fn provenance(s: &PaperSample, model: PaperModel) -> String {
     }
 }
 
+/// Where the plate scenes put the camera and the light for a view `view_deg` from the
+/// plate's normal: `(camera position, light centre, camera up as TOML)`. The light sits at
+/// the camera's mirror direction, so the specular peak is in view.
+pub fn plate_view(view_deg: f64) -> ([f64; 3], [f64; 3], &'static str) {
+    let t = view_deg.to_radians();
+    let cam = [0.0, t.cos(), t.sin()];
+    // At normal view the light sits 1° further out so camera and light do not coincide.
+    let tl = view_deg.max(1.0).to_radians();
+    let light = [0.0, 1.2 * tl.cos(), -1.2 * tl.sin()];
+    // Looking straight down, the usual +y up is the view direction itself.
+    let up = if view_deg < 1.0 {
+        "[0.0, 0.0, -1.0]"
+    } else {
+        "[0.0, 1.0, 0.0]"
+    };
+    (cam, light, up)
+}
+
 fn scene(
     s: &PaperSample,
     tag: &str,
@@ -118,16 +136,7 @@ fn scene(
     let l = surface.material(model);
     let psd = format!("../{}", psd_path(s));
     let material = models::material_toml(&l.spec, Some(&psd))?;
-    let t = theta_deg.to_radians();
-    let cam = [0.0, t.cos(), t.sin()];
-    // At normal view the light sits 1° further out so camera and light do not coincide.
-    let tl = theta_deg.max(1.0).to_radians();
-    let light = [0.0, 1.2 * tl.cos(), -1.2 * tl.sin()];
-    let up = if theta_deg < 1.0 {
-        "[0.0, 0.0, -1.0]"
-    } else {
-        "[0.0, 1.0, 0.0]"
-    };
+    let (cam, light, up) = plate_view(theta_deg);
     let v = |p: [f64; 3]| format!("[{:.6}, {:.6}, {:.6}]", p[0], p[1], p[2]);
     Ok(format!(
         "# {} plate, model {tag} ({}), {view} viewing ({theta_deg} deg from the normal).\n\

@@ -9,6 +9,27 @@ use brdf::Metal;
 use brdf::paper::{PaperModel, PaperSample};
 use brdf::spec::{FresnelSpec, KcSpec, MaterialDesc, MaterialSpec, ModelSpec};
 
+/// Refuse wavelengths [nm] the models do not cover; `flag` names them in the message.
+pub fn check_wavelengths(flag: &str, values: &[f64]) -> anyhow::Result<()> {
+    let (lo, hi) = (brdf::WAVELENGTH_MIN_NM, brdf::WAVELENGTH_MAX_NM);
+    for &l in values {
+        if !(lo..=hi).contains(&l) {
+            bail!("{flag} {l}: must lie in {lo}–{hi} nm");
+        }
+    }
+    Ok(())
+}
+
+/// Refuse `--theta-i` angles outside `[0, max_deg)` degrees.
+pub fn check_incidence(values: &[f64], max_deg: f64) -> anyhow::Result<()> {
+    for &t in values {
+        if !(0.0..max_deg).contains(&t) {
+            bail!("--theta-i {t}: must lie in [0, {max_deg}) degrees");
+        }
+    }
+    Ok(())
+}
+
 /// A K-correlation surface to draw models of.
 #[derive(Clone, Debug)]
 pub struct Surface {
@@ -171,6 +192,21 @@ pub struct FitFile {
     pub material: toml::Table,
     /// The file's absolute path, for the `include` of generated scenes.
     pub abs: std::path::PathBuf,
+}
+
+/// The `[materials.*]` body that draws the fit file at `abs` (see [`FitFile::abs`]) as
+/// `model`; `cutoff` names the `[two_scale.*]` table a two-scale model uses.
+pub fn fit_material_toml(
+    abs: &std::path::Path,
+    model: brdf::spec::ModelKind,
+    cutoff: Option<String>,
+) -> anyhow::Result<String> {
+    desc_toml(&MaterialDesc {
+        include: Some(abs.display().to_string()),
+        model: Some(model),
+        cutoff,
+        ..MaterialDesc::default()
+    })
 }
 
 /// Reads a `lustre fit` material file; an error names the file and what is missing.

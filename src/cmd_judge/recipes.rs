@@ -115,27 +115,23 @@ pub(super) fn candidate(model: &str, key: String, assumes: &'static str, s: Json
 }
 
 pub(super) fn make_ggx(f: &Fitted, _: &[f64]) -> Vec<Built> {
-    let a = f.analysis.ndf.alpha_ggx.0;
-    vec![candidate(
-        "ggx",
-        "ggx".into(),
-        RECIPES[0].assumes,
-        spec(
-            json!({"model": "ggx", "alpha": a, "fresnel": f.fresnel}),
-            format!("GGX, NDF fit (α {})", short(a)),
-        ),
-    )]
+    ndf_candidate(&RECIPES[0], "GGX", f.analysis.ndf.alpha_ggx.0, f)
 }
 
 pub(super) fn make_beckmann(f: &Fitted, _: &[f64]) -> Vec<Built> {
-    let a = f.analysis.ndf.alpha_beckmann.0;
+    ndf_candidate(&RECIPES[1], "Beckmann", f.analysis.ndf.alpha_beckmann.0, f)
+}
+
+/// The one candidate of a microfacet recipe: its model with the roughness `a` fitted to
+/// the measured NDF; `name` labels it.
+fn ndf_candidate(recipe: &Recipe, name: &str, a: f64, f: &Fitted) -> Vec<Built> {
     vec![candidate(
-        "beckmann",
-        "beckmann".into(),
-        RECIPES[1].assumes,
+        recipe.model,
+        recipe.model.into(),
+        recipe.assumes,
         spec(
-            json!({"model": "beckmann", "alpha": a, "fresnel": f.fresnel}),
-            format!("Beckmann, NDF fit (α {})", short(a)),
+            json!({"model": recipe.model, "alpha": a, "fresnel": f.fresnel}),
+            format!("{name}, NDF fit (α {})", short(a)),
         ),
     )]
 }
@@ -182,26 +178,23 @@ pub(super) fn kc_fields(model: &str, f: &Fitted) -> Result<Value, String> {
 }
 
 pub(super) fn make_ghs_ssa(f: &Fitted, _: &[f64]) -> Vec<Built> {
-    match kc_fields("ghs_ssa", f) {
-        Ok(v) => vec![candidate(
-            "ghs_ssa",
-            "ghs_ssa".into(),
-            RECIPES[3].assumes,
-            spec(v, "GHS SSA, KC fit".into()),
-        )],
-        Err(e) => vec![Err(("GHS SSA".into(), e))],
-    }
+    kc_candidate(&RECIPES[3], "GHS SSA", f)
 }
 
 pub(super) fn make_ghs(f: &Fitted, _: &[f64]) -> Vec<Built> {
-    match kc_fields("ghs", f) {
+    kc_candidate(&RECIPES[4], "full GHS", f)
+}
+
+/// The one candidate of a recipe whose model takes the KC fit as it is; `name` labels it.
+fn kc_candidate(recipe: &Recipe, name: &str, f: &Fitted) -> Vec<Built> {
+    match kc_fields(recipe.model, f) {
         Ok(v) => vec![candidate(
-            "ghs",
-            "ghs".into(),
-            RECIPES[4].assumes,
-            spec(v, "full GHS, KC fit".into()),
+            recipe.model,
+            recipe.model.into(),
+            recipe.assumes,
+            spec(v, format!("{name}, KC fit")),
         )],
-        Err(e) => vec![Err(("full GHS".into(), e))],
+        Err(e) => vec![Err((name.into(), e))],
     }
 }
 

@@ -505,16 +505,16 @@ impl Report<'_> {
                 Legend::Hidden
             })
             .font_px(11.0);
+        // The scan's own values, drawn apart inside and outside the validity window.
+        let scan = |label: &str, inside: bool, color: Rgb, marker: Marker| {
+            Series::points(label, &xs, &y_of(&|p: &Point| p.explicit.value, inside))
+                .color(color)
+                .marker(marker)
+                .marker_size(3.0)
+        };
         p = add(
             p,
-            Series::points(
-                "scan (explicit)",
-                &xs,
-                &y_of(&|p: &Point| p.explicit.value, true),
-            )
-            .color(Rgb(0, 0, 0))
-            .marker(Marker::Circle)
-            .marker_size(3.0),
+            scan("scan (explicit)", true, Rgb(0, 0, 0), Marker::Circle),
         );
         for sign in [-2.0, 2.0] {
             p = add(
@@ -531,14 +531,7 @@ impl Report<'_> {
         }
         p = add(
             p,
-            Series::points(
-                "outside window",
-                &xs,
-                &y_of(&|p: &Point| p.explicit.value, false),
-            )
-            .color(Rgb(190, 190, 190))
-            .marker(Marker::Cross)
-            .marker_size(3.0),
+            scan("outside window", false, Rgb(190, 190, 190), Marker::Cross),
         );
         for &m in shown {
             let j = &self.judged[m];

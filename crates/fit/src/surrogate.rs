@@ -11,6 +11,7 @@
 //! periodogram exactly. Every Fourier mode then has an independent uniform phase, so the
 //! heights are Gaussian by the central limit theorem while the periodogram is unchanged.
 
+use crate::two_scale::{extended, first_block};
 use crate::{FitError, Topography};
 use rustfft::FftPlanner;
 use rustfft::num_complex::Complex;
@@ -27,17 +28,7 @@ pub fn gaussian_surrogate_periodic(t: &Topography, seed: u64) -> Result<Topograp
 
 fn surrogate(t: &Topography, seed: u64, mirror: bool) -> Result<Topography, FitError> {
     crate::field_spectrum::check(t)?;
-    let (nx, ny) = (t.nx, t.ny);
-    let f = if mirror { 2 } else { 1 };
-    let (mx, my) = (f * nx, if ny > 1 { f * ny } else { 1 });
-    let mut buf = vec![Complex::new(0.0, 0.0); mx * my];
-    for y in 0..my {
-        let sy = if y < ny { y } else { my - 1 - y };
-        for x in 0..mx {
-            let sx = if x < nx { x } else { mx - 1 - x };
-            buf[y * mx + x] = Complex::new(t.heights[sy * nx + sx], 0.0);
-        }
-    }
+    let (mut buf, mx, my) = extended(t, mirror);
     let mut noise = crate::rng::white_noise(mx * my, seed);
     let mut planner = FftPlanner::<f64>::new();
     crate::fft::fft2(&mut buf, mx, my, &mut planner, false);
@@ -51,13 +42,7 @@ fn surrogate(t: &Topography, seed: u64, mirror: bool) -> Result<Topography, FitE
         };
     }
     crate::fft::fft2(&mut buf, mx, my, &mut planner, true);
-    let n = (mx * my) as f64;
-    let mut out = t.clone();
-    for y in 0..ny {
-        for x in 0..nx {
-            out.heights[y * nx + x] = buf[y * mx + x].re / n;
-        }
-    }
+    let mut out = first_block(t, &buf, mx, my);
     out.channel = format!("{} (Gaussian surrogate)", t.channel);
     Ok(out)
 }

@@ -61,7 +61,9 @@ pub fn split(
     }
     let f_cut = 1.0 / cutoff;
     let fits_map = t.size_x() >= 2.0 * cutoff && (t.is_profile() || t.size_y() >= 2.0 * cutoff);
-    if fits_map {
+    // Only the map branch computes a PSD of its own; it must outlive the branch.
+    let residual_psd;
+    let (beta, beta_source, kc_psd) = if fits_map {
         let large = gaussian_lowpass(t, cutoff);
         let (sx, sy) = ndf::slopes(&large);
         let beta = if t.is_profile() {
@@ -74,46 +76,16 @@ pub fn split(
         for (r, l) in residual.heights.iter_mut().zip(&large.heights) {
             *r -= l;
         }
-        let rpsd = psd::welch(&residual, &WelchOptions::default())?;
-        let kc = kc::fit(
-            kc::Form::Profile1d,
-            &rpsd.f,
-            &rpsd.p,
-            f_cut.max(f_min),
-            f_max,
-        )?;
-        return Ok(TwoScale {
-            multiple,
-            cutoff,
-            beta,
-            beta_source: BetaSource::Map,
-            kc,
-        });
-    }
-    let below: Vec<(f64, f64)> = line_psd
-        .f
-        .iter()
-        .zip(&line_psd.p)
-        .filter(|(f, p)| **f > 0.0 && **f < f_cut && p.is_finite())
-        .map(|(f, p)| (*f, *p))
-        .collect();
-    let (beta, source) = if below.len() >= 3 {
-        // Trapezoid over the bins, starting from f = 0 with the first bin's value.
-        let mut var_x = 0.0;
-        let mut prev = (0.0, 0.0);
-        for &(f, p) in &below {
-            let g = (2.0 * std::f64::consts::PI * f).powi(2) * p;
-            var_x += 0.5 * (g + prev.1) * (f - prev.0);
-            prev = (f, g);
-        }
-        ((2.0 * var_x / 6.0).sqrt(), BetaSource::Psd)
+        residual_psd = psd::welch(&residual, &WelchOptions::default())?;
+        (beta, BetaSource::Map, &residual_psd)
     } else {
-        (0.0, BetaSource::Unresolved)
+        let (beta, source) = line_psd_beta(line_psd, f_cut);
+        (beta, source, line_psd)
     };
     let kc = kc::fit(
         kc::Form::Profile1d,
-        &line_psd.f,
-        &line_psd.p,
+        &kc_psd.f,
+        &kc_psd.p,
         f_cut.max(f_min),
         f_max,
     )?;
@@ -121,24 +93,39 @@ pub fn split(
         multiple,
         cutoff,
         beta,
-        beta_source: source,
+        beta_source,
         kc,
     })
+}
+
+/// β from the slope variance of the line PSD below `f_cut`; unresolved when fewer than
+/// three bins lie there.
+fn line_psd_beta(line_psd: &Psd1d, f_cut: f64) -> (f64, BetaSource) {
+    let below: Vec<(f64, f64)> = line_psd
+        .f
+        .iter()
+        .zip(&line_psd.p)
+        .filter(|(f, p)| **f > 0.0 && **f < f_cut && p.is_finite())
+        .map(|(f, p)| (*f, *p))
+        .collect();
+    if below.len() < 3 {
+        return (0.0, BetaSource::Unresolved);
+    }
+    // Trapezoid over the bins, starting from f = 0 with the first bin's value.
+    let mut var_x = 0.0;
+    let mut prev = (0.0, 0.0);
+    for &(f, p) in &below {
+        let g = (2.0 * std::f64::consts::PI * f).powi(2) * p;
+        var_x += 0.5 * (g + prev.1) * (f - prev.0);
+        prev = (f, g);
+    }
+    ((2.0 * var_x / 6.0).sqrt(), BetaSource::Psd)
 }
 
 /// ISO 16610-61 Gaussian low-pass with cutoff period `cutoff` [m], applied by FFT to the
 /// mirror-extended map (so the map edges do not wrap around).
 pub fn gaussian_lowpass(t: &Topography, cutoff: f64) -> Topography {
-    let (nx, ny) = (t.nx, t.ny);
-    let (mx, my) = (2 * nx, if ny > 1 { 2 * ny } else { 1 });
-    let mut buf = vec![Complex::new(0.0, 0.0); mx * my];
-    for y in 0..my {
-        let sy = if y < ny { y } else { my - 1 - y };
-        for x in 0..mx {
-            let sx = if x < nx { x } else { mx - 1 - x };
-            buf[y * mx + x] = Complex::new(t.heights[sy * nx + sx], 0.0);
-        }
-    }
+    let (mut buf, mx, my) = extended(t, true);
     let mut planner = FftPlanner::<f64>::new();
     fft2(&mut buf, mx, my, &mut planner, false);
     let alpha2 = 2f64.ln() / std::f64::consts::PI;
@@ -151,11 +138,39 @@ pub fn gaussian_lowpass(t: &Topography, cutoff: f64) -> Topography {
         }
     }
     fft2(&mut buf, mx, my, &mut planner, true);
+    first_block(t, &buf, mx, my)
+}
+
+/// `t` as a complex `(buffer, mx, my)` for an FFT: mirror-extended to `2nx × 2ny` (`2nx × 1`
+/// for a profile) when `mirror`, so a non-periodic map has no edge jump; as it is otherwise.
+pub(crate) fn extended(t: &Topography, mirror: bool) -> (Vec<Complex<f64>>, usize, usize) {
+    let (nx, ny) = (t.nx, t.ny);
+    let f = if mirror { 2 } else { 1 };
+    let (mx, my) = (f * nx, if ny > 1 { f * ny } else { 1 });
+    let mut buf = vec![Complex::new(0.0, 0.0); mx * my];
+    for y in 0..my {
+        let sy = if y < ny { y } else { my - 1 - y };
+        for x in 0..mx {
+            let sx = if x < nx { x } else { mx - 1 - x };
+            buf[y * mx + x] = Complex::new(t.heights[sy * nx + sx], 0.0);
+        }
+    }
+    (buf, mx, my)
+}
+
+/// The `nx × ny` block of an unnormalised inverse FFT of an [`extended`] buffer, as a copy
+/// of `t` with those heights.
+pub(crate) fn first_block(
+    t: &Topography,
+    buf: &[Complex<f64>],
+    mx: usize,
+    my: usize,
+) -> Topography {
     let n = (mx * my) as f64;
     let mut out = t.clone();
-    for y in 0..ny {
-        for x in 0..nx {
-            out.heights[y * nx + x] = buf[y * mx + x].re / n;
+    for y in 0..t.ny {
+        for x in 0..t.nx {
+            out.heights[y * t.nx + x] = buf[y * mx + x].re / n;
         }
     }
     out

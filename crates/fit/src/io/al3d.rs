@@ -5,7 +5,7 @@
 //! per scan line, each row padded to a multiple of 8 bytes. NaN or the invalid-pixel
 //! value mark points that were not measured.
 
-use super::{Ctx, Decoded, Raw, Unit, Want, binary, check_spacing, checked_grid};
+use super::{Ctx, Decoded, Raw, Want, binary, check_spacing, checked_grid, header_value};
 use crate::ReadError;
 use std::collections::HashMap;
 
@@ -52,27 +52,16 @@ pub(crate) fn read(ctx: Ctx<'_>, bytes: &[u8], want: Want<'_>) -> Result<Decoded
         let (k, v) = tag_at(2 + i).ok_or_else(|| corrupt(&format!("tag {}", i + 2)))?;
         tags.insert(k, v);
     }
-    let num = |k: &str| -> Result<f64, ReadError> {
-        tags.get(k)
-            .and_then(|v| v.trim().parse::<f64>().ok())
-            .ok_or_else(|| {
-                ctx.err(
-                    k,
-                    "missing or not a number",
-                    "the AL3D header is incomplete",
-                )
-            })
-    };
-    let count_of = |k: &str| -> Result<u64, ReadError> {
-        tags.get(k)
-            .and_then(|v| v.trim().parse::<u64>().ok())
-            .ok_or_else(|| {
-                ctx.err(
-                    k,
-                    "missing or not a non-negative integer",
-                    "the AL3D header is incomplete",
-                )
-            })
+    const INCOMPLETE: &str = "the AL3D header is incomplete";
+    let num = |k: &str| header_value::<f64>(ctx, &tags, k, "missing or not a number", INCOMPLETE);
+    let count_of = |k: &str| {
+        header_value::<u64>(
+            ctx,
+            &tags,
+            k,
+            "missing or not a non-negative integer",
+            INCOMPLETE,
+        )
     };
     let nx = count_of("Cols")?;
     let ny = count_of("Rows")?;
@@ -106,15 +95,6 @@ pub(crate) fn read(ctx: Ctx<'_>, bytes: &[u8], want: Want<'_>) -> Result<Decoded
     }
     let dx = check_spacing(ctx, "PixelSizeXMeter", num("PixelSizeXMeter")?)?;
     let dy = check_spacing(ctx, "PixelSizeYMeter", num("PixelSizeYMeter")?)?;
-    let raw = Raw {
-        nx: nx as usize,
-        ny: ny as usize,
-        heights,
-        height_unit: Unit::Known(1.0),
-        spacing: Some((dx, dy)),
-        lateral_unit: Unit::Known(1.0),
-        channel: "depth".into(),
-        notes: Vec::new(),
-    };
+    let raw = Raw::si(nx as usize, ny as usize, dx, dy, heights, "depth");
     Decoded::single(ctx, want, raw)
 }

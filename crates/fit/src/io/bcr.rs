@@ -3,24 +3,19 @@
 //! (`bcrstm`) or float32 (`bcrf`) data, x fastest. Lateral units default to nm; heights are
 //! `raw × bit2nm` nm for integers and `raw` in `zunit` (default nm) for floats.
 
-use super::{Ctx, Decoded, Raw, Want, binary, check_spacing, checked_grid, units};
-use crate::{ReadError, Topography};
+use super::{Ctx, Decoded, Raw, Want, binary, check_spacing, decode_grid, header_value, units};
+use crate::ReadError;
 use std::collections::HashMap;
 
 const HEADER_CHARS: usize = 2048;
 
 /// Read the file (one channel).
 pub(crate) fn read(ctx: Ctx<'_>, bytes: &[u8], want: Want<'_>) -> Result<Decoded, ReadError> {
-    let t = parse(ctx, bytes)?;
-    Decoded::single(
-        ctx,
-        want,
-        Raw::si(t.nx, t.ny, t.dx, t.dy, t.heights, t.channel),
-    )
+    Decoded::single(ctx, want, parse(ctx, bytes)?)
 }
 
 /// Parse a BCR file.
-fn parse(ctx: Ctx<'_>, bytes: &[u8]) -> Result<Topography, ReadError> {
+fn parse(ctx: Ctx<'_>, bytes: &[u8]) -> Result<Raw, ReadError> {
     let unicode = bytes.len() >= 2 && bytes[1] == 0 && bytes[0] != 0;
     let char_bytes = if unicode { 2 } else { 1 };
     let head_len = (HEADER_CHARS * char_bytes).min(bytes.len());
@@ -61,14 +56,9 @@ fn parse(ctx: Ctx<'_>, bytes: &[u8]) -> Result<Topography, ReadError> {
             ));
         }
     };
-    let int = |k: &str| -> Result<u64, ReadError> {
-        get(k).and_then(|v| v.parse::<u64>().ok()).ok_or_else(|| {
-            ctx.err(
-                k,
-                "missing or not a non-negative integer",
-                "the BCR header is incomplete",
-            )
-        })
+    let int = |k: &str| {
+        let problem = "missing or not a non-negative integer";
+        header_value::<u64>(ctx, &kv, k, problem, "the BCR header is incomplete")
     };
     let float = |k: &str, default: Option<f64>| -> Result<f64, ReadError> {
         match get(k) {
@@ -104,16 +94,14 @@ fn parse(ctx: Ctx<'_>, bytes: &[u8]) -> Result<Topography, ReadError> {
     let xlen = float("xlength", None)? * xu;
     let ylen = float("ylength", Some(f64::NAN))? * yu;
     let data = &bytes[data_start..];
-    let n = checked_grid(
+    let raw = decode_grid(
         ctx,
         "xpixels × ypixels",
-        nx,
-        ny,
-        kind.size() as u64,
-        data.len() as u64,
+        (nx, ny),
+        ("data", data),
+        kind,
+        little,
     )?;
-    let raw = binary::decode(data, kind, little, n)
-        .ok_or_else(|| ctx.short("data", (n * kind.size()) as u64, data.len() as u64))?;
     let dx = check_spacing(ctx, "xlength", xlen / nx as f64)?;
     let dy = if ny == 1 || !ylen.is_finite() {
         dx
@@ -145,13 +133,12 @@ fn parse(ctx: Ctx<'_>, bytes: &[u8]) -> Result<Topography, ReadError> {
             })
             .collect()
     };
-    Ok(Topography {
-        nx: nx as usize,
-        ny: ny as usize,
+    Ok(Raw::si(
+        nx as usize,
+        ny as usize,
         dx,
         dy,
         heights,
-        channel: fileformat.to_string(),
-        format: "bcr",
-    })
+        fileformat,
+    ))
 }

@@ -4,8 +4,8 @@
 //! scale [m per count], 0x0b the height image (x fastest). The value 1 marks points
 //! that were not measured.
 
-use super::binary::{Cursor, Sample, decode};
-use super::{Ctx, Decoded, Raw, Unit, Want, check_spacing, checked_grid};
+use super::binary::{Cursor, Sample};
+use super::{Ctx, Decoded, Raw, Want, check_spacing, decode_grid};
 use crate::ReadError;
 use std::collections::HashMap;
 
@@ -89,16 +89,14 @@ pub(crate) fn read(ctx: Ctx<'_>, bytes: &[u8], want: Want<'_>) -> Result<Decoded
         }
     };
     let data = block(0x0b, "topography image")?;
-    let n = checked_grid(
+    let raw = decode_grid(
         ctx,
         "block 0x0066 grid",
-        nx,
-        ny,
-        kind.size() as u64,
-        data.len() as u64,
+        (nx, ny),
+        ("topography", data),
+        kind,
+        true,
     )?;
-    let raw = decode(data, kind, true, n)
-        .ok_or_else(|| ctx.short("topography", (n * kind.size()) as u64, data.len() as u64))?;
     if !(q.is_finite() && q != 0.0) {
         return Err(ctx.err(
             "block 0x006c",
@@ -112,18 +110,10 @@ pub(crate) fn read(ctx: Ctx<'_>, bytes: &[u8], want: Want<'_>) -> Result<Decoded
     } else {
         check_spacing(ctx, "block 0x0067", sy / ny as f64)?
     };
-    let out = Raw {
-        nx: nx as usize,
-        ny: ny as usize,
-        heights: raw
-            .into_iter()
-            .map(|v| if v == 1.0 { f64::NAN } else { v * q })
-            .collect(),
-        height_unit: Unit::Known(1.0),
-        spacing: Some((dx, dy)),
-        lateral_unit: Unit::Known(1.0),
-        channel: "topography".into(),
-        notes: Vec::new(),
-    };
+    let heights = raw
+        .into_iter()
+        .map(|v| if v == 1.0 { f64::NAN } else { v * q })
+        .collect();
+    let out = Raw::si(nx as usize, ny as usize, dx, dy, heights, "topography");
     Decoded::single(ctx, want, out)
 }

@@ -2,24 +2,19 @@
 //! lines (XRes, YRes, XReal, YReal, XYUnits, ZUnits), NUL padding to a multiple of 4 bytes,
 //! then XRes·YRes little-endian float32 values. NaN marks invalid points.
 
-use super::{Ctx, Decoded, Raw, Want, binary, check_spacing, checked_grid, units};
-use crate::{ReadError, Topography};
+use super::{Ctx, Decoded, Raw, Want, binary, check_spacing, checked_grid, header_value, units};
+use crate::ReadError;
 use std::collections::HashMap;
 
 const MAGIC: &[u8] = b"Gwyddion Simple Field 1.0";
 
 /// Read the file (one channel).
 pub(crate) fn read(ctx: Ctx<'_>, bytes: &[u8], want: Want<'_>) -> Result<Decoded, ReadError> {
-    let t = parse(ctx, bytes)?;
-    Decoded::single(
-        ctx,
-        want,
-        Raw::si(t.nx, t.ny, t.dx, t.dy, t.heights, t.channel),
-    )
+    Decoded::single(ctx, want, parse(ctx, bytes)?)
 }
 
 /// Parse a GSF file.
-fn parse(ctx: Ctx<'_>, bytes: &[u8]) -> Result<Topography, ReadError> {
+fn parse(ctx: Ctx<'_>, bytes: &[u8]) -> Result<Raw, ReadError> {
     if !bytes.starts_with(MAGIC) {
         return Err(ctx.err(
             "magic",
@@ -45,17 +40,8 @@ fn parse(ctx: Ctx<'_>, bytes: &[u8]) -> Result<Topography, ReadError> {
             kv.insert(k.trim().to_string(), v.trim().to_string());
         }
     }
-    let int = |k: &str| -> Result<u64, ReadError> {
-        kv.get(k)
-            .and_then(|v| v.parse::<u64>().ok())
-            .ok_or_else(|| {
-                ctx.err(
-                    k,
-                    "missing or not an integer",
-                    "the GSF header is incomplete",
-                )
-            })
-    };
+    const INCOMPLETE: &str = "the GSF header is incomplete";
+    let int = |k: &str| header_value::<u64>(ctx, &kv, k, "missing or not an integer", INCOMPLETE);
     let nx = int("XRes")?;
     let ny = int("YRes")?;
     let unit = |k: &str| -> Result<f64, ReadError> {
@@ -71,16 +57,9 @@ fn parse(ctx: Ctx<'_>, bytes: &[u8]) -> Result<Topography, ReadError> {
         }
     };
     let (xyu, zu) = (unit("XYUnits")?, unit("ZUnits")?);
-    let real = |k: &str| -> Result<f64, ReadError> {
-        kv.get(k)
-            .and_then(|v| v.parse::<f64>().ok())
-            .ok_or_else(|| {
-                ctx.err(
-                    k,
-                    "missing, so the pixel size is unknown",
-                    format!("add `{k} = <size in XYUnits>` to the header"),
-                )
-            })
+    let real = |k: &str| {
+        let fix = format!("add `{k} = <size in XYUnits>` to the header");
+        header_value::<f64>(ctx, &kv, k, "missing, so the pixel size is unknown", &fix)
     };
     let data = &bytes[data_start..];
     let n = checked_grid(ctx, "XRes × YRes", nx, ny, 4, data.len() as u64)?;
@@ -92,16 +71,10 @@ fn parse(ctx: Ctx<'_>, bytes: &[u8]) -> Result<Topography, ReadError> {
     };
     let raw = binary::decode(data, binary::Sample::F32, true, n)
         .ok_or_else(|| ctx.short("data", n as u64 * 4, data.len() as u64))?;
-    Ok(Topography {
-        nx: nx as usize,
-        ny: ny as usize,
-        dx,
-        dy,
-        heights: raw
-            .into_iter()
-            .map(|v| if v.is_finite() { v * zu } else { f64::NAN })
-            .collect(),
-        channel: kv.get("Title").cloned().unwrap_or_else(|| "gsf".into()),
-        format: "gsf",
-    })
+    let heights = raw
+        .into_iter()
+        .map(|v| if v.is_finite() { v * zu } else { f64::NAN })
+        .collect();
+    let channel = kv.get("Title").map_or("gsf", String::as_str);
+    Ok(Raw::si(nx as usize, ny as usize, dx, dy, heights, channel))
 }

@@ -8,7 +8,7 @@
 
 use super::binary::{Sample, decode};
 use super::{
-    ChannelInfo, Ctx, Decoded, Raw, Sniff, Unit, Want, check_spacing, checked_grid, select, units,
+    ChannelInfo, Ctx, Decoded, Raw, Sniff, Unit, Want, check_spacing, checked_grid, units,
 };
 use crate::ReadError;
 
@@ -258,49 +258,27 @@ pub(crate) fn read(ctx: Ctx<'_>, bytes: &[u8], want: Want<'_>) -> Result<Decoded
             }
         })
         .collect();
-    let sel = match want {
-        Want::List => {
-            return Ok(Decoded {
-                selected: channels.iter().position(|c| c.is_height).unwrap_or(0),
-                channels,
-                raw: None,
-            });
-        }
-        Want::Channel(sel) => sel,
-    };
-    let selected = select(ctx, &channels, sel)?;
-    let size = kind.size() as u64;
-    let off = data_start + per * size * selected as u64;
-    let block = &bytes[off as usize..data_end as usize];
-    let heights = decode(block, kind, little, per as usize)
-        .ok_or_else(|| ctx.short("wave data", off + per * size, data_end))?;
-    let hu = match units::length_factor(&channels[selected].unit) {
-        Some(f) => Unit::Known(f),
-        None => Unit::Unknown,
-    };
-    let lu = match units::length_factor(&lateral_unit) {
-        Some(f) => Unit::Known(f),
-        None => Unit::Unknown,
-    };
-    let dx = check_spacing(ctx, "sfA[0]", sfa[0].abs())?;
-    let dy = if ny == 1 {
-        dx
-    } else {
-        check_spacing(ctx, "sfA[1]", sfa[1].abs())?
-    };
-    let raw = Raw {
-        nx: nx as usize,
-        ny: ny as usize,
-        heights,
-        height_unit: hu,
-        spacing: Some((dx, dy)),
-        lateral_unit: lu,
-        channel: channels[selected].name.clone(),
-        notes: Vec::new(),
-    };
-    Ok(Decoded {
-        channels,
-        selected,
-        raw: Some(raw),
+    Decoded::pick(ctx, want, channels, |selected, channel| {
+        let size = kind.size() as u64;
+        let off = data_start + per * size * selected as u64;
+        let block = &bytes[off as usize..data_end as usize];
+        let heights = decode(block, kind, little, per as usize)
+            .ok_or_else(|| ctx.short("wave data", off + per * size, data_end))?;
+        let hu = match units::length_factor(&channel.unit) {
+            Some(f) => Unit::Known(f),
+            None => Unit::Unknown,
+        };
+        let lu = match units::length_factor(&lateral_unit) {
+            Some(f) => Unit::Known(f),
+            None => Unit::Unknown,
+        };
+        let dx = check_spacing(ctx, "sfA[0]", sfa[0].abs())?;
+        let dy = if ny == 1 {
+            dx
+        } else {
+            check_spacing(ctx, "sfA[1]", sfa[1].abs())?
+        };
+        let raw = Raw::si(nx as usize, ny as usize, dx, dy, heights, &channel.name);
+        Ok(raw.in_units(hu, lu))
     })
 }

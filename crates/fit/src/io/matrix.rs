@@ -8,7 +8,7 @@
 //! What the header leaves out (pixel size, units) is left unknown here and supplied by the
 //! user's flags, or named in the error.
 
-use super::{ChannelInfo, Ctx, Decoded, Raw, Sniff, Unit, Want, select, text, units};
+use super::{ChannelInfo, Ctx, Decoded, Raw, Sniff, Unit, Want, text, units};
 use crate::ReadError;
 
 /// What a header key means.
@@ -71,17 +71,14 @@ fn classify(key: &str) -> Option<Key> {
 
 /// Content check: numeric rows (≥ 4 columns or a recognised header).
 pub(crate) fn sniff(bytes: &[u8]) -> Sniff {
-    if !text::looks_like_text(bytes) {
+    let Some(t) = text::sniff_sample(bytes) else {
         return Sniff::No;
-    }
-    let t = text::decode(&bytes[..bytes.len().min(16384)]);
-    let lines: Vec<&str> = t.lines().take(200).collect();
-    // The last line of a cut sample may be partial.
-    let usable = &lines[..lines.len().saturating_sub(1).max(1).min(lines.len())];
+    };
+    let usable = text::sample_lines(&t);
     let dialect = text::Dialect::guess(usable.iter().copied().filter(|l| looks_numeric(l)));
     let mut header = false;
     let mut cols = Vec::new();
-    for l in usable {
+    for l in &usable {
         if let Some(r) = dialect.row(l) {
             cols.push(r.len());
         } else if text::key_value(l).is_some_and(|(k, _)| classify(&k).is_some()) {
@@ -310,24 +307,13 @@ pub(crate) fn read(ctx: Ctx<'_>, bytes: &[u8], want: Want<'_>) -> Result<Decoded
         height_unit,
         spacing,
         lateral_unit,
-        channel: channel.clone(),
+        channel,
         notes,
     };
-    let channels = vec![ChannelInfo {
-        index: 0,
-        name: channel,
+    let info = ChannelInfo {
         unit: unit_name,
         is_height,
-        nx,
-        ny,
-    }];
-    let selected = match want {
-        Want::List => 0,
-        Want::Channel(sel) => select(ctx, &channels, sel)?,
+        ..raw.info(0)
     };
-    Ok(Decoded {
-        channels,
-        selected,
-        raw: matches!(want, Want::Channel(_)).then_some(raw),
-    })
+    Decoded::single_listed(ctx, want, info, raw)
 }

@@ -7,7 +7,7 @@
 //! points that were not measured.
 
 use super::binary::Cursor;
-use super::{Ctx, Decoded, Raw, Sniff, Unit, Want, check_spacing, checked_grid};
+use super::{Ctx, Decoded, Raw, Sniff, Want, check_spacing, checked_grid};
 use crate::ReadError;
 
 const MAGICS: [[u8; 4]; 3] = [
@@ -115,15 +115,6 @@ pub(crate) fn read(ctx: Ctx<'_>, bytes: &[u8], want: Want<'_>) -> Result<Decoded
         heights.push(if v >= INVALID { f64::NAN } else { v as f64 * q });
     }
     let dx = check_spacing(ctx, "lateral_res", lateral)?;
-    let raw = Raw {
-        nx: cn_w as usize,
-        ny: cn_h as usize,
-        heights,
-        height_unit: Unit::Known(1.0),
-        spacing: Some((dx, dx)),
-        lateral_unit: Unit::Known(1.0),
-        channel: "phase".into(),
-        notes: Vec::new(),
-    };
+    let raw = Raw::si(cn_w as usize, cn_h as usize, dx, dx, heights, "phase");
     Decoded::single(ctx, want, raw)
 }

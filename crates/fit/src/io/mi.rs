@@ -6,7 +6,7 @@
 //! bufferRange` in `bufferUnit`.
 
 use super::{
-    ChannelInfo, Ctx, Decoded, Raw, Unit, Want, binary, check_spacing, checked_grid, select, units,
+    ChannelInfo, Ctx, Decoded, Raw, Unit, Want, binary, check_spacing, checked_grid, units,
 };
 use crate::ReadError;
 
@@ -117,60 +117,39 @@ pub(crate) fn read(ctx: Ctx<'_>, bytes: &[u8], want: Want<'_>) -> Result<Decoded
             ny: ny as usize,
         })
         .collect();
-    let sel = match want {
-        Want::List => {
-            return Ok(Decoded {
-                selected: channels.iter().position(|c| c.is_height).unwrap_or(0),
-                channels,
-                raw: None,
-            });
+    Decoded::pick(ctx, want, channels, |selected, channel| {
+        let (sample, full) = match kind.as_str() {
+            "BINARY" => (binary::Sample::I16, 32768.0),
+            "BINARY_32" => (binary::Sample::I32, 2147483648.0),
+            k => {
+                return Err(ctx.err(
+                    "data",
+                    format!("`{k}` data are not supported (only BINARY and BINARY_32)"),
+                    "save the image in binary format from PicoView",
+                ));
+            }
+        };
+        let size = sample.size() as u64;
+        let data = &bytes[pos..];
+        let per = checked_grid(ctx, "xPixels × yPixels", nx, ny, 1, u64::MAX)? as u64;
+        let need = per.saturating_mul(size).saturating_mul(selected as u64 + 1);
+        if need > data.len() as u64 {
+            return Err(ctx.short("channel data", need, data.len() as u64));
         }
-        Want::Channel(sel) => sel,
-    };
-    let selected = select(ctx, &channels, sel)?;
-    let (sample, full) = match kind.as_str() {
-        "BINARY" => (binary::Sample::I16, 32768.0),
-        "BINARY_32" => (binary::Sample::I32, 2147483648.0),
-        k => {
-            return Err(ctx.err(
-                "data",
-                format!("`{k}` data are not supported (only BINARY and BINARY_32)"),
-                "save the image in binary format from PicoView",
-            ));
-        }
-    };
-    let size = sample.size() as u64;
-    let data = &bytes[pos..];
-    let per = checked_grid(ctx, "xPixels × yPixels", nx, ny, 1, u64::MAX)? as u64;
-    let need = per.saturating_mul(size).saturating_mul(selected as u64 + 1);
-    if need > data.len() as u64 {
-        return Err(ctx.short("channel data", need, data.len() as u64));
-    }
-    let block = &data[(per * size * selected as u64) as usize..];
-    let raw = binary::decode(block, sample, true, per as usize)
-        .ok_or_else(|| ctx.short("channel data", need, data.len() as u64))?;
-    let b = &buffers[selected];
-    let q = b.range / full;
-    let zu = units::length_factor(&b.unit).unwrap_or(1.0);
-    let dx = check_spacing(ctx, "xLength", num("xLength")? / nx as f64)?;
-    let dy = if ny == 1 {
-        dx
-    } else {
-        check_spacing(ctx, "yLength", num("yLength")? / ny as f64)?
-    };
-    let out = Raw {
-        nx: nx as usize,
-        ny: ny as usize,
-        heights: raw.into_iter().map(|v| v * q).collect(),
-        height_unit: Unit::Known(zu),
-        spacing: Some((dx, dy)),
-        lateral_unit: Unit::Known(1.0),
-        channel: channels[selected].name.clone(),
-        notes: Vec::new(),
-    };
-    Ok(Decoded {
-        channels,
-        selected,
-        raw: Some(out),
+        let block = &data[(per * size * selected as u64) as usize..];
+        let raw = binary::decode(block, sample, true, per as usize)
+            .ok_or_else(|| ctx.short("channel data", need, data.len() as u64))?;
+        let b = &buffers[selected];
+        let q = b.range / full;
+        let zu = units::length_factor(&b.unit).unwrap_or(1.0);
+        let dx = check_spacing(ctx, "xLength", num("xLength")? / nx as f64)?;
+        let dy = if ny == 1 {
+            dx
+        } else {
+            check_spacing(ctx, "yLength", num("yLength")? / ny as f64)?
+        };
+        let heights = raw.into_iter().map(|v| v * q).collect();
+        let out = Raw::si(nx as usize, ny as usize, dx, dy, heights, &channel.name);
+        Ok(out.in_units(Unit::Known(zu), Unit::Known(1.0)))
     })
 }

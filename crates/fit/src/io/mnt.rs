@@ -18,7 +18,7 @@
 //! The blocks must tile the grid exactly, so a misread layout is an error, not a wrong
 //! map.
 
-use super::{Ctx, Decoded, Raw, Sniff, Unit, Want, check_spacing, checked_grid, ole, units};
+use super::{Ctx, Decoded, Raw, Sniff, Want, check_spacing, checked_grid, ole, units};
 use crate::ReadError;
 use std::io::Read;
 
@@ -308,16 +308,7 @@ pub(crate) fn read(ctx: Ctx<'_>, bytes: &[u8], want: Want<'_>) -> Result<Decoded
         .collect();
     let dx = check_spacing(ctx, "x spacing", x.spacing_m)?;
     let dy = check_spacing(ctx, "y spacing", y.spacing_m)?;
-    let mut raw = Raw {
-        nx: nx as usize,
-        ny: ny as usize,
-        heights,
-        height_unit: Unit::Known(1.0),
-        spacing: Some((dx, dy)),
-        lateral_unit: Unit::Known(1.0),
-        channel: "surface".into(),
-        notes: Vec::new(),
-    };
+    let mut raw = Raw::si(nx as usize, ny as usize, dx, dy, heights, "surface");
     if invalid > 0 {
         raw.notes
             .push(format!("{invalid} points were not measured"));

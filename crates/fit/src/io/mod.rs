@@ -39,6 +39,7 @@ pub mod xyz;
 pub use registry::{Format, READERS, Sniff};
 
 use crate::{ReadError, Topography};
+use std::collections::HashMap;
 use std::path::Path;
 
 /// A channel chosen on the command line: by 0-based index or by name.
@@ -181,6 +182,15 @@ impl Raw {
         }
     }
 
+    /// The same channel with heights in `height` and spacing in `lateral` instead of metres.
+    pub fn in_units(self, height: Unit, lateral: Unit) -> Raw {
+        Raw {
+            height_unit: height,
+            lateral_unit: lateral,
+            ..self
+        }
+    }
+
     fn info(&self, index: usize) -> ChannelInfo {
         ChannelInfo {
             index,
@@ -206,17 +216,48 @@ pub(crate) struct Decoded {
 }
 
 impl Decoded {
-    /// A single-channel file.
+    /// A single-channel file, listed as what `raw` holds: a height in its own unit.
     pub fn single(ctx: Ctx<'_>, want: Want<'_>, raw: Raw) -> Result<Decoded, ReadError> {
-        let channels = vec![raw.info(0)];
-        let selected = match want {
-            Want::List => 0,
-            Want::Channel(sel) => select(ctx, &channels, sel)?,
+        Decoded::single_listed(ctx, want, raw.info(0), raw)
+    }
+
+    /// A single-channel file whose listing says more than `raw` does (the unit as the file
+    /// states it, or that the channel is not a height), so `select` can refuse it.
+    pub fn single_listed(
+        ctx: Ctx<'_>,
+        want: Want<'_>,
+        info: ChannelInfo,
+        raw: Raw,
+    ) -> Result<Decoded, ReadError> {
+        Decoded::pick(ctx, want, vec![info], |_, _| Ok(raw))
+    }
+
+    /// A multi-channel file: only the list for [`Want::List`]; otherwise the channel the
+    /// user chose (or the first height channel) is decoded by `decode`, given its index
+    /// and listing. Listing first means a bad `--channel` is refused before any data is
+    /// touched.
+    pub fn pick(
+        ctx: Ctx<'_>,
+        want: Want<'_>,
+        channels: Vec<ChannelInfo>,
+        decode: impl FnOnce(usize, &ChannelInfo) -> Result<Raw, ReadError>,
+    ) -> Result<Decoded, ReadError> {
+        let sel = match want {
+            Want::List => {
+                return Ok(Decoded {
+                    selected: channels.iter().position(|c| c.is_height).unwrap_or(0),
+                    channels,
+                    raw: None,
+                });
+            }
+            Want::Channel(sel) => sel,
         };
+        let selected = select(ctx, &channels, sel)?;
+        let raw = decode(selected, &channels[selected])?;
         Ok(Decoded {
             channels,
             selected,
-            raw: matches!(want, Want::Channel(_)).then_some(raw),
+            raw: Some(raw),
         })
     }
 }
@@ -379,6 +420,35 @@ impl Ctx<'_> {
     }
 }
 
+/// The value of `key` in a parsed `key = value` header, as a `T`. A missing value and one
+/// that does not parse are both reported as `problem`, with `fix`.
+pub(crate) fn header_value<T: std::str::FromStr>(
+    ctx: Ctx<'_>,
+    header: &HashMap<String, String>,
+    key: &str,
+    problem: &str,
+    fix: &str,
+) -> Result<T, ReadError> {
+    header
+        .get(key)
+        .and_then(|v| v.trim().parse::<T>().ok())
+        .ok_or_else(|| ctx.err(key, problem, fix))
+}
+
+/// Where the text header of a file ends: the position of `marker`; `fix` says what its
+/// absence means for this format.
+pub(crate) fn header_end(
+    ctx: Ctx<'_>,
+    bytes: &[u8],
+    marker: &str,
+    fix: &str,
+) -> Result<usize, ReadError> {
+    bytes
+        .windows(marker.len())
+        .position(|w| w == marker.as_bytes())
+        .ok_or_else(|| ctx.err(marker, "header end marker not found", fix))
+}
+
 /// Largest grid accepted by any reader (points). Larger headers are reported as corrupt.
 pub const MAX_POINTS: u64 = 1 << 31;
 
@@ -414,6 +484,22 @@ pub(crate) fn checked_grid(
     }
     usize::try_from(n)
         .map_err(|_| ctx.err(field, "grid does not fit in memory", "use a 64-bit build"))
+}
+
+/// Decode the `nx × ny` samples at the start of a data block, `(name, bytes)`, once
+/// [`checked_grid`] has found the grid within the limit and the block long enough.
+pub(crate) fn decode_grid(
+    ctx: Ctx<'_>,
+    grid_field: &str,
+    (nx, ny): (u64, u64),
+    (name, data): (&str, &[u8]),
+    kind: binary::Sample,
+    little_endian: bool,
+) -> Result<Vec<f64>, ReadError> {
+    let size = kind.size() as u64;
+    let n = checked_grid(ctx, grid_field, nx, ny, size, data.len() as u64)?;
+    binary::decode(data, kind, little_endian, n)
+        .ok_or_else(|| ctx.short(name, n as u64 * size, data.len() as u64))
 }
 
 /// Check a pixel spacing: finite and positive.

@@ -4,7 +4,7 @@
 //! image's `Z scale` entry (e.g. `[Sens. ZsensSens]`).
 
 use super::{
-    ChannelInfo, Ctx, Decoded, Raw, Want, binary, check_spacing, checked_grid, select, units,
+    ChannelInfo, Ctx, Decoded, Raw, Want, binary, check_spacing, checked_grid, header_end, units,
 };
 use crate::ReadError;
 
@@ -24,18 +24,13 @@ impl Section {
 
 /// Read a NanoScope file: list its image channels, decode the chosen one.
 pub(crate) fn read(ctx: Ctx<'_>, bytes: &[u8], want: Want<'_>) -> Result<Decoded, ReadError> {
-    let end_marker = b"\\*File list end";
-    let header_end = bytes
-        .windows(end_marker.len())
-        .position(|w| w == end_marker)
-        .ok_or_else(|| {
-            ctx.err(
-                "\\*File list end",
-                "header end marker not found",
-                "the file is truncated or not a NanoScope file",
-            )
-        })?;
-    let header = String::from_utf8_lossy(&bytes[..header_end]);
+    let end = header_end(
+        ctx,
+        bytes,
+        "\\*File list end",
+        "the file is truncated or not a NanoScope file",
+    )?;
+    let header = String::from_utf8_lossy(&bytes[..end]);
     let sections = parse_sections(&header);
     let images: Vec<&Section> = sections
         .iter()
@@ -53,22 +48,8 @@ pub(crate) fn read(ctx: Ctx<'_>, bytes: &[u8], want: Want<'_>) -> Result<Decoded
         .enumerate()
         .map(|(i, img)| describe(ctx, i, img, &sections))
         .collect();
-    let sel = match want {
-        Want::List => {
-            return Ok(Decoded {
-                selected: channels.iter().position(|c| c.is_height).unwrap_or(0),
-                channels,
-                raw: None,
-            });
-        }
-        Want::Channel(sel) => sel,
-    };
-    let selected = select(ctx, &channels, sel)?;
-    let raw = decode(ctx, bytes, images[selected], &sections)?;
-    Ok(Decoded {
-        channels,
-        selected,
-        raw: Some(raw),
+    Decoded::pick(ctx, want, channels, |selected, _| {
+        decode(ctx, bytes, images[selected], &sections)
     })
 }
 

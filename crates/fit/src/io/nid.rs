@@ -5,10 +5,8 @@
 //! `Dim2Unit`, `Dim2Range`, and the sample format (`SaveBits`, `SaveSign`, `SaveOrder`).
 //! Values are `raw · Dim2Range / 2^bits`, x fastest.
 
-use super::binary::{Sample, decode};
-use super::{
-    ChannelInfo, Ctx, Decoded, Raw, Unit, Want, check_spacing, checked_grid, select, units,
-};
+use super::binary::Sample;
+use super::{ChannelInfo, Ctx, Decoded, Raw, Unit, Want, check_spacing, decode_grid, units};
 use crate::ReadError;
 use std::collections::HashMap;
 
@@ -159,54 +157,36 @@ pub(crate) fn read(ctx: Ctx<'_>, bytes: &[u8], want: Want<'_>) -> Result<Decoded
             ny: s.ny as usize,
         })
         .collect();
-    let sel = match want {
-        Want::List => {
-            return Ok(Decoded {
-                selected: channels.iter().position(|c| c.is_height).unwrap_or(0),
-                channels,
-                raw: None,
-            });
-        }
-        Want::Channel(sel) => sel,
-    };
-    let selected = select(ctx, &channels, sel)?;
-    let s = &sets[selected];
-    let size = s.kind.size() as u64;
-    let block = data
-        .get(s.offset.min(data.len() as u64) as usize..)
-        .unwrap_or(&[]);
-    let n = checked_grid(ctx, "Points × Lines", s.nx, s.ny, size, block.len() as u64)?;
-    let raw = decode(block, s.kind, s.little, n)
-        .ok_or_else(|| ctx.short("data", n as u64 * size, block.len() as u64))?;
-    let zu = units::length_factor(&s.unit).unwrap_or(1.0);
-    let xu = units::length_factor(&s.xy_unit).ok_or_else(|| {
-        ctx.err(
-            "Dim0Unit",
-            format!("`{}` is not a length unit", s.xy_unit),
-            "the header is corrupt",
-        )
-    })?;
-    let q = s.z_range / 2f64.powi(s.bits as i32);
-    let dx = check_spacing(ctx, "Dim0Range", s.range_x * xu / s.nx as f64)?;
-    let dy = if s.ny == 1 || !s.range_y.is_finite() {
-        dx
-    } else {
-        check_spacing(ctx, "Dim1Range", s.range_y * xu / s.ny as f64)?
-    };
-    let heights = raw.into_iter().map(|v| v * q).collect();
-    let out = Raw {
-        nx: s.nx as usize,
-        ny: s.ny as usize,
-        heights,
-        height_unit: Unit::Known(zu),
-        spacing: Some((dx, dy)),
-        lateral_unit: Unit::Known(1.0),
-        channel: s.name.clone(),
-        notes: Vec::new(),
-    };
-    Ok(Decoded {
-        channels,
-        selected,
-        raw: Some(out),
+    Decoded::pick(ctx, want, channels, |selected, _| {
+        let s = &sets[selected];
+        let block = data
+            .get(s.offset.min(data.len() as u64) as usize..)
+            .unwrap_or(&[]);
+        let raw = decode_grid(
+            ctx,
+            "Points × Lines",
+            (s.nx, s.ny),
+            ("data", block),
+            s.kind,
+            s.little,
+        )?;
+        let zu = units::length_factor(&s.unit).unwrap_or(1.0);
+        let xu = units::length_factor(&s.xy_unit).ok_or_else(|| {
+            ctx.err(
+                "Dim0Unit",
+                format!("`{}` is not a length unit", s.xy_unit),
+                "the header is corrupt",
+            )
+        })?;
+        let q = s.z_range / 2f64.powi(s.bits as i32);
+        let dx = check_spacing(ctx, "Dim0Range", s.range_x * xu / s.nx as f64)?;
+        let dy = if s.ny == 1 || !s.range_y.is_finite() {
+            dx
+        } else {
+            check_spacing(ctx, "Dim1Range", s.range_y * xu / s.ny as f64)?
+        };
+        let heights = raw.into_iter().map(|v| v * q).collect();
+        let out = Raw::si(s.nx as usize, s.ny as usize, dx, dy, heights, &s.name);
+        Ok(out.in_units(Unit::Known(zu), Unit::Known(1.0)))
     })
 }

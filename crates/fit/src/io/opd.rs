@@ -7,7 +7,7 @@
 //! are `raw · λ / Mult` nm. Values ≥ 1e38 (float) or ≥ 32766 (int16) are invalid.
 
 use super::binary::Cursor;
-use super::{ChannelInfo, Ctx, Decoded, Raw, Unit, Want, check_spacing, checked_grid, select};
+use super::{ChannelInfo, Ctx, Decoded, Raw, Unit, Want, check_spacing, checked_grid};
 use crate::ReadError;
 
 const BLOCK: usize = 24;
@@ -95,77 +95,63 @@ pub(crate) fn read(ctx: Ctx<'_>, bytes: &[u8], want: Want<'_>) -> Result<Decoded
             }
         })
         .collect();
-    let sel = match want {
-        Want::List => {
-            return Ok(Decoded {
-                selected: channels.iter().position(|c| c.is_height).unwrap_or(0),
-                channels,
-                raw: None,
-            });
+    Decoded::pick(ctx, want, channels, |selected, _| {
+        let b = arrays[selected];
+        let mut h = Cursor::le(bytes, b.offset);
+        let short_b = || ctx.short(&b.name, (b.offset + b.len) as u64, bytes.len() as u64);
+        let nx = h.u16().ok_or_else(short_b)? as u64;
+        let ny = h.u16().ok_or_else(short_b)? as u64;
+        let elsize = h.u16().ok_or_else(short_b)? as u64;
+        if !matches!(elsize, 1 | 2 | 4) {
+            return Err(ctx.err(
+                &b.name,
+                format!("element size {elsize} is not 1, 2 or 4"),
+                "the file is corrupt",
+            ));
         }
-        Want::Channel(sel) => sel,
-    };
-    let selected = select(ctx, &channels, sel)?;
-    let b = arrays[selected];
-    let mut h = Cursor::le(bytes, b.offset);
-    let short_b = || ctx.short(&b.name, (b.offset + b.len) as u64, bytes.len() as u64);
-    let nx = h.u16().ok_or_else(short_b)? as u64;
-    let ny = h.u16().ok_or_else(short_b)? as u64;
-    let elsize = h.u16().ok_or_else(short_b)? as u64;
-    if !matches!(elsize, 1 | 2 | 4) {
-        return Err(ctx.err(
-            &b.name,
-            format!("element size {elsize} is not 1, 2 or 4"),
-            "the file is corrupt",
-        ));
-    }
-    let avail = (bytes.len().saturating_sub(h.pos)).min(b.len.saturating_sub(6)) as u64;
-    let n = checked_grid(ctx, &b.name, nx, ny, elsize, avail)?;
-    let (nxu, nyu) = (nx as usize, ny as usize);
-    let q = wavelength / mult;
-    let mut heights = vec![f64::NAN; n];
-    // Column by column (y fastest), the last row first.
-    for x in 0..nxu {
-        for j in 0..nyu {
-            let v = match elsize {
-                1 => h.u8().map(f64::from),
-                2 => h
-                    .i16()
-                    .map(|v| if v >= 32766 { f64::NAN } else { v as f64 }),
-                _ => h.f32().map(|v| if v.abs() >= 1e38 { f64::NAN } else { v }),
+        let avail = (bytes.len().saturating_sub(h.pos)).min(b.len.saturating_sub(6)) as u64;
+        let n = checked_grid(ctx, &b.name, nx, ny, elsize, avail)?;
+        let (nxu, nyu) = (nx as usize, ny as usize);
+        let q = wavelength / mult;
+        let mut heights = vec![f64::NAN; n];
+        // Column by column (y fastest), the last row first.
+        for x in 0..nxu {
+            for j in 0..nyu {
+                let v = match elsize {
+                    1 => h.u8().map(f64::from),
+                    2 => h
+                        .i16()
+                        .map(|v| if v >= 32766 { f64::NAN } else { v as f64 }),
+                    _ => h.f32().map(|v| if v.abs() >= 1e38 { f64::NAN } else { v }),
+                }
+                .ok_or_else(short_b)?;
+                let y = nyu - 1 - j;
+                heights[y * nxu + x] = v * q;
             }
-            .ok_or_else(short_b)?;
-            let y = nyu - 1 - j;
-            heights[y * nxu + x] = v * q;
         }
-    }
-    let pixel = pixel.ok_or_else(|| {
-        ctx.err(
-            "Pixel_size",
-            "missing, so the lateral size is unknown",
-            "pass --pixel-size",
-        )
-    });
-    let (spacing, lateral_unit) = match pixel {
-        Ok(p) => {
-            let dx = check_spacing(ctx, "Pixel_size", p)?;
-            (Some((dx, dx * aspect)), Unit::Known(1e-3))
-        }
-        Err(_) => (None, Unit::Known(1e-3)),
-    };
-    let raw = Raw {
-        nx: nxu,
-        ny: nyu,
-        heights,
-        height_unit: Unit::Known(1e-9),
-        spacing,
-        lateral_unit,
-        channel: b.name.clone(),
-        notes: Vec::new(),
-    };
-    Ok(Decoded {
-        channels,
-        selected,
-        raw: Some(raw),
+        let pixel = pixel.ok_or_else(|| {
+            ctx.err(
+                "Pixel_size",
+                "missing, so the lateral size is unknown",
+                "pass --pixel-size",
+            )
+        });
+        let (spacing, lateral_unit) = match pixel {
+            Ok(p) => {
+                let dx = check_spacing(ctx, "Pixel_size", p)?;
+                (Some((dx, dx * aspect)), Unit::Known(1e-3))
+            }
+            Err(_) => (None, Unit::Known(1e-3)),
+        };
+        Ok(Raw {
+            nx: nxu,
+            ny: nyu,
+            heights,
+            height_unit: Unit::Known(1e-9),
+            spacing,
+            lateral_unit,
+            channel: b.name.clone(),
+            notes: Vec::new(),
+        })
     })
 }

@@ -4,8 +4,10 @@
 //! gain, scale and unit; version 2 adds the data type: int16, int32 or float32). Heights
 //! are `raw · scale · gain` in the data unit, x fastest.
 
-use super::binary::{Cursor, Sample, decode};
-use super::{Ctx, Decoded, Raw, Sniff, Unit, Want, check_spacing, checked_grid, tiff, units};
+use super::binary::{Cursor, Sample};
+use super::{
+    ChannelInfo, Ctx, Decoded, Raw, Sniff, Unit, Want, check_spacing, decode_grid, tiff, units,
+};
 use crate::ReadError;
 
 const MAGIC: u32 = 0x0E03_1301;
@@ -96,21 +98,14 @@ pub(crate) fn read(ctx: Ctx<'_>, bytes: &[u8], want: Want<'_>) -> Result<Decoded
         Sample::I16
     };
     let data = t.get(TAG_DATA).map(|e| e.value).unwrap_or(&[]);
-    let n = checked_grid(
+    let raw = decode_grid(
         ctx,
         "xres × yres",
-        nx,
-        ny,
-        kind.size() as u64,
-        data.len() as u64,
+        (nx, ny),
+        ("tag 50434 (data)", data),
+        kind,
+        true,
     )?;
-    let raw = decode(data, kind, true, n).ok_or_else(|| {
-        ctx.short(
-            "tag 50434 (data)",
-            (n * kind.size()) as u64,
-            data.len() as u64,
-        )
-    })?;
     let q = gain * scale;
     if !(q.is_finite() && q != 0.0) {
         return Err(ctx.err(
@@ -125,25 +120,13 @@ pub(crate) fn read(ctx: Ctx<'_>, bytes: &[u8], want: Want<'_>) -> Result<Decoded
     };
     let dx = check_spacing(ctx, "X scan size", sx / nx as f64)?;
     let dy = check_spacing(ctx, "Y scan size", sy / ny as f64)?;
-    let out = Raw {
-        nx: nx as usize,
-        ny: ny as usize,
-        heights: raw.into_iter().map(|v| v * q).collect(),
-        height_unit,
-        spacing: Some((dx, dy)),
-        lateral_unit: Unit::Known(1e-6),
-        channel: name,
-        notes: Vec::new(),
+    let heights = raw.into_iter().map(|v| v * q).collect();
+    let out = Raw::si(nx as usize, ny as usize, dx, dy, heights, name)
+        .in_units(height_unit, Unit::Known(1e-6));
+    let info = ChannelInfo {
+        unit,
+        is_height: is_length,
+        ..out.info(0)
     };
-    let mut d = Decoded::single(ctx, Want::List, out.clone())?;
-    d.channels[0].unit = unit.clone();
-    d.channels[0].is_height = is_length;
-    match want {
-        Want::List => Ok(d),
-        Want::Channel(sel) => {
-            d.selected = super::select(ctx, &d.channels, sel)?;
-            d.raw = Some(out);
-            Ok(d)
-        }
-    }
+    Decoded::single_listed(ctx, want, info, out)
 }

@@ -83,16 +83,8 @@ pub(crate) fn read(ctx: Ctx<'_>, bytes: &[u8], want: Want<'_>) -> Result<Decoded
             *h = f64::NAN;
         }
     }
-    let mut raw = Raw {
-        nx: nx as usize,
-        ny: ny as usize,
-        heights,
-        height_unit: Unit::Known(1e-6),
-        spacing: Some((dx, dy)),
-        lateral_unit: Unit::Known(1e-6),
-        channel: "layer0".into(),
-        notes: Vec::new(),
-    };
+    let mut raw = Raw::si(nx as usize, ny as usize, dx, dy, heights, "layer0")
+        .in_units(Unit::Known(1e-6), Unit::Known(1e-6));
     if num_layers > 1 {
         raw.notes.push(format!(
             "the file has {num_layers} layers; the first was read"

@@ -84,8 +84,16 @@ use super::{
     sdf, sur, tmd, wsxm, x3p, xyz,
 };
 
-fn starts(bytes: &[u8], magic: &[u8]) -> Sniff {
-    if bytes.starts_with(magic) {
+/// `Magic` when the file starts with any of `magics`: some formats have variants (ASCII
+/// or binary, compressed or not) that differ in their first bytes.
+fn starts(bytes: &[u8], magics: &[&[u8]]) -> Sniff {
+    magic_at(bytes, 0, magics)
+}
+
+/// `Magic` when any of `magics` stands at byte `offset`.
+fn magic_at(bytes: &[u8], offset: usize, magics: &[&[u8]]) -> Sniff {
+    let tail = bytes.get(offset..).unwrap_or(&[]);
+    if magics.iter().any(|m| tail.starts_with(m)) {
         Sniff::Magic
     } else {
         Sniff::No
@@ -100,7 +108,7 @@ pub static READERS: &[Reader] = &[
         description: "ISO 25178-72 X3P (zip with main.xml)",
         extensions: &["x3p"],
         binary: true,
-        sniff: |b| starts(b, b"PK\x03\x04"),
+        sniff: |b| starts(b, &[b"PK\x03\x04"]),
         read: x3p::read,
     },
     Reader {
@@ -109,14 +117,7 @@ pub static READERS: &[Reader] = &[
         description: "Surface Data File (BCR/ISO 25178-71 SDF, binary or ASCII)",
         extensions: &["sdf"],
         binary: true,
-        sniff: |b| {
-            for m in [&b"aBCR-"[..], b"bBCR-", b"aISO-", b"bISO-"] {
-                if b.starts_with(m) {
-                    return Sniff::Magic;
-                }
-            }
-            Sniff::No
-        },
+        sniff: |b| starts(b, &[b"aBCR-", b"bBCR-", b"aISO-", b"bISO-"]),
         read: sdf::read,
     },
     Reader {
@@ -125,13 +126,8 @@ pub static READERS: &[Reader] = &[
         description: "BCR-STM (bcrstm/bcrf, ASCII or UTF-16 header)",
         extensions: &["bcr", "bcrf", "bcrstm"],
         binary: true,
-        sniff: |b| {
-            if b.starts_with(b"fileformat") || b.starts_with(b"f\0i\0l\0e\0f\0o\0r\0m\0a\0t\0") {
-                Sniff::Magic
-            } else {
-                Sniff::No
-            }
-        },
+        // The UTF-16LE variant spells `fileformat` with NULs between the letters.
+        sniff: |b| starts(b, &[b"fileformat", b"f\0i\0l\0e\0f\0o\0r\0m\0a\0t\0"]),
         read: bcr::read,
     },
     Reader {
@@ -140,7 +136,7 @@ pub static READERS: &[Reader] = &[
         description: "Gwyddion Simple Field .gsf",
         extensions: &["gsf"],
         binary: true,
-        sniff: |b| starts(b, b"Gwyddion Simple Field"),
+        sniff: |b| starts(b, &[b"Gwyddion Simple Field"]),
         read: gsf::read,
     },
     Reader {
@@ -149,7 +145,7 @@ pub static READERS: &[Reader] = &[
         description: "Bruker/Veeco NanoScope .di/.spm/.001 (multi-channel)",
         extensions: &["di", "spm", "001", "002", "003", "004"],
         binary: true,
-        sniff: |b| starts(b, b"\\*File list"),
+        sniff: |b| starts(b, &[b"\\*File list"]),
         read: nanoscope::read,
     },
     Reader {
@@ -167,13 +163,7 @@ pub static READERS: &[Reader] = &[
         description: "Digital Surf .sur (MountainsMap)",
         extensions: &["sur"],
         binary: true,
-        sniff: |b| {
-            if b.starts_with(b"DIGITAL SURF") || b.starts_with(b"DSCOMPRESSED") {
-                Sniff::Magic
-            } else {
-                Sniff::No
-            }
-        },
+        sniff: |b| starts(b, &[b"DIGITAL SURF", b"DSCOMPRESSED"]),
         read: sur::read,
     },
     Reader {
@@ -200,13 +190,8 @@ pub static READERS: &[Reader] = &[
         description: "Veeco/Bruker Wyko Vision .opd",
         extensions: &["opd"],
         binary: true,
-        sniff: |b| {
-            if b.get(2..11) == Some(b"Directory") {
-                Sniff::Magic
-            } else {
-                Sniff::No
-            }
-        },
+        // After the 2-byte header, the directory's own descriptor names itself.
+        sniff: |b| magic_at(b, 2, &[b"Directory"]),
         read: opd::read,
     },
     Reader {
@@ -215,7 +200,7 @@ pub static READERS: &[Reader] = &[
         description: "Alicona Imaging .al3d",
         extensions: &["al3d"],
         binary: true,
-        sniff: |b| starts(b, b"AliconaImaging"),
+        sniff: |b| starts(b, &[b"AliconaImaging"]),
         read: al3d::read,
     },
     Reader {
@@ -224,7 +209,7 @@ pub static READERS: &[Reader] = &[
         description: "Nanosurf easyScan .nid/.ezd (multi-channel)",
         extensions: &["nid", "ezd"],
         binary: true,
-        sniff: |b| starts(b, b"[DataSet]"),
+        sniff: |b| starts(b, &[b"[DataSet]"]),
         read: nid::read,
     },
     Reader {
@@ -251,7 +236,7 @@ pub static READERS: &[Reader] = &[
         description: "Keysight/Agilent PicoView .mi (multi-channel)",
         extensions: &["mi"],
         binary: true,
-        sniff: |b| starts(b, b"fileType      Image"),
+        sniff: |b| starts(b, &[b"fileType      Image"]),
         read: mi::read,
     },
     Reader {
@@ -260,7 +245,7 @@ pub static READERS: &[Reader] = &[
         description: "WSxM .stp/.top",
         extensions: &["stp", "top", "tom"],
         binary: true,
-        sniff: |b| starts(b, b"WSxM file copyright"),
+        sniff: |b| starts(b, &[b"WSxM file copyright"]),
         read: wsxm::read,
     },
     Reader {
@@ -269,7 +254,7 @@ pub static READERS: &[Reader] = &[
         description: "FRT MicroProf .frt",
         extensions: &["frt"],
         binary: true,
-        sniff: |b| starts(b, b"FRTM_GLIDERV"),
+        sniff: |b| starts(b, &[b"FRTM_GLIDERV"]),
         read: frt::read,
     },
     Reader {
@@ -278,7 +263,7 @@ pub static READERS: &[Reader] = &[
         description: "TrueMap .tmd",
         extensions: &["tmd"],
         binary: true,
-        sniff: |b| starts(b, b"Binary TrueMap Data File"),
+        sniff: |b| starts(b, &[b"Binary TrueMap Data File"]),
         read: tmd::read,
     },
     Reader {

@@ -4,24 +4,22 @@
 //! followed by the data. ASCII (`aBCR-1.0`, `aISO-1.0`): `Key = value` lines, a `*` line,
 //! the values, then `*`. Heights are `raw × Zscale`.
 
-use super::{Ctx, Decoded, Raw, Want, binary, check_spacing, checked_grid, text::parse_row};
-use crate::{ReadError, Topography};
+use super::{
+    Ctx, Decoded, Raw, Want, binary, check_spacing, checked_grid, decode_grid, header_value,
+    text::parse_row,
+};
+use crate::ReadError;
 use std::collections::HashMap;
 
 const BINARY_HEADER: usize = 81;
 
 /// Read the file (one channel).
 pub(crate) fn read(ctx: Ctx<'_>, bytes: &[u8], want: Want<'_>) -> Result<Decoded, ReadError> {
-    let t = parse(ctx, bytes)?;
-    Decoded::single(
-        ctx,
-        want,
-        Raw::si(t.nx, t.ny, t.dx, t.dy, t.heights, t.channel),
-    )
+    Decoded::single(ctx, want, parse(ctx, bytes)?)
 }
 
 /// Parse an SDF file (binary or ASCII).
-fn parse(ctx: Ctx<'_>, bytes: &[u8]) -> Result<Topography, ReadError> {
+fn parse(ctx: Ctx<'_>, bytes: &[u8]) -> Result<Raw, ReadError> {
     match bytes.first() {
         Some(b'b') => read_binary(ctx, bytes),
         Some(b'a') => read_ascii(ctx, bytes),
@@ -54,7 +52,7 @@ fn data_kind(ctx: Ctx<'_>, code: u64) -> Result<binary::Sample, ReadError> {
     })
 }
 
-fn read_binary(ctx: Ctx<'_>, bytes: &[u8]) -> Result<Topography, ReadError> {
+fn read_binary(ctx: Ctx<'_>, bytes: &[u8]) -> Result<Raw, ReadError> {
     let short = || ctx.short("header", BINARY_HEADER as u64, bytes.len() as u64);
     if bytes.len() < BINARY_HEADER {
         return Err(short());
@@ -74,20 +72,18 @@ fn read_binary(ctx: Ctx<'_>, bytes: &[u8]) -> Result<Topography, ReadError> {
     }
     let kind = data_kind(ctx, bytes[79] as u64)?;
     let data = &bytes[BINARY_HEADER..];
-    let n = checked_grid(
+    let raw = decode_grid(
         ctx,
         "NumPoints × NumProfiles",
-        nx,
-        ny,
-        kind.size() as u64,
-        data.len() as u64,
+        (nx, ny),
+        ("data", data),
+        kind,
+        true,
     )?;
-    let raw = binary::decode(data, kind, true, n)
-        .ok_or_else(|| ctx.short("data", (n * kind.size()) as u64, data.len() as u64))?;
-    finish(ctx, nx, ny, xs, ys, zs, raw, "sdf-binary")
+    finish(ctx, nx, ny, xs, ys, zs, raw)
 }
 
-fn read_ascii(ctx: Ctx<'_>, bytes: &[u8]) -> Result<Topography, ReadError> {
+fn read_ascii(ctx: Ctx<'_>, bytes: &[u8]) -> Result<Raw, ReadError> {
     let text = String::from_utf8_lossy(bytes);
     let mut lines = text.lines();
     lines.next(); // version line
@@ -110,22 +106,9 @@ fn read_ascii(ctx: Ctx<'_>, bytes: &[u8]) -> Result<Topography, ReadError> {
             "the SDF file is truncated",
         ));
     }
-    let int = |k: &str| -> Result<u64, ReadError> {
-        kv.get(k)
-            .and_then(|v| v.parse::<u64>().ok())
-            .ok_or_else(|| {
-                ctx.err(
-                    k,
-                    "missing or not an integer",
-                    "the SDF header is incomplete",
-                )
-            })
-    };
-    let float = |k: &str| -> Result<f64, ReadError> {
-        kv.get(k)
-            .and_then(|v| v.parse::<f64>().ok())
-            .ok_or_else(|| ctx.err(k, "missing or not a number", "the SDF header is incomplete"))
-    };
+    const INCOMPLETE: &str = "the SDF header is incomplete";
+    let int = |k: &str| header_value::<u64>(ctx, &kv, k, "missing or not an integer", INCOMPLETE);
+    let float = |k: &str| header_value::<f64>(ctx, &kv, k, "missing or not a number", INCOMPLETE);
     let nx = int("numpoints")?;
     let ny = int("numprofiles")?;
     let (xs, ys, zs) = (float("xscale")?, float("yscale")?, float("zscale")?);
@@ -161,10 +144,9 @@ fn read_ascii(ctx: Ctx<'_>, bytes: &[u8]) -> Result<Topography, ReadError> {
         values.len() as u64,
     )?;
     values.truncate(n);
-    finish(ctx, nx, ny, xs, ys, zs, values, "sdf-ascii")
+    finish(ctx, nx, ny, xs, ys, zs, values)
 }
 
-#[allow(clippy::too_many_arguments)]
 fn finish(
     ctx: Ctx<'_>,
     nx: u64,
@@ -173,8 +155,7 @@ fn finish(
     ys: f64,
     zs: f64,
     raw: Vec<f64>,
-    format: &'static str,
-) -> Result<Topography, ReadError> {
+) -> Result<Raw, ReadError> {
     let dx = check_spacing(ctx, "Xscale", xs)?;
     let dy = if ny == 1 {
         dx
@@ -188,16 +169,9 @@ fn finish(
             "the SDF header is corrupt",
         ));
     }
-    Ok(Topography {
-        nx: nx as usize,
-        ny: ny as usize,
-        dx,
-        dy,
-        heights: raw
-            .into_iter()
-            .map(|v| if v.is_finite() { v * zs } else { f64::NAN })
-            .collect(),
-        channel: "sdf".into(),
-        format,
-    })
+    let heights = raw
+        .into_iter()
+        .map(|v| if v.is_finite() { v * zs } else { f64::NAN })
+        .collect();
+    Ok(Raw::si(nx as usize, ny as usize, dx, dy, heights, "sdf"))
 }

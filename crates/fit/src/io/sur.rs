@@ -7,7 +7,7 @@
 //! measured. `DSCOMPRESSED` files hold the same layout with zlib-compressed data.
 
 use super::binary::Cursor;
-use super::{Ctx, Decoded, Raw, Unit, Want, check_spacing, checked_grid, units};
+use super::{Ctx, Decoded, Raw, Want, check_spacing, checked_grid, units};
 use crate::ReadError;
 use std::io::Read;
 
@@ -159,16 +159,7 @@ pub(crate) fn read(ctx: Ctx<'_>, bytes: &[u8], want: Want<'_>) -> Result<Decoded
             }
         })
         .collect();
-    let mut out = Raw {
-        nx: nx as usize,
-        ny: ny as usize,
-        heights,
-        height_unit: Unit::Known(1.0),
-        spacing: Some((dx, dy)),
-        lateral_unit: Unit::Known(1.0),
-        channel: names[2].clone(),
-        notes: Vec::new(),
-    };
+    let mut out = Raw::si(nx as usize, ny as usize, dx, dy, heights, &names[2]);
     if invalid > 0 {
         out.notes
             .push(format!("{invalid} points were not measured"));

@@ -52,6 +52,20 @@ fn utf16(bytes: &[u8], little: bool) -> String {
     String::from_utf16_lossy(&units)
 }
 
+/// What a content check of a text format reads: the first 16 kB decoded, or `None` when
+/// the file does not look like text.
+pub(crate) fn sniff_sample(bytes: &[u8]) -> Option<Cow<'_, str>> {
+    looks_like_text(bytes).then(|| decode(&bytes[..bytes.len().min(16384)]))
+}
+
+/// The first 200 lines of a [`sniff_sample`] without the last one, which the cut may have
+/// split (a single line is kept).
+pub(crate) fn sample_lines(sample: &str) -> Vec<&str> {
+    let mut lines: Vec<&str> = sample.lines().take(200).collect();
+    lines.truncate(lines.len().saturating_sub(1).max(1));
+    lines
+}
+
 /// True when the bytes look like text (few control characters in the first kB).
 pub fn looks_like_text(bytes: &[u8]) -> bool {
     let t = decode(&bytes[..bytes.len().min(2048)]);

@@ -2,8 +2,8 @@
 //! u32 columns and rows, float32 lengths x and y and offsets (mm), then float32 heights
 //! in mm, x fastest. Non-finite values are invalid.
 
-use super::binary::{Cursor, Sample, decode};
-use super::{Ctx, Decoded, Raw, Unit, Want, check_spacing, checked_grid};
+use super::binary::{Cursor, Sample};
+use super::{Ctx, Decoded, Raw, Unit, Want, check_spacing, decode_grid};
 use crate::ReadError;
 
 const HEADER: usize = 32 + 24 + 4 + 4 + 4 * 4;
@@ -27,24 +27,21 @@ pub(crate) fn read(ctx: Ctx<'_>, bytes: &[u8], want: Want<'_>) -> Result<Decoded
     let lx = c.f32().ok_or_else(short)?;
     let ly = c.f32().ok_or_else(short)?;
     let data = &bytes[HEADER..];
-    let n = checked_grid(ctx, "columns × rows", nx, ny, 4, data.len() as u64)?;
-    let raw = decode(data, Sample::F32, true, n)
-        .ok_or_else(|| ctx.short("data", n as u64 * 4, data.len() as u64))?;
+    let raw = decode_grid(
+        ctx,
+        "columns × rows",
+        (nx, ny),
+        ("data", data),
+        Sample::F32,
+        true,
+    )?;
     let dx = check_spacing(ctx, "x length", lx / nx as f64)?;
     let dy = if ny == 1 {
         dx
     } else {
         check_spacing(ctx, "y length", ly / ny as f64)?
     };
-    let out = Raw {
-        nx: nx as usize,
-        ny: ny as usize,
-        heights: raw,
-        height_unit: Unit::Known(1e-3),
-        spacing: Some((dx, dy)),
-        lateral_unit: Unit::Known(1e-3),
-        channel: "height".into(),
-        notes: Vec::new(),
-    };
+    let out = Raw::si(nx as usize, ny as usize, dx, dy, raw, "height")
+        .in_units(Unit::Known(1e-3), Unit::Known(1e-3));
     Decoded::single(ctx, want, out)
 }

@@ -5,25 +5,16 @@
 //! with their unit; heights are scaled so their range equals `General Info/Z Amplitude`
 //! (as WSxM and Gwyddion display them).
 
-use super::binary::{Sample, decode};
-use super::{Ctx, Decoded, Raw, Unit, Want, check_spacing, checked_grid, units};
+use super::binary::Sample;
+use super::{Ctx, Decoded, Raw, Unit, Want, check_spacing, decode_grid, header_end, units};
 use crate::ReadError;
 use std::collections::HashMap;
 
-const END: &[u8] = b"[Header end]";
+const END: &str = "[Header end]";
 
 /// Read a WSxM image.
 pub(crate) fn read(ctx: Ctx<'_>, bytes: &[u8], want: Want<'_>) -> Result<Decoded, ReadError> {
-    let end = bytes
-        .windows(END.len())
-        .position(|w| w == END)
-        .ok_or_else(|| {
-            ctx.err(
-                "[Header end]",
-                "header end marker not found",
-                "the file is truncated or not a WSxM file",
-            )
-        })?;
+    let end = header_end(ctx, bytes, END, "the file is truncated or not a WSxM file")?;
     let mut start = end + END.len();
     while start < bytes.len()
         && matches!(bytes[start], b'\r' | b'\n')
@@ -69,16 +60,7 @@ pub(crate) fn read(ctx: Ctx<'_>, bytes: &[u8], want: Want<'_>) -> Result<Decoded
         }
     };
     let data = &bytes[start.min(bytes.len())..];
-    let n = checked_grid(
-        ctx,
-        "columns × rows",
-        nx,
-        ny,
-        kind.size() as u64,
-        data.len() as u64,
-    )?;
-    let raw = decode(data, kind, true, n)
-        .ok_or_else(|| ctx.short("data", (n * kind.size()) as u64, data.len() as u64))?;
+    let raw = decode_grid(ctx, "columns × rows", (nx, ny), ("data", data), kind, true)?;
     let amplitude = |k: &str| -> Result<(f64, f64), ReadError> {
         let v = get(k)?;
         let (x, u) = units::split_number(v)
@@ -108,18 +90,11 @@ pub(crate) fn read(ctx: Ctx<'_>, bytes: &[u8], want: Want<'_>) -> Result<Decoded
     } else {
         check_spacing(ctx, "Y Amplitude", sy * fy / ny as f64)?
     };
-    let out = Raw {
-        nx: nx as usize,
-        ny: ny as usize,
-        heights: raw.into_iter().map(|v| v * q).collect(),
-        height_unit: Unit::Known(zf),
-        spacing: Some((dx, dy)),
-        lateral_unit: Unit::Known(1.0),
-        channel: meta
-            .get("General Info/Acquisition channel")
-            .cloned()
-            .unwrap_or_else(|| "topography".into()),
-        notes: Vec::new(),
-    };
+    let heights = raw.into_iter().map(|v| v * q).collect();
+    let channel = meta
+        .get("General Info/Acquisition channel")
+        .map_or("topography", String::as_str);
+    let out = Raw::si(nx as usize, ny as usize, dx, dy, heights, channel)
+        .in_units(Unit::Known(zf), Unit::Known(1.0));
     Decoded::single(ctx, want, out)
 }

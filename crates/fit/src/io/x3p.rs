@@ -8,7 +8,7 @@
 //! (`md5checksum.hex`); the error says which check failed.
 
 use super::{Ctx, Decoded, Raw, Want, binary, check_spacing, checked_grid, md5};
-use crate::{ReadError, Topography};
+use crate::ReadError;
 use quick_xml::events::Event;
 use std::collections::HashMap;
 use std::io::Read;
@@ -20,16 +20,11 @@ const MAX_DEFLATE_RATIO: u64 = 1100;
 
 /// Read an X3P file (one channel).
 pub(crate) fn read(ctx: Ctx<'_>, bytes: &[u8], want: Want<'_>) -> Result<Decoded, ReadError> {
-    let t = parse(ctx, bytes)?;
-    Decoded::single(
-        ctx,
-        want,
-        Raw::si(t.nx, t.ny, t.dx, t.dy, t.heights, t.channel),
-    )
+    Decoded::single(ctx, want, parse(ctx, bytes)?)
 }
 
 /// Parse an X3P file.
-fn parse(ctx: Ctx<'_>, bytes: &[u8]) -> Result<Topography, ReadError> {
+fn parse(ctx: Ctx<'_>, bytes: &[u8]) -> Result<Raw, ReadError> {
     let mut zip = zip::ZipArchive::new(std::io::Cursor::new(bytes)).map_err(|e| {
         ctx.err(
             "zip container",
@@ -236,14 +231,21 @@ fn parse(ctx: Ctx<'_>, bytes: &[u8]) -> Result<Topography, ReadError> {
             }
         }
     }
-    Ok(Topography {
-        nx: nx as usize,
-        ny: ny as usize,
-        dx,
-        dy,
-        heights,
-        channel: get("Record2/Comment").unwrap_or("x3p").trim().to_string(),
-        format: "x3p",
+    let channel = get("Record2/Comment").unwrap_or("x3p").trim();
+    Ok(Raw::si(nx as usize, ny as usize, dx, dy, heights, channel))
+}
+
+fn entry<'z, R: Read + std::io::Seek>(
+    ctx: Ctx<'_>,
+    zip: &'z mut zip::ZipArchive<R>,
+    name: &str,
+) -> Result<zip::read::ZipFile<'z, R>, ReadError> {
+    zip.by_name(name).map_err(|e| {
+        ctx.err(
+            name,
+            format!("entry missing from the archive ({e})"),
+            "the X3P file is incomplete",
+        )
     })
 }
 
@@ -252,13 +254,7 @@ fn entry_size<R: Read + std::io::Seek>(
     zip: &mut zip::ZipArchive<R>,
     name: &str,
 ) -> Result<u64, ReadError> {
-    let f = zip.by_name(name).map_err(|e| {
-        ctx.err(
-            name,
-            format!("entry missing from the archive ({e})"),
-            "the X3P file is incomplete",
-        )
-    })?;
+    let f = entry(ctx, zip, name)?;
     Ok(f.size().min(
         f.compressed_size()
             .saturating_mul(MAX_DEFLATE_RATIO)
@@ -274,13 +270,7 @@ fn read_entry<R: Read + std::io::Seek>(
     name: &str,
     limit: u64,
 ) -> Result<Vec<u8>, ReadError> {
-    let f = zip.by_name(name).map_err(|e| {
-        ctx.err(
-            name,
-            format!("entry missing from the archive ({e})"),
-            "the X3P file is incomplete",
-        )
-    })?;
+    let f = entry(ctx, zip, name)?;
     let declared = f.size();
     let crc = f.crc32();
     if declared > limit {

@@ -8,10 +8,7 @@
 //! is resampled by linear interpolation onto the same number of points, and the notes
 //! say so. Units the file does not state come from `--units`.
 
-use super::{
-    ChannelInfo, Ctx, Decoded, Raw, Sniff, Unit, Want, check_spacing, checked_grid, select, text,
-    units,
-};
+use super::{Ctx, Decoded, Raw, Sniff, Unit, Want, check_spacing, checked_grid, text, units};
 use crate::ReadError;
 
 /// What a column holds.
@@ -62,12 +59,10 @@ fn role_of(title: &str) -> Role {
 
 /// Content check: rows of 2–5 numbers, optionally after titles.
 pub(crate) fn sniff(bytes: &[u8]) -> Sniff {
-    if !text::looks_like_text(bytes) {
+    let Some(t) = text::sniff_sample(bytes) else {
         return Sniff::No;
-    }
-    let t = text::decode(&bytes[..bytes.len().min(16384)]);
-    let lines: Vec<&str> = t.lines().take(200).collect();
-    let usable = &lines[..lines.len().saturating_sub(1).max(1).min(lines.len())];
+    };
+    let usable = text::sample_lines(&t);
     let d = text::Dialect::guess(usable.iter().copied().filter(|l| numeric_start(l)));
     let rows: Vec<usize> = usable
         .iter()
@@ -265,28 +260,9 @@ pub(crate) fn read(ctx: Ctx<'_>, bytes: &[u8], want: Want<'_>) -> Result<Decoded
     };
     raw.height_unit = height_unit;
     raw.lateral_unit = lateral_unit;
-    raw.channel = name.clone();
+    raw.channel = name;
     raw.notes = notes;
-    let channels = vec![ChannelInfo {
-        index: 0,
-        name,
-        unit: match height_unit {
-            Unit::Known(f) => units::name_of(f),
-            Unit::Unknown => String::new(),
-        },
-        is_height: true,
-        nx: raw.nx,
-        ny: raw.ny,
-    }];
-    let selected = match want {
-        Want::List => 0,
-        Want::Channel(sel) => select(ctx, &channels, sel)?,
-    };
-    Ok(Decoded {
-        channels,
-        selected,
-        raw: matches!(want, Want::Channel(_)).then_some(raw),
-    })
+    Decoded::single(ctx, want, raw)
 }
 
 /// A profile: sorted by x, duplicates averaged, resampled when not uniformly spaced.
