@@ -80,45 +80,32 @@ pub trait Bxdf {
     }
 }
 
-impl<T: Bxdf + ?Sized> Bxdf for &T {
-    fn eval(&self, wi: DVec3, wo: DVec3, lambda_nm: f64) -> f64 {
-        (**self).eval(wi, wo, lambda_nm)
-    }
-    fn pdf(&self, wi: DVec3, wo: DVec3, lambda_nm: f64) -> f64 {
-        (**self).pdf(wi, wo, lambda_nm)
-    }
-    fn eval_pdf(&self, wi: DVec3, wo: DVec3, lambda_nm: f64) -> (f64, f64) {
-        (**self).eval_pdf(wi, wo, lambda_nm)
-    }
-    fn eval_pdf_many(&self, wi: DVec3, wo: DVec3, lambdas: &[f64], out: &mut [(f64, f64)]) {
-        (**self).eval_pdf_many(wi, wo, lambdas, out)
-    }
-    fn sample(&self, wi: DVec3, lambda_nm: f64, u: [f64; 3]) -> Option<BxdfSample> {
-        (**self).sample(wi, lambda_nm, u)
-    }
-    fn specular(&self, wi: DVec3, lambda_nm: f64) -> Specular {
-        (**self).specular(wi, lambda_nm)
-    }
+/// A pointer to a model is the model: every method forwards.
+macro_rules! forward_bxdf {
+    ($($ptr:tt)*) => {
+        impl<T: Bxdf + ?Sized> Bxdf for $($ptr)* {
+            fn eval(&self, wi: DVec3, wo: DVec3, lambda_nm: f64) -> f64 {
+                (**self).eval(wi, wo, lambda_nm)
+            }
+            fn pdf(&self, wi: DVec3, wo: DVec3, lambda_nm: f64) -> f64 {
+                (**self).pdf(wi, wo, lambda_nm)
+            }
+            fn eval_pdf(&self, wi: DVec3, wo: DVec3, lambda_nm: f64) -> (f64, f64) {
+                (**self).eval_pdf(wi, wo, lambda_nm)
+            }
+            fn eval_pdf_many(&self, wi: DVec3, wo: DVec3, lambdas: &[f64], out: &mut [(f64, f64)]) {
+                (**self).eval_pdf_many(wi, wo, lambdas, out)
+            }
+            fn sample(&self, wi: DVec3, lambda_nm: f64, u: [f64; 3]) -> Option<BxdfSample> {
+                (**self).sample(wi, lambda_nm, u)
+            }
+            fn specular(&self, wi: DVec3, lambda_nm: f64) -> Specular {
+                (**self).specular(wi, lambda_nm)
+            }
+        }
+    };
 }
 
+forward_bxdf!(&T);
 #[cfg(feature = "alloc")]
-impl<T: Bxdf + ?Sized> Bxdf for alloc::boxed::Box<T> {
-    fn eval(&self, wi: DVec3, wo: DVec3, lambda_nm: f64) -> f64 {
-        (**self).eval(wi, wo, lambda_nm)
-    }
-    fn pdf(&self, wi: DVec3, wo: DVec3, lambda_nm: f64) -> f64 {
-        (**self).pdf(wi, wo, lambda_nm)
-    }
-    fn eval_pdf(&self, wi: DVec3, wo: DVec3, lambda_nm: f64) -> (f64, f64) {
-        (**self).eval_pdf(wi, wo, lambda_nm)
-    }
-    fn eval_pdf_many(&self, wi: DVec3, wo: DVec3, lambdas: &[f64], out: &mut [(f64, f64)]) {
-        (**self).eval_pdf_many(wi, wo, lambdas, out)
-    }
-    fn sample(&self, wi: DVec3, lambda_nm: f64, u: [f64; 3]) -> Option<BxdfSample> {
-        (**self).sample(wi, lambda_nm, u)
-    }
-    fn specular(&self, wi: DVec3, lambda_nm: f64) -> Specular {
-        (**self).specular(wi, lambda_nm)
-    }
-}
+forward_bxdf!(alloc::boxed::Box<T>);

@@ -22,7 +22,7 @@ use alloc::sync::Arc;
 use glam::DVec3;
 
 use super::energy::{GhsOptions, hemispherical_integral};
-use super::ghs_ssa::GhsCommon;
+use super::ghs_ssa::{GhsCommon, LobeChoice};
 use super::ghs_table::{G_MIN, GhsTable, TableResolution};
 use super::{Geometry, direction_from_u, wavenumber};
 use crate::fresnel::Fresnel;
@@ -147,14 +147,7 @@ impl<P: TableSource> GhsFull<P> {
                 valid: "≥ (2·k(360 nm)·σ)² of the surface: build the table for this σ or larger",
             });
         }
-        let common = GhsCommon {
-            fresnel,
-            opts,
-            energy_table: None,
-            cap_table: None,
-            sigma: psd.sigma_um(),
-            length: psd.length_um(),
-        };
+        let common = GhsCommon::new(fresnel, opts, psd.sigma_um(), psd.length_um());
         let mut model = GhsFull { psd, common, table };
         let mut common = model.common.clone();
         common.build_table(
@@ -190,12 +183,7 @@ impl<P: TableSource> GhsFull<P> {
         if !(g > 0.0) {
             return 0.0;
         }
-        let ln_u = if u > 0.0 {
-            crate::numerics::math::ln(u)
-        } else {
-            f64::NEG_INFINITY
-        };
-        self.s_tilde_at(ln_u, u, g)
+        self.s_tilde_at(ln_or_neg_inf(u), u, g)
     }
 
     /// R = 1, unrenormalised scattered BRDF k²L² S̃.
@@ -209,11 +197,7 @@ impl<P: TableSource> GhsFull<P> {
 
     #[inline]
     fn ln_u(geo: &Geometry) -> f64 {
-        if geo.u2 > 0.0 {
-            0.5 * crate::numerics::math::ln(geo.u2)
-        } else {
-            f64::NEG_INFINITY
-        }
+        0.5 * ln_or_neg_inf(geo.u2)
     }
 
     #[inline]
@@ -245,12 +229,7 @@ impl<P: TableSource> GhsFull<P> {
     /// draws u = L|ζ| for specular exponent `gs` (before the evanescent cut).
     #[inline]
     pub fn proposal_density(&self, gs: f64, u: f64) -> f64 {
-        let ln_u = if u > 0.0 {
-            crate::numerics::math::ln(u)
-        } else {
-            f64::NEG_INFINITY
-        };
-        self.proposal_density_ln(gs, u, ln_u)
+        self.proposal_density_ln(gs, u, ln_or_neg_inf(u))
     }
 
     #[inline]
@@ -349,17 +328,10 @@ impl<P: TableSource> Bxdf for GhsFull<P> {
         if !(wi.z > 0.0) {
             return None;
         }
-        let (p_delta, gs) = self.common.choice(wi.z.min(1.0), lambda_nm);
-        if u[0] < p_delta {
-            let spec = self.common.fresnel.reflectance(wi.z.min(1.0), lambda_nm) * p_delta;
-            return (spec > 0.0).then(|| BxdfSample {
-                wo: frame::reflect_z(wi),
-                weight: spec / p_delta,
-                pdf: p_delta,
-                is_delta: true,
-            });
-        }
-        let v = (u[0] - p_delta) / (1.0 - p_delta);
+        let (v, gs) = match self.common.choose_lobe(wi, lambda_nm, u[0]) {
+            LobeChoice::Delta(s) => return s,
+            LobeChoice::Glossy { v, gs } => (v, gs),
+        };
         let kl = wavenumber(lambda_nm) * self.common.length;
         let uu = self.proposal_sample(gs, v, u[1]);
         let wo = direction_from_u(wi, kl, uu, 2.0 * core::f64::consts::PI * u[2])?;
@@ -368,5 +340,14 @@ impl<P: TableSource> Bxdf for GhsFull<P> {
 
     fn specular(&self, wi: DVec3, lambda_nm: f64) -> Specular {
         self.common.specular(wi, lambda_nm)
+    }
+}
+/// ln x, and −∞ at x = 0 (u = 0 is the mirror direction, which the tables treat as a limit).
+#[inline]
+fn ln_or_neg_inf(x: f64) -> f64 {
+    if x > 0.0 {
+        crate::numerics::math::ln(x)
+    } else {
+        f64::NEG_INFINITY
     }
 }

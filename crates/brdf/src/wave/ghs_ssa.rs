@@ -18,6 +18,14 @@ use crate::numerics::math::finite_nonneg;
 use crate::statistics::{KcPsd, RadialPsd};
 use crate::{BrdfError, frame};
 
+/// Which lobe a GHS sample draws (see [`GhsCommon::choose_lobe`]).
+pub(crate) enum LobeChoice {
+    /// The delta lobe was drawn (`None`: it reflects nothing at this λ).
+    Delta(Option<BxdfSample>),
+    /// The glossy lobe was drawn; `v` is the choice number rescaled to [0, 1).
+    Glossy { v: f64, gs: f64 },
+}
+
 /// Reflectance, specular weight and energy factor shared by the GHS models.
 #[derive(Clone, Debug, PartialEq)]
 pub(crate) struct GhsCommon {
@@ -77,9 +85,8 @@ impl GhsCommon {
         (crate::numerics::math::exp(-gs), gs)
     }
 
-    /// (specular weight R_s A_s, delta probability, g_s).
-    #[inline]
     /// The delta lobe at `wi` (zero below the horizon).
+    #[inline]
     pub fn specular(&self, wi: DVec3, lambda_nm: f64) -> Specular {
         if !(wi.z > 0.0) {
             return Specular::default();
@@ -91,6 +98,41 @@ impl GhsCommon {
         }
     }
 
+    /// The shared part of a model over a surface of RMS height `sigma` and
+    /// correlation length `length` (µm), before its energy tables are built.
+    pub fn new(fresnel: Fresnel, opts: GhsOptions, sigma: f64, length: f64) -> GhsCommon {
+        GhsCommon {
+            fresnel,
+            opts,
+            energy_table: None,
+            cap_table: None,
+            sigma,
+            length,
+        }
+    }
+
+    /// Draws the delta lobe with probability A_s = e^{−g_s} from `u0`: its
+    /// sample (`None` when R_s A_s = 0), or the glossy lobe's turn with `u0`
+    /// rescaled to [0, 1) and g_s.
+    #[inline]
+    pub fn choose_lobe(&self, wi: DVec3, lambda_nm: f64, u0: f64) -> LobeChoice {
+        let (p_delta, gs) = self.choice(wi.z.min(1.0), lambda_nm);
+        if u0 >= p_delta {
+            return LobeChoice::Glossy {
+                v: (u0 - p_delta) / (1.0 - p_delta),
+                gs,
+            };
+        }
+        let spec = self.fresnel.reflectance(wi.z.min(1.0), lambda_nm) * p_delta;
+        LobeChoice::Delta((spec > 0.0).then(|| BxdfSample {
+            wo: frame::reflect_z(wi),
+            weight: spec / p_delta,
+            pdf: p_delta,
+            is_delta: true,
+        }))
+    }
+
+    /// (specular weight R_s A_s, delta probability, g_s).
     pub fn specular_and_choice(&self, ci: f64, lambda_nm: f64) -> (f64, f64, f64) {
         let (p, gs) = self.choice(ci, lambda_nm);
         (self.fresnel.reflectance(ci, lambda_nm) * p, p, gs)
@@ -173,14 +215,7 @@ impl<P: RadialPsd> GhsSsa<P> {
     /// build time (about 1.5 M lobe evaluations).
     pub fn with_options(psd: P, fresnel: Fresnel, opts: GhsOptions) -> Result<Self, BrdfError> {
         fresnel.check_covers(WAVELENGTH_MIN_NM, WAVELENGTH_MAX_NM)?;
-        let common = GhsCommon {
-            fresnel,
-            opts,
-            energy_table: None,
-            cap_table: None,
-            sigma: psd.sigma_um(),
-            length: psd.length_um(),
-        };
+        let common = GhsCommon::new(fresnel, opts, psd.sigma_um(), psd.length_um());
         let mut model = GhsSsa { psd, common };
         let mut common = model.common.clone();
         common.build_table(
@@ -277,15 +312,8 @@ impl<P: RadialPsd> Bxdf for GhsSsa<P> {
         if !(wi.z > 0.0) {
             return None;
         }
-        let (p_delta, _) = self.common.choice(wi.z.min(1.0), lambda_nm);
-        if u[0] < p_delta {
-            let spec = self.common.fresnel.reflectance(wi.z.min(1.0), lambda_nm) * p_delta;
-            return (spec > 0.0).then(|| BxdfSample {
-                wo: frame::reflect_z(wi),
-                weight: spec / p_delta,
-                pdf: p_delta,
-                is_delta: true,
-            });
+        if let LobeChoice::Delta(s) = self.common.choose_lobe(wi, lambda_nm, u[0]) {
+            return s;
         }
         let kl = wavenumber(lambda_nm) * self.common.length;
         let uu = self.psd.sample_u(u[1]);
