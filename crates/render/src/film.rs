@@ -485,19 +485,16 @@ impl Film {
         checkpoint
             .compatible_with(self)
             .map_err(ResumeError::Incompatible)?;
-        let [done] = checkpoint.p.ranges.as_slice() else {
-            return Err(ResumeError::NotAPrefix {
-                held: checkpoint.p.ranges,
-                target,
-            });
+        let done_end = match checkpoint.p.ranges.as_slice() {
+            [done] if done.start == target.start => done.end,
+            _ => {
+                return Err(ResumeError::NotAPrefix {
+                    held: checkpoint.p.ranges,
+                    target,
+                });
+            }
         };
-        if done.start != target.start {
-            return Err(ResumeError::NotAPrefix {
-                held: checkpoint.p.ranges,
-                target,
-            });
-        }
-        let todo = done.end.min(target.end)..target.end;
+        let todo = done_end.min(target.end)..target.end;
         self.p.ranges = checkpoint.p.ranges;
         self.p.sums = checkpoint.p.sums;
         self.p.dropped = checkpoint.p.dropped;
