@@ -51,17 +51,23 @@ pub struct RenderArgs {
     pub quiet: bool,
 }
 
-/// CPU seconds used by this process so far, all threads (Linux: `/proc/self/stat`;
-/// `None` elsewhere).
+/// CPU seconds used by this process so far, all threads (exited ones included), to
+/// the nanosecond: `clock_gettime(CLOCK_PROCESS_CPUTIME_ID)`. `/proc/self/stat` counts in
+/// 10 ms ticks, 2.5 % of a 0.4 s render, too coarse for the peer comparison.
+#[cfg(unix)]
 fn process_cpu_seconds() -> Option<f64> {
-    let stat = std::fs::read_to_string("/proc/self/stat").ok()?;
-    // Fields after the command name, which is parenthesised and may hold spaces.
-    let rest = &stat[stat.rfind(')')? + 2..];
-    let f: Vec<&str> = rest.split_whitespace().collect();
-    // utime and stime are fields 14 and 15 of the file, 12 and 13 after the name.
-    let ticks: f64 = f.get(11)?.parse::<f64>().ok()? + f.get(12)?.parse::<f64>().ok()?;
-    // USER_HZ is 100 on every Linux ABI the renderer runs on.
-    Some(ticks / 100.0)
+    let mut ts = libc::timespec {
+        tv_sec: 0,
+        tv_nsec: 0,
+    };
+    // SAFETY: `ts` is a valid, writable timespec; the call only writes it.
+    let rc = unsafe { libc::clock_gettime(libc::CLOCK_PROCESS_CPUTIME_ID, &mut ts) };
+    (rc == 0).then_some(ts.tv_sec as f64 + ts.tv_nsec as f64 * 1e-9)
+}
+
+#[cfg(not(unix))]
+fn process_cpu_seconds() -> Option<f64> {
+    None
 }
 
 /// Arguments of the merge command.
@@ -330,7 +336,7 @@ pub fn render(args: RenderArgs) -> anyhow::Result<()> {
         )?)
     };
     let cpu = match (cpu0, process_cpu_seconds()) {
-        (Some(a), Some(b)) => format!(", {:.2} CPU s", b - a),
+        (Some(a), Some(b)) => format!(", {:.3} CPU s", b - a),
         _ => String::new(),
     };
     if !args.no_film {

@@ -224,3 +224,56 @@ fn garbage_never_panics() {
         assert!(render::load_str(&path(), text).is_err(), "{text:?}");
     }
 }
+
+#[test]
+fn hero_wavelengths_default_by_material_and_bad_counts_are_refused() {
+    // Conductors only: sixteen per path; a wave-optical material: four;
+    // `single`: one; an explicit count wins.
+    let s = render::load_str(&path(), GOOD).unwrap();
+    assert_eq!(s.settings.wavelengths_per_path(), 16, "{}", s.prepared);
+    assert!(s.prepared.contains("16 per path"), "{}", s.prepared);
+    let ssa = GOOD.replacen(
+        "model = \"ggx\"\nmetal = \"brass\"\nalpha = 0.2",
+        "model = \"ghs_ssa\"\nmetal = \"brass\"\nsigma_um = 0.02\nlc_um = 2.0\ngamma = 3.0",
+        1,
+    );
+    assert_eq!(
+        render::load_str(&path(), &ssa)
+            .unwrap()
+            .settings
+            .wavelengths_per_path(),
+        4
+    );
+    let single = format!("{GOOD}\n[integrator]\nwavelengths = \"single\"\n");
+    assert_eq!(
+        render::load_str(&path(), &single)
+            .unwrap()
+            .settings
+            .wavelengths_per_path(),
+        1
+    );
+    for n in [2, 7, 16] {
+        let t = format!("{ssa}\n[integrator]\nhero_wavelengths = {n}\n");
+        assert_eq!(
+            render::load_str(&path(), &t)
+                .unwrap()
+                .settings
+                .wavelengths_per_path(),
+            n
+        );
+    }
+    for bad in ["0", "1", "17", "1000"] {
+        let t = format!("{GOOD}\n[integrator]\nhero_wavelengths = {bad}\n");
+        let e = render::load_str(&path(), &t).err().expect(bad).to_string();
+        assert!(
+            e.contains("hero_wavelengths") && e.contains("2..=16"),
+            "{e}"
+        );
+    }
+    let t = format!("{GOOD}\n[integrator]\nwavelengths = \"single\"\nhero_wavelengths = 8\n");
+    let e = render::load_str(&path(), &t)
+        .err()
+        .expect("single + count")
+        .to_string();
+    assert!(e.contains("needs wavelengths = \"hero\""), "{e}");
+}

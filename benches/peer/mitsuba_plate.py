@@ -116,11 +116,28 @@ def shape_transform(mi, tr: dict | None):
     return m @ T().scale(s if isinstance(s, list) else [s, s, s])
 
 
-def spectrum(name: str, value: float, where: str) -> dict:
-    """lustre spectra are normalised to unit luminance; Mitsuba's uniform and d65 spectra
-    of value v give Y = v on its spectral film (checked: 1.0004 and 0.9992 at v = 1)."""
+def y_normalisation_fix(mi) -> float:
+    """Mitsuba's spectral film divides by MI_CIE_Y_NORMALIZATION⁻¹ = 106.7503 nm, but its
+    own CIE 1931 ȳ table integrates to 106.8570 nm over 360–830 nm, so a uniform spectrum
+    of value 1 renders at Y = 1.0010 (measured: a constant environment of 1, 4096 spp,
+    gives XYZ = 1.0011, 1.0010, 1.0014), 0.1 % brighter than the colorimetric Y = 1 that
+    lustre gives. This factor (0.99900) scales the translated uniform emitters so that
+    both renderers mean the same radiance; it was the 0.09–0.11 % offset between them.
+    Mitsuba's `d65` spectrum is normalised with the same constant and needs no fix
+    (a constant D65 environment of scale 1 renders at Y = 0.99989)."""
+    def scalar(v) -> float:  # a Python float in scalar variants, a 1-lane array in LLVM ones
+        return float(v[0]) if hasattr(v, "__len__") else float(v)
+    y = [scalar(mi.cie1931_y(float(l))) for l in range(360, 831)]
+    integral = sum(0.5 * (a + b) for a, b in zip(y, y[1:]))
+    return 1.0 / (float(mi.MI_CIE_Y_NORMALIZATION) * integral)
+
+
+def spectrum(name: str, value: float, where: str, y_fix: float = 1.0) -> dict:
+    """lustre spectra are normalised to unit luminance; on Mitsuba's spectral film a d65
+    spectrum of scale v gives Y = v, a uniform one of value v gives Y = v / y_fix, so it
+    is handed v · y_fix (see `y_normalisation_fix`)."""
     if name == "constant":
-        return {"type": "uniform", "value": float(value)}
+        return {"type": "uniform", "value": float(value) * y_fix}
     if name == "d65":
         return {"type": "d65", "scale": float(value)}
     raise Unsupported(f"{where}: spectrum {name!r} has no luminance-matched Mitsuba equivalent "
@@ -156,6 +173,7 @@ def material(sc: dict, mname: str) -> dict:
 
 def mitsuba_scene_dict(mi, sc: dict, spp: int, resolution=None, sampler: str = "independent") -> dict:
     T = mi.ScalarTransform4f
+    y_fix = y_normalisation_fix(mi)
     cam = sc["camera"]
     w, h = resolution or cam["resolution"]
     d = {
@@ -197,12 +215,12 @@ def mitsuba_scene_dict(mi, sc: dict, spp: int, resolution=None, sampler: str = "
         if l["type"] == "sphere":
             d[f"light{i}"] = {"type": "sphere", "center": l["center"], "radius": l["radius"],
                               "emitter": {"type": "area",
-                                          "radiance": spectrum(spec, l["radiance"], where)}}
+                                          "radiance": spectrum(spec, l["radiance"], where, y_fix)}}
         elif l["type"] == "point":
             d[f"light{i}"] = {"type": "point", "position": l["position"],
-                              "intensity": spectrum(spec, l["intensity"], where)}
+                              "intensity": spectrum(spec, l["intensity"], where, y_fix)}
         elif l["type"] == "environment" and "file" not in l:
-            d[f"light{i}"] = {"type": "constant", "radiance": spectrum(spec, l["radiance"], where)}
+            d[f"light{i}"] = {"type": "constant", "radiance": spectrum(spec, l["radiance"], where, y_fix)}
         else:
             raise Unsupported(f"{where}: light type {l['type']!r} not supported by the peer script")
     return d
@@ -285,7 +303,7 @@ def reference(mi, dr, np, sc, args, out: Path):
     ref_dir.mkdir(parents=True, exist_ok=True)
     npy, meta_path = ref_dir / f"{sc['name']}.npy", ref_dir / f"{sc['name']}.json"
     # "translation" changes whenever mitsuba_scene_dict changes what it renders.
-    key = {"hash": scene_hash(sc, args.resolution), "translation": 2, "spp": args.ref_spp,
+    key = {"hash": scene_hash(sc, args.resolution), "translation": 3, "spp": args.ref_spp,
            "variant": args.ref_variant, "sampler": args.ref_sampler, "mitsuba": mi.__version__}
     if npy.exists() and meta_path.exists() and not args.fresh_reference:
         meta = json.loads(meta_path.read_text())

@@ -26,14 +26,14 @@ use crate::film::BadSample;
 use crate::geometry::Ray;
 use crate::light::Emission;
 use crate::sampler::Sampler;
-use crate::scene::desc::{MisHeuristic, WavelengthMode};
-use crate::scene::{Scene, Surface};
+use crate::scene::desc::MisHeuristic;
+use crate::scene::{Hit, Scene, Surface};
 use crate::spectrum::Cie;
-use crate::wavelength::{HERO_COUNT, SampledWavelengths};
+use crate::wavelength::{MAX_WAVELENGTHS, SampledWavelengths};
 use brdf::frame::orthonormal_basis;
 use glam::DVec3;
 
-const N: usize = HERO_COUNT;
+const N: usize = MAX_WAVELENGTHS;
 
 /// Shading frame at a hit: tangent `t`, bitangent `b`, normal `n` (facing the viewer).
 struct Frame {
@@ -92,10 +92,19 @@ fn mis_over_pdf(mis: MisHeuristic, own: f64, other: f64) -> f64 {
     if w.is_finite() { w } else { 0.0 }
 }
 
+/// A glossy BSDF sample whose other-wavelength factors are not yet applied.
+struct Pending {
+    material: u32,
+    wi: DVec3,
+    wo: DVec3,
+    pdf: f64,
+}
+
 /// One camera sample: its wavelengths and spectral radiance estimates.
 #[derive(Clone, Copy, Debug)]
 pub struct CameraSample {
-    /// The wavelengths carried (1, or [`HERO_COUNT`] in hero mode) and their pdfs.
+    /// The wavelengths carried ([`Settings::wavelengths_per_path`](crate::scene::Settings::wavelengths_per_path))
+    /// and their pdfs.
     pub wavelengths: SampledWavelengths,
     /// Radiance estimates at each wavelength, wavelength pdf included; the
     /// first `wavelengths.len()` are used.
@@ -104,21 +113,51 @@ pub struct CameraSample {
 
 /// Traces camera sample `sample` of pixel (`x`, `y`).
 pub fn camera_sample(scene: &Scene, x: u32, y: u32, sample: u64) -> CameraSample {
-    let cam = &scene.camera;
-    let pixel = y as u64 * cam.width as u64 + x as u64;
-    let mut sampler = Sampler::new(scene.settings.sampler, scene.settings.seed, pixel, sample);
+    traced(scene, x, y, sample).unwrap_or_else(|| {
+        // The ray escaped into no environment: zero at the wavelengths its
+        // draws give.
+        let mut sampler = pixel_sampler(scene, x, y, sample);
+        sampler.get_2d();
+        CameraSample {
+            wavelengths: scene
+                .wavelengths
+                .sample_set(sampler.get_2d(), scene.settings.wavelengths_per_path()),
+            radiance: [0.0; N],
+        }
+    })
+}
+
+#[inline]
+fn pixel_sampler(scene: &Scene, x: u32, y: u32, sample: u64) -> Sampler {
+    let pixel = y as u64 * scene.camera.width as u64 + x as u64;
+    Sampler::new(scene.settings.sampler, scene.settings.seed, pixel, sample)
+}
+
+/// Traces a camera sample; `None` if its ray escapes into no environment
+/// (most of the misses around an object or a plate), which is zero at every
+/// wavelength and returns before the wavelengths are drawn: their draw is
+/// reserved, so every later draw is the same.
+#[inline]
+fn traced(scene: &Scene, x: u32, y: u32, sample: u64) -> Option<CameraSample> {
+    let mut sampler = pixel_sampler(scene, x, y, sample);
     let [ux, uy] = sampler.get_2d();
-    let ray = cam.ray(x as f64 + ux, y as f64 + uy);
-    let n = match scene.settings.mode {
-        WavelengthMode::Single => 1,
-        WavelengthMode::Hero => N,
-    };
-    let wavelengths = scene.wavelengths.sample_set(sampler.get_1d(), n);
-    let radiance = trace(scene, ray, &wavelengths, &mut sampler);
-    CameraSample {
+    let ray = scene.camera.ray(x as f64 + ux, y as f64 + uy);
+    // A 2-D draw: the set's position and, jointly stratified with it, which
+    // member is the hero.
+    let u_lambda = sampler.reserve_2d();
+    let first = scene.shapes.intersect(&ray, f64::INFINITY);
+    if first.is_none() && !scene.lights.has_environment() {
+        return None;
+    }
+    let wavelengths = scene.wavelengths.sample_set(
+        sampler.reserved_2d(u_lambda),
+        scene.settings.wavelengths_per_path(),
+    );
+    let radiance = trace(scene, ray, first, &wavelengths, &mut sampler);
+    Some(CameraSample {
         wavelengths,
         radiance,
-    }
+    })
 }
 
 /// XYZ estimate (before the film's 1/∫ȳ normalisation) of one camera sample
@@ -140,7 +179,9 @@ pub fn sample_pixel_checked(
     y: u32,
     sample: u64,
 ) -> Result<[f64; 3], BadSample> {
-    let cs = camera_sample(scene, x, y, sample);
+    let Some(cs) = traced(scene, x, y, sample) else {
+        return Ok([0.0; 3]);
+    };
     let n = cs.wavelengths.len();
     let r = &cs.radiance[..n];
     if !r.iter().all(|v| v.is_finite()) {
@@ -165,10 +206,12 @@ pub fn sample_pixel_checked(
     }
 }
 
-/// Spectral radiance estimates (wavelength pdf included) along `ray` at each λ_j.
-pub fn trace(
+/// Spectral radiance estimates (wavelength pdf included) along `ray` at each
+/// λ_j; `first` is the camera ray's hit, already found.
+fn trace(
     scene: &Scene,
     mut ray: Ray,
+    first: Option<Hit>,
     wavelengths: &SampledWavelengths,
     sampler: &mut Sampler,
 ) -> [f64; N] {
@@ -186,6 +229,24 @@ pub fn trace(
     let m0 = t[..n].iter().fold(0.0f64, |a, &v| a.max(v)) / n as f64;
     let mis = settings.mis;
     let mut out = [0.0; N];
+
+    // The other wavelengths' BSDF value and pdf for the direction just
+    // sampled at the hero wavelength are needed only if the path goes on to
+    // another vertex or reaches emission; a path that ends (it escapes into
+    // no environment, or hits a surface at the last depth) skips them. At the
+    // last bounce of a direct-lighting render that is most paths.
+    let mut pending: Option<Pending> = None;
+    let resolve = |pending: &mut Option<Pending>, t: &mut [f64; N], q: &mut [f64; N]| {
+        if let Some(p) = pending.take() {
+            let bxdf = &scene.materials[p.material as usize].bxdf;
+            let mut fp = [(0.0, 0.0); N];
+            bxdf.eval_pdf_many(p.wi, p.wo, &lambdas[1..n], &mut fp[1..n]);
+            for j in 1..n {
+                t[j] *= fp[j].0 * p.wo.z / p.pdf;
+                q[j] *= fp[j].1 / p.pdf;
+            }
+        }
+    };
 
     let add_emission = |out: &mut [f64; N],
                         t: &[f64; N],
@@ -206,16 +267,27 @@ pub fn trace(
         }
     };
 
+    let mut first = Some(first);
     for depth in 0..=settings.max_depth {
-        let Some(hit) = scene.shapes.intersect(&ray, f64::INFINITY) else {
+        let hit = match first.take() {
+            Some(h) => h,
+            None => scene.shapes.intersect(&ray, f64::INFINITY),
+        };
+        let Some(hit) = hit else {
             let (em, pdf_l) = lights.environment(ray.d);
-            add_emission(&mut out, &t, &q, &l_mis, em, pdf_l);
+            if !matches!(em, Emission::None) {
+                resolve(&mut pending, &mut t, &mut q);
+                add_emission(&mut out, &t, &q, &l_mis, em, pdf_l);
+            }
             break;
         };
         let m = match hit.surface {
             Surface::Emitter(i) => {
                 let (em, pdf_l) = lights.emitted(i as usize, ray.o, ray.d, hit.geo.n, hit.geo.t);
-                add_emission(&mut out, &t, &q, &l_mis, em, pdf_l);
+                if !matches!(em, Emission::None) {
+                    resolve(&mut pending, &mut t, &mut q);
+                    add_emission(&mut out, &t, &q, &l_mis, em, pdf_l);
+                }
                 break;
             }
             Surface::Material(m) => m,
@@ -245,6 +317,7 @@ pub fn trace(
             break;
         }
         let p = offset(hit.geo.p, ng, hit.mesh);
+        resolve(&mut pending, &mut t, &mut q);
 
         // Next-event estimation.
         if let Some(ls) = lights.sample(p, sampler.get_1d_2d()) {
@@ -298,16 +371,17 @@ pub fn trace(
             for k in 0..n {
                 l_mis[k] = q[k] / s.pdf;
             }
-            let mut fp = [(0.0, 0.0); N];
-            bxdf.eval_pdf_many(wi, s.wo, &lambdas[1..n], &mut fp[1..n]);
-            for j in 1..n {
-                t[j] *= fp[j].0 * s.wo.z / s.pdf;
-                q[j] *= fp[j].1 / s.pdf;
-            }
+            pending = Some(Pending {
+                material: m,
+                wi,
+                wo: s.wo,
+                pdf: s.pdf,
+            });
         }
 
         // Russian roulette on the hero-symmetric throughput T_j / Σ Q_k.
         if depth + 1 >= settings.rr_depth {
+            resolve(&mut pending, &mut t, &mut q);
             let sum_q: f64 = q[..n].iter().sum();
             let m = t[..n].iter().fold(0.0f64, |a, v| a.max(v.abs())) / (sum_q * m0);
             let survive = m.min(1.0);

@@ -459,6 +459,12 @@ impl Lights {
         }
     }
 
+    /// Whether the scene has an environment light (rays that escape see it).
+    #[inline]
+    pub fn has_environment(&self) -> bool {
+        self.environment.is_some()
+    }
+
     /// Environment radiance along `dir` (escaping rays) and its sampling pdf.
     pub fn environment(&self, dir: DVec3) -> (Emission<'_>, f64) {
         let Some(i) = self.environment else {

@@ -145,6 +145,15 @@ fn sobol_draw(index_rev: u32, pixel_seed: u64, draw: u32) -> [f64; 2] {
     [x, to_unit(y)]
 }
 
+/// A 2D draw whose place in the sequence is taken ([`Sampler::reserve_2d`]).
+#[derive(Clone, Copy, Debug)]
+pub enum Reserved2d {
+    /// Already drawn (independent sampler).
+    Drawn([f64; 2]),
+    /// The padded draw number to compute (Sobol).
+    Draw(u32),
+}
+
 impl Sampler {
     /// The sampler of sample `sample` of pixel `pixel` under `seed`.
     #[inline]
@@ -196,6 +205,28 @@ impl Sampler {
         }
     }
 
+    /// Takes the next 2D draw's place in the sequence without computing it
+    /// (Sobol), so a draw a sample may not need costs nothing when it is not
+    /// needed; [`reserved_2d`](Self::reserved_2d) gives the values
+    /// [`get_2d`](Self::get_2d) would have returned. The independent
+    /// sampler's stream is sequential, so it draws at once.
+    #[inline]
+    pub fn reserve_2d(&mut self) -> Reserved2d {
+        match self.kind {
+            SamplerKind::Independent => Reserved2d::Drawn(self.get_2d()),
+            SamplerKind::Sobol => Reserved2d::Draw(self.next_draw()),
+        }
+    }
+
+    /// The values of a draw reserved with [`reserve_2d`](Self::reserve_2d).
+    #[inline]
+    pub fn reserved_2d(&self, r: Reserved2d) -> [f64; 2] {
+        match r {
+            Reserved2d::Drawn(u) => u,
+            Reserved2d::Draw(d) => sobol_draw(self.index_rev, self.pixel_seed, d),
+        }
+    }
+
     /// A 1D draw followed by a 2D draw, as `[u1d, u2d.0, u2d.1]` (the layout
     /// of light and BSDF sampling: a discrete choice, then a direction).
     #[inline]
@@ -236,6 +267,21 @@ mod tests {
         for _ in 0..10_000 {
             let i = r.next_u64() as u32;
             assert_eq!(sobol1(i), sobol1_reference(i));
+        }
+    }
+
+    #[test]
+    fn a_reserved_draw_is_the_draw_it_replaced() {
+        for kind in [SamplerKind::Sobol, SamplerKind::Independent] {
+            for sample in [0u64, 5, 1 << 33] {
+                let mut a = Sampler::new(kind, 9, 4, sample);
+                let mut b = Sampler::new(kind, 9, 4, sample);
+                let first = a.get_2d();
+                let r = b.reserve_2d();
+                // Later draws do not depend on whether the reserved one was computed.
+                assert_eq!(a.get_1d_2d(), b.get_1d_2d());
+                assert_eq!(b.reserved_2d(r), first);
+            }
         }
     }
 

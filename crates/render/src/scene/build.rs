@@ -3,7 +3,7 @@
 //! and the fingerprint of every file read — each returning an error that
 //! points at the scene text it is about.
 
-use super::desc::{LightDesc, SceneDesc, ShapeDesc, TransformDesc};
+use super::desc::{LightDesc, ModelKind, SceneDesc, ShapeDesc, TransformDesc, WavelengthMode};
 use super::inputs::{self, Inputs};
 use super::shapes::Shapes;
 use super::{ESTIMATOR, Scene, Settings, Surface};
@@ -15,7 +15,7 @@ use crate::material::{Material, build_material};
 use crate::mesh::{MeshAccel, MeshSource, obj_from_bytes};
 use crate::sky::{Sky, SkyParams};
 use crate::spectrum::{LAMBDA_MAX, LAMBDA_MIN, Spectrum, parse_spectrum_with};
-use crate::wavelength::WavelengthSampler;
+use crate::wavelength::{HERO_COUNT, HERO_COUNT_CONDUCTORS, MAX_WAVELENGTHS, WavelengthSampler};
 use glam::DVec3;
 use std::collections::HashMap;
 use std::ops::Range;
@@ -52,6 +52,20 @@ pub(super) fn build(path: &Path, text: &str, desc: &SceneDesc) -> Result<Scene, 
         mesh: (!shapes.meshes.is_empty()).then(|| MeshAccel::build(shapes.meshes)),
     };
     let (materials, inputs) = (b.materials, b.inputs.into_files());
+    let mut settings = settings;
+    if settings.hero_wavelengths == 0 {
+        let conductors = materials.iter().all(|m| {
+            matches!(
+                m.model,
+                ModelKind::Ggx | ModelKind::Beckmann | ModelKind::Smooth
+            )
+        });
+        settings.hero_wavelengths = if conductors {
+            HERO_COUNT_CONDUCTORS
+        } else {
+            HERO_COUNT
+        };
+    }
     let fingerprint = inputs::fingerprint(ESTIMATOR, &inputs);
 
     let models: Vec<String> = materials
@@ -59,7 +73,7 @@ pub(super) fn build(path: &Path, text: &str, desc: &SceneDesc) -> Result<Scene, 
         .map(|m| format!("{} ({})", m.name, m.model.name()))
         .collect();
     let prepared = format!(
-        "prepared {}: {}×{} px, {} material(s) [{}], {} analytic shape(s), {}, {} light(s){}, λ {lo:.0}–{hi:.0} nm{} in {:.1} ms",
+        "prepared {}: {}×{} px, {} material(s) [{}], {} analytic shape(s), {}, {} light(s){}, λ {lo:.0}–{hi:.0} nm{}, {} per path, in {:.1} ms",
         path.display(),
         camera.width,
         camera.height,
@@ -82,6 +96,7 @@ pub(super) fn build(path: &Path, text: &str, desc: &SceneDesc) -> Result<Scene, 
         } else {
             ""
         },
+        settings.wavelengths_per_path(),
         start.elapsed().as_secs_f64() * 1e3
     );
 
@@ -210,12 +225,34 @@ impl<'a> Builder<'a> {
                 format!("max_depth = {max_depth} is invalid: expected 1..=1000"),
             ));
         }
+        let max = MAX_WAVELENGTHS as u32;
+        let hero_wavelengths = match &integrator.hero_wavelengths {
+            Some(n) if !(2..=max).contains(n.get_ref()) => {
+                return Err(self.at(
+                    n.span(),
+                    format!(
+                        "hero_wavelengths = {} is invalid: expected 2..={max}",
+                        n.get_ref()
+                    ),
+                ));
+            }
+            Some(n) if integrator.wavelengths == WavelengthMode::Single => {
+                return Err(self.at(
+                    n.span(),
+                    "hero_wavelengths needs wavelengths = \"hero\" (\"single\" carries one)".into(),
+                ));
+            }
+            Some(n) => *n.get_ref() as usize,
+            // Chosen once the materials are known (see `build`).
+            None => 0,
+        };
         Ok(Settings {
             spp: *film.spp.get_ref(),
             seed: film.seed,
             max_depth,
             rr_depth: integrator.rr_depth,
             mode: integrator.wavelengths,
+            hero_wavelengths,
             sampler: integrator.sampler,
             mis: integrator.mis,
             exr: film.exr.clone(),

@@ -137,7 +137,9 @@ pub struct FilmDesc {
 pub enum WavelengthMode {
     /// One wavelength per path.
     Single,
-    /// Four stratified wavelengths per path with spectral MIS (Wilkie et al. 2014).
+    /// Several stratified wavelengths per path with spectral MIS (Wilkie et
+    /// al. 2014): `hero_wavelengths` of them, by default 16 in scenes whose
+    /// materials are all conductors and 4 otherwise.
     #[default]
     Hero,
 }
@@ -175,6 +177,10 @@ pub struct IntegratorDesc {
     /// `hero` (default) or `single`.
     #[serde(default)]
     pub wavelengths: WavelengthMode,
+    /// Wavelengths per path in `hero` mode, 2–16 (default: 16 when every
+    /// material is a microfacet or smooth conductor, 4 otherwise).
+    #[serde(default)]
+    pub hero_wavelengths: Option<Spanned<u32>>,
     /// Bounces before Russian roulette may end a path (default 3).
     #[serde(default = "default_rr")]
     pub rr_depth: u32,
@@ -199,6 +205,7 @@ impl Default for IntegratorDesc {
         IntegratorDesc {
             max_depth: default_depth(),
             wavelengths: WavelengthMode::Hero,
+            hero_wavelengths: None,
             rr_depth: 3,
             sampler: SamplerKind::Sobol,
             mis: MisHeuristic::Power,

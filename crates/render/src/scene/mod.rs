@@ -23,8 +23,9 @@ use std::path::{Path, PathBuf};
 /// The estimator version, hashed into every fingerprint: films rendered by
 /// an earlier estimator (other wavelength or random-number sampling, other
 /// inputs hashed) must not merge with new ones.
-pub const ESTIMATOR: &str = "lustre estimator 4: sobol sampler with 64-bit sample indices, \
-                             stratified hero, power MIS, every input file hashed";
+pub const ESTIMATOR: &str = "lustre estimator 5: sobol sampler with 64-bit sample indices, \
+                             hero sets from a 2-D draw (base u/n, hero index), 16 per path \
+                             for conductor-only scenes, power MIS, every input file hashed";
 
 /// What a ray hit.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -75,6 +76,12 @@ pub struct Settings {
     pub rr_depth: u32,
     /// Wavelength sampling mode.
     pub mode: WavelengthMode,
+    /// Wavelengths each path carries in `hero` mode: `[integrator]
+    /// hero_wavelengths`, or by default
+    /// [`HERO_COUNT_CONDUCTORS`](crate::wavelength::HERO_COUNT_CONDUCTORS)
+    /// when every material is a microfacet or smooth conductor and
+    /// [`HERO_COUNT`](crate::wavelength::HERO_COUNT) otherwise.
+    pub hero_wavelengths: usize,
     /// Random-number source of camera samples.
     pub sampler: SamplerKind,
     /// Weighting of light and BSDF sampling.
@@ -85,6 +92,17 @@ pub struct Settings {
     pub png: Option<PathBuf>,
     /// Exposure in stops.
     pub exposure: f64,
+}
+
+impl Settings {
+    /// Wavelengths each path carries: 1 in `single` mode, `hero_wavelengths` in `hero` mode.
+    #[inline]
+    pub fn wavelengths_per_path(&self) -> usize {
+        match self.mode {
+            WavelengthMode::Single => 1,
+            WavelengthMode::Hero => self.hero_wavelengths,
+        }
+    }
 }
 
 /// A scene ready to render.
