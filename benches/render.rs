@@ -17,7 +17,8 @@
 //! * `plates_cpu/*`: camera samples per CPU-second on the Mitsuba peer's GGX
 //!   and Beckmann copper plates (`benches/peer/lustre/`, written by
 //!   `mitsuba_plate.py --write-lustre-scenes`), one thread, Sobol and
-//!   independent samplers (their ratio is the sampler overhead).
+//!   independent samplers (their ratio is the sampler overhead), and Sobol
+//!   with 4 wavelengths per path instead of the default 16.
 //!
 //! `cargo bench --bench render`
 
@@ -70,8 +71,9 @@ fn throughput<M: Measurement + 'static>(c: &mut Criterion<M>, group: &str) {
 }
 
 /// Camera samples per CPU-second on the Mitsuba peer's plates (1 thread,
-/// so the figure is per core), with the default Sobol sampler and with
-/// white noise: their ratio is the sampler's overhead.
+/// so the figure is per core), with the default Sobol sampler, with white
+/// noise (their ratio is the sampler's overhead) and with 4 instead of 16
+/// wavelengths per path.
 fn plates<M: Measurement + 'static>(c: &mut Criterion<M>, group: &str) {
     let mut g = c.benchmark_group(group);
     g.sample_size(10).measurement_time(Duration::from_secs(10));
@@ -79,15 +81,18 @@ fn plates<M: Measurement + 'static>(c: &mut Criterion<M>, group: &str) {
     for plate in ["ggx_cu_45deg", "beckmann_cu_45deg"] {
         let path = scene_path(&format!("benches/peer/lustre/{plate}.toml"));
         let text = std::fs::read_to_string(&path).expect("plate scene");
-        for sampler in ["sobol", "independent"] {
-            let text = text.replace(
-                "[integrator]\n",
-                &format!("[integrator]\nsampler = \"{sampler}\"\n"),
-            );
+        // The defaults (16 wavelengths per path on these conductor plates),
+        // white noise, and the 4 wavelengths of wave-optical scenes.
+        for (name, extra) in [
+            ("sobol", ""),
+            ("independent", "sampler = \"independent\"\n"),
+            ("sobol_4wl", "hero_wavelengths = 4\n"),
+        ] {
+            let text = text.replace("[integrator]\n", &format!("[integrator]\n{extra}"));
             let scene = render::load_str(&path, &text).expect("plate scene");
             let samples = scene.camera.width as u64 * scene.camera.height as u64 * SPP;
             g.throughput(Throughput::Elements(samples));
-            g.bench_function(format!("{plate}_{sampler}"), |b| {
+            g.bench_function(format!("{plate}_{name}"), |b| {
                 b.iter(|| black_box(render_spp(&pool, &scene)))
             });
         }
