@@ -18,6 +18,10 @@ use crate::numerics::math::finite_nonneg;
 use crate::statistics::{KcPsd, RadialPsd};
 use crate::{BrdfError, frame};
 
+/// Least probability with which a GHS sample draws the delta lobe (see
+/// [`GhsCommon::choice`]).
+pub const DELTA_PROBABILITY_MIN: f64 = 0.05;
+
 /// Which lobe a GHS sample draws (see [`GhsCommon::choose_lobe`]).
 pub(crate) enum LobeChoice {
     /// The delta lobe was drawn (`None`: it reflects nothing at this λ).
@@ -75,11 +79,31 @@ impl GhsCommon {
 
     /// (probability of choosing the delta lobe, specular exponent g_s).
     ///
-    /// The delta and the glossy lobe are chosen in proportion to R_s A_s
-    /// and R_s (1 − A_s), so the probability is A_s = e^{−g_s} and needs no
-    /// Fresnel evaluation.
+    /// The delta lobe carries R_s A_s with A_s = e^{−g_s}. It is chosen with
+    /// probability max(A_s, [`DELTA_PROBABILITY_MIN`]) (A_s itself below
+    /// 1e−12), not A_s: when A_s is
+    /// tiny (rough surfaces, short λ) the coherent reflection of a bright,
+    /// small light is a rare event of weight R_s and probability A_s, whose
+    /// relative variance 1/A_s dominated the s138 full-GHS images (one
+    /// camera sample at ~1 300× its pixel's mean, with A_s ≈ 2·10⁻⁵). The
+    /// floor bounds that variance at the price of a few glossy samples; the
+    /// glossy pdf carries 1 − p, so both lobes stay unbiased.
     #[inline]
     pub fn choice(&self, ci: f64, lambda_nm: f64) -> (f64, f64) {
+        let (a_s, gs) = self.coherent(ci, lambda_nm);
+        // Below 1e−12 the coherent reflection is invisible even of the sun
+        // (~10⁶ × the sky) and the floor would only waste samples.
+        let p = if a_s >= 1e-12 {
+            a_s.max(DELTA_PROBABILITY_MIN)
+        } else {
+            a_s
+        };
+        (p, gs)
+    }
+
+    /// (A_s = e^{−g_s}, g_s): the coherent fraction and its exponent.
+    #[inline]
+    pub fn coherent(&self, ci: f64, lambda_nm: f64) -> (f64, f64) {
         let t = 2.0 * wavenumber(lambda_nm) * self.sigma_eff(ci, lambda_nm) * ci;
         let gs = t * t;
         (crate::numerics::math::exp(-gs), gs)
@@ -111,7 +135,7 @@ impl GhsCommon {
         }
     }
 
-    /// Draws the delta lobe with probability A_s = e^{−g_s} from `u0`: its
+    /// Draws the delta lobe with probability [`choice`](Self::choice) from `u0`: its
     /// sample (`None` when R_s A_s = 0), or the glossy lobe's turn with `u0`
     /// rescaled to [0, 1) and g_s.
     #[inline]
@@ -123,7 +147,8 @@ impl GhsCommon {
                 gs,
             };
         }
-        let spec = self.fresnel.reflectance(wi.z.min(1.0), lambda_nm) * p_delta;
+        let a_s = self.coherent(wi.z.min(1.0), lambda_nm).0;
+        let spec = self.fresnel.reflectance(wi.z.min(1.0), lambda_nm) * a_s;
         LobeChoice::Delta((spec > 0.0).then(|| BxdfSample {
             wo: frame::reflect_z(wi),
             weight: spec / p_delta,
@@ -135,7 +160,8 @@ impl GhsCommon {
     /// (specular weight R_s A_s, delta probability, g_s).
     pub fn specular_and_choice(&self, ci: f64, lambda_nm: f64) -> (f64, f64, f64) {
         let (p, gs) = self.choice(ci, lambda_nm);
-        (self.fresnel.reflectance(ci, lambda_nm) * p, p, gs)
+        let a_s = self.coherent(ci, lambda_nm).0;
+        (self.fresnel.reflectance(ci, lambda_nm) * a_s, p, gs)
     }
 
     /// Builds the energy tables for `opts.energy`. `raw_albedo(c, θi, λ)`
