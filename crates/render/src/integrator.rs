@@ -25,7 +25,7 @@
 use crate::film::BadSample;
 use crate::geometry::Ray;
 use crate::light::Emission;
-use crate::sampler::Sampler;
+use crate::sampler::{Reserved2d, Sampler};
 use crate::scene::desc::MisHeuristic;
 use crate::scene::{Hit, Scene, Surface};
 use crate::spectrum::Cie;
@@ -116,21 +116,28 @@ pub fn camera_sample(scene: &Scene, x: u32, y: u32, sample: u64) -> CameraSample
     traced(scene, x, y, sample).unwrap_or_else(|| {
         // The ray escaped into no environment: zero at the wavelengths its
         // draws give.
-        let mut sampler = pixel_sampler(scene, x, y, sample);
-        sampler.get_2d();
+        let (sampler, _, u_lambda) = camera_draws(scene, x, y, sample);
         CameraSample {
-            wavelengths: scene
-                .wavelengths
-                .sample_set(sampler.get_2d(), scene.settings.wavelengths_per_path()),
+            wavelengths: scene.wavelengths.sample_set(
+                sampler.reserved_2d(u_lambda),
+                scene.settings.wavelengths_per_path(),
+            ),
             radiance: [0.0; N],
         }
     })
 }
 
+/// A camera sample's first draws: its sampler, its camera ray, and the
+/// reserved 2-D wavelength draw (the set's position and, jointly stratified
+/// with it, which member is the hero).
 #[inline]
-fn pixel_sampler(scene: &Scene, x: u32, y: u32, sample: u64) -> Sampler {
+fn camera_draws(scene: &Scene, x: u32, y: u32, sample: u64) -> (Sampler, Ray, Reserved2d) {
     let pixel = y as u64 * scene.camera.width as u64 + x as u64;
-    Sampler::new(scene.settings.sampler, scene.settings.seed, pixel, sample)
+    let mut sampler = Sampler::new(scene.settings.sampler, scene.settings.seed, pixel, sample);
+    let [ux, uy] = sampler.get_2d();
+    let ray = scene.camera.ray(x as f64 + ux, y as f64 + uy);
+    let u_lambda = sampler.reserve_2d();
+    (sampler, ray, u_lambda)
 }
 
 /// Traces a camera sample; `None` if its ray escapes into no environment
@@ -139,12 +146,7 @@ fn pixel_sampler(scene: &Scene, x: u32, y: u32, sample: u64) -> Sampler {
 /// reserved, so every later draw is the same.
 #[inline]
 fn traced(scene: &Scene, x: u32, y: u32, sample: u64) -> Option<CameraSample> {
-    let mut sampler = pixel_sampler(scene, x, y, sample);
-    let [ux, uy] = sampler.get_2d();
-    let ray = scene.camera.ray(x as f64 + ux, y as f64 + uy);
-    // A 2-D draw: the set's position and, jointly stratified with it, which
-    // member is the hero.
-    let u_lambda = sampler.reserve_2d();
+    let (mut sampler, ray, u_lambda) = camera_draws(scene, x, y, sample);
     let first = scene.shapes.intersect(&ray, f64::INFINITY);
     if first.is_none() && !scene.lights.has_environment() {
         return None;

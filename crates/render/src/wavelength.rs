@@ -64,8 +64,6 @@ pub struct WavelengthSampler {
     bin: f64,
     /// Bin `i`: (CDF at its start, 1 / its probability, density per nm).
     bins: Vec<[f64; 3]>,
-    /// CDF at each bin's end (`cdf_end[i]` = start of bin `i + 1`; the last is 1).
-    cdf_end: Vec<f64>,
     /// `guide[c]`: the first bin whose end exceeds c / guide.len().
     guide: Vec<u32>,
 }
@@ -91,12 +89,11 @@ impl WavelengthSampler {
                 [cdf[i], 1.0 / p, p / bin]
             })
             .collect();
-        let cdf_end = cdf[1..].to_vec();
         let cells = 4 * n;
         let guide = (0..cells)
             .map(|c| {
                 let u = c as f64 / cells as f64;
-                cdf_end.partition_point(|&e| e <= u).min(n - 1) as u32
+                cdf[1..].partition_point(|&e| e <= u).min(n - 1) as u32
             })
             .collect();
         WavelengthSampler {
@@ -104,7 +101,6 @@ impl WavelengthSampler {
             hi,
             bin,
             bins,
-            cdf_end,
             guide,
         }
     }
@@ -121,7 +117,8 @@ impl WavelengthSampler {
         let cells = self.guide.len();
         let mut i = self.guide[((u * cells as f64) as usize).min(cells - 1)] as usize;
         let last = self.bins.len() - 1;
-        while i < last && self.cdf_end[i] <= u {
+        // The end of bin i is the start of bin i + 1.
+        while i < last && self.bins[i + 1][0] <= u {
             i += 1;
         }
         let [start, inv_p, density] = self.bins[i];

@@ -22,6 +22,11 @@ use crate::{BrdfError, frame};
 /// [`GhsCommon::choice`]).
 pub const DELTA_PROBABILITY_MIN: f64 = 0.05;
 
+/// Coherent fraction A_s from which the floor [`DELTA_PROBABILITY_MIN`]
+/// applies: below it the coherent reflection is invisible even of the sun
+/// (~10⁶ × the sky), and drawing it would only waste samples.
+const DELTA_FLOOR_FROM: f64 = 1e-12;
+
 /// Which lobe a GHS sample draws (see [`GhsCommon::choose_lobe`]).
 pub(crate) enum LobeChoice {
     /// The delta lobe was drawn (`None`: it reflects nothing at this λ).
@@ -90,23 +95,22 @@ impl GhsCommon {
     /// glossy pdf carries 1 − p, so both lobes stay unbiased.
     #[inline]
     pub fn choice(&self, ci: f64, lambda_nm: f64) -> (f64, f64) {
-        let (a_s, gs) = self.coherent(ci, lambda_nm);
-        // Below 1e−12 the coherent reflection is invisible even of the sun
-        // (~10⁶ × the sky) and the floor would only waste samples.
-        let p = if a_s >= 1e-12 {
+        let (p, _, gs) = self.choice_coherent(ci, lambda_nm);
+        (p, gs)
+    }
+
+    /// (delta probability [`choice`](Self::choice), A_s = e^{−g_s}, g_s).
+    #[inline]
+    pub fn choice_coherent(&self, ci: f64, lambda_nm: f64) -> (f64, f64, f64) {
+        let t = 2.0 * wavenumber(lambda_nm) * self.sigma_eff(ci, lambda_nm) * ci;
+        let gs = t * t;
+        let a_s = crate::numerics::math::exp(-gs);
+        let p = if a_s >= DELTA_FLOOR_FROM {
             a_s.max(DELTA_PROBABILITY_MIN)
         } else {
             a_s
         };
-        (p, gs)
-    }
-
-    /// (A_s = e^{−g_s}, g_s): the coherent fraction and its exponent.
-    #[inline]
-    pub fn coherent(&self, ci: f64, lambda_nm: f64) -> (f64, f64) {
-        let t = 2.0 * wavenumber(lambda_nm) * self.sigma_eff(ci, lambda_nm) * ci;
-        let gs = t * t;
-        (crate::numerics::math::exp(-gs), gs)
+        (p, a_s, gs)
     }
 
     /// The delta lobe at `wi` (zero below the horizon).
@@ -140,14 +144,13 @@ impl GhsCommon {
     /// rescaled to [0, 1) and g_s.
     #[inline]
     pub fn choose_lobe(&self, wi: DVec3, lambda_nm: f64, u0: f64) -> LobeChoice {
-        let (p_delta, gs) = self.choice(wi.z.min(1.0), lambda_nm);
+        let (p_delta, a_s, gs) = self.choice_coherent(wi.z.min(1.0), lambda_nm);
         if u0 >= p_delta {
             return LobeChoice::Glossy {
                 v: (u0 - p_delta) / (1.0 - p_delta),
                 gs,
             };
         }
-        let a_s = self.coherent(wi.z.min(1.0), lambda_nm).0;
         let spec = self.fresnel.reflectance(wi.z.min(1.0), lambda_nm) * a_s;
         LobeChoice::Delta((spec > 0.0).then(|| BxdfSample {
             wo: frame::reflect_z(wi),
@@ -159,8 +162,7 @@ impl GhsCommon {
 
     /// (specular weight R_s A_s, delta probability, g_s).
     pub fn specular_and_choice(&self, ci: f64, lambda_nm: f64) -> (f64, f64, f64) {
-        let (p, gs) = self.choice(ci, lambda_nm);
-        let a_s = self.coherent(ci, lambda_nm).0;
+        let (p, a_s, gs) = self.choice_coherent(ci, lambda_nm);
         (self.fresnel.reflectance(ci, lambda_nm) * a_s, p, gs)
     }
 
