@@ -27,6 +27,11 @@ pub const MAX_WAVELENGTHS: usize = 16;
 /// wavelength costs a model evaluation: four (Wilkie et al. 2014). Measured
 /// on `scenes/samples/s138_{ghs_ssa,ghs,two_scale}_45deg` at 64 spp, eight
 /// and sixteen wavelengths were 0.71–0.86× and 0.38–0.50× as efficient.
+/// Re-measured after the GHS delta-lobe floor (`brdf` `GhsCommon::choice`),
+/// sixteen are 0.69× on `s138_ghs_ssa_45deg` and 0.47× on
+/// `s138_two_scale_45deg` but 2.9× on `s138_ghs_normal`, whose noise is now
+/// spectral: the split by model is a compromise, and `hero_wavelengths`
+/// overrides it.
 pub const HERO_COUNT: usize = 4;
 
 /// Wavelengths per path in hero mode when every material is a microfacet or
