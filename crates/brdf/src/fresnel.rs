@@ -37,6 +37,46 @@ impl Fresnel {
         }
     }
 
+    /// [`reflectance_ratio`](Self::reflectance_ratio) at each of `lambdas`
+    /// into `out` (as many as the shorter of the two), bit-identical to it.
+    ///
+    /// Only n and κ vary across the set, so the optical constants are looked
+    /// up in one loop and the reflectances computed in pairs, two lanes per
+    /// square root and division (their latency is most of a conductor
+    /// BRDF's cost at each further wavelength).
+    #[inline]
+    pub fn reflectance_ratio_many(&self, num: f64, den: f64, lambdas: &[f64], out: &mut [f64]) {
+        let ior = match self {
+            Fresnel::One => {
+                for o in out.iter_mut().take(lambdas.len()) {
+                    *o = 1.0;
+                }
+                return;
+            }
+            Fresnel::Conductor(ior) => ior,
+        };
+        const CHUNK: usize = 16;
+        let len = lambdas.len().min(out.len());
+        let (mut n, mut k) = ([0.0; CHUNK], [0.0; CHUNK]);
+        for (ls, os) in lambdas[..len]
+            .chunks(CHUNK)
+            .zip(out[..len].chunks_mut(CHUNK))
+        {
+            let m = ls.len();
+            ior.at_many(ls, &mut n[..m], &mut k[..m]);
+            let mut j = 0;
+            while j + 1 < m {
+                let r =
+                    conductor_reflectance_ratio_pair(num, den, [n[j], n[j + 1]], [k[j], k[j + 1]]);
+                (os[j], os[j + 1]) = (r[0], r[1]);
+                j += 2;
+            }
+            if j < m {
+                os[j] = conductor_reflectance_ratio(num, den, n[j], k[j]);
+            }
+        }
+    }
+
     /// Checks that the data cover `[lo, hi]` nm (always true for [`Fresnel::One`]).
     pub fn check_covers(&self, lo_nm: f64, hi_nm: f64) -> Result<(), crate::BrdfError> {
         match self {
@@ -100,6 +140,66 @@ pub fn conductor_reflectance_ratio(num: f64, den: f64, n: f64, k: f64) -> f64 {
     } else {
         0.0
     }
+}
+
+/// [`conductor_reflectance_ratio`] for two indices at one angle, with the
+/// same operations in the same order on each lane (so bit-identical to two
+/// scalar calls): SSE2 is part of every x86-64, and its packed square root
+/// and division take two lanes for the latency of one.
+#[cfg(target_arch = "x86_64")]
+#[inline]
+fn conductor_reflectance_ratio_pair(num: f64, den: f64, n: [f64; 2], k: [f64; 2]) -> [f64; 2] {
+    use core::arch::x86_64::{
+        __m128d, _mm_add_pd, _mm_div_pd, _mm_mul_pd, _mm_set_pd, _mm_set1_pd, _mm_sqrt_pd,
+        _mm_storeu_pd, _mm_sub_pd,
+    };
+    // SAFETY: every intrinsic used is SSE2, which the x86_64 target always
+    // has; the store writes two f64 into a two-element array.
+    unsafe {
+        let c = num.max(0.0);
+        let s = (den - c).max(0.0);
+        let splat = |x: f64| _mm_set1_pd(x);
+        let (vc, vs, vden) = (splat(c), splat(s), splat(den));
+        let vn: __m128d = _mm_set_pd(n[1], n[0]);
+        let vk: __m128d = _mm_set_pd(k[1], k[0]);
+        let n2 = _mm_mul_pd(vn, vn);
+        let k2 = _mm_mul_pd(vk, vk);
+        let e = _mm_sub_pd(_mm_sub_pd(n2, k2), splat(1.0));
+        let nk4 = _mm_mul_pd(_mm_mul_pd(splat(4.0), n2), k2);
+        let t0 = _mm_add_pd(_mm_mul_pd(e, vden), vc);
+        let a2b2 = _mm_sqrt_pd(_mm_add_pd(
+            _mm_mul_pd(t0, t0),
+            _mm_mul_pd(nk4, splat(den * den)),
+        ));
+        let t2_sq = _mm_mul_pd(splat(2.0 * c), _mm_add_pd(a2b2, t0));
+        let t2 = _mm_sqrt_pd(t2_sq);
+        let t1 = _mm_add_pd(a2b2, vc);
+        let t3 = _mm_add_pd(_mm_mul_pd(vc, a2b2), splat(s * s));
+        let t1t3 = _mm_mul_pd(t1, t3);
+        let numer = _mm_sub_pd(t1t3, _mm_mul_pd(t2, t3));
+        let denom = _mm_add_pd(
+            _mm_add_pd(t1t3, _mm_mul_pd(vs, t2_sq)),
+            _mm_mul_pd(t2, _mm_add_pd(_mm_mul_pd(t1, vs), t3)),
+        );
+        let mut r = [0.0; 2];
+        _mm_storeu_pd(r.as_mut_ptr(), _mm_div_pd(numer, denom));
+        r.map(|r| {
+            if r.is_finite() {
+                r.clamp(0.0, 1.0)
+            } else {
+                0.0
+            }
+        })
+    }
+}
+
+#[cfg(not(target_arch = "x86_64"))]
+#[inline]
+fn conductor_reflectance_ratio_pair(num: f64, den: f64, n: [f64; 2], k: [f64; 2]) -> [f64; 2] {
+    [
+        conductor_reflectance_ratio(num, den, n[0], k[0]),
+        conductor_reflectance_ratio(num, den, n[1], k[1]),
+    ]
 }
 
 #[cfg(test)]
@@ -169,6 +269,41 @@ mod tests {
                 }
             }
         }
+    }
+
+    #[test]
+    fn batched_reflectance_is_bit_identical_to_scalar_over_the_domain() {
+        // Odd lengths (the unpaired last lane), more than one chunk, every
+        // kind of data, and the extremes of angle and index.
+        let lambdas: [f64; 37] = core::array::from_fn(|j| 340.0 + 14.1 * j as f64);
+        let iors = [
+            Ior::metal(Metal::Cu),
+            Ior::metal(Metal::Al),
+            Ior::constant(1.0, 0.0).unwrap(),
+            Ior::constant(1e-6, 1e6).unwrap(),
+            Ior::constant(1e6, 0.0).unwrap(),
+            Ior::table(alloc::vec![[400.0, 0.3, 3.0], [700.0, 1.5, 0.0]]).unwrap(),
+        ];
+        let cos2 = [0.0, 1e-300, 1e-12, 0.25, 0.5, 1.0 - 1e-16, 1.0, 1.5, -0.1];
+        for ior in iors {
+            let f = Fresnel::conductor(ior);
+            for &c2 in &cos2 {
+                for q in [1e-30, 1.0, 4.0, 1e12] {
+                    for len in [0, 1, 2, 5, 16, 17, 37] {
+                        let mut out = [-1.0; 38];
+                        f.reflectance_ratio_many(c2 * q, q, &lambdas[..len], &mut out);
+                        for j in 0..len {
+                            let r = f.reflectance_ratio(c2 * q, q, lambdas[j]);
+                            assert_eq!(out[j].to_bits(), r.to_bits(), "{f:?} c²={c2} q={q} j={j}");
+                        }
+                        assert!(out[len..].iter().all(|&v| v == -1.0));
+                    }
+                }
+            }
+        }
+        let mut out = [0.0; 4];
+        Fresnel::One.reflectance_ratio_many(0.3, 1.0, &lambdas[..3], &mut out);
+        assert_eq!(out, [1.0, 1.0, 1.0, 0.0]);
     }
 
     #[test]

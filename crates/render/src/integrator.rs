@@ -144,7 +144,7 @@ fn camera_draws(scene: &Scene, x: u32, y: u32, sample: u64) -> (Sampler, Ray, Re
 /// (most of the misses around an object or a plate), which is zero at every
 /// wavelength and returns before the wavelengths are drawn: their draw is
 /// reserved, so every later draw is the same.
-#[inline]
+#[inline(always)]
 fn traced(scene: &Scene, x: u32, y: u32, sample: u64) -> Option<CameraSample> {
     let (mut sampler, ray, u_lambda) = camera_draws(scene, x, y, sample);
     let first = scene.shapes.intersect(&ray, f64::INFINITY);

@@ -47,6 +47,9 @@ pub const HERO_COUNT: usize = 4;
 /// 2.2–3.8× on the s138 GGX and Beckmann plates).
 pub const HERO_COUNT_CONDUCTORS: usize = 16;
 
+/// Guide-entry flag: the cell's draws may need more than one step.
+const WALK: u16 = 1 << 15;
+
 /// A piecewise-constant wavelength distribution over `[lo, hi]` nm.
 ///
 /// The density follows |r̄| + |ḡ| + |b̄| on 0.25 nm bins. Drawing inverts the
@@ -69,8 +72,9 @@ pub struct WavelengthSampler {
     bin: f64,
     /// Bin `i`: (CDF at its start, 1 / its probability, density per nm).
     bins: Vec<[f64; 3]>,
-    /// `guide[c]`: the first bin whose end exceeds c / guide.len().
-    guide: Vec<u32>,
+    /// `guide[c]`: the first bin whose end exceeds c / guide.len(), with
+    /// [`WALK`] set if the next cell starts two or more bins further on.
+    guide: Vec<u16>,
 }
 
 impl WavelengthSampler {
@@ -78,6 +82,8 @@ impl WavelengthSampler {
     pub fn new(lo: f64, hi: f64) -> WavelengthSampler {
         let cie = Cie::get();
         let n = ((4.0 * (hi - lo)).ceil() as usize).clamp(64, 4096);
+        // Bin indices and the WALK flag share a u16.
+        const _: () = assert!(4096 < WALK as usize);
         let bin = (hi - lo) / n as f64;
         // Midpoint weight; a small floor keeps the pdf positive where the CMFs vanish.
         let weights: Vec<f64> = (0..n)
@@ -95,10 +101,16 @@ impl WavelengthSampler {
             })
             .collect();
         let cells = 4 * n;
+        let first = |c: usize| {
+            let u = c as f64 / cells as f64;
+            cdf[1..].partition_point(|&e| e <= u).min(n - 1)
+        };
+        // The top bit marks a cell whose draws may lie two or more bins past
+        // its first one (the next cell starts at least two bins on).
         let guide = (0..cells)
             .map(|c| {
-                let u = c as f64 / cells as f64;
-                cdf[1..].partition_point(|&e| e <= u).min(n - 1) as u32
+                let (a, b) = (first(c), if c + 1 < cells { first(c + 1) } else { n - 1 });
+                a as u16 | if b > a + 1 { WALK } else { 0 }
             })
             .collect();
         WavelengthSampler {
@@ -120,11 +132,19 @@ impl WavelengthSampler {
     fn draw(&self, u: f64) -> (f64, f64) {
         let u = u.clamp(0.0, 1.0f64.next_down());
         let cells = self.guide.len();
-        let mut i = self.guide[((u * cells as f64) as usize).min(cells - 1)] as usize;
+        let g = self.guide[((u * cells as f64) as usize).min(cells - 1)];
+        let mut i = (g & !WALK) as usize;
         let last = self.bins.len() - 1;
-        // The end of bin i is the start of bin i + 1.
-        while i < last && self.bins[i + 1][0] <= u {
-            i += 1;
+        // The end of bin i is the start of bin i + 1. A guide cell holds at
+        // most one bin end wherever a bin's probability is at least a
+        // quarter of the mean, so one branch-free step finishes the search
+        // (as a loop, its exit mispredicted for most draws); the cells in
+        // the tails that span more bins are marked, and only they walk on.
+        i += usize::from(i < last && self.bins[i + 1][0] <= u);
+        if g & WALK != 0 {
+            while i < last && self.bins[i + 1][0] <= u {
+                i += 1;
+            }
         }
         let [start, inv_p, density] = self.bins[i];
         let t = ((u - start) * inv_p).clamp(0.0, 1.0);
@@ -170,9 +190,13 @@ impl WavelengthSampler {
         let step = 1.0 / count as f64;
         let base = u[0].clamp(0.0, 1.0f64.next_down()) * step;
         let hero = ((u[1] * count as f64) as usize).min(count - 1);
+        let mut member = hero;
         for j in 0..count {
-            let member = (hero + j) % count;
             (lambda[j], pdf[j]) = self.draw(base + member as f64 * step);
+            member += 1;
+            if member == count {
+                member = 0;
+            }
         }
         SampledWavelengths {
             n: count,
@@ -299,6 +323,27 @@ mod tests {
         }
         assert_eq!(s.sample_set([0.7, 0.2], 1).lambdas(), &[s.sample(0.7)]);
         assert_eq!(s.sample_set([0.7, 0.2], 99).len(), MAX_WAVELENGTHS);
+    }
+
+    #[test]
+    fn guided_draw_finds_the_bin_a_full_search_finds() {
+        // Every bin start, the floats on either side of it, and a dense
+        // sweep, over ranges whose tails span many bins per guide cell.
+        for &(lo, hi) in &[(360.0, 830.0), (520.0, 540.0), (380.0, 780.5)] {
+            let s = WavelengthSampler::new(lo, hi);
+            let starts: Vec<f64> = s.bins.iter().map(|b| b[0]).collect();
+            let mut us: Vec<f64> = (0..200_000).map(|k| k as f64 / 200_000.0).collect();
+            for &b in &starts {
+                us.extend([b, b.next_up(), b.next_down().max(0.0)]);
+            }
+            for u in us {
+                let want = starts.partition_point(|&b| b <= u).max(1) - 1;
+                let (l, p) = s.draw(u);
+                assert_eq!(p, s.bins[want][2], "{lo}–{hi}: u {u}");
+                let t = (l - lo) / s.bin - want as f64;
+                assert!((-1e-9..=1.0 + 1e-9).contains(&t), "{lo}–{hi}: u {u}: λ {l}");
+            }
+        }
     }
 
     #[test]

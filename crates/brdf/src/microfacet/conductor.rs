@@ -144,9 +144,14 @@ impl Bxdf for MicrofacetConductor {
         };
         // Only Fresnel depends on λ; the same expressions as `eval_pdf`, so
         // the results are bit-identical to it.
-        for (o, &l) in out.iter_mut().zip(lambdas) {
-            let f = self.fresnel.reflectance_ratio(g.len2, 4.0, l) * g.f_over_fresnel;
-            *o = (finite_nonneg(f), g.pdf);
+        let mut r = [0.0; 16];
+        for (ls, os) in lambdas.chunks(r.len()).zip(out.chunks_mut(r.len())) {
+            let m = ls.len().min(os.len());
+            self.fresnel
+                .reflectance_ratio_many(g.len2, 4.0, &ls[..m], &mut r[..m]);
+            for (o, &r) in os.iter_mut().zip(&r[..m]) {
+                *o = (finite_nonneg(r * g.f_over_fresnel), g.pdf);
+            }
         }
     }
 
