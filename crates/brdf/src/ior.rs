@@ -337,7 +337,9 @@ fn metal_at(
     // row lies in (⌊λ⌋, λ], so one branch-free step finishes the
     // search (a data-dependent branch here mispredicts for random
     // λ and cost more than the rest of the lookup).
-    let j = ((lambda_nm as usize).saturating_sub(GUIDE_BASE_NM)).min(GUIDE_LEN - 1);
+    // Through u32 (λ is finite and positive here): shorter than the
+    // saturating f64 → usize.
+    let j = ((lambda_nm as u32 as usize).saturating_sub(GUIDE_BASE_NM)).min(GUIDE_LEN - 1);
     let lo = guide[j] as usize;
     let lo = lo + usize::from(rows[lo + 1][0] <= lambda_nm);
     let (a, s) = (rows[lo], slopes[lo]);

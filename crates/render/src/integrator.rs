@@ -263,8 +263,10 @@ fn trace(
         let other: f64 = l_mis[..n].iter().sum::<f64>() * pdf_l;
         let w = mis_over_pdf(mis, own, other);
         if w > 0.0 {
+            let mut e = [0.0; N];
+            em.eval_many(&lambdas[..n], &mut e[..n]);
             for j in 0..n {
-                out[j] += t[j] * em.eval(lambdas[j]) * w;
+                out[j] += t[j] * e[j] * w;
             }
         }
     };
@@ -345,8 +347,10 @@ fn trace(
                     let other: f64 = (0..n).map(|k| q[k] * fp[k].1).sum();
                     let w = mis_over_pdf(mis, own, other);
                     if w > 0.0 {
+                        let mut e = [0.0; N];
+                        ls.emission.eval_many(&lambdas[..n], &mut e[..n]);
                         for j in 0..n {
-                            out[j] += t[j] * fp[j].0 * wo.z * ls.emission.eval(lambdas[j]) * w;
+                            out[j] += t[j] * fp[j].0 * wo.z * e[j] * w;
                         }
                     }
                 }

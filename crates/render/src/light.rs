@@ -36,6 +36,43 @@ impl Emission<'_> {
             Emission::None => 0.0,
         }
     }
+
+    /// [`eval`](Self::eval) at each of `lambdas` into `out` (as many as the
+    /// shorter of the two), bit-identical to it: the kind of emission is
+    /// matched once for the whole set rather than per wavelength.
+    #[inline]
+    pub fn eval_many(&self, lambdas: &[f64], out: &mut [f64]) {
+        let pairs = out.iter_mut().zip(lambdas);
+        match *self {
+            Emission::Spectrum(Spectrum::Constant(v), k) => {
+                for (o, _) in pairs {
+                    *o = k * v;
+                }
+            }
+            Emission::Spectrum(s, k) => {
+                for (o, &l) in pairs {
+                    *o = k * s.eval(l);
+                }
+            }
+            Emission::Cmf(c) => {
+                let cie = Cie::get();
+                for (o, &l) in pairs {
+                    let m = cie.xyz(l);
+                    *o = c[0] * m[0] + c[1] * m[1] + c[2] * m[2];
+                }
+            }
+            Emission::Sky(sky, c) => {
+                for (o, &l) in pairs {
+                    *o = sky.spectral(&c, l);
+                }
+            }
+            Emission::None => {
+                for (o, _) in pairs {
+                    *o = 0.0;
+                }
+            }
+        }
+    }
 }
 
 /// Lifts linear sRGB to the spectrum `Σ cᵢ·cmfᵢ(λ)` whose XYZ (with the
@@ -521,6 +558,36 @@ pub fn uniform_sphere(u: [f64; 2]) -> DVec3 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn eval_many_is_eval_at_each_wavelength_for_every_kind() {
+        let constant = Spectrum::Constant(2.5);
+        let black = Spectrum::Blackbody {
+            kelvin: 3200.0,
+            scale: 1e-9,
+        };
+        let table = crate::spectrum::d65();
+        let sky = Sky::new(crate::sky::SkyParams::default()).unwrap();
+        let c = sky.coefficients(DVec3::new(0.3, 0.2, 0.9).normalize());
+        let kinds = [
+            Emission::Spectrum(&constant, 0.7),
+            Emission::Spectrum(&black, 3.0),
+            Emission::Spectrum(&table, 1.5),
+            Emission::Cmf([0.4, -0.1, 0.9]),
+            Emission::Sky(&sky, c),
+            Emission::None,
+        ];
+        // Inside, at the ends of, and outside the rendered range; odd length.
+        let lambdas = [359.0, 360.0, 412.3, 555.5, 700.25, 830.0, 831.0];
+        for em in kinds {
+            let mut out = [-1.0; 8];
+            em.eval_many(&lambdas, &mut out);
+            for (o, &l) in out.iter().zip(&lambdas) {
+                assert_eq!(o.to_bits(), em.eval(l).to_bits(), "{em:?} at {l}");
+            }
+            assert_eq!(out[7], -1.0);
+        }
+    }
 
     #[test]
     fn rgb_lift_reproduces_xyz() {

@@ -19,7 +19,8 @@ const A_CSV: &str = include_str!("../../../data/spectra/illuminant_A.csv");
 
 /// The CIE 1931 2° colour-matching functions at 1 nm, 360–830 nm.
 pub struct Cie {
-    xyz: Vec<[f64; 3]>,
+    /// Fixed length, so a clamped index needs no bounds check.
+    xyz: Box<[[f64; 3]; 471]>,
     y_integral: f64,
 }
 
@@ -30,7 +31,10 @@ impl Cie {
         CIE.get_or_init(|| {
             let rows = parse_csv_rows(CIE_1931_CSV, 4).expect("bundled CIE table is valid");
             let xyz: Vec<[f64; 3]> = rows.iter().map(|r| [r[1], r[2], r[3]]).collect();
-            debug_assert_eq!(xyz.len(), 471);
+            let xyz: Box<[[f64; 3]; 471]> = xyz
+                .into_boxed_slice()
+                .try_into()
+                .expect("bundled CIE table has 471 rows, 360–830 nm");
             // Trapezoid rule on the 1 nm grid.
             let y_integral = xyz.windows(2).map(|w| 0.5 * (w[0][1] + w[1][1])).sum();
             Cie { xyz, y_integral }
@@ -44,7 +48,9 @@ impl Cie {
             return [0.0; 3];
         }
         let x = lambda - LAMBDA_MIN;
-        let i = (x as usize).min(self.xyz.len() - 2);
+        // Through u32: x ∈ [0, 470] here, and f64 → u32 is a shorter
+        // instruction sequence than the saturating f64 → usize.
+        let i = (x as u32 as usize).min(self.xyz.len() - 2);
         let t = x - i as f64;
         let (a, b) = (self.xyz[i], self.xyz[i + 1]);
         [
@@ -169,7 +175,11 @@ fn planck(lambda_nm: f64, kelvin: f64) -> f64 {
     let l = lambda_nm * 1e-3; // µm, keeps the numbers O(1)
     let x = C2 / (lambda_nm * kelvin);
     // exp_m1 keeps the Rayleigh–Jeans end accurate; huge x underflows to 0 cleanly.
-    1.0 / (l.powi(5) * x.exp_m1())
+    // l⁵ spelled out: `powi`'s expansion (and so its last bit) depends on
+    // the context it is inlined into, and a spectrum must evaluate to the
+    // same value per wavelength and in a batch.
+    let l2 = l * l;
+    1.0 / (l2 * l2 * l * x.exp_m1())
 }
 
 /// Most cells of a [`Table`]'s guide (cells are 1 nm wide up to this many).

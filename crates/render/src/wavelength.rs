@@ -132,7 +132,8 @@ impl WavelengthSampler {
     fn draw(&self, u: f64) -> (f64, f64) {
         let u = u.clamp(0.0, 1.0f64.next_down());
         let cells = self.guide.len();
-        let g = self.guide[((u * cells as f64) as usize).min(cells - 1)];
+        // Through u32 (u·cells < 2¹⁸): shorter than the saturating f64 → usize.
+        let g = self.guide[((u * cells as f64) as u32 as usize).min(cells - 1)];
         let mut i = (g & !WALK) as usize;
         let last = self.bins.len() - 1;
         // The end of bin i is the start of bin i + 1. A guide cell holds at

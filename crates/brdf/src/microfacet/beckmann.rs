@@ -158,9 +158,10 @@ fn start_correction(c: f64, s: f64, u: f64) -> f64 {
     let last = (START_N - 1) as f64;
     let ft = (s / (s + c)).clamp(0.0, 1.0) * last;
     let fv = libm::sqrt((1.0 - u).clamp(0.0, 1.0)) * last;
+    // Through u32 (both lie in [0, 64]): shorter than f64 → usize.
     let (it, iv) = (
-        (ft as usize).min(START_N - 2),
-        (fv as usize).min(START_N - 2),
+        (ft as u32 as usize).min(START_N - 2),
+        (fv as u32 as usize).min(START_N - 2),
     );
     let (at, av) = (ft - it as f64, fv - iv as f64);
     let row = |i: usize| {
