@@ -32,6 +32,8 @@ pub(crate) enum LobeChoice {
     /// The delta lobe was drawn (`None`: it reflects nothing at this λ).
     Delta(Option<BxdfSample>),
     /// The glossy lobe was drawn; `v` is the choice number rescaled to [0, 1).
+    // Read only by the full GHS model, which needs `alloc`.
+    #[cfg_attr(not(feature = "alloc"), allow(dead_code))]
     Glossy { v: f64, gs: f64 },
 }
 
