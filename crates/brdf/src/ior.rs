@@ -295,22 +295,22 @@ impl Ior {
     /// which the processor overlaps. Bit-identical to `at`.
     #[inline]
     pub fn at_many(&self, lambdas: &[f64], n: &mut [f64], k: &mut [f64]) {
-        let out = n.iter_mut().zip(k.iter_mut());
+        let out = n.iter_mut().zip(k.iter_mut()).zip(lambdas);
         match self {
             Ior::Constant { n: nc, k: kc } => {
-                for (n, k) in out {
+                for ((n, k), _) in out {
                     (*n, *k) = (*nc, *kc);
                 }
             }
             Ior::Metal(m) => {
                 let (rows, guide, slopes) = m.lookup();
-                for ((n, k), &l) in out.zip(lambdas) {
+                for ((n, k), &l) in out {
                     (*n, *k) = metal_at(rows, guide, slopes, l);
                 }
             }
             #[cfg(feature = "alloc")]
             Ior::Table(rows) => {
-                for ((n, k), &l) in out.zip(lambdas) {
+                for ((n, k), &l) in out {
                     (*n, *k) = table_at(rows, l);
                 }
             }
@@ -375,6 +375,31 @@ fn table_at(rows: &[[f64; 3]], lambda_nm: f64) -> (f64, f64) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn at_many_is_at_for_as_many_as_the_shortest_slice() {
+        let lambdas = [350.0, 400.5, 555.0, 829.9, f64::NAN];
+        let iors = [
+            Ior::metal(Metal::Au),
+            Ior::constant(1.5, 0.25).unwrap(),
+            Ior::table(alloc::vec![[400.0, 0.3, 3.0], [700.0, 1.5, 0.0]]).unwrap(),
+        ];
+        for ior in iors {
+            for len in 0..=lambdas.len() {
+                // Longer outputs than wavelengths: the extra slots stay as they were.
+                let (mut n, mut k) = ([-1.0; 6], [-1.0; 6]);
+                ior.at_many(&lambdas[..len], &mut n, &mut k);
+                for j in 0..len {
+                    let (a, b) = ior.at(lambdas[j]);
+                    assert_eq!((n[j].to_bits(), k[j].to_bits()), (a.to_bits(), b.to_bits()));
+                }
+                assert!(
+                    n[len..].iter().chain(&k[len..]).all(|&v| v == -1.0),
+                    "{ior:?} {len}"
+                );
+            }
+        }
+    }
 
     #[test]
     fn tables_cover_visible_range_and_increase() {

@@ -44,15 +44,9 @@ impl Emission<'_> {
     pub fn eval_many(&self, lambdas: &[f64], out: &mut [f64]) {
         let pairs = out.iter_mut().zip(lambdas);
         match *self {
-            Emission::Spectrum(Spectrum::Constant(v), k) => {
-                for (o, _) in pairs {
-                    *o = k * v;
-                }
-            }
             Emission::Spectrum(s, k) => {
-                for (o, &l) in pairs {
-                    *o = k * s.eval(l);
-                }
+                s.eval_many(lambdas, out);
+                out.iter_mut().take(lambdas.len()).for_each(|o| *o *= k);
             }
             Emission::Cmf(c) => {
                 let cie = Cie::get();

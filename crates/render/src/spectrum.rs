@@ -98,6 +98,20 @@ impl Spectrum {
         }
     }
 
+    /// [`eval`](Self::eval) at each of `lambdas` into `out` (as many as the
+    /// shorter of the two), bit-identical to it, with one match for the set.
+    #[inline]
+    pub fn eval_many(&self, lambdas: &[f64], out: &mut [f64]) {
+        let pairs = out.iter_mut().zip(lambdas);
+        match self {
+            Spectrum::Constant(v) => pairs.for_each(|(o, _)| *o = *v),
+            Spectrum::Blackbody { kelvin, scale } => {
+                pairs.for_each(|(o, &l)| *o = scale * planck(l, *kelvin))
+            }
+            Spectrum::Table(t) => pairs.for_each(|(o, &l)| *o = t.eval(l)),
+        }
+    }
+
     /// The wavelength interval outside which the spectrum is zero,
     /// intersected with 360–830 nm; `None` if it is zero everywhere there.
     pub fn support(&self) -> Option<(f64, f64)> {

@@ -101,17 +101,19 @@ impl WavelengthSampler {
             })
             .collect();
         let cells = 4 * n;
-        let first = |c: usize| {
-            let u = c as f64 / cells as f64;
-            cdf[1..].partition_point(|&e| e <= u).min(n - 1)
-        };
+        // First bin of each cell, and n − 1 closing the last cell.
+        let first: Vec<usize> = (0..cells)
+            .map(|c| {
+                let u = c as f64 / cells as f64;
+                cdf[1..].partition_point(|&e| e <= u).min(n - 1)
+            })
+            .chain([n - 1])
+            .collect();
         // The top bit marks a cell whose draws may lie two or more bins past
         // its first one (the next cell starts at least two bins on).
-        let guide = (0..cells)
-            .map(|c| {
-                let (a, b) = (first(c), if c + 1 < cells { first(c + 1) } else { n - 1 });
-                a as u16 | if b > a + 1 { WALK } else { 0 }
-            })
+        let guide = first
+            .windows(2)
+            .map(|w| w[0] as u16 | if w[1] > w[0] + 1 { WALK } else { 0 })
             .collect();
         WavelengthSampler {
             lo,
