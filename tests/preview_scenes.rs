@@ -71,6 +71,12 @@ fn preview_scenes_render_finite_and_deterministic() {
             for x in 0..40 {
                 for s in 0..4 {
                     let cs = camera_sample(&scene, x, y, s);
+                    assert!(
+                        cs.xyz.iter().all(|v| v.is_finite()) && cs.xyz[1] >= 0.0,
+                        "{}: pixel ({x}, {y}) sample {s}: exactly integrated XYZ {:?}",
+                        path.display(),
+                        cs.xyz
+                    );
                     for j in 0..cs.wavelengths.len() {
                         let r = cs.radiance[j];
                         assert!(

@@ -73,6 +73,13 @@ fn first_bad_sample(scene: &Scene, spp: u64) -> Option<String> {
         for x in 0..cam.width {
             for s in 0..spp {
                 let cs = camera_sample(scene, x, y, s);
+                // The exactly integrated part: finite, and its Y not negative.
+                if !(cs.xyz.iter().all(|v| v.is_finite()) && cs.xyz[1] >= 0.0) {
+                    return Some(format!(
+                        "pixel ({x}, {y}) sample {s}: exactly integrated XYZ {:?} (mode {:?}, sampler {:?})",
+                        cs.xyz, scene.settings.mode, scene.settings.sampler
+                    ));
+                }
                 if let Some(j) = (0..cs.wavelengths.len())
                     .find(|&j| !(cs.radiance[j].is_finite() && cs.radiance[j] >= 0.0))
                 {
@@ -101,6 +108,14 @@ fn check_scene(path: &Path) -> Vec<String> {
     ] {
         scene.settings.mode = mode;
         scene.settings.sampler = sampler;
+        // With the first bounce integrated over λ exactly (the default,
+        // where some material is Fresnel-only) and with every wavelength
+        // sampled.
+        let tables = scene.spectral.take();
+        if let Some(m) = first_bad_sample(&scene, SPP) {
+            bad.push(format!("{}: sampled λ: {m}", path.display()));
+        }
+        scene.spectral = tables;
         if let Some(m) = first_bad_sample(&scene, SPP) {
             bad.push(format!("{}: {m}", path.display()));
         }

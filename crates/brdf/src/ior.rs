@@ -241,7 +241,9 @@ impl Ior {
         Ok(Ior::Table(rows.into()))
     }
 
-    fn rows(&self) -> Option<&[[f64; 3]]> {
+    /// The measured rows `[λ nm, n, κ]` that [`at`](Self::at) interpolates
+    /// linearly (its knots), or `None` for a constant index.
+    pub fn rows(&self) -> Option<&[[f64; 3]]> {
         match self {
             Ior::Constant { .. } => None,
             Ior::Metal(m) => Some(m.table()),

@@ -161,6 +161,22 @@ impl ModelKind {
         ModelKind::ALL.into_iter().find(|m| m.name() == name)
     }
 
+    /// Whether the model depends on the wavelength only through one
+    /// conductor Fresnel factor at the reflecting microfacet:
+    /// `f(wi, wo, λ) = F(λ, cosθd) · f₁(wi, wo)`, where `f₁` is the same
+    /// model built with [`FresnelSpec::One`] and cosθd = wi·h =
+    /// |wi + wo| / 2; its sampled directions and pdfs do not depend on λ,
+    /// and a sample's weight is F(λ, cosθd) times `f₁`'s (for the delta
+    /// lobe of `smooth`, cosθd = cosθi). A renderer can then integrate a
+    /// single-scattering contribution over λ exactly instead of sampling it.
+    /// False for the wave-optical models, whose lobes change with λ.
+    pub fn fresnel_only(self) -> bool {
+        matches!(
+            self,
+            ModelKind::Ggx | ModelKind::Beckmann | ModelKind::Smooth
+        )
+    }
+
     /// `ggx, beckmann, …` for error messages.
     pub fn names() -> String {
         let names: Vec<&str> = ModelKind::ALL.iter().map(|m| m.name()).collect();

@@ -24,10 +24,11 @@
 
 use crate::film::BadSample;
 use crate::geometry::Ray;
-use crate::light::Emission;
+use crate::light::{Emission, LightSample};
 use crate::sampler::{Reserved2d, Sampler};
 use crate::scene::desc::MisHeuristic;
 use crate::scene::{Hit, Scene, Surface};
+use crate::spectral_table::SpectralTables;
 use crate::spectrum::Cie;
 use crate::wavelength::{MAX_WAVELENGTHS, SampledWavelengths};
 use brdf::frame::orthonormal_basis;
@@ -109,6 +110,10 @@ pub struct CameraSample {
     /// Radiance estimates at each wavelength, wavelength pdf included; the
     /// first `wavelengths.len()` are used.
     pub radiance: [f64; N],
+    /// XYZ (before the film's 1/∫ȳ normalisation) of the contributions
+    /// integrated over λ exactly ([`crate::spectral_table`]); a path that
+    /// needs no sampled wavelength carries none.
+    pub xyz: [f64; 3],
 }
 
 /// Traces camera sample `sample` of pixel (`x`, `y`).
@@ -123,6 +128,7 @@ pub fn camera_sample(scene: &Scene, x: u32, y: u32, sample: u64) -> CameraSample
                 scene.settings.wavelengths_per_path(),
             ),
             radiance: [0.0; N],
+            xyz: [0.0; 3],
         }
     })
 }
@@ -151,14 +157,26 @@ fn traced(scene: &Scene, x: u32, y: u32, sample: u64) -> Option<CameraSample> {
     if first.is_none() && !scene.lights.has_environment() {
         return None;
     }
+    if let Some(tables) = &scene.spectral {
+        return Some(trace_exact(
+            scene,
+            tables,
+            ray,
+            first,
+            &mut sampler,
+            u_lambda,
+        ));
+    }
     let wavelengths = scene.wavelengths.sample_set(
         sampler.reserved_2d(u_lambda),
         scene.settings.wavelengths_per_path(),
     );
-    let radiance = trace(scene, ray, first, &wavelengths, &mut sampler);
+    let start = Throughput::camera(&wavelengths);
+    let radiance = trace(scene, ray, first, &wavelengths, &mut sampler, start, 0);
     Some(CameraSample {
         wavelengths,
         radiance,
+        xyz: [0.0; 3],
     })
 }
 
@@ -186,14 +204,18 @@ pub fn sample_pixel_checked(
     };
     let n = cs.wavelengths.len();
     let r = &cs.radiance[..n];
-    if !r.iter().all(|v| v.is_finite()) {
+    if !r.iter().all(|v| v.is_finite()) || !cs.xyz.iter().all(|v| v.is_finite()) {
         return Err(BadSample::NonFinite);
     }
-    if !scene.signed_radiance && !r.iter().all(|v| *v >= 0.0) {
+    // The exactly integrated part is a non-negative spectrum's XYZ, whose Y
+    // (unlike X and Z of a narrow band, within the table's tolerance of 0)
+    // is clearly positive: a negative Y is a model's negative value.
+    let non_negative = r.iter().all(|v| *v >= 0.0) && cs.xyz[1] >= 0.0;
+    if !scene.signed_radiance && !non_negative {
         return Err(BadSample::Negative);
     }
     let cie = Cie::get();
-    let mut xyz = [0.0; 3];
+    let mut xyz = cs.xyz;
     for (j, &lambda) in cs.wavelengths.lambdas().iter().enumerate() {
         let c = cie.xyz(lambda);
         for k in 0..3 {
@@ -208,27 +230,300 @@ pub fn sample_pixel_checked(
     }
 }
 
+/// A path vertex on a reflecting surface, seen from the ray that reached it.
+struct Vertex {
+    frame: Frame,
+    /// Geometric normal on the viewer's side.
+    ng: DVec3,
+    /// Shaded with an interpolated normal (directions must still leave on
+    /// the geometric side).
+    smooth: bool,
+    /// Direction toward the viewer, local frame.
+    wi: DVec3,
+    /// Origin of rays leaving the vertex.
+    p: DVec3,
+}
+
+impl Vertex {
+    /// `None` if the viewer is below the shading frame's horizon.
+    #[inline]
+    fn new(hit: &Hit, ray: &Ray) -> Option<Vertex> {
+        let ng = if hit.geo.n.dot(ray.d) > 0.0 {
+            -hit.geo.n
+        } else {
+            hit.geo.n
+        };
+        // Smooth-shaded meshes: the BSDF frame follows the interpolated
+        // normal, turned to the viewer's side of the triangle; directions
+        // must still leave on the geometric side, or light would leak
+        // through the surface.
+        let smooth = hit.shading_n.is_some();
+        let ns = match hit.shading_n {
+            Some(s) if s.dot(ng) < 0.0 => -s,
+            Some(s) => s,
+            None => ng,
+        };
+        let frame = Frame::new(ns, hit.geo.tangent);
+        let wi = frame.to_local(-ray.d);
+        (wi.z > 0.0).then(|| Vertex {
+            frame,
+            ng,
+            smooth,
+            wi,
+            p: offset(hit.geo.p, ng, hit.mesh),
+        })
+    }
+
+    /// A light sample's direction in the local frame, if it leaves above
+    /// both horizons.
+    #[inline]
+    fn light_direction(&self, ls: &LightSample) -> Option<DVec3> {
+        let wo = self.frame.to_local(ls.wi);
+        (wo.z > 0.0 && ls.pdf > 0.0 && (!self.smooth || ls.wi.dot(self.ng) > 0.0)).then_some(wo)
+    }
+
+    /// The ray along local direction `wo`, if it leaves on the geometric side.
+    #[inline]
+    fn ray(&self, wo: DVec3) -> Option<Ray> {
+        let d = self.frame.to_world(wo).normalize();
+        (!self.smooth || d.dot(self.ng) > 0.0).then_some(Ray { o: self.p, d })
+    }
+}
+
+/// Whether nothing blocks the segment from `p` to a light sample.
+#[inline]
+fn unoccluded(scene: &Scene, p: DVec3, ls: &LightSample) -> bool {
+    let shadow = Ray { o: p, d: ls.wi };
+    let t_max = if ls.dist.is_finite() {
+        ls.dist * (1.0 - 1e-7)
+    } else {
+        f64::INFINITY
+    };
+    !scene.shapes.occluded(&shadow, t_max)
+}
+
+/// The per-wavelength state of a path (see the module documentation):
+/// `T_j`, `Q_k`, and the BSDF-sampling densities `L_k` of the last edge
+/// for the MIS of an emitter it reaches.
+struct Throughput {
+    t: [f64; N],
+    q: [f64; N],
+    l_mis: [f64; N],
+}
+
+impl Throughput {
+    /// At the camera.
+    fn camera(wavelengths: &SampledWavelengths) -> Throughput {
+        let mut t = [0.0; N];
+        for (t, p) in t.iter_mut().zip(wavelengths.pdfs()) {
+            *t = 1.0 / p;
+        }
+        Throughput {
+            t,
+            q: [1.0; N],
+            l_mis: [0.0; N],
+        }
+    }
+}
+
+/// Russian roulette on the hero-symmetric throughput T_j / Σ Q_k, compared
+/// with its value `m0` at the camera: `false` ends the path; a survivor's
+/// throughput is divided by its survival probability.
+#[inline]
+fn survives(th: &mut Throughput, n: usize, m0: f64, sampler: &mut Sampler) -> bool {
+    let sum_q: f64 = th.q[..n].iter().sum();
+    let m = th.t[..n].iter().fold(0.0f64, |a, v| a.max(v.abs())) / (sum_q * m0);
+    let survive = m.min(1.0);
+    if survive.is_nan() || survive <= 0.0 || sampler.get_1d() >= survive {
+        return false;
+    }
+    for tj in th.t.iter_mut().take(n) {
+        *tj /= survive;
+    }
+    true
+}
+
+/// Any wavelength: the λ-free part of a Fresnel-only model ignores it.
+const UNIT_LAMBDA: f64 = 550.0;
+
+/// A camera path whose first bounce is integrated over λ exactly where the
+/// material is Fresnel-only ([`crate::spectral_table`]): emission seen
+/// directly, next-event estimation and the BSDF sample's emission at the
+/// first vertex become XYZ with no sampled wavelength. A path that goes on
+/// to a second vertex draws its wavelengths then (from the camera sample's
+/// reserved draw) and carries the first vertex's Fresnel factor at each; a
+/// first vertex whose material is not Fresnel-only is traced with sampled
+/// wavelengths from the start.
+fn trace_exact(
+    scene: &Scene,
+    tables: &SpectralTables,
+    ray: Ray,
+    first: Option<Hit>,
+    sampler: &mut Sampler,
+    u_lambda: Reserved2d,
+) -> CameraSample {
+    let lights = &scene.lights;
+    let settings = &scene.settings;
+    let mut out = CameraSample {
+        wavelengths: SampledWavelengths::none(),
+        radiance: [0.0; N],
+        xyz: [0.0; 3],
+    };
+    let add = |xyz: &mut [f64; 3], e: [f64; 3], w: f64| {
+        for c in 0..3 {
+            xyz[c] += w * e[c];
+        }
+    };
+    // Emission seen directly: the only strategy, weight 1.
+    let hit = match first {
+        None => {
+            let (em, _) = lights.environment(ray.d);
+            add(&mut out.xyz, tables.direct(&em), 1.0);
+            return out;
+        }
+        Some(h) => h,
+    };
+    let m = match hit.surface {
+        Surface::Emitter(i) => {
+            let (em, _) = lights.emitted(i as usize, ray.o, ray.d, hit.geo.n, hit.geo.t);
+            add(&mut out.xyz, tables.direct(&em), 1.0);
+            return out;
+        }
+        Surface::Material(m) => m,
+    };
+    let (Some(table), Some(split)) = (
+        tables.material(m),
+        scene.materials[m as usize].fresnel_only.as_ref(),
+    ) else {
+        out.wavelengths = scene.wavelengths.sample_set(
+            sampler.reserved_2d(u_lambda),
+            settings.wavelengths_per_path(),
+        );
+        let start = Throughput::camera(&out.wavelengths);
+        out.radiance = trace(scene, ray, Some(hit), &out.wavelengths, sampler, start, 0);
+        return out;
+    };
+    let unit = &split.unit;
+    let Some(v) = Vertex::new(&hit, &ray) else {
+        return out;
+    };
+    let mis = settings.mis;
+
+    // Next-event estimation.
+    if let Some(ls) = lights.sample(v.p, sampler.get_1d_2d())
+        && let Some(wo) = v.light_direction(&ls)
+    {
+        let (f, pdf) = unit.eval_pdf(v.wi, wo, UNIT_LAMBDA);
+        // A delta light cannot be reached by BSDF sampling.
+        let pdf = if ls.is_delta { 0.0 } else { pdf };
+        if f > 0.0 && unoccluded(scene, v.p, &ls) {
+            let w = mis_over_pdf(mis, ls.pdf, pdf);
+            if w > 0.0 {
+                let e = tables.reflected(table, (v.wi + wo).length_squared(), 4.0, &ls.emission);
+                add(&mut out.xyz, e, f * wo.z * w);
+            }
+        }
+    }
+
+    // BSDF sampling.
+    let Some(s) = unit.sample(v.wi, UNIT_LAMBDA, sampler.get_1d_2d()) else {
+        return out;
+    };
+    if s.pdf.is_nan() || s.pdf <= 0.0 || s.wo.z <= 0.0 {
+        return out;
+    }
+    // cos²θd as a ratio: the mirror's θi, or |wi + wo|²/4.
+    let (num, den) = if s.is_delta {
+        (v.wi.z * v.wi.z, 1.0)
+    } else {
+        ((v.wi + s.wo).length_squared(), 4.0)
+    };
+    // The BSDF strategy's density relative to the light's for an emitter
+    // this edge reaches (no light sample can produce a delta direction).
+    let l_mis = if s.is_delta { 0.0 } else { 1.0 / s.pdf };
+    let Some(ray) = v.ray(s.wo) else {
+        return out;
+    };
+    let next = scene.shapes.intersect(&ray, f64::INFINITY);
+    let (em, pdf_l) = match next {
+        None => lights.environment(ray.d),
+        Some(Hit {
+            surface: Surface::Emitter(i),
+            geo,
+            ..
+        }) => lights.emitted(i as usize, ray.o, ray.d, geo.n, geo.t),
+        Some(Hit {
+            surface: Surface::Material(_),
+            ..
+        }) => (Emission::None, 0.0),
+    };
+    if !matches!(em, Emission::None) {
+        let w = mis_over_pdf(mis, 1.0, l_mis * pdf_l);
+        if w > 0.0 {
+            add(
+                &mut out.xyz,
+                tables.reflected(table, num, den, &em),
+                s.weight * w,
+            );
+        }
+    }
+    let Some(next) = next.filter(|h| matches!(h.surface, Surface::Material(_))) else {
+        return out;
+    };
+    if settings.max_depth == 1 {
+        return out;
+    }
+
+    // The path goes on: its wavelengths now, each carrying the first
+    // vertex's Fresnel factor (the sampled estimator's state after that
+    // vertex, with every Q_k = 1 since no density depended on λ).
+    let wavelengths = scene.wavelengths.sample_set(
+        sampler.reserved_2d(u_lambda),
+        settings.wavelengths_per_path(),
+    );
+    let n = wavelengths.len();
+    let mut th = Throughput::camera(&wavelengths);
+    let m0 = th.t[..n].iter().fold(0.0f64, |a, &v| a.max(v)) / n as f64;
+    let mut fresnel = [0.0; N];
+    split
+        .fresnel
+        .reflectance_ratio_many(num, den, wavelengths.lambdas(), &mut fresnel[..n]);
+    for ((t, l), f) in th.t.iter_mut().zip(&mut th.l_mis).zip(&fresnel).take(n) {
+        *t *= s.weight * f;
+        *l = l_mis;
+    }
+    if 1 >= settings.rr_depth && !survives(&mut th, n, m0, sampler) {
+        out.wavelengths = wavelengths;
+        return out;
+    }
+    out.radiance = trace(scene, ray, Some(next), &wavelengths, sampler, th, 1);
+    out.wavelengths = wavelengths;
+    out
+}
+
 /// Spectral radiance estimates (wavelength pdf included) along `ray` at each
-/// λ_j; `first` is the camera ray's hit, already found.
+/// λ_j from scattering event `depth0` on, with the path's state `start`
+/// (for `depth0` = 0, [`Throughput::camera`]); `first` is `ray`'s hit,
+/// already found.
 fn trace(
     scene: &Scene,
     mut ray: Ray,
     first: Option<Hit>,
     wavelengths: &SampledWavelengths,
     sampler: &mut Sampler,
+    start: Throughput,
+    depth0: u32,
 ) -> [f64; N] {
     let (lambdas, pl, n) = (&wavelengths.lambda, &wavelengths.pdf, wavelengths.n);
     let lights = &scene.lights;
     let settings = &scene.settings;
-    let mut t = [0.0; N];
-    let mut q = [0.0; N];
-    let mut l_mis = [0.0; N];
-    for k in 0..n {
-        t[k] = 1.0 / pl[k];
-        q[k] = 1.0;
-    }
+    let Throughput {
+        mut t,
+        mut q,
+        mut l_mis,
+    } = start;
     // Russian roulette compares max_j T_j / Σ Q_k with its value at the camera.
-    let m0 = t[..n].iter().fold(0.0f64, |a, &v| a.max(v)) / n as f64;
+    let m0 = pl[..n].iter().fold(0.0f64, |a, &p| a.max(1.0 / p)) / n as f64;
     let mis = settings.mis;
     let mut out = [0.0; N];
 
@@ -272,7 +567,7 @@ fn trace(
     };
 
     let mut first = Some(first);
-    for depth in 0..=settings.max_depth {
+    for depth in depth0..=settings.max_depth {
         let hit = match first.take() {
             Some(h) => h,
             None => scene.shapes.intersect(&ray, f64::INFINITY),
@@ -300,58 +595,34 @@ fn trace(
             break;
         }
         let bxdf = &scene.materials[m as usize].bxdf;
-        let ng = if hit.geo.n.dot(ray.d) > 0.0 {
-            -hit.geo.n
-        } else {
-            hit.geo.n
-        };
-        // Smooth-shaded meshes: the BSDF frame follows the interpolated
-        // normal, turned to the viewer's side of the triangle; directions
-        // must still leave on the geometric side, or light would leak
-        // through the surface.
-        let smooth = hit.shading_n.is_some();
-        let ns = match hit.shading_n {
-            Some(s) if s.dot(ng) < 0.0 => -s,
-            Some(s) => s,
-            None => ng,
-        };
-        let frame = Frame::new(ns, hit.geo.tangent);
-        let wi = frame.to_local(-ray.d);
-        if wi.z <= 0.0 {
+        let Some(v) = Vertex::new(&hit, &ray) else {
             break;
-        }
-        let p = offset(hit.geo.p, ng, hit.mesh);
+        };
+        let wi = v.wi;
         resolve(&mut pending, &mut t, &mut q);
 
         // Next-event estimation.
-        if let Some(ls) = lights.sample(p, sampler.get_1d_2d()) {
-            let wo = frame.to_local(ls.wi);
-            if wo.z > 0.0 && ls.pdf > 0.0 && (!smooth || ls.wi.dot(ng) > 0.0) {
-                let shadow = Ray { o: p, d: ls.wi };
-                let t_max = if ls.dist.is_finite() {
-                    ls.dist * (1.0 - 1e-7)
-                } else {
-                    f64::INFINITY
-                };
-                // A delta light cannot be reached by BSDF sampling: its MIS
-                // denominator has no BSDF term, so the pdf is not needed.
-                let mut fp = [(0.0, 0.0); N];
-                bxdf.eval_pdf_many(wi, wo, &lambdas[..n], &mut fp[..n]);
-                if ls.is_delta {
-                    for v in &mut fp[..n] {
-                        v.1 = 0.0;
-                    }
+        if let Some(ls) = lights.sample(v.p, sampler.get_1d_2d())
+            && let Some(wo) = v.light_direction(&ls)
+        {
+            // A delta light cannot be reached by BSDF sampling: its MIS
+            // denominator has no BSDF term, so the pdf is not needed.
+            let mut fp = [(0.0, 0.0); N];
+            bxdf.eval_pdf_many(wi, wo, &lambdas[..n], &mut fp[..n]);
+            if ls.is_delta {
+                for v in &mut fp[..n] {
+                    v.1 = 0.0;
                 }
-                if fp[..n].iter().any(|v| v.0 > 0.0) && !scene.shapes.occluded(&shadow, t_max) {
-                    let own: f64 = q[..n].iter().sum::<f64>() * ls.pdf;
-                    let other: f64 = (0..n).map(|k| q[k] * fp[k].1).sum();
-                    let w = mis_over_pdf(mis, own, other);
-                    if w > 0.0 {
-                        let mut e = [0.0; N];
-                        ls.emission.eval_many(&lambdas[..n], &mut e[..n]);
-                        for j in 0..n {
-                            out[j] += t[j] * fp[j].0 * wo.z * e[j] * w;
-                        }
+            }
+            if fp[..n].iter().any(|v| v.0 > 0.0) && unoccluded(scene, v.p, &ls) {
+                let own: f64 = q[..n].iter().sum::<f64>() * ls.pdf;
+                let other: f64 = (0..n).map(|k| q[k] * fp[k].1).sum();
+                let w = mis_over_pdf(mis, own, other);
+                if w > 0.0 {
+                    let mut e = [0.0; N];
+                    ls.emission.eval_many(&lambdas[..n], &mut e[..n]);
+                    for j in 0..n {
+                        out[j] += t[j] * fp[j].0 * wo.z * e[j] * w;
                     }
                 }
             }
@@ -385,24 +656,18 @@ fn trace(
             });
         }
 
-        // Russian roulette on the hero-symmetric throughput T_j / Σ Q_k.
         if depth + 1 >= settings.rr_depth {
             resolve(&mut pending, &mut t, &mut q);
-            let sum_q: f64 = q[..n].iter().sum();
-            let m = t[..n].iter().fold(0.0f64, |a, v| a.max(v.abs())) / (sum_q * m0);
-            let survive = m.min(1.0);
-            if survive.is_nan() || survive <= 0.0 || sampler.get_1d() >= survive {
+            let mut th = Throughput { t, q, l_mis };
+            if !survives(&mut th, n, m0, sampler) {
                 break;
             }
-            for tj in t.iter_mut().take(n) {
-                *tj /= survive;
-            }
+            (t, q, l_mis) = (th.t, th.q, th.l_mis);
         }
-        let d = frame.to_world(s.wo).normalize();
-        if smooth && d.dot(ng) <= 0.0 {
+        let Some(next) = v.ray(s.wo) else {
             break;
-        }
-        ray = Ray { o: p, d };
+        };
+        ray = next;
     }
     out
 }

@@ -33,6 +33,7 @@ pub mod rng;
 pub mod sampler;
 pub mod scene;
 pub mod sky;
+pub mod spectral_table;
 pub mod spectrum;
 pub mod wavelength;
 

@@ -12,8 +12,9 @@ use std::path::Path;
 /// Spectral radiance (or intensity) of one emission event.
 #[derive(Clone, Copy, Debug)]
 pub enum Emission<'a> {
-    /// A spectrum times a scale.
-    Spectrum(&'a Spectrum, f64),
+    /// A spectrum times a scale, emitted by light number `.2` (whose
+    /// spectrum it is: the integrator's spectral tables are indexed by it).
+    Spectrum(&'a Spectrum, f64, u32),
     /// `c · (x̄, ȳ, z̄)(λ)`: an RGB texel lifted to a spectrum (see [`RgbLift`]).
     Cmf([f64; 3]),
     /// Daylight: coefficients on the sky's basis (S0, S1, S2, sun); see [`Sky::coefficients`].
@@ -27,7 +28,7 @@ impl Emission<'_> {
     #[inline]
     pub fn eval(&self, lambda: f64) -> f64 {
         match *self {
-            Emission::Spectrum(s, k) => k * s.eval(lambda),
+            Emission::Spectrum(s, k, _) => k * s.eval(lambda),
             Emission::Cmf(c) => {
                 let m = Cie::get().xyz(lambda);
                 c[0] * m[0] + c[1] * m[1] + c[2] * m[2]
@@ -44,7 +45,7 @@ impl Emission<'_> {
     pub fn eval_many(&self, lambdas: &[f64], out: &mut [f64]) {
         let pairs = out.iter_mut().zip(lambdas);
         match *self {
-            Emission::Spectrum(s, k) => {
+            Emission::Spectrum(s, k, _) => {
                 s.eval_many(lambdas, out);
                 out.iter_mut().take(lambdas.len()).for_each(|o| *o *= k);
             }
@@ -371,7 +372,7 @@ impl Lights {
                     dist,
                     pdf: sel,
                     is_delta: true,
-                    emission: Emission::Spectrum(spectrum, 1.0 / dist2),
+                    emission: Emission::Spectrum(spectrum, 1.0 / dist2, idx as u32),
                 })
             }
             LightKind::Sphere { sphere, spectrum } => {
@@ -402,7 +403,7 @@ impl Lights {
                     dist,
                     pdf: sel * sphere_cone_pdf(sphere, p),
                     is_delta: false,
-                    emission: Emission::Spectrum(spectrum, 1.0),
+                    emission: Emission::Spectrum(spectrum, 1.0, idx as u32),
                 })
             }
             LightKind::Rectangle {
@@ -427,7 +428,7 @@ impl Lights {
                     dist,
                     pdf: sel * dist2 / (shape.area() * cos_l.abs()),
                     is_delta: false,
-                    emission: Emission::Spectrum(spectrum, 1.0),
+                    emission: Emission::Spectrum(spectrum, 1.0, idx as u32),
                 })
             }
             LightKind::Environment(env) => {
@@ -435,7 +436,7 @@ impl Lights {
                     Environment::Constant(s) => (
                         uniform_sphere(uv),
                         1.0 / (4.0 * PI),
-                        Emission::Spectrum(s, 1.0),
+                        Emission::Spectrum(s, 1.0, idx as u32),
                     ),
                     Environment::Map(m) => {
                         let (st, _) = m.dist.sample(uv);
@@ -471,7 +472,7 @@ impl Lights {
         let sel = self.select_pdf();
         match &self.lights[idx] {
             LightKind::Sphere { sphere, spectrum } => (
-                Emission::Spectrum(spectrum, 1.0),
+                Emission::Spectrum(spectrum, 1.0, idx as u32),
                 sel * sphere_cone_pdf(sphere, from),
             ),
             LightKind::Rectangle {
@@ -484,7 +485,7 @@ impl Lights {
                     return (Emission::None, 0.0);
                 }
                 let pdf = sel * dist * dist / (shape.area() * cos_l.abs().max(1e-300));
-                (Emission::Spectrum(spectrum, 1.0), pdf)
+                (Emission::Spectrum(spectrum, 1.0, idx as u32), pdf)
             }
             LightKind::Point { .. } | LightKind::Environment(_) => (Emission::None, 0.0),
         }
@@ -504,7 +505,7 @@ impl Lights {
         let sel = self.select_pdf();
         match &self.lights[i] {
             LightKind::Environment(Environment::Constant(s)) => {
-                (Emission::Spectrum(s, 1.0), sel / (4.0 * PI))
+                (Emission::Spectrum(s, 1.0, i as u32), sel / (4.0 * PI))
             }
             LightKind::Environment(Environment::Map(m)) => {
                 let uv = m.uv(dir);
@@ -564,9 +565,9 @@ mod tests {
         let sky = Sky::new(crate::sky::SkyParams::default()).unwrap();
         let c = sky.coefficients(DVec3::new(0.3, 0.2, 0.9).normalize());
         let kinds = [
-            Emission::Spectrum(&constant, 0.7),
-            Emission::Spectrum(&black, 3.0),
-            Emission::Spectrum(&table, 1.5),
+            Emission::Spectrum(&constant, 0.7, 0),
+            Emission::Spectrum(&black, 3.0, 1),
+            Emission::Spectrum(&table, 1.5, 2),
             Emission::Cmf([0.4, -0.1, 0.9]),
             Emission::Sky(&sky, c),
             Emission::None,

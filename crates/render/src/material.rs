@@ -7,8 +7,9 @@
 
 use crate::scene::inputs::{Inputs, MAX_CSV_BYTES, MAX_TOML_BYTES};
 use crate::spectrum::parse_csv_rows;
+use brdf::Fresnel;
 pub use brdf::spec::DynBxdf;
-use brdf::spec::{FileLoader, MaterialDesc, ModelKind};
+use brdf::spec::{FileLoader, FresnelSpec, MaterialDesc, MaterialSpec, ModelKind};
 use std::path::Path;
 
 /// A built material.
@@ -19,6 +20,20 @@ pub struct Material {
     pub model: ModelKind,
     /// The model.
     pub bxdf: DynBxdf,
+    /// For the models whose only dependence on λ is a Fresnel factor
+    /// ([`ModelKind::fresnel_only`]): that factor and the model without it,
+    /// so the integrator can integrate a single-scattering contribution
+    /// over λ exactly (`spectral_table.rs`). It must describe `bxdf`: whoever
+    /// replaces `bxdf` by another model replaces or clears it too.
+    pub fresnel_only: Option<FresnelOnly>,
+}
+
+/// A material split into its Fresnel factor and a λ-free rest.
+pub struct FresnelOnly {
+    /// The Fresnel factor F(λ, cosθd).
+    pub fresnel: Fresnel,
+    /// The same model built with F ≡ 1.
+    pub unit: DynBxdf,
 }
 
 /// A PSD table `(ζ rad/µm, P µm⁴)` under the name `psd_csv` refers to it by.
@@ -239,9 +254,22 @@ pub fn build_material(
         .resolve(base.as_ref(), &mut files)
         .map_err(|e| e.to_string())?;
     let bxdf = spec.build().map_err(|e| e.to_string())?;
+    let fresnel_only = if spec.model.kind().fresnel_only() {
+        let unit = MaterialSpec {
+            model: spec.model.clone(),
+            fresnel: FresnelSpec::One,
+        };
+        Some(FresnelOnly {
+            fresnel: spec.fresnel.build().map_err(|e| e.to_string())?,
+            unit: unit.build().map_err(|e| e.to_string())?,
+        })
+    } else {
+        None
+    };
     Ok(Material {
         name: name.to_string(),
         model: spec.model.kind(),
         bxdf,
+        fresnel_only,
     })
 }

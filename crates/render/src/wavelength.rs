@@ -225,9 +225,19 @@ impl SampledWavelengths {
         self.n
     }
 
-    /// Whether none are carried (never: at least one is).
+    /// Whether none are carried: a path whose every contribution was
+    /// integrated over λ exactly (`spectral_table.rs`) draws none.
     pub fn is_empty(&self) -> bool {
         self.n == 0
+    }
+
+    /// The empty set.
+    pub fn none() -> SampledWavelengths {
+        SampledWavelengths {
+            n: 0,
+            lambda: [0.0; MAX_WAVELENGTHS],
+            pdf: [0.0; MAX_WAVELENGTHS],
+        }
     }
 
     /// The wavelengths in nm.

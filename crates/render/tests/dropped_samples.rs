@@ -69,6 +69,9 @@ fn scene(broken: bool) -> render::Scene {
             Box::new(brdf::SmoothConductor::new(brdf::Fresnel::One).unwrap()),
         );
         m.bxdf = Box::new(Broken(inner));
+        // The broken model is not Fresnel-only: its first bounce must not
+        // be integrated through the split of the model it replaced.
+        m.fresnel_only = None;
     }
     s
 }

@@ -3,7 +3,9 @@
 //! and the fingerprint of every file read — each returning an error that
 //! points at the scene text it is about.
 
-use super::desc::{LightDesc, ModelKind, SceneDesc, ShapeDesc, TransformDesc, WavelengthMode};
+use super::desc::{
+    LightDesc, ModelKind, SceneDesc, ShapeDesc, SpectralIntegration, TransformDesc, WavelengthMode,
+};
 use super::inputs::{self, Inputs};
 use super::shapes::Shapes;
 use super::{ESTIMATOR, Scene, Settings, Surface};
@@ -14,6 +16,7 @@ use crate::light::{EnvMap, Environment, LightKind, Lights};
 use crate::material::{Material, build_material};
 use crate::mesh::{MeshAccel, MeshSource, obj_from_bytes};
 use crate::sky::{Sky, SkyParams};
+use crate::spectral_table::SpectralTables;
 use crate::spectrum::{LAMBDA_MAX, LAMBDA_MIN, Spectrum, parse_spectrum_with};
 use crate::wavelength::{HERO_COUNT, HERO_COUNT_CONDUCTORS, MAX_WAVELENGTHS, WavelengthSampler};
 use glam::DVec3;
@@ -67,13 +70,35 @@ pub(super) fn build(path: &Path, text: &str, desc: &SceneDesc) -> Result<Scene, 
         };
     }
     let fingerprint = inputs::fingerprint(ESTIMATOR, &inputs);
+    // No tables when no material could use them.
+    let tables_start = Instant::now();
+    let spectral = (settings.spectral_integration == SpectralIntegration::Auto
+        && materials.iter().any(|m| m.fresnel_only.is_some()))
+    .then(|| {
+        let fresnels: Vec<_> = materials
+            .iter()
+            .map(|m| m.fresnel_only.as_ref().map(|f| &f.fresnel))
+            .collect();
+        SpectralTables::build(&lights, &fresnels)
+    });
+    let spectral_summary = match &spectral {
+        None => String::new(),
+        Some(t) => format!(
+            ", λ integrated exactly at the first bounce ({} Fresnel grid(s) of ≤ {} intervals, {} λ-free, {} refused; {:.1} ms)",
+            t.stats.grids,
+            t.stats.max_intervals,
+            t.stats.flat,
+            t.stats.refused,
+            tables_start.elapsed().as_secs_f64() * 1e3
+        ),
+    };
 
     let models: Vec<String> = materials
         .iter()
         .map(|m| format!("{} ({})", m.name, m.model.name()))
         .collect();
     let prepared = format!(
-        "prepared {}: {}×{} px, {} material(s) [{}], {} analytic shape(s), {}, {} light(s){}, λ {lo:.0}–{hi:.0} nm{}, {} per path, in {:.1} ms",
+        "prepared {}: {}×{} px, {} material(s) [{}], {} analytic shape(s), {}, {} light(s){}, λ {lo:.0}–{hi:.0} nm{}, {} per path{}, in {:.1} ms",
         path.display(),
         camera.width,
         camera.height,
@@ -97,6 +122,7 @@ pub(super) fn build(path: &Path, text: &str, desc: &SceneDesc) -> Result<Scene, 
             ""
         },
         settings.wavelengths_per_path(),
+        spectral_summary,
         start.elapsed().as_secs_f64() * 1e3
     );
 
@@ -108,6 +134,7 @@ pub(super) fn build(path: &Path, text: &str, desc: &SceneDesc) -> Result<Scene, 
         shapes,
         lights,
         wavelengths,
+        spectral,
         fingerprint,
         inputs,
         prepared,
@@ -255,6 +282,7 @@ impl<'a> Builder<'a> {
             hero_wavelengths,
             sampler: integrator.sampler,
             mis: integrator.mis,
+            spectral_integration: integrator.spectral_integration,
             exr: film.exr.clone(),
             png: film.png.clone(),
             exposure: film.exposure,

@@ -190,6 +190,23 @@ pub struct IntegratorDesc {
     /// `power` (default) or `balance`.
     #[serde(default)]
     pub mis: MisHeuristic,
+    /// `auto` (default) or `sampled`.
+    #[serde(default)]
+    pub spectral_integration: SpectralIntegration,
+}
+
+/// How the integral over λ is estimated.
+#[derive(Deserialize, Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum SpectralIntegration {
+    /// Exactly, through tables, for the contributions whose spectrum is one
+    /// emission spectrum times one conductor Fresnel factor (emission seen
+    /// directly, and the first bounce off a microfacet or smooth
+    /// conductor); by sampled wavelengths for the rest.
+    #[default]
+    Auto,
+    /// By sampled wavelengths everywhere.
+    Sampled,
 }
 
 fn default_depth() -> Spanned<u32> {
@@ -209,6 +226,7 @@ impl Default for IntegratorDesc {
             rr_depth: 3,
             sampler: SamplerKind::Sobol,
             mis: MisHeuristic::Power,
+            spectral_integration: SpectralIntegration::Auto,
         }
     }
 }

@@ -13,8 +13,9 @@ use crate::error::SceneError;
 use crate::geometry::HitGeometry;
 use crate::light::Lights;
 use crate::material::Material;
+use crate::spectral_table::SpectralTables;
 use crate::wavelength::WavelengthSampler;
-use desc::{MisHeuristic, SamplerKind, SceneDesc, WavelengthMode};
+use desc::{MisHeuristic, SamplerKind, SceneDesc, SpectralIntegration, WavelengthMode};
 use glam::DVec3;
 pub use inputs::{FNV_OFFSET, InputFile, Inputs, fnv1a};
 pub use shapes::Shapes;
@@ -23,9 +24,10 @@ use std::path::{Path, PathBuf};
 /// The estimator version, hashed into every fingerprint: films rendered by
 /// an earlier estimator (other wavelength or random-number sampling, other
 /// inputs hashed) must not merge with new ones.
-pub const ESTIMATOR: &str = "lustre estimator 5: sobol sampler with 64-bit sample indices, \
+pub const ESTIMATOR: &str = "lustre estimator 6: sobol sampler with 64-bit sample indices, \
                              hero sets from a 2-D draw (base u/n, hero index), 16 per path \
-                             for conductor-only scenes, power MIS, every input file hashed";
+                             for conductor-only scenes, power MIS, every input file hashed, \
+                             first bounce off fresnel-only materials integrated over λ exactly";
 
 /// What a ray hit.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -86,6 +88,8 @@ pub struct Settings {
     pub sampler: SamplerKind,
     /// Weighting of light and BSDF sampling.
     pub mis: MisHeuristic,
+    /// Exact or sampled integration over λ.
+    pub spectral_integration: SpectralIntegration,
     /// EXR output path.
     pub exr: Option<PathBuf>,
     /// PNG output path.
@@ -121,6 +125,9 @@ pub struct Scene {
     pub lights: Lights,
     /// Wavelength distribution over the emission range.
     pub wavelengths: WavelengthSampler,
+    /// The exact spectral integrals of the first bounce, when some material
+    /// is Fresnel-only and `spectral_integration = "auto"`.
+    pub spectral: Option<SpectralTables>,
     /// Hash of everything that determines the per-sample values (not spp or outputs).
     pub fingerprint: u64,
     /// The files the scene was built from, with their hashes (the scene file

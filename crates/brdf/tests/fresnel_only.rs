@@ -1,0 +1,178 @@
+//! `ModelKind::fresnel_only` is a promise renderers rely on to integrate a
+//! single-scattering contribution over λ exactly: the model with a Fresnel
+//! term is the model built with `FresnelSpec::One`, at any other wavelength,
+//! times F(λ, |wi + wo|/2),
+//! in value, pdf, sampled direction and sample weight. Checked here over the
+//! directions and wavelengths; and the models it excludes must really break
+//! the factorisation somewhere, or the predicate would hide a cheaper path.
+
+use brdf::spec::{FresnelSpec, KcSpec, MaterialSpec, ModelKind, ModelSpec};
+use brdf::wave::GhsOptions;
+use brdf::wave::two_scale::CoherentPart;
+use brdf::{Bxdf, Metal, frame};
+use core::f64::consts::{FRAC_PI_2, TAU};
+
+/// xorshift64*: the test's own deterministic numbers.
+struct Rng(u64);
+
+impl Rng {
+    fn f64(&mut self) -> f64 {
+        self.0 ^= self.0 >> 12;
+        self.0 ^= self.0 << 25;
+        self.0 ^= self.0 >> 27;
+        (self.0.wrapping_mul(0x2545_f491_4f6c_dd1d) >> 11) as f64 / (1u64 << 53) as f64
+    }
+}
+
+fn kc() -> KcSpec {
+    KcSpec {
+        sigma_um: 0.05,
+        lc_um: 3.0,
+        gamma: 2.5,
+    }
+}
+
+fn models() -> Vec<ModelSpec> {
+    vec![
+        ModelSpec::Ggx {
+            alpha_x: 0.2,
+            alpha_y: 0.2,
+        },
+        ModelSpec::Ggx {
+            alpha_x: 0.03,
+            alpha_y: 0.7,
+        },
+        ModelSpec::Beckmann {
+            alpha_x: 0.05,
+            alpha_y: 0.05,
+        },
+        ModelSpec::Beckmann {
+            alpha_x: 1.0,
+            alpha_y: 0.3,
+        },
+        ModelSpec::Smooth,
+        ModelSpec::GhsSsa {
+            surface: kc(),
+            options: GhsOptions::default(),
+        },
+        ModelSpec::Ghs {
+            surface: kc(),
+            options: GhsOptions::default(),
+        },
+        ModelSpec::TwoScale {
+            beta: 0.1,
+            surface: kc(),
+            coherent: CoherentPart::MacroNdf,
+        },
+    ]
+}
+
+fn fresnels() -> Vec<FresnelSpec> {
+    let mut f: Vec<FresnelSpec> = Metal::ALL.into_iter().map(FresnelSpec::Metal).collect();
+    f.push(FresnelSpec::Constant { n: 0.2, k: 3.0 });
+    f.push(FresnelSpec::Table(vec![
+        [300.0, 1.4, 0.1],
+        [500.0, 0.3, 2.0],
+        [900.0, 2.5, 6.0],
+    ]));
+    f
+}
+
+/// Largest relative departure from the factorisation over random
+/// directions and wavelengths.
+fn worst_departure(model: &ModelSpec, fresnel: &FresnelSpec, rng: &mut Rng) -> f64 {
+    let with = MaterialSpec {
+        model: model.clone(),
+        fresnel: fresnel.clone(),
+    }
+    .build()
+    .unwrap();
+    let one = MaterialSpec {
+        model: model.clone(),
+        fresnel: FresnelSpec::One,
+    }
+    .build()
+    .unwrap();
+    let f = fresnel.build().unwrap();
+    let rel = |a: f64, b: f64| {
+        if a == b {
+            0.0
+        } else {
+            (a - b).abs() / a.abs().max(b.abs())
+        }
+    };
+    let mut worst = 0.0f64;
+    for _ in 0..400 {
+        // Incidence from the normal to 1e-3 rad above the horizon.
+        // √u leans toward grazing.
+        let ti = (FRAC_PI_2 - 1e-3) * rng.f64().sqrt();
+        let wi = frame::spherical(ti, TAU * rng.f64());
+        let wo = frame::spherical(1.5 * rng.f64(), TAU * rng.f64());
+        let lambda = 360.0 + 470.0 * rng.f64();
+        // The unit model at another wavelength: f₁ must not depend on λ.
+        let other = 360.0 + 470.0 * rng.f64();
+        let cos_d = 0.5 * (wi + wo).length();
+        let fd = f.reflectance(cos_d, lambda);
+        let (e1, p1) = one.eval_pdf(wi, wo, other);
+        let (e, p) = with.eval_pdf(wi, wo, lambda);
+        worst = worst.max(rel(e, fd * e1)).max(rel(p, p1));
+        let u = [rng.f64(), rng.f64(), rng.f64()];
+        match (with.sample(wi, lambda, u), one.sample(wi, other, u)) {
+            (Some(s), Some(s1)) => {
+                let d = (s.wo - s1.wo).length();
+                let fs = if s.is_delta {
+                    f.reflectance(wi.z, lambda)
+                } else {
+                    f.reflectance(0.5 * (wi + s.wo).length(), lambda)
+                };
+                worst = worst
+                    .max(d)
+                    .max(rel(s.pdf, s1.pdf))
+                    .max(rel(s.weight, fs * s1.weight))
+                    .max(if s.is_delta == s1.is_delta { 0.0 } else { 1.0 });
+            }
+            // Only a zero Fresnel factor may drop a sample the unit model keeps.
+            (None, Some(s1)) => {
+                let fs = f.reflectance(0.5 * (wi + s1.wo).length(), lambda);
+                worst = worst.max(if fs == 0.0 { 0.0 } else { 1.0 });
+            }
+            (Some(_), None) => worst = 1.0,
+            (None, None) => {}
+        }
+        let sp = with.specular(wi, lambda);
+        let sp1 = one.specular(wi, other);
+        worst = worst
+            .max(rel(sp.weight, f.reflectance(wi.z, lambda) * sp1.weight))
+            .max(rel(sp.probability, sp1.probability));
+    }
+    worst
+}
+
+#[test]
+fn fresnel_only_models_factor_and_the_others_do_not() {
+    let mut rng = Rng(0x9e37_79b9_7f4a_7c15);
+    for model in models() {
+        let kind = model.kind();
+        let worst = fresnels()
+            .iter()
+            .map(|f| worst_departure(&model, f, &mut rng))
+            .fold(0.0f64, f64::max);
+        if kind.fresnel_only() {
+            assert!(worst < 1e-12, "{kind:?}: departs by {worst:e}");
+        } else {
+            assert!(
+                worst > 1e-3,
+                "{kind:?} factors ({worst:e}): mark it fresnel_only"
+            );
+        }
+    }
+    // Every kind is classified by a case above.
+    for kind in ModelKind::ALL {
+        let covered = models().iter().any(|m| m.kind() == kind);
+        assert!(
+            covered || kind == ModelKind::MeasuredPsd,
+            "{kind:?} untested"
+        );
+    }
+    assert!(!ModelKind::MeasuredPsd.fresnel_only());
+}
