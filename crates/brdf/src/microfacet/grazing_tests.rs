@@ -215,3 +215,48 @@ fn sampling_at_the_horizon_is_consistent_with_eval_and_pdf() {
         }
     }
 }
+
+/// Beckmann's `lambda_frac` returns Λ = 0 from a = 1/(α tanθ) ≥ 5.8 on; the
+/// sums with 1 the conductor formulas form must then be those of the exact
+/// Λ to the last bit, on both sides of the cut and for anisotropic α.
+#[test]
+fn beckmann_lambda_cut_changes_no_bit_of_g1_or_g2() {
+    let mut checked = 0;
+    for (ax, ay) in [(0.05, 0.05), (0.2, 0.2), (0.01, 0.3), (1.0, 0.5)] {
+        let d = Distribution::beckmann(ax, ay).unwrap();
+        for i in 0..400 {
+            // a from 5 to 7 along several azimuths.
+            let a = 5.0 + 2.0 * (i as f64 + 0.5) / 400.0;
+            let phi = 0.37 * i as f64;
+            let (c, s) = (libm::cos(phi), libm::sin(phi));
+            let alpha = libm::sqrt(ax * ax * c * c + ay * ay * s * s);
+            let tan = 1.0 / (a * alpha);
+            let w = DVec3::new(tan * c, tan * s, 1.0).normalize();
+            let (l_frac, one) = d.lambda_frac(w);
+            let exact = d.lambda(w);
+            assert_eq!(one, 1.0);
+            if a >= 5.8 + 1e-9 {
+                assert_eq!(l_frac, 0.0, "a = {a}");
+                assert!(exact < 1.8e-18, "Λ({a}) = {exact}");
+                checked += 1;
+            }
+            for other in [0.0, exact, 1e-3, 0.4, 7.0] {
+                assert_eq!(
+                    (1.0 + l_frac).to_bits(),
+                    (1.0 + exact).to_bits(),
+                    "G1 at a = {a}"
+                );
+                assert_eq!(
+                    (1.0 + l_frac + other).to_bits(),
+                    (1.0 + exact + other).to_bits(),
+                    "G2 at a = {a}, other Λ {other}"
+                );
+                assert_eq!(
+                    (1.0 + other + l_frac).to_bits(),
+                    (1.0 + other + exact).to_bits()
+                );
+            }
+        }
+    }
+    assert!(checked > 900);
+}
