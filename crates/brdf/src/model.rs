@@ -78,6 +78,14 @@ pub trait Bxdf {
         let _ = (wi, lambda_nm);
         Specular::default()
     }
+
+    /// Whether [`Bxdf::sample`] reads `u[0]` (the choice between a delta and
+    /// a glossy lobe). A model with one lobe returns `false`, and a caller may
+    /// then pass any value there instead of computing it. `true`, the
+    /// default, is always safe.
+    fn uses_lobe_choice(&self) -> bool {
+        true
+    }
 }
 
 /// A pointer to a model is the model: every method forwards.
@@ -101,6 +109,9 @@ macro_rules! forward_bxdf {
             }
             fn specular(&self, wi: DVec3, lambda_nm: f64) -> Specular {
                 (**self).specular(wi, lambda_nm)
+            }
+            fn uses_lobe_choice(&self) -> bool {
+                (**self).uses_lobe_choice()
             }
         }
     };

@@ -176,3 +176,36 @@ fn fresnel_only_models_factor_and_the_others_do_not() {
     }
     assert!(!ModelKind::MeasuredPsd.fresnel_only());
 }
+
+/// A model that says its `sample` ignores `u[0]` must give the same sample
+/// whatever `u[0]` is; the microfacet and smooth conductors say so (the
+/// renderer then skips computing that number), the wave-optical models,
+/// which choose between a delta and a glossy lobe with it, do not.
+#[test]
+fn single_lobe_models_ignore_the_lobe_choice() {
+    let mut rng = Rng(0x1234_5678_9abc_def1);
+    for model in models() {
+        let kind = model.kind();
+        let m = MaterialSpec {
+            model: model.clone(),
+            fresnel: FresnelSpec::Metal(Metal::Au),
+        }
+        .build()
+        .unwrap();
+        assert_eq!(m.uses_lobe_choice(), !kind.fresnel_only(), "{kind:?}");
+        let mut reads = false;
+        for _ in 0..2000 {
+            let wi = frame::spherical(1.5 * rng.f64(), TAU * rng.f64());
+            let lambda = 360.0 + 470.0 * rng.f64();
+            let (u1, u2) = (rng.f64(), rng.f64());
+            let a = m.sample(wi, lambda, [0.003, u1, u2]);
+            let b = m.sample(wi, lambda, [0.997, u1, u2]);
+            if m.uses_lobe_choice() {
+                reads |= a != b;
+            } else {
+                assert_eq!(a, b, "{kind:?}");
+            }
+        }
+        assert!(!m.uses_lobe_choice() || reads, "{kind:?} never reads u[0]");
+    }
+}

@@ -410,7 +410,7 @@ fn trace_exact(
     let mis = settings.mis;
 
     // Next-event estimation.
-    if let Some(ls) = lights.sample(v.p, sampler.get_1d_2d())
+    if let Some(ls) = lights.sample(v.p, sampler.get_1d_2d_if(lights.len() > 1))
         && let Some(wo) = v.light_direction(&ls)
     {
         let (f, pdf) = unit.eval_pdf(v.wi, wo, UNIT_LAMBDA);
@@ -426,7 +426,8 @@ fn trace_exact(
     }
 
     // BSDF sampling.
-    let Some(s) = unit.sample(v.wi, UNIT_LAMBDA, sampler.get_1d_2d()) else {
+    let lobe = unit.uses_lobe_choice();
+    let Some(s) = unit.sample(v.wi, UNIT_LAMBDA, sampler.get_1d_2d_if(lobe)) else {
         return out;
     };
     if s.pdf.is_nan() || s.pdf <= 0.0 || s.wo.z <= 0.0 {
@@ -602,7 +603,7 @@ fn trace(
         resolve(&mut pending, &mut t, &mut q);
 
         // Next-event estimation.
-        if let Some(ls) = lights.sample(v.p, sampler.get_1d_2d())
+        if let Some(ls) = lights.sample(v.p, sampler.get_1d_2d_if(lights.len() > 1))
             && let Some(wo) = v.light_direction(&ls)
         {
             // A delta light cannot be reached by BSDF sampling: its MIS
@@ -629,7 +630,8 @@ fn trace(
         }
 
         // BSDF sampling at the hero wavelength.
-        let Some(s) = bxdf.sample(wi, lambdas[0], sampler.get_1d_2d()) else {
+        let lobe = bxdf.uses_lobe_choice();
+        let Some(s) = bxdf.sample(wi, lambdas[0], sampler.get_1d_2d_if(lobe)) else {
             break;
         };
         if s.pdf.is_nan() || s.pdf <= 0.0 || s.wo.z <= 0.0 {

@@ -350,7 +350,8 @@ impl Lights {
         1.0 / self.lights.len() as f64
     }
 
-    /// Samples a light and a direction toward it from `p`.
+    /// Samples a light and a direction toward it from `p`: `u[0]` chooses
+    /// the light (and is not read when there is one), `u[1..]` the point.
     pub fn sample(&self, p: DVec3, u: [f64; 3]) -> Option<LightSample<'_>> {
         let n = self.lights.len();
         if n == 0 {

@@ -166,7 +166,12 @@ impl Sampler {
         }
         Sampler {
             kind,
-            rng: Rng::for_sample(seed, pixel, sample),
+            // Only the independent sampler reads it: three hashes saved per
+            // Sobol camera sample.
+            rng: match kind {
+                SamplerKind::Independent => Rng::for_sample(seed, pixel, sample),
+                SamplerKind::Sobol => Rng::for_sample(0, 0, 0),
+            },
             // Truncation on purpose: the index within the block.
             index_rev: (sample as u32).reverse_bits(),
             pixel_seed,
@@ -235,6 +240,22 @@ impl Sampler {
         let [b, c] = self.get_2d();
         [a, b, c]
     }
+
+    /// [`get_1d_2d`](Self::get_1d_2d) for a caller that reads the 1D value
+    /// only if `first` (a light choice among one light, the lobe choice of a
+    /// single-lobe model): otherwise the Sobol sampler takes its place in
+    /// the sequence without computing it and returns 0.5 there, so every
+    /// value the caller reads is the one `get_1d_2d` gives. The independent
+    /// sampler's stream is sequential, so it draws it anyway.
+    #[inline]
+    pub fn get_1d_2d_if(&mut self, first: bool) -> [f64; 3] {
+        if !first && self.kind == SamplerKind::Sobol {
+            self.next_draw();
+            let [b, c] = self.get_2d();
+            return [0.5, b, c];
+        }
+        self.get_1d_2d()
+    }
 }
 
 #[cfg(test)]
@@ -267,6 +288,27 @@ mod tests {
         for _ in 0..10_000 {
             let i = r.next_u64() as u32;
             assert_eq!(sobol1(i), sobol1_reference(i));
+        }
+    }
+
+    #[test]
+    fn a_skipped_1d_draw_changes_no_other_value() {
+        for kind in [SamplerKind::Sobol, SamplerKind::Independent] {
+            for sample in [0u64, 7, 1 << 35] {
+                let mut a = Sampler::new(kind, 3, 11, sample);
+                let mut b = Sampler::new(kind, 3, 11, sample);
+                for round in 0..4 {
+                    let x = a.get_1d_2d();
+                    let y = b.get_1d_2d_if(round % 2 == 0);
+                    if round % 2 == 0 || kind == SamplerKind::Independent {
+                        assert_eq!(x, y);
+                    } else {
+                        assert_eq!([x[1], x[2]], [y[1], y[2]]);
+                        assert_eq!(y[0], 0.5);
+                    }
+                }
+                assert_eq!(a.get_2d(), b.get_2d());
+            }
         }
     }
 

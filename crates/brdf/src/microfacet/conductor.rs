@@ -181,6 +181,11 @@ impl Bxdf for MicrofacetConductor {
             ),
         }
     }
+
+    /// One glossy lobe: `sample` reads only `u[1]` and `u[2]`.
+    fn uses_lobe_choice(&self) -> bool {
+        false
+    }
 }
 
 impl MicrofacetConductor {
@@ -285,6 +290,11 @@ impl Bxdf for SmoothConductor {
             weight: self.fresnel.reflectance(wi.z, lambda_nm),
             probability: 1.0,
         }
+    }
+
+    /// One delta lobe: `sample` reads no random number.
+    fn uses_lobe_choice(&self) -> bool {
+        false
     }
 }
 
