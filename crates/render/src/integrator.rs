@@ -24,7 +24,7 @@
 
 use crate::film::BadSample;
 use crate::geometry::Ray;
-use crate::light::{Emission, LightSample};
+use crate::light::{Emission, LightSample, Lights};
 use crate::sampler::{Reserved2d, Sampler};
 use crate::scene::desc::MisHeuristic;
 use crate::scene::{Hit, Scene, Surface};
@@ -123,10 +123,7 @@ pub fn camera_sample(scene: &Scene, x: u32, y: u32, sample: u64) -> CameraSample
         // draws give.
         let (sampler, _, u_lambda) = camera_draws(scene, x, y, sample);
         CameraSample {
-            wavelengths: scene.wavelengths.sample_set(
-                sampler.reserved_2d(u_lambda),
-                scene.settings.wavelengths_per_path(),
-            ),
+            wavelengths: draw_wavelengths(scene, &sampler, u_lambda),
             radiance: [0.0; N],
             xyz: [0.0; 3],
         }
@@ -144,6 +141,15 @@ fn camera_draws(scene: &Scene, x: u32, y: u32, sample: u64) -> (Sampler, Ray, Re
     let ray = scene.camera.ray(x as f64 + ux, y as f64 + uy);
     let u_lambda = sampler.reserve_2d();
     (sampler, ray, u_lambda)
+}
+
+/// The camera sample's wavelengths, from its reserved draw `u_lambda`.
+#[inline]
+fn draw_wavelengths(scene: &Scene, sampler: &Sampler, u_lambda: Reserved2d) -> SampledWavelengths {
+    scene.wavelengths.sample_set(
+        sampler.reserved_2d(u_lambda),
+        scene.settings.wavelengths_per_path(),
+    )
 }
 
 /// Traces a camera sample; `None` if its ray escapes into no environment
@@ -167,10 +173,7 @@ fn traced(scene: &Scene, x: u32, y: u32, sample: u64) -> Option<CameraSample> {
             u_lambda,
         ));
     }
-    let wavelengths = scene.wavelengths.sample_set(
-        sampler.reserved_2d(u_lambda),
-        scene.settings.wavelengths_per_path(),
-    );
+    let wavelengths = draw_wavelengths(scene, &sampler, u_lambda);
     let start = Throughput::camera(&wavelengths);
     let radiance = trace(scene, ray, first, &wavelengths, &mut sampler, start, 0);
     Some(CameraSample {
@@ -290,6 +293,22 @@ impl Vertex {
     }
 }
 
+/// The emission `ray` meets at `hit` (an emitter, or the environment when
+/// it escapes) with the light-sampling density of that point; nothing at a
+/// reflecting surface.
+#[inline]
+fn emission_at<'a>(lights: &'a Lights, ray: &Ray, hit: Option<&Hit>) -> (Emission<'a>, f64) {
+    match hit {
+        None => lights.environment(ray.d),
+        Some(Hit {
+            surface: Surface::Emitter(i),
+            geo,
+            ..
+        }) => lights.emitted(*i as usize, ray.o, ray.d, geo.n, geo.t),
+        Some(_) => (Emission::None, 0.0),
+    }
+}
+
 /// Whether nothing blocks the segment from `p` to a light sample.
 #[inline]
 fn unoccluded(scene: &Scene, p: DVec3, ls: &LightSample) -> bool {
@@ -324,6 +343,13 @@ impl Throughput {
             l_mis: [0.0; N],
         }
     }
+}
+
+/// max_j T_j / Σ Q_k at the camera, the scale Russian roulette compares with.
+#[inline]
+fn roulette_scale(wavelengths: &SampledWavelengths) -> f64 {
+    let pdfs = wavelengths.pdfs();
+    pdfs.iter().fold(0.0f64, |a, &p| a.max(1.0 / p)) / pdfs.len() as f64
 }
 
 /// Russian roulette on the hero-symmetric throughput T_j / Σ Q_k, compared
@@ -374,31 +400,23 @@ fn trace_exact(
             xyz[c] += w * e[c];
         }
     };
-    // Emission seen directly: the only strategy, weight 1.
-    let hit = match first {
-        None => {
-            let (em, _) = lights.environment(ray.d);
-            add(&mut out.xyz, tables.direct(&em), 1.0);
-            return out;
-        }
-        Some(h) => h,
-    };
-    let m = match hit.surface {
-        Surface::Emitter(i) => {
-            let (em, _) = lights.emitted(i as usize, ray.o, ray.d, hit.geo.n, hit.geo.t);
-            add(&mut out.xyz, tables.direct(&em), 1.0);
-            return out;
-        }
-        Surface::Material(m) => m,
+    let Some(
+        hit @ Hit {
+            surface: Surface::Material(m),
+            ..
+        },
+    ) = first
+    else {
+        // Emission seen directly: the only strategy, weight 1.
+        let (em, _) = emission_at(lights, &ray, first.as_ref());
+        add(&mut out.xyz, tables.direct(&em), 1.0);
+        return out;
     };
     let (Some(table), Some(split)) = (
         tables.material(m),
         scene.materials[m as usize].fresnel_only.as_ref(),
     ) else {
-        out.wavelengths = scene.wavelengths.sample_set(
-            sampler.reserved_2d(u_lambda),
-            settings.wavelengths_per_path(),
-        );
+        out.wavelengths = draw_wavelengths(scene, sampler, u_lambda);
         let start = Throughput::camera(&out.wavelengths);
         out.radiance = trace(scene, ray, Some(hit), &out.wavelengths, sampler, start, 0);
         return out;
@@ -446,18 +464,7 @@ fn trace_exact(
         return out;
     };
     let next = scene.shapes.intersect(&ray, f64::INFINITY);
-    let (em, pdf_l) = match next {
-        None => lights.environment(ray.d),
-        Some(Hit {
-            surface: Surface::Emitter(i),
-            geo,
-            ..
-        }) => lights.emitted(i as usize, ray.o, ray.d, geo.n, geo.t),
-        Some(Hit {
-            surface: Surface::Material(_),
-            ..
-        }) => (Emission::None, 0.0),
-    };
+    let (em, pdf_l) = emission_at(lights, &ray, next.as_ref());
     if !matches!(em, Emission::None) {
         let w = mis_over_pdf(mis, 1.0, l_mis * pdf_l);
         if w > 0.0 {
@@ -478,13 +485,10 @@ fn trace_exact(
     // The path goes on: its wavelengths now, each carrying the first
     // vertex's Fresnel factor (the sampled estimator's state after that
     // vertex, with every Q_k = 1 since no density depended on λ).
-    let wavelengths = scene.wavelengths.sample_set(
-        sampler.reserved_2d(u_lambda),
-        settings.wavelengths_per_path(),
-    );
+    let wavelengths = draw_wavelengths(scene, sampler, u_lambda);
     let n = wavelengths.len();
     let mut th = Throughput::camera(&wavelengths);
-    let m0 = th.t[..n].iter().fold(0.0f64, |a, &v| a.max(v)) / n as f64;
+    let m0 = roulette_scale(&wavelengths);
     let mut fresnel = [0.0; N];
     split
         .fresnel
@@ -515,16 +519,11 @@ fn trace(
     start: Throughput,
     depth0: u32,
 ) -> [f64; N] {
-    let (lambdas, pl, n) = (&wavelengths.lambda, &wavelengths.pdf, wavelengths.n);
+    let (lambdas, n) = (&wavelengths.lambda, wavelengths.n);
     let lights = &scene.lights;
     let settings = &scene.settings;
-    let Throughput {
-        mut t,
-        mut q,
-        mut l_mis,
-    } = start;
-    // Russian roulette compares max_j T_j / Σ Q_k with its value at the camera.
-    let m0 = pl[..n].iter().fold(0.0f64, |a, &p| a.max(1.0 / p)) / n as f64;
+    let mut th = start;
+    let m0 = roulette_scale(wavelengths);
     let mis = settings.mis;
     let mut out = [0.0; N];
 
@@ -534,35 +533,15 @@ fn trace(
     // no environment, or hits a surface at the last depth) skips them. At the
     // last bounce of a direct-lighting render that is most paths.
     let mut pending: Option<Pending> = None;
-    let resolve = |pending: &mut Option<Pending>, t: &mut [f64; N], q: &mut [f64; N]| {
+    let resolve = |pending: &mut Option<Pending>, th: &mut Throughput| {
         if let Some(p) = pending.take() {
             let bxdf = &scene.materials[p.material as usize].bxdf;
             let mut fp = [(0.0, 0.0); N];
             bxdf.eval_pdf_many(p.wi, p.wo, &lambdas[1..n], &mut fp[1..n]);
-            for j in 1..n {
-                t[j] *= fp[j].0 * p.wo.z / p.pdf;
-                q[j] *= fp[j].1 / p.pdf;
-            }
-        }
-    };
-
-    let add_emission = |out: &mut [f64; N],
-                        t: &[f64; N],
-                        q: &[f64; N],
-                        l_mis: &[f64; N],
-                        em: Emission,
-                        pdf_l: f64| {
-        if matches!(em, Emission::None) {
-            return;
-        }
-        let own: f64 = q[..n].iter().sum();
-        let other: f64 = l_mis[..n].iter().sum::<f64>() * pdf_l;
-        let w = mis_over_pdf(mis, own, other);
-        if w > 0.0 {
-            let mut e = [0.0; N];
-            em.eval_many(&lambdas[..n], &mut e[..n]);
-            for j in 0..n {
-                out[j] += t[j] * e[j] * w;
+            let pairs = th.t[1..n].iter_mut().zip(&mut th.q[1..n]);
+            for ((t, q), &(f, pdf)) in pairs.zip(&fp[1..n]) {
+                *t *= f * p.wo.z / p.pdf;
+                *q *= pdf / p.pdf;
             }
         }
     };
@@ -573,24 +552,28 @@ fn trace(
             Some(h) => h,
             None => scene.shapes.intersect(&ray, f64::INFINITY),
         };
-        let Some(hit) = hit else {
-            let (em, pdf_l) = lights.environment(ray.d);
+        let Some(
+            hit @ Hit {
+                surface: Surface::Material(m),
+                ..
+            },
+        ) = hit
+        else {
+            let (em, pdf_l) = emission_at(lights, &ray, hit.as_ref());
             if !matches!(em, Emission::None) {
-                resolve(&mut pending, &mut t, &mut q);
-                add_emission(&mut out, &t, &q, &l_mis, em, pdf_l);
+                resolve(&mut pending, &mut th);
+                let own: f64 = th.q[..n].iter().sum();
+                let other: f64 = th.l_mis[..n].iter().sum::<f64>() * pdf_l;
+                let w = mis_over_pdf(mis, own, other);
+                if w > 0.0 {
+                    let mut e = [0.0; N];
+                    em.eval_many(&lambdas[..n], &mut e[..n]);
+                    for j in 0..n {
+                        out[j] += th.t[j] * e[j] * w;
+                    }
+                }
             }
             break;
-        };
-        let m = match hit.surface {
-            Surface::Emitter(i) => {
-                let (em, pdf_l) = lights.emitted(i as usize, ray.o, ray.d, hit.geo.n, hit.geo.t);
-                if !matches!(em, Emission::None) {
-                    resolve(&mut pending, &mut t, &mut q);
-                    add_emission(&mut out, &t, &q, &l_mis, em, pdf_l);
-                }
-                break;
-            }
-            Surface::Material(m) => m,
         };
         if depth == settings.max_depth {
             break;
@@ -600,7 +583,8 @@ fn trace(
             break;
         };
         let wi = v.wi;
-        resolve(&mut pending, &mut t, &mut q);
+        resolve(&mut pending, &mut th);
+        let Throughput { t, q, l_mis } = &mut th;
 
         // Next-event estimation.
         if let Some(ls) = lights.sample(v.p, sampler.get_1d_2d_if(lights.len() > 1))
@@ -644,7 +628,7 @@ fn trace(
                 t[j] *= sp.weight / s.pdf;
                 q[j] *= sp.probability / s.pdf;
             }
-            l_mis = [0.0; N];
+            *l_mis = [0.0; N];
         } else {
             t[0] *= s.weight;
             for k in 0..n {
@@ -659,12 +643,10 @@ fn trace(
         }
 
         if depth + 1 >= settings.rr_depth {
-            resolve(&mut pending, &mut t, &mut q);
-            let mut th = Throughput { t, q, l_mis };
+            resolve(&mut pending, &mut th);
             if !survives(&mut th, n, m0, sampler) {
                 break;
             }
-            (t, q, l_mis) = (th.t, th.q, th.l_mis);
         }
         let Some(next) = v.ray(s.wo) else {
             break;
