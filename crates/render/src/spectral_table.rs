@@ -14,7 +14,7 @@
 //! needs more than [`MAX_INTERVALS`] intervals gets no table and its paths
 //! sample wavelengths as before.
 //!
-//! The quadrature over λ is Gauss–Legendre (3 points) on the intervals
+//! The quadrature over λ is Gauss–Legendre (4 points) on the intervals
 //! between every knot of the integrand's pieces (the 1 nm colour-matching
 //! and sky rows, the n, κ table's rows, an emission table's rows), inside
 //! which the integrand is smooth: it integrates the very functions the
@@ -29,6 +29,8 @@ use crate::light::{Emission, Environment, LightKind, Lights};
 use crate::spectrum::{Cie, LAMBDA_MAX, LAMBDA_MIN, Spectrum};
 use brdf::Fresnel;
 use brdf::fresnel::conductor_reflectance_ratio;
+use brdf::numerics::interp::lagrange4;
+use brdf::numerics::quadrature::gl4_nodes;
 
 /// Largest interpolation error accepted, relative to the largest magnitude
 /// of the same basis function's channel over cosθd ∈ [0, 1].
@@ -98,23 +100,18 @@ impl Nodes {
         cuts.sort_by(f64::total_cmp);
         cuts.dedup_by(|a, b| (*a - *b).abs() < 1e-9);
         let cie = Cie::get();
-        let g = (0.6f64).sqrt();
-        let gl = [(-g, 5.0 / 9.0), (0.0, 8.0 / 9.0), (g, 5.0 / 9.0)];
-        let mut nk = Vec::new();
-        let mut w = Vec::new();
-        for seg in cuts.windows(2) {
-            let (mid, half) = (0.5 * (seg[0] + seg[1]), 0.5 * (seg[1] - seg[0]));
-            for (x, gw) in gl {
-                let l = mid + x * half;
-                nk.push(match fresnel {
-                    Fresnel::Conductor(ior) => ior.at(l),
-                    Fresnel::One => (1.0, 0.0),
-                });
-                let c = cie.xyz(l);
-                for b in bases {
-                    let v = gw * half * b.eval(l);
-                    w.push([v * c[0], v * c[1], v * c[2]]);
-                }
+        let nodes = gl4_nodes(&cuts);
+        let mut nk = Vec::with_capacity(nodes.len());
+        let mut w = Vec::with_capacity(nodes.len() * bases.len());
+        for (l, gw) in nodes {
+            nk.push(match fresnel {
+                Fresnel::Conductor(ior) => ior.at(l),
+                Fresnel::One => (1.0, 0.0),
+            });
+            let c = cie.xyz(l);
+            for b in bases {
+                let v = gw * b.eval(l);
+                w.push([v * c[0], v * c[1], v * c[2]]);
             }
         }
         Nodes {
@@ -150,17 +147,7 @@ fn cubic(x: f64, n: usize) -> (usize, [f64; 4]) {
     let x = x.clamp(0.0, 1.0) * n as f64;
     // Nodes i − 1 … i + 2 around x, shifted inward at the ends.
     let i = (x as u32 as usize).clamp(1, n - 2);
-    let t = x - i as f64;
-    let (a, b, c, d) = (t + 1.0, t, t - 1.0, t - 2.0);
-    (
-        i - 1,
-        [
-            -b * c * d / 6.0,
-            a * c * d / 2.0,
-            -a * b * d / 2.0,
-            a * b * c / 6.0,
-        ],
-    )
+    (i - 1, lagrange4(x - i as f64))
 }
 
 /// The integrals for one Fresnel term.
@@ -249,18 +236,17 @@ impl SpectralTables {
             d
         };
 
-        let mut distinct: Vec<&Fresnel> = Vec::new();
+        // Each distinct Fresnel term with the table it got.
+        let mut distinct: Vec<(&Fresnel, Option<u32>)> = Vec::new();
         let mut tables = Vec::new();
         let mut stats = TableStats::default();
-        let mut table_of: Vec<Option<u32>> = Vec::new();
         let material = fresnels
             .iter()
             .map(|f| {
                 let f = (*f)?;
-                if let Some(i) = distinct.iter().position(|g| *g == f) {
-                    return table_of[i];
+                if let Some(&(_, id)) = distinct.iter().find(|(g, _)| *g == f) {
+                    return id;
                 }
-                distinct.push(f);
                 let t = match f {
                     Fresnel::One => Some(FresnelTable::Flat(Fresnel::One)),
                     Fresnel::Conductor(ior) if ior.rows().is_none() => {
@@ -280,7 +266,7 @@ impl SpectralTables {
                     tables.push(t);
                     (tables.len() - 1) as u32
                 });
-                table_of.push(id);
+                distinct.push((f, id));
                 id
             })
             .collect();

@@ -4,7 +4,7 @@
 /// Weights of 4-point Lagrange interpolation at offsets −1, 0, 1, 2 for
 /// t ∈ [0, 1] (extrapolates smoothly outside).
 #[inline]
-pub(crate) fn lagrange4(t: f64) -> [f64; 4] {
+pub fn lagrange4(t: f64) -> [f64; 4] {
     const SIXTH: f64 = 1.0 / 6.0;
     let tm1 = t - 1.0;
     let tm2 = t - 2.0;

@@ -12,7 +12,7 @@
 pub(crate) mod bessel01;
 pub mod hankel;
 #[cfg(feature = "alloc")]
-pub(crate) mod interp;
+pub mod interp;
 pub(crate) mod math;
 pub mod poisson;
 pub mod quadrature;

@@ -61,7 +61,7 @@ pub(crate) fn gl4(a: f64, b: f64, mut f: impl FnMut(f64) -> f64) -> f64 {
 #[cfg(feature = "alloc")]
 /// The nodes and weights of [`gl4`] on every panel of `edges`, for integrals
 /// whose integrand setup is worth doing once per node.
-pub(crate) fn gl4_nodes(edges: &[f64]) -> Vec<(f64, f64)> {
+pub fn gl4_nodes(edges: &[f64]) -> Vec<(f64, f64)> {
     let mut out = Vec::with_capacity(4 * edges.len());
     for e in edges.windows(2) {
         let (c, r) = (0.5 * (e[0] + e[1]), 0.5 * (e[1] - e[0]));
