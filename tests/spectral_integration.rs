@@ -24,9 +24,17 @@ resolution = [6, 5]
 spp = 1
 "#;
 
-fn scene(body: &str, mode: &str) -> Scene {
+/// The scene: `body` continues `[integrator]`, and every scene stands on
+/// a level square of side `size` made of `floor`.
+fn scene(body: &str, (floor, size): (&str, f64), mode: &str) -> Scene {
     let text = format!(
-        "{CAMERA}\n[integrator]\nsampler = \"independent\"\nspectral_integration = \"{mode}\"\n{body}"
+        "{CAMERA}\n[integrator]\nsampler = \"independent\"\nspectral_integration = \"{mode}\"\n{body}
+[[shapes]]
+type = \"rectangle\"
+size = [{size}, {size}]
+material = \"{floor}\"
+transform = {{ rotate_deg = [-90.0, 0.0, 0.0] }}
+"
     );
     render::load_str(Path::new("spectral_integration.toml"), &text).unwrap()
 }
@@ -72,9 +80,9 @@ fn paired(a: &Scene, b: &Scene, spp: u64) -> [(f64, f64, f64, f64); 3] {
     out.map(|(ma, mb, d, v)| (ma, mb, d, v.sqrt()))
 }
 
-fn agree(name: &str, body: &str, spp: u64) {
-    let exact = scene(body, "auto");
-    let sampled = scene(body, "sampled");
+fn agree(name: &str, body: &str, floor: (&str, f64), spp: u64) {
+    let exact = scene(body, floor, "auto");
+    let sampled = scene(body, floor, "sampled");
     assert!(exact.spectral.is_some(), "{name}: {}", exact.prepared);
     assert!(sampled.spectral.is_none(), "{name}: {}", sampled.prepared);
     for (c, (ma, mb, d, e)) in paired(&exact, &sampled, spp).into_iter().enumerate() {
@@ -100,12 +108,6 @@ model = "ggx"
 metal = "cu"
 alpha = 0.3
 
-[[shapes]]
-type = "rectangle"
-size = [3.0, 3.0]
-material = "plate"
-transform = { rotate_deg = [-90.0, 0.0, 0.0] }
-
 [[lights]]
 type = "sphere"
 center = [0.0, 0.5, -0.6]
@@ -113,6 +115,7 @@ radius = 0.25
 radiance = 2.0
 spectrum = "constant"
 "#,
+        ("plate", 3.0),
         4000,
     );
 }
@@ -141,12 +144,6 @@ alpha_x = 0.1
 alpha_y = 0.4
 
 [[shapes]]
-type = "rectangle"
-size = [4.0, 4.0]
-material = "floor"
-transform = { rotate_deg = [-90.0, 0.0, 0.0] }
-
-[[shapes]]
 type = "sphere"
 center = [-0.3, 0.3, 0.0]
 radius = 0.3
@@ -171,6 +168,7 @@ position = [1.0, 1.0, 1.0]
 intensity = 1.5
 spectrum = "blackbody(3000)"
 "#,
+        ("floor", 4.0),
         20000,
     );
 }
@@ -187,18 +185,13 @@ model = "ggx"
 metal = "al"
 alpha = 0.2
 
-[[shapes]]
-type = "rectangle"
-size = [3.0, 3.0]
-material = "plate"
-transform = { rotate_deg = [-90.0, 0.0, 0.0] }
-
 [[lights]]
 type = "sky"
 sun_elevation_deg = 40.0
 sun_azimuth_deg = 180.0
 scale = 1e-4
 "#,
+        ("plate", 3.0),
         4000,
     );
 }
@@ -223,12 +216,6 @@ metal = "brass"
 alpha = 0.25
 
 [[shapes]]
-type = "rectangle"
-size = [3.0, 3.0]
-material = "ghs"
-transform = { rotate_deg = [-90.0, 0.0, 0.0] }
-
-[[shapes]]
 type = "sphere"
 center = [0.0, 0.35, 0.0]
 radius = 0.35
@@ -239,6 +226,7 @@ type = "environment"
 radiance = 1.0
 spectrum = "a"
 "#,
+        ("ghs", 3.0),
         4000,
     );
 }
