@@ -62,7 +62,7 @@ pub fn asinh_nonneg(x: f64) -> f64 {
     ln(x + libm::sqrt(x * x + 1.0))
 }
 
-/// (sin 2πu, cos 2πu) for `u` ∈ [0, 1], without a libm call.
+/// (sin 2πu, cos 2πu) for `u` ∈ [−1/8, 1], without a libm call.
 ///
 /// Samplers draw azimuths as 2πu, where the general-purpose `sincos` (argument
 /// reduction for any x) costs several times more than the rest of a sample.
@@ -139,7 +139,14 @@ mod tests {
             let b = k as f64 / 8.0;
             [b, b.next_up(), b.next_down()]
         });
-        for u in grid.chain(edges).filter(|u| (0.0..=1.0).contains(u)) {
+        // Negative arguments down to −1/8 too (the concentric map's range).
+        let negative = (0..=n / 8).map(|i| -(i as f64) / n as f64);
+        for u in grid
+            .chain(negative)
+            .chain(edges)
+            .chain([-0.125, (-0.125f64).next_up()])
+            .filter(|u| (-0.125..=1.0).contains(u))
+        {
             let (s, c) = sincos_2pi(u);
             // Against libm on the same reduced argument: the polynomials alone.
             let j = libm::floor(4.0 * u + 0.5);

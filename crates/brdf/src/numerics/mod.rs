@@ -2,7 +2,7 @@
 //! beyond the kernels they transform: Hankel transforms of the GHS kernel
 //! ([`hankel`]), Gauss–Legendre quadrature ([`quadrature`]), special
 //! functions ([`special`]), Poisson weights of the diffraction orders
-//! ([`poisson`]); crate-internal: K₀/K₁ Bessel functions, interpolation
+//! ([`poisson`]), sample warps ([`warp`]); crate-internal: K₀/K₁ Bessel functions, interpolation
 //! weights and the `no_std` math shims.
 
 // `!(x > 0.0)` is used on purpose throughout: it rejects NaN together with
@@ -19,3 +19,4 @@ pub mod quadrature;
 pub mod special;
 #[doc(hidden)]
 pub mod splitmix;
+pub mod warp;
