@@ -428,7 +428,7 @@ fn trace_exact(
     let mis = settings.mis;
 
     // Next-event estimation.
-    if let Some(ls) = lights.sample(v.p, sampler.get_1d_2d_if(lights.len() > 1))
+    if let Some(ls) = lights.sample(v.p, sampler.get_1d_2d_if(lights.nee_len() > 1))
         && let Some(wo) = v.light_direction(&ls)
     {
         let (f, pdf) = unit.eval_pdf(v.wi, wo, UNIT_LAMBDA);
@@ -587,7 +587,7 @@ fn trace(
         let Throughput { t, q, l_mis } = &mut th;
 
         // Next-event estimation.
-        if let Some(ls) = lights.sample(v.p, sampler.get_1d_2d_if(lights.len() > 1))
+        if let Some(ls) = lights.sample(v.p, sampler.get_1d_2d_if(lights.nee_len() > 1))
             && let Some(wo) = v.light_direction(&ls)
         {
             // A delta light cannot be reached by BSDF sampling: its MIS

@@ -317,6 +317,17 @@ pub struct Lights {
     pub lights: Vec<LightKind>,
     /// Index of the environment, if any.
     pub environment: Option<usize>,
+    /// A constant environment is left to BSDF sampling alone: next-event
+    /// estimation chooses among the other lights only, and a BSDF-sampled
+    /// ray that escapes to it has MIS weight 1 (its light pdf is 0). Uniform
+    /// directions know nothing a constant environment could add, while
+    /// visible-normal sampling of a microfacet conductor weighs each
+    /// direction by F·G2/G1 ≤ 1, so the light strategy only adds variance
+    /// (pbrt-v4 drops it for the same reason when allowed an incomplete
+    /// pdf). Sound only where every material's sampling covers its whole
+    /// lobe, so the scene sets it only when every material is a microfacet
+    /// or smooth conductor.
+    pub bsdf_only_environment: bool,
 }
 
 fn sphere_cone_pdf(sphere: &Sphere, p: DVec3) -> f64 {
@@ -346,18 +357,32 @@ impl Lights {
         self.lights.is_empty()
     }
 
+    /// The environment index when [`Lights::bsdf_only_environment`] keeps
+    /// it out of next-event estimation.
+    fn skipped(&self) -> Option<usize> {
+        self.environment.filter(|_| self.bsdf_only_environment)
+    }
+
+    /// Number of lights next-event estimation chooses among.
+    pub fn nee_len(&self) -> usize {
+        self.lights.len() - usize::from(self.skipped().is_some())
+    }
+
     fn select_pdf(&self) -> f64 {
-        1.0 / self.lights.len() as f64
+        1.0 / self.nee_len() as f64
     }
 
     /// Samples a light and a direction toward it from `p`: `u[0]` chooses
     /// the light (and is not read when there is one), `u[1..]` the point.
     pub fn sample(&self, p: DVec3, u: [f64; 3]) -> Option<LightSample<'_>> {
-        let n = self.lights.len();
+        let n = self.nee_len();
         if n == 0 {
             return None;
         }
-        let idx = ((u[0] * n as f64) as usize).min(n - 1);
+        let mut idx = ((u[0] * n as f64) as usize).min(n - 1);
+        if self.skipped().is_some_and(|e| idx >= e) {
+            idx += 1;
+        }
         let sel = self.select_pdf();
         let uv = [u[1], u[2]];
         match &self.lights[idx] {
@@ -508,6 +533,12 @@ impl Lights {
         let Some(i) = self.environment else {
             return (Emission::None, 0.0);
         };
+        if self.bsdf_only_environment {
+            // Only a constant environment is ever left to BSDF sampling.
+            if let LightKind::Environment(Environment::Constant(s)) = &self.lights[i] {
+                return (Emission::Spectrum(s, 1.0, i as u32), 0.0);
+            }
+        }
         let sel = self.select_pdf();
         match &self.lights[i] {
             LightKind::Environment(Environment::Constant(s)) => {
@@ -632,6 +663,7 @@ mod tests {
                 spectrum: Spectrum::Constant(1.0),
             }],
             environment: None,
+            bsdf_only_environment: false,
         };
         for i in 0..100 {
             let ls = lights
@@ -660,6 +692,7 @@ mod tests {
                     spectrum: Spectrum::Constant(1.0),
                 }],
                 environment: None,
+                bsdf_only_environment: false,
             };
             let r2d2 = (radius / dist) * (radius / dist);
             let one_minus = r2d2 / (1.0 + (1.0 - r2d2).sqrt());
@@ -688,5 +721,65 @@ mod tests {
             // 119 degrees of freedom: P(χ² > 185) ≈ 1e−4.
             assert!(chi2 < 185.0, "d = {dist}, r = {radius}: χ² = {chi2}");
         }
+    }
+
+    #[test]
+    fn a_bsdf_only_environment_is_never_chosen_and_has_no_light_pdf() {
+        // Sphere, constant environment, point: with the environment left to
+        // BSDF sampling, light choice is uniform over the other two.
+        let lights = Lights {
+            lights: vec![
+                LightKind::Sphere {
+                    sphere: Sphere {
+                        center: DVec3::new(0.0, 0.0, 5.0),
+                        radius: 1.0,
+                    },
+                    spectrum: Spectrum::Constant(1.0),
+                },
+                LightKind::Environment(Environment::Constant(Spectrum::Constant(1.0))),
+                LightKind::Point {
+                    position: DVec3::new(0.0, 3.0, 0.0),
+                    spectrum: Spectrum::Constant(1.0),
+                },
+            ],
+            environment: Some(1),
+            bsdf_only_environment: true,
+        };
+        assert_eq!(lights.nee_len(), 2);
+        let mut seen = [0u32; 2];
+        for i in 0..1000 {
+            let u0 = (i as f64 + 0.5) / 1000.0;
+            let ls = lights.sample(DVec3::ZERO, [u0, 0.3, 0.7]).unwrap();
+            assert!(ls.dist.is_finite(), "the environment was chosen");
+            if ls.is_delta {
+                assert_eq!(ls.pdf, 0.5);
+                seen[1] += 1;
+            } else {
+                let cone = sphere_cone_pdf(
+                    &Sphere {
+                        center: DVec3::new(0.0, 0.0, 5.0),
+                        radius: 1.0,
+                    },
+                    DVec3::ZERO,
+                );
+                assert!((ls.pdf - 0.5 * cone).abs() < 1e-12 * cone);
+                seen[0] += 1;
+            }
+        }
+        assert_eq!(seen, [500, 500]);
+        let (em, pdf) = lights.environment(DVec3::Y);
+        assert!(matches!(em, Emission::Spectrum(..)));
+        assert_eq!(pdf, 0.0);
+        // Without the flag: three lights, the environment sampled uniformly.
+        let all = Lights {
+            bsdf_only_environment: false,
+            ..lights
+        };
+        assert_eq!(all.nee_len(), 3);
+        assert!((all.environment(DVec3::Y).1 - 1.0 / (3.0 * 4.0 * PI)).abs() < 1e-15);
+        assert!((0..300).any(|i| {
+            all.sample(DVec3::ZERO, [(i as f64 + 0.5) / 300.0, 0.3, 0.7])
+                .is_some_and(|l| l.dist.is_infinite())
+        }));
     }
 }

@@ -512,6 +512,7 @@ mod tests {
         let lights = Lights {
             lights: spectra.iter().cloned().map(point).collect(),
             environment: None,
+            bsdf_only_environment: false,
         };
         let mut fresnels: Vec<Fresnel> = Metal::ALL
             .into_iter()
@@ -562,6 +563,7 @@ mod tests {
         let lights = Lights {
             lights: vec![LightKind::Environment(Environment::Sky(Box::new(sky)))],
             environment: Some(0),
+            bsdf_only_environment: false,
         };
         let t = SpectralTables::build(&lights, &[None, Some(&fresnel)]);
         assert_eq!(t.material(0), None);
@@ -580,6 +582,7 @@ mod tests {
         let lights = Lights {
             lights: vec![point(Spectrum::Constant(1.0))],
             environment: None,
+            bsdf_only_environment: false,
         };
         let mut t = SpectralTables::build(&lights, &[Some(&fresnel)]);
         let cie_basis: Vec<Basis> = (0..3).map(Basis::Cmf).collect();
@@ -612,6 +615,7 @@ mod tests {
         let lights = Lights {
             lights: vec![point(Spectrum::Constant(1.0))],
             environment: None,
+            bsdf_only_environment: false,
         };
         let em = Emission::Spectrum(&Spectrum::Constant(1.0), 1.0, 0);
         let (mut accepted, mut refused) = (0, 0);

@@ -56,13 +56,23 @@ pub(super) fn build(path: &Path, text: &str, desc: &SceneDesc) -> Result<Scene, 
     };
     let (materials, inputs) = (b.materials, b.inputs.into_files());
     let mut settings = settings;
-    if settings.hero_wavelengths == 0 {
-        let conductors = materials.iter().all(|m| {
+    let conductors = materials.iter().all(|m| {
+        matches!(
+            m.model,
+            ModelKind::Ggx | ModelKind::Beckmann | ModelKind::Smooth
+        )
+    });
+    // Their visible-normal (or delta) sampling covers every lobe, so a
+    // constant environment can be left to it (see `Lights`).
+    let mut lights = lights;
+    lights.bsdf_only_environment = conductors
+        && lights.environment.is_some_and(|i| {
             matches!(
-                m.model,
-                ModelKind::Ggx | ModelKind::Beckmann | ModelKind::Smooth
+                lights.lights[i],
+                LightKind::Environment(Environment::Constant(_))
             )
         });
+    if settings.hero_wavelengths == 0 {
         settings.hero_wavelengths = if conductors {
             HERO_COUNT_CONDUCTORS
         } else {
@@ -534,6 +544,8 @@ impl<'a> Builder<'a> {
             Lights {
                 lights,
                 environment,
+                // Set once the materials are known (see `build`).
+                bsdf_only_environment: false,
             },
             signed_radiance,
         ))

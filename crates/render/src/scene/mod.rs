@@ -28,7 +28,9 @@ pub const ESTIMATOR: &str = "lustre estimator 7: sobol sampler with 64-bit sampl
                              hero sets from a 2-D draw (base u/n, hero index), 16 per path \
                              for conductor-only scenes, power MIS, every input file hashed, \
                              first bounce off fresnel-only materials integrated over λ exactly, \
-                             sphere lights sampled through the concentric disk";
+                             sphere lights sampled through the concentric disk, \
+                             a constant environment left to BSDF sampling in conductor-only \
+                             scenes";
 
 /// What a ray hit.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
