@@ -533,16 +533,16 @@ impl Lights {
         let Some(i) = self.environment else {
             return (Emission::None, 0.0);
         };
-        if self.bsdf_only_environment {
-            // Only a constant environment is ever left to BSDF sampling.
-            if let LightKind::Environment(Environment::Constant(s)) = &self.lights[i] {
-                return (Emission::Spectrum(s, 1.0, i as u32), 0.0);
-            }
-        }
         let sel = self.select_pdf();
         match &self.lights[i] {
+            // Left to BSDF sampling, next-event estimation never draws it.
             LightKind::Environment(Environment::Constant(s)) => {
-                (Emission::Spectrum(s, 1.0, i as u32), sel / (4.0 * PI))
+                let pdf = if self.bsdf_only_environment {
+                    0.0
+                } else {
+                    sel / (4.0 * PI)
+                };
+                (Emission::Spectrum(s, 1.0, i as u32), pdf)
             }
             LightKind::Environment(Environment::Map(m)) => {
                 let uv = m.uv(dir);
