@@ -1,6 +1,7 @@
 //! Levelling: subtract a least-squares plane, a 2D polynomial, or a per-line polynomial.
 //! NaN points are ignored by the fits and stay NaN.
 
+use crate::ordered_sum::{map_blocks, sum_in_order};
 use crate::{FitError, Topography};
 use nalgebra::{DMatrix, DVector};
 use rayon::prelude::*;
@@ -224,55 +225,50 @@ fn fit_poly(topo: &Topography, degree: usize) -> Result<PolyFit, FitError> {
     let (ux, vy) = (scaled(nx), scaled(ny));
     // Accumulator: ata (m·m, upper triangle), atb (m), count, Σz, Σz².
     let size = m * m + m + 3;
-    let acc = topo
-        .heights
-        .par_chunks(nx.max(1))
-        .enumerate()
-        .fold(
-            || vec![0.0; size],
-            |mut acc, (y, row)| {
-                let mut mom = vec![0.0; 2 * degree + 1];
-                let mut rz = vec![0.0; degree + 1];
-                let (mut n_row, mut s1, mut s2) = (0usize, 0.0, 0.0);
-                for (&z, &u) in row.iter().zip(&ux) {
-                    if !z.is_finite() {
-                        continue;
-                    }
-                    n_row += 1;
-                    s1 += z;
-                    s2 += z * z;
-                    let mut p = 1.0;
-                    for k in 0..=2 * degree {
-                        mom[k] += p;
-                        if k <= degree {
-                            rz[k] += p * z;
-                        }
-                        p *= u;
-                    }
+    // Fixed blocks summed in order: the fit is the same on any thread count.
+    let row_len = nx.max(1);
+    let parts = map_blocks(topo.heights.len() / row_len, |rows| {
+        let mut acc = vec![0.0; size];
+        let mut mom = vec![0.0; 2 * degree + 1];
+        let mut rz = vec![0.0; degree + 1];
+        for y in rows {
+            let row = &topo.heights[y * row_len..(y + 1) * row_len];
+            mom.iter_mut().for_each(|v| *v = 0.0);
+            rz.iter_mut().for_each(|v| *v = 0.0);
+            let (mut n_row, mut s1, mut s2) = (0usize, 0.0, 0.0);
+            for (&z, &u) in row.iter().zip(&ux) {
+                if !z.is_finite() {
+                    continue;
                 }
-                if n_row == 0 {
-                    return acc;
-                }
-                let v = vy[y.min(ny - 1)];
-                for (a, &(ia, ja)) in terms.iter().enumerate() {
-                    acc[m * m + a] += v.powi(ja) * rz[ia as usize];
-                    for (b, &(ib, jb)) in terms.iter().enumerate().skip(a) {
-                        acc[a * m + b] += v.powi(ja + jb) * mom[(ia + ib) as usize];
+                n_row += 1;
+                s1 += z;
+                s2 += z * z;
+                let mut p = 1.0;
+                for k in 0..=2 * degree {
+                    mom[k] += p;
+                    if k <= degree {
+                        rz[k] += p * z;
                     }
+                    p *= u;
                 }
-                acc[m * m + m] += n_row as f64;
-                acc[m * m + m + 1] += s1;
-                acc[m * m + m + 2] += s2;
-                acc
-            },
-        )
-        .reduce(
-            || vec![0.0; size],
-            |mut a, b| {
-                a.iter_mut().zip(b).for_each(|(x, y)| *x += y);
-                a
-            },
-        );
+            }
+            if n_row == 0 {
+                continue;
+            }
+            let v = vy[y.min(ny - 1)];
+            for (a, &(ia, ja)) in terms.iter().enumerate() {
+                acc[m * m + a] += v.powi(ja) * rz[ia as usize];
+                for (b, &(ib, jb)) in terms.iter().enumerate().skip(a) {
+                    acc[a * m + b] += v.powi(ja + jb) * mom[(ia + ib) as usize];
+                }
+            }
+            acc[m * m + m] += n_row as f64;
+            acc[m * m + m + 1] += s1;
+            acc[m * m + m + 2] += s2;
+        }
+        acc
+    });
+    let acc = sum_in_order(parts, size);
     let mut ata = DMatrix::<f64>::zeros(m, m);
     for a in 0..m {
         for b in a..m {

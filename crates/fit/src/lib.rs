@@ -23,6 +23,7 @@ pub mod kc;
 pub mod level;
 pub mod material;
 pub mod ndf;
+mod ordered_sum;
 pub mod pipeline;
 pub mod psd;
 pub mod resample;

@@ -9,6 +9,7 @@
 //! * [`radial_from_profile`]: a 1D PSD converted to an isotropic 2D PSD by the local
 //!   power-law relation (approximate; see its docs).
 
+use crate::ordered_sum::{map_blocks, sum_in_order};
 use crate::{FitError, Topography};
 use rayon::prelude::*;
 use realfft::RealFftPlanner;
@@ -73,48 +74,36 @@ pub fn welch(t: &Topography, opts: &WelchOptions) -> Result<Psd1d, FitError> {
     let nbin = nperseg / 2 + 1;
     let fft = RealFftPlanner::<f64>::new().plan_fft_forward(nperseg);
     let nx = t.nx;
-    let sum = t
-        .heights
-        .par_chunks(nx)
-        .fold(
-            || {
-                (
-                    vec![0.0; nbin],
-                    fft.make_input_vec(),
-                    fft.make_output_vec(),
-                    fft.make_scratch_vec(),
-                )
-            },
-            |(mut acc, mut inp, mut out, mut scratch), line| {
-                for s in 0..nseg {
-                    let seg = &line[s * step..s * step + nperseg];
-                    let mean = seg.iter().sum::<f64>() / nperseg as f64;
-                    for ((i, &v), w) in inp.iter_mut().zip(seg).zip(&win) {
-                        *i = (v - mean) * w;
-                    }
-                    // Lengths match by construction, so this cannot fail.
-                    if fft
-                        .process_with_scratch(&mut inp, &mut out, &mut scratch)
-                        .is_ok()
-                    {
-                        for (a, c) in acc.iter_mut().zip(&out) {
-                            *a += c.norm_sqr();
-                        }
-                    }
-                }
-                (acc, inp, out, scratch)
-            },
-        )
-        .map(|(acc, ..)| acc)
-        .reduce(
-            || vec![0.0; nbin],
-            |mut a, b| {
-                for (x, y) in a.iter_mut().zip(b) {
-                    *x += y;
-                }
-                a
-            },
+    // Fixed blocks summed in order: the PSD is the same on any thread count.
+    let parts = map_blocks(t.heights.len() / nx, |rows| {
+        let mut acc = vec![0.0; nbin];
+        let (mut inp, mut out, mut scratch) = (
+            fft.make_input_vec(),
+            fft.make_output_vec(),
+            fft.make_scratch_vec(),
         );
+        for y in rows {
+            let line = &t.heights[y * nx..(y + 1) * nx];
+            for s in 0..nseg {
+                let seg = &line[s * step..s * step + nperseg];
+                let mean = seg.iter().sum::<f64>() / nperseg as f64;
+                for ((i, &v), w) in inp.iter_mut().zip(seg).zip(&win) {
+                    *i = (v - mean) * w;
+                }
+                // Lengths match by construction, so this cannot fail.
+                if fft
+                    .process_with_scratch(&mut inp, &mut out, &mut scratch)
+                    .is_ok()
+                {
+                    for (a, c) in acc.iter_mut().zip(&out) {
+                        *a += c.norm_sqr();
+                    }
+                }
+            }
+        }
+        acc
+    });
+    let sum = sum_in_order(parts, nbin);
     let scale = t.dx / wss / (nseg * t.ny) as f64;
     let last_doubled = if nperseg.is_multiple_of(2) {
         nbin - 1
@@ -190,44 +179,38 @@ pub fn radial(t: &Topography) -> Result<RadialPsd, FitError> {
     let zmax = std::f64::consts::PI / t.dx.max(t.dy);
     let nbins = (zmax / dz).floor() as usize + 1;
     let norm = t.dx * t.dy / ((nx * ny) as f64 * w2) / (4.0 * std::f64::consts::PI.powi(2));
-    let (sz, sp, sw) = (0..ncol)
-        .into_par_iter()
-        .fold(
-            || (vec![0.0; nbins], vec![0.0; nbins], vec![0.0; nbins]),
-            |(mut sz, mut sp, mut sw), kx| {
-                let mut col: Vec<Complex<f64>> = rows.iter().map(|r| r[kx]).collect();
-                cfft.process(&mut col);
-                let weight = if kx == 0 || (nx.is_multiple_of(2) && kx == nx / 2) {
-                    1.0
-                } else {
-                    2.0
-                };
-                let fx = kx as f64 * dkx;
-                for (ky, c) in col.iter().enumerate() {
-                    let kys = crate::fft::signed(ky, ny);
-                    let z = 2.0 * std::f64::consts::PI * (fx * fx + (kys * dky).powi(2)).sqrt();
-                    let b = (z / dz).round() as usize;
-                    if b == 0 || b >= nbins || z > zmax {
-                        continue;
-                    }
-                    sz[b] += weight * z;
-                    sp[b] += weight * c.norm_sqr() * norm;
-                    sw[b] += weight;
+    // Fixed blocks of columns summed in order: the same on any thread count.
+    // Each block's sums are laid out as [Σz | Σp | Σw], nbins each.
+    let parts = map_blocks(ncol, |cols| {
+        let mut acc = vec![0.0; 3 * nbins];
+        let (sz, rest) = acc.split_at_mut(nbins);
+        let (sp, sw) = rest.split_at_mut(nbins);
+        for kx in cols {
+            let mut col: Vec<Complex<f64>> = rows.iter().map(|r| r[kx]).collect();
+            cfft.process(&mut col);
+            let weight = if kx == 0 || (nx.is_multiple_of(2) && kx == nx / 2) {
+                1.0
+            } else {
+                2.0
+            };
+            let fx = kx as f64 * dkx;
+            for (ky, c) in col.iter().enumerate() {
+                let kys = crate::fft::signed(ky, ny);
+                let z = 2.0 * std::f64::consts::PI * (fx * fx + (kys * dky).powi(2)).sqrt();
+                let b = (z / dz).round() as usize;
+                if b == 0 || b >= nbins || z > zmax {
+                    continue;
                 }
-                (sz, sp, sw)
-            },
-        )
-        .reduce(
-            || (vec![0.0; nbins], vec![0.0; nbins], vec![0.0; nbins]),
-            |mut a, b| {
-                for i in 0..nbins {
-                    a.0[i] += b.0[i];
-                    a.1[i] += b.1[i];
-                    a.2[i] += b.2[i];
-                }
-                a
-            },
-        );
+                sz[b] += weight * z;
+                sp[b] += weight * c.norm_sqr() * norm;
+                sw[b] += weight;
+            }
+        }
+        acc
+    });
+    let sums = sum_in_order(parts, 3 * nbins);
+    let (sz, rest) = sums.split_at(nbins);
+    let (sp, sw) = rest.split_at(nbins);
     let mut out = RadialPsd {
         zeta: Vec::new(),
         p: Vec::new(),
