@@ -200,6 +200,28 @@ impl Sphere {
     /// Nearest hit with `t` in `(t_min, t_max)`.
     #[inline]
     pub fn intersect(&self, ray: &Ray, t_min: f64, t_max: f64) -> Option<HitGeometry> {
+        let t = self.hit_distance(ray, t_min, t_max)?;
+        Some(self.geometry_at(ray, t))
+    }
+
+    /// The hit geometry at distance `t` along `ray` (a `t` from
+    /// [`Sphere::hit_distance`]).
+    #[inline]
+    pub fn geometry_at(&self, ray: &Ray, t: f64) -> HitGeometry {
+        let p = ray.at(t);
+        let n = (p - self.center) / self.radius;
+        let n = n.normalize();
+        // dp/dφ about the sphere's z axis; at the poles fall back to x.
+        let tangent = DVec3::new(-n.y, n.x, 0.0)
+            .try_normalize()
+            .unwrap_or(DVec3::X);
+        HitGeometry { t, p, n, tangent }
+    }
+
+    /// The `t` of [`Sphere::intersect`] alone (no point, normal or tangent):
+    /// what a light sample or a shadow test needs.
+    #[inline]
+    pub fn hit_distance(&self, ray: &Ray, t_min: f64, t_max: f64) -> Option<f64> {
         let oc = ray.o - self.center;
         let b = oc.dot(ray.d);
         // c via (|oc| − r)(|oc| + r) avoids cancellation for far origins.
@@ -218,21 +240,13 @@ impl Sphere {
             let a1 = q;
             if a0 < a1 { (a0, a1) } else { (a1, a0) }
         };
-        let t = if t0 > t_min && t0 < t_max {
-            t0
+        if t0 > t_min && t0 < t_max {
+            Some(t0)
         } else if t1 > t_min && t1 < t_max {
-            t1
+            Some(t1)
         } else {
-            return None;
-        };
-        let p = ray.at(t);
-        let n = (p - self.center) / self.radius;
-        let n = n.normalize();
-        // dp/dφ about the sphere's z axis; at the poles fall back to x.
-        let tangent = DVec3::new(-n.y, n.x, 0.0)
-            .try_normalize()
-            .unwrap_or(DVec3::X);
-        Some(HitGeometry { t, p, n, tangent })
+            None
+        }
     }
 }
 
@@ -306,6 +320,38 @@ mod tests {
             )
             .is_none()
         );
+    }
+
+    #[test]
+    fn sphere_distance_is_the_hit_distance_and_the_hit_lies_on_the_sphere() {
+        // Rays from outside, inside and on the surface, toward and away from
+        // the sphere, with windows that include and exclude either root.
+        let s = Sphere {
+            center: DVec3::new(0.3, -1.0, 4.0),
+            radius: 1.5,
+        };
+        let (mut hits, mut misses) = (0, 0);
+        for i in 0..2000u32 {
+            let f = |k: u32| (((i.wrapping_mul(2_654_435_761) >> k) & 1023) as f64) / 1023.0;
+            let o = s.center + DVec3::new(f(0) - 0.5, f(3) - 0.5, f(6) - 0.5) * (6.0 * f(9));
+            let d = DVec3::new(f(12) - 0.5, f(15) - 0.5, f(18) - 0.5 + 1e-3).normalize();
+            let ray = Ray { o, d };
+            for (t_min, t_max) in [(0.0, f64::INFINITY), (1e-9, 2.0), (1.0, 10.0)] {
+                let t = s.hit_distance(&ray, t_min, t_max);
+                let h = s.intersect(&ray, t_min, t_max);
+                assert_eq!(t, h.as_ref().map(|h| h.t), "ray {i}");
+                if let (Some(t), Some(h)) = (t, h) {
+                    hits += 1;
+                    assert!(t > t_min && t < t_max);
+                    assert!(((h.p - s.center).length() - s.radius).abs() < 1e-12);
+                    let g = s.geometry_at(&ray, t);
+                    assert!(g.p == h.p && g.n == h.n && g.tangent == h.tangent);
+                } else {
+                    misses += 1;
+                }
+            }
+        }
+        assert!(hits > 1000 && misses > 1000, "{hits} hits, {misses} misses");
     }
 
     #[test]

@@ -118,16 +118,23 @@ pub struct CameraSample {
 
 /// Traces camera sample `sample` of pixel (`x`, `y`).
 pub fn camera_sample(scene: &Scene, x: u32, y: u32, sample: u64) -> CameraSample {
-    traced(scene, x, y, sample).unwrap_or_else(|| {
-        // The ray escaped into no environment: zero at the wavelengths its
-        // draws give.
-        let (sampler, _, u_lambda) = camera_draws(scene, x, y, sample);
-        CameraSample {
-            wavelengths: draw_wavelengths(scene, &sampler, u_lambda),
+    match traced(scene, x, y, sample) {
+        Traced::Spectral(cs) => cs,
+        Traced::Exact(xyz) => CameraSample {
+            wavelengths: SampledWavelengths::none(),
             radiance: [0.0; N],
-            xyz: [0.0; 3],
+            xyz,
+        },
+        Traced::Miss => {
+            // Zero at the wavelengths its draws give.
+            let (sampler, _, u_lambda) = camera_draws(scene, x, y, sample);
+            CameraSample {
+                wavelengths: draw_wavelengths(scene, &sampler, u_lambda),
+                radiance: [0.0; N],
+                xyz: [0.0; 3],
+            }
         }
-    })
+    }
 }
 
 /// A camera sample's first draws: its sampler, its camera ray, and the
@@ -152,31 +159,37 @@ fn draw_wavelengths(scene: &Scene, sampler: &Sampler, u_lambda: Reserved2d) -> S
     )
 }
 
-/// Traces a camera sample; `None` if its ray escapes into no environment
-/// (most of the misses around an object or a plate), which is zero at every
-/// wavelength and returns before the wavelengths are drawn: their draw is
-/// reserved, so every later draw is the same.
+/// What a traced camera sample produced.
+// Not boxed: the enum is returned through the caller's slot, so a small
+// variant writes its 24 bytes only, and a box would allocate per sample.
+#[allow(clippy::large_enum_variant)]
+enum Traced {
+    /// The ray escaped into no environment (most of the misses around an
+    /// object or a plate): zero at every wavelength, returned before the
+    /// wavelengths are drawn (their draw is reserved, so every later draw is
+    /// the same).
+    Miss,
+    /// Every contribution was integrated over λ exactly: their XYZ.
+    Exact([f64; 3]),
+    /// Sampled wavelengths were needed.
+    Spectral(CameraSample),
+}
+
+/// Traces a camera sample.
 #[inline(always)]
-fn traced(scene: &Scene, x: u32, y: u32, sample: u64) -> Option<CameraSample> {
+fn traced(scene: &Scene, x: u32, y: u32, sample: u64) -> Traced {
     let (mut sampler, ray, u_lambda) = camera_draws(scene, x, y, sample);
     let first = scene.shapes.intersect(&ray, f64::INFINITY);
     if first.is_none() && !scene.lights.has_environment() {
-        return None;
+        return Traced::Miss;
     }
     if let Some(tables) = &scene.spectral {
-        return Some(trace_exact(
-            scene,
-            tables,
-            ray,
-            first,
-            &mut sampler,
-            u_lambda,
-        ));
+        return trace_exact(scene, tables, ray, first, &mut sampler, u_lambda);
     }
     let wavelengths = draw_wavelengths(scene, &sampler, u_lambda);
     let start = Throughput::camera(&wavelengths);
     let radiance = trace(scene, ray, first, &wavelengths, &mut sampler, start, 0);
-    Some(CameraSample {
+    Traced::Spectral(CameraSample {
         wavelengths,
         radiance,
         xyz: [0.0; 3],
@@ -202,8 +215,18 @@ pub fn sample_pixel_checked(
     y: u32,
     sample: u64,
 ) -> Result<[f64; 3], BadSample> {
-    let Some(cs) = traced(scene, x, y, sample) else {
-        return Ok([0.0; 3]);
+    let cs = match traced(scene, x, y, sample) {
+        Traced::Miss => return Ok([0.0; 3]),
+        Traced::Exact(xyz) => {
+            let finite = xyz.iter().all(|v| v.is_finite());
+            // See below for why Y decides the sign.
+            return match (finite, scene.signed_radiance || xyz[1] >= 0.0) {
+                (false, _) => Err(BadSample::NonFinite),
+                (true, false) => Err(BadSample::Negative),
+                (true, true) => Ok(xyz),
+            };
+        }
+        Traced::Spectral(cs) => cs,
     };
     let n = cs.wavelengths.len();
     let r = &cs.radiance[..n];
@@ -387,14 +410,13 @@ fn trace_exact(
     first: Option<Hit>,
     sampler: &mut Sampler,
     u_lambda: Reserved2d,
-) -> CameraSample {
+) -> Traced {
     let lights = &scene.lights;
     let settings = &scene.settings;
-    let mut out = CameraSample {
-        wavelengths: SampledWavelengths::none(),
-        radiance: [0.0; N],
-        xyz: [0.0; 3],
-    };
+    // Only the XYZ of the exactly integrated part until a path needs
+    // sampled wavelengths: a whole `CameraSample` (416 bytes) built and
+    // moved per sample cost ~135 instructions in memset and memcpy.
+    let mut xyz = [0.0; 3];
     let add = |xyz: &mut [f64; 3], e: [f64; 3], w: f64| {
         for c in 0..3 {
             xyz[c] += w * e[c];
@@ -409,21 +431,25 @@ fn trace_exact(
     else {
         // Emission seen directly: the only strategy, weight 1.
         let (em, _) = emission_at(lights, &ray, first.as_ref());
-        add(&mut out.xyz, tables.direct(&em), 1.0);
-        return out;
+        add(&mut xyz, tables.direct(&em), 1.0);
+        return Traced::Exact(xyz);
     };
     let (Some(table), Some(split)) = (
         tables.material(m),
         scene.materials[m as usize].fresnel_only.as_ref(),
     ) else {
-        out.wavelengths = draw_wavelengths(scene, sampler, u_lambda);
-        let start = Throughput::camera(&out.wavelengths);
-        out.radiance = trace(scene, ray, Some(hit), &out.wavelengths, sampler, start, 0);
-        return out;
+        let wavelengths = draw_wavelengths(scene, sampler, u_lambda);
+        let start = Throughput::camera(&wavelengths);
+        let radiance = trace(scene, ray, Some(hit), &wavelengths, sampler, start, 0);
+        return Traced::Spectral(CameraSample {
+            wavelengths,
+            radiance,
+            xyz,
+        });
     };
     let unit = &split.unit;
     let Some(v) = Vertex::new(&hit, &ray) else {
-        return out;
+        return Traced::Exact(xyz);
     };
     let mis = settings.mis;
 
@@ -438,7 +464,7 @@ fn trace_exact(
             let w = mis_over_pdf(mis, ls.pdf, pdf);
             if w > 0.0 {
                 let e = tables.reflected(table, (v.wi + wo).length_squared(), 4.0, &ls.emission);
-                add(&mut out.xyz, e, f * wo.z * w);
+                add(&mut xyz, e, f * wo.z * w);
             }
         }
     }
@@ -446,10 +472,10 @@ fn trace_exact(
     // BSDF sampling.
     let lobe = unit.uses_lobe_choice();
     let Some(s) = unit.sample(v.wi, UNIT_LAMBDA, sampler.get_1d_2d_if(lobe)) else {
-        return out;
+        return Traced::Exact(xyz);
     };
     if s.pdf.is_nan() || s.pdf <= 0.0 || s.wo.z <= 0.0 {
-        return out;
+        return Traced::Exact(xyz);
     }
     // cos²θd as a ratio: the mirror's θi, or |wi + wo|²/4.
     let (num, den) = if s.is_delta {
@@ -461,7 +487,7 @@ fn trace_exact(
     // this edge reaches (no light sample can produce a delta direction).
     let l_mis = if s.is_delta { 0.0 } else { 1.0 / s.pdf };
     let Some(ray) = v.ray(s.wo) else {
-        return out;
+        return Traced::Exact(xyz);
     };
     let next = scene.shapes.intersect(&ray, f64::INFINITY);
     let (em, pdf_l) = emission_at(lights, &ray, next.as_ref());
@@ -469,17 +495,17 @@ fn trace_exact(
         let w = mis_over_pdf(mis, 1.0, l_mis * pdf_l);
         if w > 0.0 {
             add(
-                &mut out.xyz,
+                &mut xyz,
                 tables.reflected(table, num, den, &em),
                 s.weight * w,
             );
         }
     }
     let Some(next) = next.filter(|h| matches!(h.surface, Surface::Material(_))) else {
-        return out;
+        return Traced::Exact(xyz);
     };
     if settings.max_depth == 1 {
-        return out;
+        return Traced::Exact(xyz);
     }
 
     // The path goes on: its wavelengths now, each carrying the first
@@ -498,12 +524,18 @@ fn trace_exact(
         *l = l_mis;
     }
     if 1 >= settings.rr_depth && !survives(&mut th, n, m0, sampler) {
-        out.wavelengths = wavelengths;
-        return out;
+        return Traced::Spectral(CameraSample {
+            wavelengths,
+            radiance: [0.0; N],
+            xyz,
+        });
     }
-    out.radiance = trace(scene, ray, Some(next), &wavelengths, sampler, th, 1);
-    out.wavelengths = wavelengths;
-    out
+    let radiance = trace(scene, ray, Some(next), &wavelengths, sampler, th, 1);
+    Traced::Spectral(CameraSample {
+        wavelengths,
+        radiance,
+        xyz,
+    })
 }
 
 /// Spectral radiance estimates (wavelength pdf included) along `ray` at each

@@ -405,8 +405,10 @@ impl Lights {
                 let to_c = sphere.center - p;
                 let d2 = to_c.length_squared();
                 let r2 = sphere.radius * sphere.radius;
-                let wi = if d2 <= r2 {
-                    uniform_sphere(uv)
+                // The cone's pdf from the same 1 − cosθmax as the draw
+                // (what `sphere_cone_pdf` computes for a BSDF-sampled hit).
+                let (wi, cone_pdf) = if d2 <= r2 {
+                    (uniform_sphere(uv), 1.0 / (4.0 * PI))
                 } else {
                     let cos_max = (1.0 - r2 / d2).max(0.0).sqrt();
                     let one_minus = (r2 / d2) / (1.0 + cos_max);
@@ -422,17 +424,20 @@ impl Lights {
                     let scale = (one_minus * (2.0 - h)).max(0.0).sqrt();
                     let w = to_c / d2.sqrt();
                     let (t, b) = frame(w);
-                    (scale * x * t + scale * y * b + cos_t * w).normalize()
+                    (
+                        (scale * x * t + scale * y * b + cos_t * w).normalize(),
+                        1.0 / (2.0 * PI * one_minus),
+                    )
                 };
                 let ray = Ray { o: p, d: wi };
                 // Grazing cone samples can miss by round-off; the tangent distance is then exact enough.
                 let dist = sphere
-                    .intersect(&ray, 0.0, f64::INFINITY)
-                    .map_or_else(|| (d2 - r2).max(0.0).sqrt(), |h| h.t);
+                    .hit_distance(&ray, 0.0, f64::INFINITY)
+                    .unwrap_or_else(|| (d2 - r2).max(0.0).sqrt());
                 Some(LightSample {
                     wi,
                     dist,
-                    pdf: sel * sphere_cone_pdf(sphere, p),
+                    pdf: sel * cone_pdf,
                     is_delta: false,
                     emission: Emission::Spectrum(spectrum, 1.0, idx as u32),
                 })

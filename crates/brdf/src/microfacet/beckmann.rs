@@ -1,7 +1,7 @@
 //! Beckmann distribution.
 
 use crate::numerics::math::exp;
-use core::f64::consts::PI;
+use core::f64::consts::{FRAC_1_SQRT_2, PI};
 use glam::DVec3;
 
 const SQRT_PI: f64 = 1.772_453_850_905_516;
@@ -46,6 +46,10 @@ pub(super) fn lambda(t: f64) -> f64 {
     let a = 1.0 / libm::sqrt(t);
     (0.5 * (exp(-a * a) / (a * SQRT_PI) - libm::erfc(a))).max(0.0)
 }
+
+/// From a = 1/(α tanθ) = 5.8 on, Λ < 1.8·10⁻¹⁸ is taken as 0 (see
+/// [`super::Distribution::lambda_frac`]).
+pub(super) const LAMBDA_NEGLIGIBLE_A: f64 = 5.8;
 
 /// Upper end of the polynomial's range in x = 1/a (a ≥ 1.25).
 const LAMBDA_POLY_MAX_X: f64 = 0.8;
@@ -122,6 +126,14 @@ fn estrin<const N: usize>(c: &[f64; N], tau: f64) -> f64 {
 /// the view azimuth from its visible marginal by inverting its CDF, draw the
 /// orthogonal slope from the (independent) Gaussian marginal, unstretch.
 pub(super) fn sample_visible(wi: DVec3, ax: f64, ay: f64, u: [f64; 2]) -> DVec3 {
+    sample_visible_with_lambda(wi, ax, ay, u).0
+}
+
+/// [`sample_visible`] and Smith Λ(wi), which the inversion computes on the
+/// way (its normalisation is cotθ (1 + Λ) in the stretched frame): the
+/// sampler's caller needs G1(wi) and would otherwise evaluate it again.
+/// Λ is 0 from a = cotθ ≥ 5.8 on, as in [`super::Distribution::lambda_frac`].
+pub(super) fn sample_visible_with_lambda(wi: DVec3, ax: f64, ay: f64, u: [f64; 2]) -> (DVec3, f64) {
     let ws = DVec3::new(ax * wi.x, ay * wi.y, wi.z).normalize();
     let sin_t = libm::sqrt((ws.x * ws.x + ws.y * ws.y).min(1.0));
     let (cos_phi, sin_phi) = if sin_t > 0.0 {
@@ -129,56 +141,84 @@ pub(super) fn sample_visible(wi: DVec3, ax: f64, ay: f64, u: [f64; 2]) -> DVec3 
     } else {
         (1.0, 0.0)
     };
-    let (sx, sy) = sample_slopes_unit(ws.z, sin_t, u);
+    let (sx, sy, lambda) = sample_slopes_unit(ws.z, sin_t, u);
     // Rotate back to the view azimuth and unstretch; the normal is (−s, 1).
     let rx = cos_phi * sx - sin_phi * sy;
     let ry = sin_phi * sx + cos_phi * sy;
-    super::normalize_or_none(DVec3::new(-rx * ax, -ry * ay, 1.0)).unwrap_or(DVec3::Z)
+    let h = super::normalize_or_none(DVec3::new(-rx * ax, -ry * ay, 1.0)).unwrap_or(DVec3::Z);
+    (h, lambda)
 }
 
 /// Slopes of the visible normals of a unit-roughness Beckmann surface, for a
-/// view at cosθ = `c`, sinθ = `s` along +x. The x-slope density is
-/// ∝ (cotθ − x) e^{−x²} on x < cotθ, with CDF
+/// view at cosθ = `c`, sinθ = `s` along +x, and Λ at that view. The x-slope
+/// density is ∝ (cotθ − x) e^{−x²} on x < cotθ, with CDF
 /// C(x) = [cotθ (1 + erf x) + e^{−x²}/√π] / 2; y is Gaussian with variance ½.
-fn sample_slopes_unit(c: f64, s: f64, u: [f64; 2]) -> (f64, f64) {
+fn sample_slopes_unit(c: f64, s: f64, u: [f64; 2]) -> (f64, f64, f64) {
     if s < 1e-7 {
         // Normal view: the visible slope density is the isotropic Gaussian.
         let r = libm::sqrt(-libm::log1p(-u[0]));
         let (sp, cp) = libm::sincos(2.0 * PI * u[1]);
-        return (r * cp, r * sp);
+        return (r * cp, r * sp, 0.0);
     }
-    // Per-axis slope variance ½ at unit roughness: erfinv of a uniform on (−1, 1).
-    let sy = erfinv(2.0 * u[1] - 1.0);
+    // Per-axis slope variance ½ at unit roughness: a standard normal / √2.
+    let sy = normal_quantile(u[1]) * FRAC_1_SQRT_2;
     let cot = c / s;
     // Start from the cotθ → ∞ limit, moved by the tabulated difference
     // between it and the root: within 1e−4 of the root for nine draws in
     // ten, so one Halley step usually finishes (from the limit alone it
     // took four to five, each an erfc and an exp).
-    let (x0, target) = gaussian_start_and_target(cot, u[0]);
-    let start = x0 + start_correction(c, s, u[0]);
-    (solve_slope(cot, target, start, true), sy)
+    let st = gaussian_start_and_target(cot, u[0]);
+    let start = st.start + start_correction(c, s, u[0]);
+    (solve_slope(cot, st.target, start, true), sy, st.lambda)
 }
 
-/// (x₀, u·C(cotθ)): the exact inverse at `u` of the cotθ → ∞ limit (the
-/// Gaussian CDF rescaled to the mass below cotθ), and the value of C the
-/// root must reach. One erfc, 1 + erf(cotθ), serves both.
+/// What the slope inversion needs at one view, and Λ at it.
+struct StartAndTarget {
+    /// The exact inverse at `u` of the cotθ → ∞ limit (the Gaussian CDF
+    /// rescaled to the mass below cotθ).
+    start: f64,
+    /// u·C(cotθ), the value of C the root must reach.
+    target: f64,
+    /// Smith Λ at a = cotθ (0 from 5.8 on).
+    lambda: f64,
+}
+
+/// The start, target and Λ of one inversion: one erfc, 1 + erf(cotθ),
+/// serves all three.
 ///
 /// From cotθ ≥ 1.25 on, C(cotθ) = cotθ (1 + Λ) and
 /// erfc(cotθ) = e^{−cot²θ} (x/√π − 2x³H(x)) with x = tanθ (see [`lambda`]):
-/// one exp and the polynomial instead of erfc's two exps and another.
+/// one exp and the polynomial instead of erfc's two exps and another, and
+/// Λ = e^{−cot²θ} x³H(x) is [`lambda`]'s own expression. Below 1.25,
+/// Λ = (e^{−cot²θ}/(cotθ √π) − (2 − (1 + erf cotθ)))/2: the same difference
+/// as [`lambda`]'s, with erfc(cotθ) taken from 1 + erf, whose rounding
+/// (2·10⁻¹⁶ absolute) is below 2.5·10⁻¹⁴ of Λ there (Λ ≥ 0.0087).
 #[inline]
-fn gaussian_start_and_target(cot: f64, u: f64) -> (f64, f64) {
+fn gaussian_start_and_target(cot: f64, u: f64) -> StartAndTarget {
     if cot >= 1.0 / LAMBDA_POLY_MAX_X {
         let x = 1.0 / cot;
         let e = exp(-cot * cot);
         let s = scaled_lambda(x);
+        let lambda = e * s;
         let erfc = e * (x / SQRT_PI - 2.0 * s);
-        let total = cot * (1.0 + e * s);
-        return (erfinv_approx(u * (2.0 - erfc) - 1.0), u * total);
+        return StartAndTarget {
+            start: erfinv_approx(u * (2.0 - erfc) - 1.0),
+            target: u * (cot * (1.0 + lambda)),
+            lambda: if cot >= LAMBDA_NEGLIGIBLE_A {
+                0.0
+            } else {
+                lambda
+            },
+        };
     }
     let one_plus_erf = libm::erfc(-cot);
-    let total = 0.5 * (cot * one_plus_erf + exp(-cot * cot) / SQRT_PI);
-    (erfinv_approx(u * one_plus_erf - 1.0), u * total)
+    let e = exp(-cot * cot) / SQRT_PI;
+    let total = 0.5 * (cot * one_plus_erf + e);
+    StartAndTarget {
+        start: erfinv_approx(u * one_plus_erf - 1.0),
+        target: u * total,
+        lambda: (0.5 * (e / cot - (2.0 - one_plus_erf))).max(0.0),
+    }
 }
 
 /// The root of C(x) = `target` on (−8, cotθ] (C(x) < 1e−30 below −8 for
@@ -287,22 +327,111 @@ fn start_table_entry(i: usize, j: usize) -> f64 {
         return 0.0;
     }
     let cot = c / s;
-    let (x0, target) = gaussian_start_and_target(cot, u);
-    solve_slope(cot, target, x0, false) - x0
+    let st = gaussian_start_and_target(cot, u);
+    solve_slope(cot, st.target, st.start, false) - st.start
 }
 
-/// Inverse error function to full f64 accuracy: Giles' single-precision
-/// approximation (relative error below 3e-7 over (−1, 1)) refined by one
-/// Newton step on libm's erf, which squares that error (a second step
-/// changed nothing the tests can see and cost an erf and an exp).
-fn erfinv(y: f64) -> f64 {
-    let x = erfinv_approx(y);
-    if y <= -1.0 || y >= 1.0 {
-        return x;
+/// The standard normal quantile Φ⁻¹(p) for p in (0, 1), to about 1e−16
+/// relative: Wichura's rational approximations (Algorithm AS 241, Applied
+/// Statistics 37(3), 1988), with no transcendental call for
+/// |p − ½| ≤ 0.425 (85 % of uniform draws) and one log and one square root
+/// in the tails. p = 0 and 1 (which [0, 1) samplers can return) are read as
+/// the smallest normal double and its complement: finite, ±37.5.
+fn normal_quantile(p: f64) -> f64 {
+    let q = p - 0.5;
+    if q.abs() <= 0.425 {
+        let r = 0.180625 - q * q;
+        return q * horner(&AS241_A, r) / horner(&AS241_B, r);
     }
-    let err = libm::erf(x) - y;
-    x - err / (2.0 / SQRT_PI * exp(-x * x))
+    let tail = if q < 0.0 { p } else { 1.0 - p }.max(f64::MIN_POSITIVE);
+    let r = libm::sqrt(-libm::log(tail));
+    let x = if r <= 5.0 {
+        let r = r - 1.6;
+        horner(&AS241_C, r) / horner(&AS241_D, r)
+    } else {
+        let r = r - 5.0;
+        horner(&AS241_E, r) / horner(&AS241_F, r)
+    };
+    if q < 0.0 { -x } else { x }
 }
+
+/// Horner evaluation of Σ c[i] xⁱ.
+#[inline(always)]
+fn horner<const N: usize>(c: &[f64; N], x: f64) -> f64 {
+    let mut acc = c[N - 1];
+    for &ci in c[..N - 1].iter().rev() {
+        acc = acc * x + ci;
+    }
+    acc
+}
+
+// AS 241's coefficients (PPND16), lowest power first.
+#[allow(clippy::excessive_precision)]
+const AS241_A: [f64; 8] = [
+    3.3871328727963666080e0,
+    1.3314166789178437745e+2,
+    1.9715909503065514427e+3,
+    1.3731693765509461125e+4,
+    4.5921953931549871457e+4,
+    6.7265770927008700853e+4,
+    3.3430575583588128105e+4,
+    2.5090809287301226727e+3,
+];
+#[allow(clippy::excessive_precision)]
+const AS241_B: [f64; 8] = [
+    1.0,
+    4.2313330701600911252e+1,
+    6.8718700749205790830e+2,
+    5.3941960214247511077e+3,
+    2.1213794301586595867e+4,
+    3.9307895800092710610e+4,
+    2.8729085735721942674e+4,
+    5.2264952788528545610e+3,
+];
+#[allow(clippy::excessive_precision)]
+const AS241_C: [f64; 8] = [
+    1.42343711074968357734e0,
+    4.63033784615654529590e0,
+    5.76949722146069140550e0,
+    3.64784832476320460504e0,
+    1.27045825245236838258e0,
+    2.41780725177450611770e-1,
+    2.27238449892691845833e-2,
+    7.74545014278341407640e-4,
+];
+#[allow(clippy::excessive_precision)]
+const AS241_D: [f64; 8] = [
+    1.0,
+    2.05319162663775882187e0,
+    1.67638483018380384940e0,
+    6.89767334985100004550e-1,
+    1.48103976427480074590e-1,
+    1.51986665636164571966e-2,
+    5.47593808499534494600e-4,
+    1.05075007164441684324e-9,
+];
+#[allow(clippy::excessive_precision)]
+const AS241_E: [f64; 8] = [
+    6.65790464350110377720e0,
+    5.46378491116411436990e0,
+    1.78482653991729133580e0,
+    2.96560571828504891230e-1,
+    2.65321895265761230930e-2,
+    1.24266094738807843860e-3,
+    2.71155556874348757815e-5,
+    2.01033439929228813265e-7,
+];
+#[allow(clippy::excessive_precision)]
+const AS241_F: [f64; 8] = [
+    1.0,
+    5.99832206555887937690e-1,
+    1.36929880922735805310e-1,
+    1.48753612908506148525e-2,
+    7.86869131145613259100e-4,
+    1.84631831751005468180e-5,
+    1.42151175831644588870e-7,
+    2.04426310338993978564e-15,
+];
 
 /// Giles' approximation of erfinv alone (relative error below 3e-7 over
 /// (−1, 1)); ±6 at and beyond ±1.
@@ -402,7 +531,7 @@ mod tests {
                     _ => b as f64 / 400.0,
                 };
                 for u0 in [u0, u0 * 1e-6, 1.0 - (1.0 - u0) * 1e-6] {
-                    let (x, _) = sample_slopes_unit(c, s, [u0, 0.5]);
+                    let (x, _, _) = sample_slopes_unit(c, s, [u0, 0.5]);
                     // Bisection to adjacent floats: independent of Halley.
                     let cot = c / s;
                     let cdf = |x: f64| 0.5 * (cot * libm::erfc(-x) + exp(-x * x) / SQRT_PI);
@@ -437,10 +566,55 @@ mod tests {
     }
 
     #[test]
-    fn erfinv_inverts_erf() {
+    fn normal_quantile_inverts_the_normal_cdf() {
+        // Φ(x) = erfc(−x/√2)/2, in the lower tail without cancellation; the
+        // upper tail by symmetry, Φ⁻¹(1 − p) = −Φ⁻¹(p), checked exactly where
+        // 1 − p is representable.
+        let phi = |x: f64| 0.5 * libm::erfc(-x * FRAC_1_SQRT_2);
+        let mut worst = 0.0f64;
+        let mut check = |p: f64| {
+            let x = normal_quantile(p);
+            assert!(x.is_finite(), "p={p}: {x}");
+            // Relative error in x from the residual of Φ: δx = (Φ(x) − p)/φ(x).
+            let density = (-0.5 * x * x).exp() / (2.0 * PI).sqrt();
+            let rel = ((phi(x) - p) / density).abs() / x.abs().max(1e-300);
+            worst = worst.max(rel);
+            assert!(rel < 5e-15, "p={p}: x={x}, relative error {rel:e}");
+        };
+        for i in 1..100_000 {
+            check(i as f64 / 100_000.0);
+        }
+        // Both boundaries of the central region and the tail approximation.
+        for p in [0.075, 0.075 + 1e-12, 0.925, 0.925 - 1e-12] {
+            check(p);
+        }
+        for k in 0..=3000 {
+            // p from 1e−2 down to 1e−300: all three branches of the tail.
+            let p = 10f64.powf(-2.0 - k as f64 * 0.0993333);
+            check(p);
+        }
+        assert!(worst > 0.0, "the check measured nothing");
+        // Dyadic p: 1 − p and p − ½ are exact, so the branches see mirrored
+        // input and the symmetry holds to the bit.
+        for i in 1..=(1 << 19) {
+            let p = i as f64 / (1u64 << 20) as f64;
+            assert_eq!(normal_quantile(1.0 - p), -normal_quantile(p), "p={p}");
+        }
+        // The sampler's domain includes 0 (Sobol and the uniform generators
+        // return [0, 1)): finite, and on the correct side.
+        for (p, sign) in [(0.0, -1.0), (1.0, 1.0), (f64::NAN, 1.0)] {
+            let x = normal_quantile(p);
+            assert!(x.is_finite() && x * sign > 37.0, "p={p}: {x}");
+        }
+        assert_eq!(normal_quantile(0.5), 0.0);
+    }
+
+    #[test]
+    fn erfinv_approx_is_within_its_stated_error() {
         for i in 1..2000 {
             let y = -1.0 + i as f64 / 1000.0;
-            let x = erfinv(y);
+            // erfinv(y) = Φ⁻¹((1 + y)/2)/√2; (1 + y)/2 is exact here.
+            let x = normal_quantile(0.5 * (1.0 + y)) * FRAC_1_SQRT_2;
             assert!((libm::erf(x) - y).abs() < 1e-14, "y={y}");
             // The approximation that starts the slope inversion.
             let a = erfinv_approx(y);
@@ -510,13 +684,64 @@ mod tests {
     }
 
     #[test]
+    fn the_samplers_lambda_is_smiths_lambda() {
+        // Λ(wi) returned with the sample against `lambda` from t = α² tan²θ,
+        // over views from the normal to 1e−9 of the horizon, anisotropic
+        // roughness, both branches (a = cotθ of the stretched view ≷ 1.25)
+        // and the cut at a = 5.8.
+        let mut branches = [0usize; 3];
+        for (ax, ay) in [
+            (0.05, 0.05),
+            (0.3, 0.1),
+            (1.0, 1.0),
+            (0.01, 0.9),
+            (1e-4, 1e-4),
+        ] {
+            for i in 0..=400 {
+                let theta =
+                    core::f64::consts::FRAC_PI_2 * (i as f64 / 400.0).min(1.0 - 1e-9 / 1.57);
+                for phi in [0.0, 0.4, 1.3, 2.9, 4.0] {
+                    let (st, ct) = libm::sincos(theta);
+                    let wi = DVec3::new(st * libm::cos(phi), st * libm::sin(phi), ct);
+                    let t = (ax * ax * wi.x * wi.x + ay * ay * wi.y * wi.y) / (wi.z * wi.z);
+                    let want = lambda(t);
+                    let a = 1.0 / libm::sqrt(t);
+                    branches[if a < 1.25 {
+                        0
+                    } else if a < LAMBDA_NEGLIGIBLE_A {
+                        1
+                    } else {
+                        2
+                    }] += 1;
+                    for u in [[0.5, 0.5], [1e-9, 0.3], [0.999, 0.01]] {
+                        let (h, got) = sample_visible_with_lambda(wi, ax, ay, u);
+                        assert!(h.is_finite() && h.z > 0.0);
+                        let tol = if a >= LAMBDA_NEGLIGIBLE_A {
+                            1.8e-18
+                        } else {
+                            3e-14 * want
+                        };
+                        assert!(
+                            (got - want).abs() <= tol,
+                            "α=({ax},{ay}) θ={theta} φ={phi}: {got:e} vs {want:e}"
+                        );
+                    }
+                }
+            }
+        }
+        assert!(branches.iter().all(|&n| n > 100), "{branches:?}");
+    }
+
+    #[test]
     fn start_and_target_agree_with_their_erfc_forms() {
         // The polynomial branch of `gaussian_start_and_target` against the
         // erfc expressions it replaces.
         for i in 0..=4000 {
             let cot = 1.25 + 30.0 * i as f64 / 4000.0;
             for u in [1e-12, 0.03, 0.5, 0.97, 1.0 - 1e-12] {
-                let (x0, target) = gaussian_start_and_target(cot, u);
+                let StartAndTarget {
+                    start: x0, target, ..
+                } = gaussian_start_and_target(cot, u);
                 let one_plus_erf = libm::erfc(-cot);
                 let total = 0.5 * (cot * one_plus_erf + exp(-cot * cot) / SQRT_PI);
                 let rel = (target - u * total).abs() / (u * total);

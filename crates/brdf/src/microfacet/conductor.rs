@@ -165,7 +165,12 @@ impl Bxdf for MicrofacetConductor {
                 wi,
                 lambda_nm,
                 u,
-                |wi, u| d.ggx_sample_visible_unnormalised(wi, u),
+                |wi, u| {
+                    (
+                        d.ggx_sample_visible_unnormalised(wi, u),
+                        d.ggx_lambda_frac(wi),
+                    )
+                },
                 |w| d.ggx_lambda_frac(w),
                 |h, q| d.ggx_d_fraction(h, q),
                 true,
@@ -174,7 +179,10 @@ impl Bxdf for MicrofacetConductor {
                 wi,
                 lambda_nm,
                 u,
-                |wi, u| d.sample_visible_unnormalised(wi, u),
+                |wi, u| {
+                    let (h, lambda) = d.beckmann_sample_visible_with_lambda(wi, u);
+                    (h, (lambda, 1.0))
+                },
                 |w| d.lambda_frac(w),
                 |h, q| (d.d_unnormalised(h, q), 1.0),
                 false,
@@ -190,7 +198,8 @@ impl Bxdf for MicrofacetConductor {
 
 impl MicrofacetConductor {
     /// Visible-normal sampling given the distribution's pieces: `visible`
-    /// draws h up to a positive factor, `lambda_frac` is Smith Λ as a
+    /// draws h up to a positive factor and returns Smith Λ(wi) as a fraction
+    /// with it (Beckmann's inversion computes it anyway), `lambda_frac` is Smith Λ as a
     /// fraction, `d` is D(h/|h|) from h and |h|² as a fraction (its division
     /// joins the pdf's), and `homogeneous` says
     /// that `lambda_frac` accepts an unnormalised direction.
@@ -207,7 +216,7 @@ impl MicrofacetConductor {
         wi: DVec3,
         lambda_nm: f64,
         u: [f64; 3],
-        visible: impl Fn(DVec3, [f64; 2]) -> DVec3,
+        visible: impl Fn(DVec3, [f64; 2]) -> (DVec3, (f64, f64)),
         lambda_frac: impl Fn(DVec3) -> (f64, f64),
         d: impl Fn(DVec3, f64) -> (f64, f64),
         homogeneous: bool,
@@ -215,7 +224,7 @@ impl MicrofacetConductor {
         if wi.z.is_nan() || wi.z < COS_HORIZON {
             return None;
         }
-        let h = visible(wi, [u[1], u[2]]);
+        let (h, (ai, di)) = visible(wi, [u[1], u[2]]);
         let p = wi.dot(h);
         let q = h.length_squared();
         if !(p > 0.0 && q > 0.0 && q.is_finite()) {
@@ -227,7 +236,6 @@ impl MicrofacetConductor {
             return None;
         }
         let wo = v * (1.0 / q);
-        let (ai, di) = lambda_frac(wi);
         let (ao, do_) = lambda_frac(if homogeneous { v } else { wo });
         // G2/G1(i) = (di + ai) do / (di do + ai do + ao di).
         let weight = self.fresnel.reflectance_ratio(p * p, q, lambda_nm) * ((di + ai) * do_)

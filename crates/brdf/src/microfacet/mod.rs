@@ -168,7 +168,8 @@ impl Distribution {
                 let ax = self.alpha_x * w.x;
                 let ay = self.alpha_y * w.y;
                 // a² = z² / (αx²x² + αy²y²) ≥ 5.8².
-                if w.z > 0.0 && (ax * ax + ay * ay) * (5.8 * 5.8) <= w.z * w.z {
+                const A2: f64 = beckmann::LAMBDA_NEGLIGIBLE_A * beckmann::LAMBDA_NEGLIGIBLE_A;
+                if w.z > 0.0 && (ax * ax + ay * ay) * A2 <= w.z * w.z {
                     return (0.0, 1.0);
                 }
                 (self.lambda(w), 1.0)
@@ -229,17 +230,20 @@ impl Distribution {
         }
     }
 
-    /// [`Distribution::sample_visible`] up to a positive factor (z ≥ 0, may be
-    /// zero for degenerate input): GGX skips two divisions and a square root.
+    /// [`Distribution::sample_visible`] for a Beckmann distribution, with
+    /// Smith Λ(wi), which the inversion computes on the way.
     #[inline]
-    pub(crate) fn sample_visible_unnormalised(&self, wi: DVec3, u: [f64; 2]) -> DVec3 {
-        match self.kind {
-            NdfKind::Ggx => self.ggx_sample_visible_unnormalised(wi, u),
-            NdfKind::Beckmann => beckmann::sample_visible(wi, self.alpha_x, self.alpha_y, u),
-        }
+    pub(crate) fn beckmann_sample_visible_with_lambda(
+        &self,
+        wi: DVec3,
+        u: [f64; 2],
+    ) -> (DVec3, f64) {
+        beckmann::sample_visible_with_lambda(wi, self.alpha_x, self.alpha_y, u)
     }
 
-    /// [`Distribution::sample_visible_unnormalised`] for a GGX distribution.
+    /// [`Distribution::sample_visible`] for a GGX distribution, up to a
+    /// positive factor (z ≥ 0, may be zero for degenerate input): no
+    /// normalisation, two divisions and a square root fewer.
     #[inline(always)]
     pub(crate) fn ggx_sample_visible_unnormalised(&self, wi: DVec3, u: [f64; 2]) -> DVec3 {
         ggx::sample_visible_unnormalised(wi, self.alpha_x, self.alpha_y, u)

@@ -33,11 +33,18 @@ impl Shapes {
                 best = Some(Hit::analytic(g, *s));
             }
         }
-        for (sp, s) in &self.spheres {
-            if let Some(g) = sp.intersect(ray, 0.0, t_max) {
-                t_max = g.t;
-                best = Some(Hit::analytic(g, *s));
+        // The nearest sphere by distance alone; its point, normal and tangent
+        // (a normalisation and a division each) only for the one that wins.
+        let mut nearest_sphere = None;
+        for (i, (sp, _)) in self.spheres.iter().enumerate() {
+            if let Some(t) = sp.hit_distance(ray, 0.0, t_max) {
+                t_max = t;
+                nearest_sphere = Some(i);
             }
+        }
+        if let Some(i) = nearest_sphere {
+            let (sp, s) = &self.spheres[i];
+            best = Some(Hit::analytic(sp.geometry_at(ray, t_max), *s));
         }
         if let Some(m) = &self.mesh
             && let Some((g, mat, shading_n)) = m.intersect(ray, 0.0, t_max)
@@ -61,7 +68,7 @@ impl Shapes {
             || self
                 .spheres
                 .iter()
-                .any(|(s, _)| s.intersect(ray, 0.0, t_max).is_some())
+                .any(|(s, _)| s.hit_distance(ray, 0.0, t_max).is_some())
             || self
                 .mesh
                 .as_ref()
