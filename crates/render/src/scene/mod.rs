@@ -24,13 +24,13 @@ use std::path::{Path, PathBuf};
 /// The estimator version, hashed into every fingerprint: films rendered by
 /// an earlier estimator (other wavelength or random-number sampling, other
 /// inputs hashed) must not merge with new ones.
-pub const ESTIMATOR: &str = "lustre estimator 7: sobol sampler with 64-bit sample indices, \
+pub const ESTIMATOR: &str = "lustre estimator 8: sobol sampler with 64-bit sample indices, \
                              hero sets from a 2-D draw (base u/n, hero index), 16 per path \
                              for conductor-only scenes, power MIS, every input file hashed, \
                              first bounce off fresnel-only materials integrated over λ exactly, \
                              sphere lights sampled through the concentric disk, \
                              a constant environment left to BSDF sampling in conductor-only \
-                             scenes";
+                             scenes, Beckmann's orthogonal slope by the AS 241 normal quantile";
 
 /// What a ray hit.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
