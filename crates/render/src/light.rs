@@ -330,16 +330,26 @@ pub struct Lights {
     pub bsdf_only_environment: bool,
 }
 
-fn sphere_cone_pdf(sphere: &Sphere, p: DVec3) -> f64 {
-    let d2 = (sphere.center - p).length_squared();
-    let r2 = sphere.radius * sphere.radius;
+/// 1 − cosθmax of the cone `sphere` subtends from a point at squared
+/// distance `d2` from its centre, written without cancellation; `None` from
+/// inside the sphere, where it fills every direction.
+fn cone_one_minus_cos(d2: f64, r2: f64) -> Option<f64> {
     if d2 <= r2 {
-        return 1.0 / (4.0 * PI);
+        return None;
     }
     let cos_max = (1.0 - r2 / d2).max(0.0).sqrt();
-    // 1 − cosθmax written without cancellation.
-    let one_minus = (r2 / d2) / (1.0 + cos_max);
-    1.0 / (2.0 * PI * one_minus)
+    Some((r2 / d2) / (1.0 + cos_max))
+}
+
+/// Solid-angle pdf of a direction drawn uniformly in that cone (uniformly
+/// over the sphere of directions from inside).
+fn cone_pdf(one_minus_cos: Option<f64>) -> f64 {
+    one_minus_cos.map_or(1.0 / (4.0 * PI), |om| 1.0 / (2.0 * PI * om))
+}
+
+fn sphere_cone_pdf(sphere: &Sphere, p: DVec3) -> f64 {
+    let d2 = (sphere.center - p).length_squared();
+    cone_pdf(cone_one_minus_cos(d2, sphere.radius * sphere.radius))
 }
 
 fn frame(n: DVec3) -> (DVec3, DVec3) {
@@ -405,13 +415,10 @@ impl Lights {
                 let to_c = sphere.center - p;
                 let d2 = to_c.length_squared();
                 let r2 = sphere.radius * sphere.radius;
-                // The cone's pdf from the same 1 − cosθmax as the draw
-                // (what `sphere_cone_pdf` computes for a BSDF-sampled hit).
-                let (wi, cone_pdf) = if d2 <= r2 {
-                    (uniform_sphere(uv), 1.0 / (4.0 * PI))
-                } else {
-                    let cos_max = (1.0 - r2 / d2).max(0.0).sqrt();
-                    let one_minus = (r2 / d2) / (1.0 + cos_max);
+                // One 1 − cosθmax for the draw and its pdf, the same
+                // expression `sphere_cone_pdf` gives a BSDF-sampled hit.
+                let cone = cone_one_minus_cos(d2, r2);
+                let wi = if let Some(one_minus) = cone {
                     // Uniform in the cone through the concentric disk: the
                     // disk's r² is uniform, so 1 − cosθ = r²(1 − cosθmax),
                     // and sinθ = r √((1 − cosθmax)(2 − r²(1 − cosθmax)))
@@ -424,10 +431,9 @@ impl Lights {
                     let scale = (one_minus * (2.0 - h)).max(0.0).sqrt();
                     let w = to_c / d2.sqrt();
                     let (t, b) = frame(w);
-                    (
-                        (scale * x * t + scale * y * b + cos_t * w).normalize(),
-                        1.0 / (2.0 * PI * one_minus),
-                    )
+                    (scale * x * t + scale * y * b + cos_t * w).normalize()
+                } else {
+                    uniform_sphere(uv)
                 };
                 let ray = Ray { o: p, d: wi };
                 // Grazing cone samples can miss by round-off; the tangent distance is then exact enough.
@@ -437,7 +443,7 @@ impl Lights {
                 Some(LightSample {
                     wi,
                     dist,
-                    pdf: sel * cone_pdf,
+                    pdf: sel * cone_pdf(cone),
                     is_delta: false,
                     emission: Emission::Spectrum(spectrum, 1.0, idx as u32),
                 })

@@ -341,28 +341,18 @@ fn normal_quantile(p: f64) -> f64 {
     let q = p - 0.5;
     if q.abs() <= 0.425 {
         let r = 0.180625 - q * q;
-        return q * horner(&AS241_A, r) / horner(&AS241_B, r);
+        return q * estrin(&AS241_A, r) / estrin(&AS241_B, r);
     }
     let tail = if q < 0.0 { p } else { 1.0 - p }.max(f64::MIN_POSITIVE);
     let r = libm::sqrt(-libm::log(tail));
     let x = if r <= 5.0 {
         let r = r - 1.6;
-        horner(&AS241_C, r) / horner(&AS241_D, r)
+        estrin(&AS241_C, r) / estrin(&AS241_D, r)
     } else {
         let r = r - 5.0;
-        horner(&AS241_E, r) / horner(&AS241_F, r)
+        estrin(&AS241_E, r) / estrin(&AS241_F, r)
     };
     if q < 0.0 { -x } else { x }
-}
-
-/// Horner evaluation of Σ c[i] xⁱ.
-#[inline(always)]
-fn horner<const N: usize>(c: &[f64; N], x: f64) -> f64 {
-    let mut acc = c[N - 1];
-    for &ci in c[..N - 1].iter().rev() {
-        acc = acc * x + ci;
-    }
-    acc
 }
 
 // AS 241's coefficients (PPND16), lowest power first.
