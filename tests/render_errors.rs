@@ -277,3 +277,35 @@ fn hero_wavelengths_default_by_material_and_bad_counts_are_refused() {
         .to_string();
     assert!(e.contains("needs wavelengths = \"hero\""), "{e}");
 }
+
+#[test]
+fn mis_light_weight_is_per_vertex_unless_set_and_bad_values_are_refused() {
+    let s = render::load_str(&path(), GOOD).unwrap();
+    assert_eq!(s.settings.mis_light_weight, None);
+    let t = format!("{GOOD}\n[integrator]\nsampler = \"independent\"\n");
+    let s = render::load_str(&path(), &t).unwrap();
+    assert_eq!(s.settings.mis_light_weight, Some(1.0));
+    for ok in ["0.001", "2", "2.5", "1e6"] {
+        let t = format!("{GOOD}\n[integrator]\nmis_light_weight = {ok}\n");
+        let s = render::load_str(&path(), &t).expect(ok);
+        assert_eq!(
+            s.settings.mis_light_weight,
+            Some(ok.parse::<f64>().unwrap())
+        );
+    }
+    // TOML has inf and nan literals; a string is refused by type.
+    for bad in ["0.0", "-2.0", "inf", "-inf", "nan", "-0.0"] {
+        let t = format!("{GOOD}\n[integrator]\nmis_light_weight = {bad}\n");
+        let e = render::load_str(&path(), &t).err().expect(bad).to_string();
+        assert!(
+            e.contains("mis_light_weight") && e.contains("> 0") && e.contains(":26:"),
+            "{bad}: {e}"
+        );
+    }
+    let t = format!("{GOOD}\n[integrator]\nmis_light_weight = \"two\"\n");
+    let e = render::load_str(&path(), &t)
+        .err()
+        .expect("string")
+        .to_string();
+    assert!(e.contains(":26:") && e.contains("expected f64"), "{e}");
+}

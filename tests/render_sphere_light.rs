@@ -1,8 +1,9 @@
 //! Direct lighting from a large sphere light, where BSDF sampling and light
 //! sampling both matter, against a quadrature of the same integral:
 //! L = ∫_λ ∫_cone f(wi, wo, λ) cosθ_i Le(λ) dω ȳ(λ) dλ / ∫ȳ dλ.
-//! Checks that both MIS heuristics, both samplers and both wavelength modes
-//! give the unbiased value (the weights of the two strategies must sum to one).
+//! Checks that both MIS heuristics, both samplers, both wavelength modes and
+//! light-density weights far on either side of the default give the
+//! unbiased value (the weights of the two strategies must sum to one).
 
 use brdf::{Bxdf, Distribution, Fresnel, Ior, Metal, MicrofacetConductor};
 use glam::DVec3;
@@ -21,9 +22,26 @@ const RADIUS: f64 = 0.35;
 const RADIANCE: f64 = 2.0;
 const ALPHA: f64 = 0.15;
 
+/// `mis` is the heuristic, then optionally the light-density weight (`auto`
+/// for the per-vertex choice, the default) and `sampled` (λ sampled at the
+/// first bounce too: the general tracer).
 fn scene_text(mode: &str, sampler: &str, mis: &str) -> String {
+    let mut m = mis.split(' ');
+    let heuristic = m.next().unwrap();
+    let weight = match m.next().unwrap_or("auto") {
+        "auto" => String::new(),
+        w => format!("\nmis_light_weight = {w}"),
+    };
+    let spectral = if m.next() == Some("sampled") {
+        "sampled"
+    } else {
+        "auto"
+    };
     plate_at_45deg(
-        &format!("wavelengths = \"{mode}\"\nsampler = \"{sampler}\"\nmis = \"{mis}\""),
+        &format!(
+            "wavelengths = \"{mode}\"\nsampler = \"{sampler}\"\nmis = \"{heuristic}\"{weight}\n\
+             spectral_integration = \"{spectral}\""
+        ),
         &format!("model = \"ggx\"\nalpha = {ALPHA}\nmetal = \"au\""),
         &format!(
             "[[lights]]\ntype = \"sphere\"\ncenter = [{}, {}, {}]\nradius = {RADIUS}\n\
@@ -104,8 +122,15 @@ fn sphere_light_direct_lighting_is_unbiased_for_every_mis_and_sampler() {
     for (mode, sampler, mis, samples, tol) in [
         ("hero", "sobol", "power", 4096u64, 0.003),
         ("hero", "sobol", "balance", 4096, 0.003),
-        ("hero", "independent", "power", 65_536, 0.008),
+        ("hero", "sobol", "power 0.2", 4096, 0.003),
+        ("hero", "sobol", "power 8", 4096, 0.003),
+        ("hero", "independent", "power 1", 65_536, 0.008),
+        ("hero", "sobol", "power 0.2 sampled", 16_384, 0.004),
+        ("hero", "sobol", "power auto sampled", 16_384, 0.004),
+        ("hero", "sobol", "balance 8 sampled", 16_384, 0.004),
         ("single", "independent", "balance", 65_536, 0.012),
+        ("single", "sobol", "power 0.2 sampled", 65_536, 0.008),
+        ("single", "sobol", "power 8 sampled", 16_384, 0.006),
     ] {
         let scene = render::load_str(&path, &scene_text(mode, sampler, mis)).unwrap();
         for (&(px, py), &want) in pixels.iter().zip(&wants) {

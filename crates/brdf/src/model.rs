@@ -86,6 +86,18 @@ pub trait Bxdf {
     fn uses_lobe_choice(&self) -> bool {
         true
     }
+
+    /// The size of the glossy lobe at `wi` as a density: an upper bound on
+    /// the solid-angle density [`Bxdf::sample`] gives a glossy direction, as
+    /// close as the model can cheaply make it, or `None` (the default) when
+    /// the model does not say. A renderer can compare it with a light's
+    /// density to tell a lobe much narrower than the light from one as wide
+    /// or wider (MIS weights that favour light sampling only in the second
+    /// case).
+    fn lobe_peak_pdf(&self, wi: DVec3) -> Option<f64> {
+        let _ = wi;
+        None
+    }
 }
 
 /// A pointer to a model is the model: every method forwards.
@@ -112,6 +124,9 @@ macro_rules! forward_bxdf {
             }
             fn uses_lobe_choice(&self) -> bool {
                 (**self).uses_lobe_choice()
+            }
+            fn lobe_peak_pdf(&self, wi: DVec3) -> Option<f64> {
+                (**self).lobe_peak_pdf(wi)
             }
         }
     };

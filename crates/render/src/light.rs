@@ -3,6 +3,7 @@
 use crate::color::{SRGB_TO_XYZ, mul};
 use crate::distribution::Distribution2D;
 use crate::geometry::{Planar, Ray, Sphere};
+use crate::scene::Surface;
 use crate::sky::Sky;
 use crate::spectrum::{Cie, LAMBDA_MAX, LAMBDA_MIN, Spectrum};
 use glam::DVec3;
@@ -309,6 +310,9 @@ pub struct LightSample<'a> {
     pub is_delta: bool,
     /// Emitted radiance (intensity / d² for point lights).
     pub emission: Emission<'a>,
+    /// The emitting shape, for an area light: the sampled point is the
+    /// nearest point of that shape along `wi`, so the shape cannot shadow it.
+    pub shape: Option<Surface>,
 }
 
 /// The scene's lights with uniform light selection.
@@ -409,6 +413,7 @@ impl Lights {
                     pdf: sel,
                     is_delta: true,
                     emission: Emission::Spectrum(spectrum, 1.0 / dist2, idx as u32),
+                    shape: None,
                 })
             }
             LightKind::Sphere { sphere, spectrum } => {
@@ -446,6 +451,7 @@ impl Lights {
                     pdf: sel * cone_pdf(cone),
                     is_delta: false,
                     emission: Emission::Spectrum(spectrum, 1.0, idx as u32),
+                    shape: Some(Surface::Emitter(idx as u32)),
                 })
             }
             LightKind::Rectangle {
@@ -471,6 +477,7 @@ impl Lights {
                     pdf: sel * dist2 / (shape.area() * cos_l.abs()),
                     is_delta: false,
                     emission: Emission::Spectrum(spectrum, 1.0, idx as u32),
+                    shape: Some(Surface::Emitter(idx as u32)),
                 })
             }
             LightKind::Environment(env) => {
@@ -496,6 +503,7 @@ impl Lights {
                     pdf: sel * pdf,
                     is_delta: false,
                     emission,
+                    shape: None,
                 })
             }
         }

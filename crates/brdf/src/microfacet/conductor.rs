@@ -194,6 +194,14 @@ impl Bxdf for MicrofacetConductor {
     fn uses_lobe_choice(&self) -> bool {
         false
     }
+
+    /// D(n)/(4 cosθi) = 1/(4π αx αy cosθi): the density of the mirror
+    /// direction divided by G1(wi) ≤ 1, and no density exceeds it (both
+    /// distributions peak at the normal; the visible-normal density is
+    /// G1 D(h)/(4 cosθi)).
+    fn lobe_peak_pdf(&self, wi: DVec3) -> Option<f64> {
+        (wi.z >= COS_HORIZON).then(|| self.dist.d_max() / (4.0 * wi.z))
+    }
 }
 
 impl MicrofacetConductor {

@@ -57,6 +57,23 @@ pub struct Distribution {
 }
 
 impl Distribution {
+    /// The largest value of D. GGX peaks at the normal, 1/(π αx αy) (the
+    /// denominator's (h²/α²)-weighted length is ≥ 1 for α ≤ 1). Beckmann
+    /// along an azimuth of roughness α, e^{−t/α²}(1 + t)²/(π αx αy) in
+    /// t = tan²θ, peaks at the normal for α ≤ 1/√2 and at t = 2α² − 1 above,
+    /// where it is 4α⁴ e^{1/α² − 2}/(π αx αy); the larger α bounds every
+    /// azimuth.
+    pub fn d_max(&self) -> f64 {
+        let a = self.alpha_x.max(self.alpha_y);
+        match self.kind {
+            NdfKind::Beckmann if a * a > 0.5 => {
+                let a2 = a * a;
+                self.d_scale * 4.0 * a2 * a2 * crate::numerics::math::exp(1.0 / a2 - 2.0)
+            }
+            _ => self.d_scale,
+        }
+    }
+
     /// Builds a distribution; `alpha_x`, `alpha_y` in [1e-4, 1].
     pub fn new(kind: NdfKind, alpha_x: f64, alpha_y: f64) -> Result<Distribution, BrdfError> {
         let alpha_x = check_range("alpha_x", alpha_x, ALPHA_MIN, ALPHA_MAX, ALPHA_VALID)?;

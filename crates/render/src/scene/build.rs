@@ -4,7 +4,8 @@
 //! points at the scene text it is about.
 
 use super::desc::{
-    LightDesc, ModelKind, SceneDesc, ShapeDesc, SpectralIntegration, TransformDesc, WavelengthMode,
+    LightDesc, ModelKind, SamplerKind, SceneDesc, ShapeDesc, SpectralIntegration, TransformDesc,
+    WavelengthMode,
 };
 use super::inputs::{self, Inputs};
 use super::shapes::Shapes;
@@ -283,6 +284,22 @@ impl<'a> Builder<'a> {
             // Chosen once the materials are known (see `build`).
             None => 0,
         };
+        let mis_light_weight = match &integrator.mis_light_weight {
+            Some(w) if !(w.get_ref().is_finite() && *w.get_ref() > 0.0) => {
+                return Err(self.at(
+                    w.span(),
+                    format!(
+                        "mis_light_weight = {} is invalid: expected a finite number > 0 (1 is the textbook heuristic; leave it out for the per-vertex choice)",
+                        w.get_ref()
+                    ),
+                ));
+            }
+            Some(w) => Some(*w.get_ref()),
+            // The per-vertex choice rests on stratification; white noise
+            // keeps the textbook weight (see `integrator::light_weight`).
+            None if integrator.sampler == SamplerKind::Independent => Some(1.0),
+            None => None,
+        };
         Ok(Settings {
             spp: *film.spp.get_ref(),
             seed: film.seed,
@@ -292,6 +309,7 @@ impl<'a> Builder<'a> {
             hero_wavelengths,
             sampler: integrator.sampler,
             mis: integrator.mis,
+            mis_light_weight,
             spectral_integration: integrator.spectral_integration,
             exr: film.exr.clone(),
             png: film.png.clone(),

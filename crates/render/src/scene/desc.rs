@@ -190,6 +190,11 @@ pub struct IntegratorDesc {
     /// `power` (default) or `balance`.
     #[serde(default)]
     pub mis: MisHeuristic,
+    /// How many times the light-sampling density counts in the MIS
+    /// heuristic, > 0 (1 is the textbook heuristic); unset, it is chosen per
+    /// vertex and light ([`Settings::mis_light_weight`](super::Settings::mis_light_weight)).
+    #[serde(default)]
+    pub mis_light_weight: Option<Spanned<f64>>,
     /// `auto` (default) or `sampled`.
     #[serde(default)]
     pub spectral_integration: SpectralIntegration,
@@ -226,6 +231,7 @@ impl Default for IntegratorDesc {
             rr_depth: 3,
             sampler: SamplerKind::Sobol,
             mis: MisHeuristic::Power,
+            mis_light_weight: None,
             spectral_integration: SpectralIntegration::Auto,
         }
     }

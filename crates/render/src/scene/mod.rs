@@ -24,13 +24,15 @@ use std::path::{Path, PathBuf};
 /// The estimator version, hashed into every fingerprint: films rendered by
 /// an earlier estimator (other wavelength or random-number sampling, other
 /// inputs hashed) must not merge with new ones.
-pub const ESTIMATOR: &str = "lustre estimator 8: sobol sampler with 64-bit sample indices, \
+pub const ESTIMATOR: &str = "lustre estimator 9: sobol sampler with 64-bit sample indices, \
                              hero sets from a 2-D draw (base u/n, hero index), 16 per path \
                              for conductor-only scenes, power MIS, every input file hashed, \
                              first bounce off fresnel-only materials integrated over λ exactly, \
                              sphere lights sampled through the concentric disk, \
                              a constant environment left to BSDF sampling in conductor-only \
-                             scenes, Beckmann's orthogonal slope by the AS 241 normal quantile";
+                             scenes, Beckmann's orthogonal slope by the AS 241 normal quantile, \
+                             the light density counted up to twice in MIS where a microfacet \
+                             lobe is not much narrower than the light";
 
 /// What a ray hit.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -91,6 +93,11 @@ pub struct Settings {
     pub sampler: SamplerKind,
     /// Weighting of light and BSDF sampling.
     pub mis: MisHeuristic,
+    /// How many times the light-sampling density counts in it: `[integrator]
+    /// mis_light_weight`; unset, `None` (the per-vertex choice of
+    /// `integrator::light_weight`) with the Sobol sampler and 1 with the
+    /// independent one.
+    pub mis_light_weight: Option<f64>,
     /// Exact or sampled integration over λ.
     pub spectral_integration: SpectralIntegration,
     /// EXR output path.
