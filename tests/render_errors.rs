@@ -42,6 +42,19 @@ fn error(from: &str, to: &str) -> String {
     }
 }
 
+/// `GOOD` with an `[integrator]` table of `keys`.
+fn with_integrator(keys: &str) -> String {
+    format!("{GOOD}\n[integrator]\n{keys}\n")
+}
+
+/// The error text of `GOOD` with an `[integrator]` table of `keys`.
+fn integrator_error(keys: &str) -> String {
+    match render::load_str(&path(), &with_integrator(keys)) {
+        Ok(_) => panic!("`{keys}` was accepted"),
+        Err(e) => e.to_string(),
+    }
+}
+
 #[test]
 fn the_good_scene_loads() {
     let s = render::load_str(&path(), GOOD).unwrap();
@@ -244,7 +257,7 @@ fn hero_wavelengths_default_by_material_and_bad_counts_are_refused() {
             .wavelengths_per_path(),
         4
     );
-    let single = format!("{GOOD}\n[integrator]\nwavelengths = \"single\"\n");
+    let single = with_integrator("wavelengths = \"single\"");
     assert_eq!(
         render::load_str(&path(), &single)
             .unwrap()
@@ -263,18 +276,13 @@ fn hero_wavelengths_default_by_material_and_bad_counts_are_refused() {
         );
     }
     for bad in ["0", "1", "17", "1000"] {
-        let t = format!("{GOOD}\n[integrator]\nhero_wavelengths = {bad}\n");
-        let e = render::load_str(&path(), &t).err().expect(bad).to_string();
+        let e = integrator_error(&format!("hero_wavelengths = {bad}"));
         assert!(
             e.contains("hero_wavelengths") && e.contains("2..=16"),
             "{e}"
         );
     }
-    let t = format!("{GOOD}\n[integrator]\nwavelengths = \"single\"\nhero_wavelengths = 8\n");
-    let e = render::load_str(&path(), &t)
-        .err()
-        .expect("single + count")
-        .to_string();
+    let e = integrator_error("wavelengths = \"single\"\nhero_wavelengths = 8");
     assert!(e.contains("needs wavelengths = \"hero\""), "{e}");
 }
 
@@ -282,11 +290,11 @@ fn hero_wavelengths_default_by_material_and_bad_counts_are_refused() {
 fn mis_light_weight_is_per_vertex_unless_set_and_bad_values_are_refused() {
     let s = render::load_str(&path(), GOOD).unwrap();
     assert_eq!(s.settings.mis_light_weight, None);
-    let t = format!("{GOOD}\n[integrator]\nsampler = \"independent\"\n");
+    let t = with_integrator("sampler = \"independent\"");
     let s = render::load_str(&path(), &t).unwrap();
     assert_eq!(s.settings.mis_light_weight, Some(1.0));
     for ok in ["0.001", "2", "2.5", "1e6"] {
-        let t = format!("{GOOD}\n[integrator]\nmis_light_weight = {ok}\n");
+        let t = with_integrator(&format!("mis_light_weight = {ok}"));
         let s = render::load_str(&path(), &t).expect(ok);
         assert_eq!(
             s.settings.mis_light_weight,
@@ -295,17 +303,12 @@ fn mis_light_weight_is_per_vertex_unless_set_and_bad_values_are_refused() {
     }
     // TOML has inf and nan literals; a string is refused by type.
     for bad in ["0.0", "-2.0", "inf", "-inf", "nan", "-0.0"] {
-        let t = format!("{GOOD}\n[integrator]\nmis_light_weight = {bad}\n");
-        let e = render::load_str(&path(), &t).err().expect(bad).to_string();
+        let e = integrator_error(&format!("mis_light_weight = {bad}"));
         assert!(
             e.contains("mis_light_weight") && e.contains("> 0") && e.contains(":26:"),
             "{bad}: {e}"
         );
     }
-    let t = format!("{GOOD}\n[integrator]\nmis_light_weight = \"two\"\n");
-    let e = render::load_str(&path(), &t)
-        .err()
-        .expect("string")
-        .to_string();
+    let e = integrator_error("mis_light_weight = \"two\"");
     assert!(e.contains(":26:") && e.contains("expected f64"), "{e}");
 }

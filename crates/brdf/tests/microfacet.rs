@@ -723,7 +723,10 @@ fn eval_pdf_many_equals_eval_pdf_per_wavelength_bit_for_bit() {
 /// at the normal.
 #[test]
 fn lobe_peak_is_the_largest_density() {
+    // The accepted domain's corners (1e−4 and 1) and between.
     let alphas = [
+        (1e-4, 1e-4),
+        (1e-4, 1.0),
         (1e-3, 1e-3),
         (0.05, 0.05),
         (0.3, 0.1),

@@ -31,6 +31,7 @@ use crate::scene::{Hit, Scene, Surface};
 use crate::spectral_table::SpectralTables;
 use crate::spectrum::Cie;
 use crate::wavelength::{MAX_WAVELENGTHS, SampledWavelengths};
+use brdf::Bxdf;
 use brdf::frame::orthonormal_basis;
 use glam::DVec3;
 
@@ -139,12 +140,17 @@ fn light_weight(fixed: Option<f64>, peak: Option<f64>, p_light: f64) -> f64 {
     };
     let c = 16.0 * p_light / peak;
     // NaN (an infinite peak and light density) keeps the textbook weight.
-    if c >= 2.0 {
-        2.0
-    } else if c > 1.0 {
-        c
+    if c > 1.0 { c.min(2.0) } else { 1.0 }
+}
+
+/// The lobe size [`light_weight`] reads at a vertex: asked of the model
+/// only when the scene does not fix the weight.
+#[inline]
+fn lobe_peak(fixed: Option<f64>, bxdf: &(impl Bxdf + ?Sized), wi: DVec3) -> Option<f64> {
+    if fixed.is_none() {
+        bxdf.lobe_peak_pdf(wi)
     } else {
-        1.0
+        None
     }
 }
 
@@ -401,7 +407,7 @@ fn unoccluded(scene: &Scene, p: DVec3, ls: &LightSample) -> bool {
     } else {
         f64::INFINITY
     };
-    !scene.shapes.occluded_except(&shadow, t_max, ls.shape)
+    !scene.shapes.occluded(&shadow, t_max, ls.shape)
 }
 
 /// The per-wavelength state of a path (see the module documentation):
@@ -515,11 +521,7 @@ fn trace_exact(
         return Traced::Exact(xyz);
     };
     let (mis, fixed) = (settings.mis, settings.mis_light_weight);
-    let peak = if fixed.is_none() {
-        unit.lobe_peak_pdf(v.wi)
-    } else {
-        None
-    };
+    let peak = lobe_peak(fixed, unit, v.wi);
 
     // Next-event estimation.
     if let Some(ls) = lights.sample(v.p, sampler.get_1d_2d_if(lights.nee_len() > 1))
@@ -687,11 +689,7 @@ fn trace(
         };
         let wi = v.wi;
         resolve(&mut pending, &mut th);
-        th.peak = if fixed.is_none() {
-            bxdf.lobe_peak_pdf(wi)
-        } else {
-            None
-        };
+        th.peak = lobe_peak(fixed, bxdf, wi);
         let peak = th.peak;
         let Throughput { t, q, l_mis, .. } = &mut th;
 

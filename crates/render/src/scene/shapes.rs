@@ -59,19 +59,13 @@ impl Shapes {
         best
     }
 
-    /// Whether anything lies on `ray` within `(0, t_max)`.
+    /// Whether anything lies on `ray` within `(0, t_max)`, not testing the
+    /// analytic shapes whose surface is `own`: a shadow ray toward a point
+    /// of an emitter that is the ray's nearest hit on it (a light sample's
+    /// point) cannot be blocked by that emitter, and a sphere light's test
+    /// is two square roots and a division per light sample.
     #[inline]
-    pub fn occluded(&self, ray: &Ray, t_max: f64) -> bool {
-        self.occluded_except(ray, t_max, None)
-    }
-
-    /// [`occluded`](Self::occluded), not testing the analytic shapes whose
-    /// surface is `own`: a shadow ray toward a point of an emitter that is
-    /// the ray's nearest hit on it (a light sample's point) cannot be
-    /// blocked by that emitter, and a sphere light's test is two square
-    /// roots and a division per light sample.
-    #[inline]
-    pub fn occluded_except(&self, ray: &Ray, t_max: f64, own: Option<Surface>) -> bool {
+    pub fn occluded(&self, ray: &Ray, t_max: f64, own: Option<Surface>) -> bool {
         let other = |s: &Surface| own != Some(*s);
         self.planars
             .iter()
@@ -167,8 +161,8 @@ mod tests {
                 "{own:?} shadows its own sample from {p} toward {}",
                 ls.wi
             );
-            let all = shapes.occluded(&ray, t_max);
-            assert_eq!(all, shapes.occluded_except(&ray, t_max, Some(own)));
+            let all = shapes.occluded(&ray, t_max, None);
+            assert_eq!(all, shapes.occluded(&ray, t_max, Some(own)));
             tested += 1;
             blocked += usize::from(all);
         }
@@ -188,18 +182,19 @@ mod tests {
             o: DVec3::ZERO,
             d: DVec3::Z,
         };
-        assert!(shapes.occluded_except(&ray, 2.19, Some(Surface::Emitter(0))));
+        assert!(shapes.occluded(&ray, 2.19, Some(Surface::Emitter(0))));
         // Without the blocker in range, nothing.
-        assert!(!shapes.occluded_except(&ray, 0.99, Some(Surface::Emitter(0))));
+        assert!(!shapes.occluded(&ray, 0.99, Some(Surface::Emitter(0))));
         // Past the sphere's near side, skipping it is the caller's claim.
         assert!(shapes.occluded(
             &Ray {
                 o: DVec3::new(0.0, 0.0, 1.5),
                 d: DVec3::Z
             },
-            2.0
+            2.0,
+            None
         ));
-        assert!(!shapes.occluded_except(
+        assert!(!shapes.occluded(
             &Ray {
                 o: DVec3::new(0.0, 0.0, 1.5),
                 d: DVec3::Z
