@@ -172,6 +172,11 @@ fn sample_slopes_unit(c: f64, s: f64, u: [f64; 2]) -> (f64, f64, f64) {
     (solve_slope(cot, st.target, start, true), sy, st.lambda)
 }
 
+/// From cotθ = 6 on the slope CDF is the Gaussian one to double precision
+/// (up to the factor cotθ): erfc(cotθ) and Λ are below half an ulp of the
+/// terms they are added to.
+const GAUSSIAN_LIMIT_COT: f64 = 6.0;
+
 /// What the slope inversion needs at one view, and Λ at it.
 struct StartAndTarget {
     /// The exact inverse at `u` of the cotθ → ∞ limit (the Gaussian CDF
@@ -195,29 +200,45 @@ struct StartAndTarget {
 /// (2·10⁻¹⁶ absolute) is below 2.5·10⁻¹⁴ of Λ there (Λ ≥ 0.0087).
 #[inline]
 fn gaussian_start_and_target(cot: f64, u: f64) -> StartAndTarget {
-    if cot >= 1.0 / LAMBDA_POLY_MAX_X {
-        let x = 1.0 / cot;
-        let e = exp(-cot * cot);
-        let s = scaled_lambda(x);
-        let lambda = e * s;
-        let erfc = e * (x / SQRT_PI - 2.0 * s);
+    if cot >= GAUSSIAN_LIMIT_COT {
+        // e^{−cot²θ} < 2.4·10⁻¹⁶: erfc(cotθ) < 2.2·10⁻¹⁷ vanishes beside 2
+        // and Λ < 1.2·10⁻¹⁹ beside 1, so the branch below would give these
+        // values to the last bit; its exp and polynomial are skipped.
         return StartAndTarget {
-            start: erfinv_approx(u * (2.0 - erfc) - 1.0),
-            target: u * (cot * (1.0 + lambda)),
-            lambda: if cot >= LAMBDA_NEGLIGIBLE_A {
-                0.0
-            } else {
-                lambda
-            },
+            start: normal_quantile(u) * FRAC_1_SQRT_2,
+            target: u * cot,
+            lambda: 0.0,
         };
+    }
+    if cot >= 1.0 / LAMBDA_POLY_MAX_X {
+        return polynomial_start_and_target(cot, u);
     }
     let one_plus_erf = libm::erfc(-cot);
     let e = exp(-cot * cot) / SQRT_PI;
     let total = 0.5 * (cot * one_plus_erf + e);
     StartAndTarget {
-        start: erfinv_approx(u * one_plus_erf - 1.0),
+        start: normal_quantile(0.5 * u * one_plus_erf) * FRAC_1_SQRT_2,
         target: u * total,
         lambda: (0.5 * (e / cot - (2.0 - one_plus_erf))).max(0.0),
+    }
+}
+
+/// [`gaussian_start_and_target`] for cotθ ≥ 1.25 (see there).
+#[inline]
+fn polynomial_start_and_target(cot: f64, u: f64) -> StartAndTarget {
+    let x = 1.0 / cot;
+    let e = exp(-cot * cot);
+    let s = scaled_lambda(x);
+    let lambda = e * s;
+    let erfc = e * (x / SQRT_PI - 2.0 * s);
+    StartAndTarget {
+        start: normal_quantile(u * (1.0 - 0.5 * erfc)) * FRAC_1_SQRT_2,
+        target: u * (cot * (1.0 + lambda)),
+        lambda: if cot >= LAMBDA_NEGLIGIBLE_A {
+            0.0
+        } else {
+            lambda
+        },
     }
 }
 
@@ -236,7 +257,11 @@ fn solve_slope(cot: f64, target: f64, start: f64, early: bool) -> f64 {
     let mut hi = cot;
     let mut x = start;
     if !(x > lo && x < hi) {
-        x = 0.5 * (lo + hi);
+        // A start below the bracket (u so small that the root lies below
+        // C's 1e−30 floor at −8, where the Gaussian quantile goes on to
+        // −26) starts at its end, which is then the answer; others, and NaN,
+        // at the midpoint.
+        x = if x <= lo { lo } else { 0.5 * (lo + hi) };
     }
     for _ in 0..40 {
         let e = exp(-x * x) / SQRT_PI;
@@ -423,43 +448,6 @@ const AS241_F: [f64; 8] = [
     2.04426310338993978564e-15,
 ];
 
-/// Giles' approximation of erfinv alone (relative error below 3e-7 over
-/// (−1, 1)); ±6 at and beyond ±1.
-fn erfinv_approx(y: f64) -> f64 {
-    if y <= -1.0 {
-        return -6.0;
-    }
-    if y >= 1.0 {
-        return 6.0;
-    }
-    let w = -libm::log((1.0 - y) * (1.0 + y));
-    if w < 5.0 {
-        let w = w - 2.5;
-        let mut p = 2.810_226_36e-08;
-        p = 3.432_739_39e-07 + p * w;
-        p = -3.523_387_7e-06 + p * w;
-        p = -4.391_506_54e-06 + p * w;
-        p = 0.000_218_580_87 + p * w;
-        p = -0.001_253_725_03 + p * w;
-        p = -0.004_177_681_64 + p * w;
-        p = 0.246_640_727 + p * w;
-        p = 1.501_409_41 + p * w;
-        p * y
-    } else {
-        let w = libm::sqrt(w) - 3.0;
-        let mut p = -0.000_200_214_257;
-        p = 0.000_100_950_558 + p * w;
-        p = 0.001_349_343_22 + p * w;
-        p = -0.003_673_428_44 + p * w;
-        p = 0.005_739_507_73 + p * w;
-        p = -0.007_622_461_3 + p * w;
-        p = 0.009_438_870_47 + p * w;
-        p = 1.001_674_06 + p * w;
-        p = 2.832_976_82 + p * w;
-        p * y
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -599,22 +587,6 @@ mod tests {
         assert_eq!(normal_quantile(0.5), 0.0);
     }
 
-    #[test]
-    fn erfinv_approx_is_within_its_stated_error() {
-        for i in 1..2000 {
-            let y = -1.0 + i as f64 / 1000.0;
-            // erfinv(y) = Φ⁻¹((1 + y)/2)/√2; (1 + y)/2 is exact here.
-            let x = normal_quantile(0.5 * (1.0 + y)) * FRAC_1_SQRT_2;
-            assert!((libm::erf(x) - y).abs() < 1e-14, "y={y}");
-            // The approximation that starts the slope inversion.
-            let a = erfinv_approx(y);
-            assert!(
-                (a - x).abs() <= 3e-7 * x.abs().max(1e-3),
-                "y={y}: {a} vs {x}"
-            );
-        }
-    }
-
     /// Λ(a) from the difference of libm's terms (no polynomial).
     fn lambda_by_erfc(a: f64) -> f64 {
         0.5 * (exp(-a * a) / (a * SQRT_PI) - libm::erfc(a))
@@ -723,6 +695,24 @@ mod tests {
     }
 
     #[test]
+    fn the_gaussian_limit_is_the_polynomial_branch_to_the_bit() {
+        for i in 0..=20000 {
+            let cot = GAUSSIAN_LIMIT_COT * (1.0 + i as f64 / 1000.0);
+            for j in 0..=64 {
+                let u = (j as f64 / 64.0).clamp(1e-300, 1.0 - 1e-16);
+                let (a, b) = (
+                    gaussian_start_and_target(cot, u),
+                    polynomial_start_and_target(cot, u),
+                );
+                assert_eq!(a.start.to_bits(), b.start.to_bits(), "{cot} {u}");
+                assert_eq!(a.target.to_bits(), b.target.to_bits(), "{cot} {u}");
+                assert_eq!(a.lambda, 0.0);
+                assert!(b.lambda == 0.0, "{cot}: {}", b.lambda);
+            }
+        }
+    }
+
+    #[test]
     fn start_and_target_agree_with_their_erfc_forms() {
         // The polynomial branch of `gaussian_start_and_target` against the
         // erfc expressions it replaces.
@@ -736,7 +726,7 @@ mod tests {
                 let total = 0.5 * (cot * one_plus_erf + exp(-cot * cot) / SQRT_PI);
                 let rel = (target - u * total).abs() / (u * total);
                 assert!(rel <= 1e-15, "{cot} {u}: {rel:e}");
-                let x_ref = erfinv_approx(u * one_plus_erf - 1.0);
+                let x_ref = normal_quantile(0.5 * u * one_plus_erf) * FRAC_1_SQRT_2;
                 assert!(
                     (x0 - x_ref).abs() <= 1e-12 * (1.0 + x_ref.abs()),
                     "{cot} {u}"
