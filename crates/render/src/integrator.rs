@@ -398,6 +398,70 @@ fn emission_at<'a>(lights: &'a Lights, ray: &Ray, hit: Option<&Hit>) -> (Emissio
     }
 }
 
+/// A vertex's numbers for light sampling and for BSDF sampling, in that
+/// order. Both are drawn before either is used: every vertex that samples a
+/// light goes on to sample its BSDF, so nothing is drawn in vain, and the two
+/// Sobol draws (each a chain of a dozen dependent multiplications) overlap
+/// instead of each waiting at the head of its strategy.
+#[inline(always)]
+fn vertex_draws(
+    sampler: &mut Sampler,
+    lights: &Lights,
+    bxdf: &(impl Bxdf + ?Sized),
+) -> ([f64; 3], [f64; 3]) {
+    let u_light = sampler.get_1d_2d_if(lights.nee_len() > 1);
+    let u_bsdf = sampler.get_1d_2d_if(bxdf.uses_lobe_choice());
+    (u_light, u_bsdf)
+}
+
+/// Adds the emission that the delta lobe of a multi-lobe model reflects at
+/// vertex `v` (its weight R·A at each of the `n` wavelengths times the
+/// radiance along the mirror direction, times `w`, the path's spectral MIS
+/// normalisation) through `add(j, value)`; returns whether it traced the
+/// mirror ray (some wavelength's delta weight is positive).
+///
+/// Why not leave it to BSDF sampling: a model such as GHS reflects a
+/// fraction A = e^{−g} coherently, and its sampler picks the delta lobe with
+/// probability p = max(A, 0.05). Where the mirror direction meets a small,
+/// bright light, that lobe is most of the pixel, so the pick is a rare event
+/// of weight 1/p: it left the s138 full-GHS plates with a relative RMSE of
+/// 5.9 at 1 spp and 0.14 at 256 (hero), falling slower than spp^−½. One
+/// more ray per such vertex makes the term exact; the sampled delta
+/// direction still carries the path on, but counts no emission.
+#[allow(clippy::too_many_arguments)]
+#[inline]
+fn delta_emission(
+    scene: &Scene,
+    bxdf: &(impl Bxdf + ?Sized),
+    v: &Vertex,
+    wi: DVec3,
+    lambdas: &[f64; N],
+    n: usize,
+    mut add: impl FnMut(usize, f64),
+    w: f64,
+) -> bool {
+    let mut spec = [0.0; N];
+    for (s, &lambda) in spec.iter_mut().zip(lambdas).take(n) {
+        *s = bxdf.specular(wi, lambda).weight;
+    }
+    if !spec[..n].iter().any(|&s| s > 0.0) {
+        return false;
+    }
+    let Some(ray) = v.ray(brdf::frame::reflect_z(wi)) else {
+        return true;
+    };
+    let hit = scene.shapes.intersect(&ray, f64::INFINITY);
+    let (em, _) = emission_at(&scene.lights, &ray, hit.as_ref());
+    if w > 0.0 && !matches!(em, Emission::None) {
+        let mut e = [0.0; N];
+        em.eval_many(&lambdas[..n], &mut e[..n]);
+        for j in 0..n {
+            add(j, spec[j] * e[j] * w);
+        }
+    }
+    true
+}
+
 /// Whether nothing blocks the segment from `p` to a light sample.
 #[inline]
 fn unoccluded(scene: &Scene, p: DVec3, ls: &LightSample) -> bool {
@@ -522,9 +586,10 @@ fn trace_exact(
     };
     let (mis, fixed) = (settings.mis, settings.mis_light_weight);
     let peak = lobe_peak(fixed, unit, v.wi);
+    let (u_light, u_bsdf) = vertex_draws(sampler, lights, unit);
 
     // Next-event estimation.
-    if let Some(ls) = lights.sample(v.p, sampler.get_1d_2d_if(lights.nee_len() > 1))
+    if let Some(ls) = lights.sample(v.p, u_light)
         && let Some(wo) = v.light_direction(&ls)
     {
         let (f, pdf) = unit.eval_pdf(v.wi, wo, UNIT_LAMBDA);
@@ -541,8 +606,7 @@ fn trace_exact(
     }
 
     // BSDF sampling.
-    let lobe = unit.uses_lobe_choice();
-    let Some(s) = unit.sample(v.wi, UNIT_LAMBDA, sampler.get_1d_2d_if(lobe)) else {
+    let Some(s) = unit.sample(v.wi, UNIT_LAMBDA, u_bsdf) else {
         return Traced::Exact(xyz);
     };
     if s.pdf.is_nan() || s.pdf <= 0.0 || s.wo.z <= 0.0 {
@@ -650,6 +714,9 @@ fn trace(
         }
     };
 
+    // The last edge is a delta direction whose emission `delta_emission`
+    // has already counted.
+    let mut emission_counted = false;
     let mut first = Some(first);
     for depth in depth0..=settings.max_depth {
         let hit = match first.take() {
@@ -664,7 +731,7 @@ fn trace(
         ) = hit
         else {
             let (em, pdf_l) = emission_at(lights, &ray, hit.as_ref());
-            if !matches!(em, Emission::None) {
+            if !emission_counted && !matches!(em, Emission::None) {
                 resolve(&mut pending, &mut th);
                 let own: f64 = th.q[..n].iter().sum();
                 let other: f64 = th.l_mis[..n].iter().sum::<f64>() * pdf_l;
@@ -692,9 +759,10 @@ fn trace(
         th.peak = lobe_peak(fixed, bxdf, wi);
         let peak = th.peak;
         let Throughput { t, q, l_mis, .. } = &mut th;
+        let (u_light, u_bsdf) = vertex_draws(sampler, lights, bxdf);
 
         // Next-event estimation.
-        if let Some(ls) = lights.sample(v.p, sampler.get_1d_2d_if(lights.nee_len() > 1))
+        if let Some(ls) = lights.sample(v.p, u_light)
             && let Some(wo) = v.light_direction(&ls)
         {
             // A delta light cannot be reached by BSDF sampling: its MIS
@@ -721,14 +789,31 @@ fn trace(
             }
         }
 
+        // The emission a delta lobe mixed with others reflects, traced
+        // deterministically (see `delta_emission`); a delta direction the
+        // BSDF sample below picks then counts no emission.
+        let delta_traced = bxdf.uses_lobe_choice()
+            && delta_emission(
+                scene,
+                bxdf,
+                &v,
+                wi,
+                lambdas,
+                n,
+                |j, e| {
+                    out[j] += t[j] * e;
+                },
+                bsdf_weight_over_pdf(mis, 1.0, q[..n].iter().sum(), 0.0),
+            );
+
         // BSDF sampling at the hero wavelength.
-        let lobe = bxdf.uses_lobe_choice();
-        let Some(s) = bxdf.sample(wi, lambdas[0], sampler.get_1d_2d_if(lobe)) else {
+        let Some(s) = bxdf.sample(wi, lambdas[0], u_bsdf) else {
             break;
         };
         if s.pdf.is_nan() || s.pdf <= 0.0 || s.wo.z <= 0.0 {
             break;
         }
+        emission_counted = s.is_delta && delta_traced;
         if s.is_delta {
             t[0] *= s.weight;
             for j in 1..n {
