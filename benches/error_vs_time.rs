@@ -24,18 +24,29 @@
 //!
 //! Besides the plates, one material-preview scene (`scenes/preview/<EVT_PREVIEW>.toml`:
 //! the preview object over a floor under the daylight sky with its sun, full GHS) is
-//! measured the same way. Convergence check: the least-squares slope of log relative RMSE
-//! (reference noise removed) against log spp, over 4 spp and up, is printed for every
-//! series, and for the preview scene it must lie in [−0.85, −0.35]: an unbiased estimator
-//! without fireflies converges as spp^−½ (Sobol points may do a little better); sun
-//! fireflies or a bias would flatten it. Measured (s138, 128×96, 1..64 spp): −0.456 hero,
-//! −0.505 single, −0.481 independent. The preview reference's own noise is large (relative
-//! RMSE 2.1 at 1024 spp): rare paths that reach the sun by BSDF sampling after the object's
-//! near-mirror reflection (a caustic of the sun on the floor) carry ~10⁵ × the mean, so the
-//! corrected errors of that scene lean on the chunk-spread noise estimate.
+//! measured the same way.
 //!
-//! Run: `cargo bench --bench error_vs_time` (about 5 CPU-minutes with defaults). Settings
-//! via environment: `EVT_RES=128x96`, `EVT_MAX_SPP=64`, `EVT_REF_SPP=1024`,
+//! Convergence checks (the run fails if one does not hold), on the relative RMSE with the
+//! reference noise removed:
+//!
+//! * every series falls at every doubling from 1 spp to `EVT_MAX_SPP` (a rare-event tail,
+//!   paths that carry many times the mean and are met once in many samples, shows as an
+//!   error that stays flat or rises when such a path is first met);
+//! * the least-squares slope of log error against log spp, over 4 spp and up, is
+//!   −0.5 ± 0.1 for white-noise series (an unbiased estimator without fireflies converges
+//!   as spp^−½; fireflies or a bias flatten it) and in [−1.6, −0.4] for Sobol series
+//!   (stratification converges faster on smooth integrands, up to spp^−1.5 for scrambled
+//!   nets);
+//! * the preview scene's series, whose slope must lie in [−0.85, −0.35] whatever the
+//!   sampler: its reference's own noise is large (relative RMSE 2.1 at 1024 spp), because
+//!   rare paths that reach the sun by BSDF sampling after the object's near-mirror
+//!   reflection (a caustic of the sun on the floor, which no light sample can find) carry
+//!   ~10⁵ × the mean, so the corrected errors of that scene lean on the chunk-spread noise
+//!   estimate and the Sobol strata do little for it. Measured (s138, 128×96, 1..64 spp):
+//!   −0.456 hero, −0.505 single, −0.481 independent.
+//!
+//! Run: `cargo bench --bench error_vs_time` (about 30 CPU-minutes with defaults). Settings
+//! via environment: `EVT_RES=128x96`, `EVT_MAX_SPP=256`, `EVT_REF_SPP=2048`,
 //! `EVT_SAMPLE=s138`, `EVT_MODELS=ggx,beckmann,ghs_ssa,ghs,two_scale`,
 //! `EVT_VIEWS=normal,45deg,grazing`, `EVT_PREVIEW=s138` (`none` to skip),
 //! `EVT_WORKERS=2` (concurrent single-thread renders).
@@ -111,8 +122,8 @@ impl Settings {
         Settings {
             width: w,
             height: h,
-            max_spp: parse_env("EVT_MAX_SPP", "64"),
-            ref_spp: parse_env("EVT_REF_SPP", "1024"),
+            max_spp: parse_env("EVT_MAX_SPP", "256"),
+            ref_spp: parse_env("EVT_REF_SPP", "2048"),
             sample: env_or("EVT_SAMPLE", "s138"),
             models: list("EVT_MODELS", "ggx,beckmann,ghs_ssa,ghs,two_scale"),
             views: list("EVT_VIEWS", "normal,45deg,grazing"),
@@ -670,8 +681,29 @@ fn main() {
             specs[i].name,
             mode_name(mode)
         );
-        if specs[i].view == "preview" && !(-0.85..=-0.35).contains(&slope) {
-            slope_failures.push(format!("{} {}: {slope:.3}", specs[i].name, mode_name(mode)));
+        let (lo, hi) = slope_bounds(specs[i].view == "preview", mode.1);
+        if !(lo..=hi).contains(&slope) {
+            slope_failures.push(format!(
+                "{} {}: slope {slope:.3} outside [{lo}, {hi}]",
+                specs[i].name,
+                mode_name(mode)
+            ));
+        }
+    }
+    for (&(i, mode), points) in jobs.iter().zip(&results) {
+        for pair in points.windows(2) {
+            // An error lost in the reference's noise (corrected to 0) says nothing.
+            if pair[1].rel_corr > 0.0 && pair[1].rel_corr >= pair[0].rel_corr {
+                slope_failures.push(format!(
+                    "{} {}: error does not fall from {} to {} spp ({:.4e} -> {:.4e})",
+                    specs[i].name,
+                    mode_name(mode),
+                    pair[0].spp,
+                    pair[1].spp,
+                    pair[0].rel_corr,
+                    pair[1].rel_corr
+                ));
+            }
         }
     }
     eprint!("{slopes}");
@@ -834,9 +866,20 @@ fn main() {
     }
     assert!(
         slope_failures.is_empty(),
-        "preview scene does not converge as spp^-1/2 (slope outside [-0.85, -0.35]): {}",
-        slope_failures.join("; ")
+        "not converging as it should (see the module documentation):\n{}",
+        slope_failures.join("\n")
     );
+}
+
+/// Accepted convergence slopes: spp^−½ ± 0.1 for white noise, steeper (up to spp^−1.5)
+/// for Sobol points; the preview scene's rare caustic paths leave its Sobol series near
+/// spp^−½ and its reference noisy, hence one wider band for all its series.
+fn slope_bounds(preview: bool, sampler: SamplerKind) -> (f64, f64) {
+    match (preview, sampler) {
+        (true, _) => (-0.85, -0.35),
+        (false, SamplerKind::Independent) => (-0.6, -0.4),
+        (false, SamplerKind::Sobol) => (-1.6, -0.4),
+    }
 }
 
 /// Least-squares slope of ln(rel. RMSE with the reference noise removed) against ln spp

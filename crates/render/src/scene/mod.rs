@@ -24,7 +24,7 @@ use std::path::{Path, PathBuf};
 /// The estimator version, hashed into every fingerprint: films rendered by
 /// an earlier estimator (other wavelength or random-number sampling, other
 /// inputs hashed) must not merge with new ones.
-pub const ESTIMATOR: &str = "lustre estimator 9: sobol sampler with 64-bit sample indices, \
+pub const ESTIMATOR: &str = "lustre estimator 10: sobol sampler with 64-bit sample indices, \
                              hero sets from a 2-D draw (base u/n, hero index), 16 per path \
                              for conductor-only scenes, power MIS, every input file hashed, \
                              first bounce off fresnel-only materials integrated over λ exactly, \
@@ -32,7 +32,8 @@ pub const ESTIMATOR: &str = "lustre estimator 9: sobol sampler with 64-bit sampl
                              a constant environment left to BSDF sampling in conductor-only \
                              scenes, Beckmann's orthogonal slope by the AS 241 normal quantile, \
                              the light density counted up to twice in MIS where a microfacet \
-                             lobe is not much narrower than the light";
+                             lobe is not much narrower than the light, the emission \
+                             along a mixed delta lobe's mirror direction traced at every vertex";
 
 /// What a ray hit.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
