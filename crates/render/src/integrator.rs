@@ -428,13 +428,11 @@ fn vertex_draws(
 /// 5.9 at 1 spp and 0.14 at 256 (hero), falling slower than spp^−½. One
 /// more ray per such vertex makes the term exact; the sampled delta
 /// direction still carries the path on, but counts no emission.
-#[allow(clippy::too_many_arguments)]
 #[inline]
 fn delta_emission(
     scene: &Scene,
     bxdf: &(impl Bxdf + ?Sized),
     v: &Vertex,
-    wi: DVec3,
     lambdas: &[f64; N],
     n: usize,
     mut add: impl FnMut(usize, f64),
@@ -442,12 +440,12 @@ fn delta_emission(
 ) -> bool {
     let mut spec = [0.0; N];
     for (s, &lambda) in spec.iter_mut().zip(lambdas).take(n) {
-        *s = bxdf.specular(wi, lambda).weight;
+        *s = bxdf.specular(v.wi, lambda).weight;
     }
     if !spec[..n].iter().any(|&s| s > 0.0) {
         return false;
     }
-    let Some(ray) = v.ray(brdf::frame::reflect_z(wi)) else {
+    let Some(ray) = v.ray(brdf::frame::reflect_z(v.wi)) else {
         return true;
     };
     let hit = scene.shapes.intersect(&ray, f64::INFINITY);
@@ -797,7 +795,6 @@ fn trace(
                 scene,
                 bxdf,
                 &v,
-                wi,
                 lambdas,
                 n,
                 |j, e| {
