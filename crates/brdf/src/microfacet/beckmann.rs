@@ -47,6 +47,23 @@ pub(super) fn lambda(t: f64) -> f64 {
     (0.5 * (exp(-a * a) / (a * SQRT_PI) - libm::erfc(a))).max(0.0)
 }
 
+/// [`lambda`] at t = q/z² from q = αx²x² + αy²y² > 0 and z = cosθ > 0
+/// (tangential components, exact as α → 0): where the polynomial applies,
+/// x = √q/z and a = z/√q from one division, 1/(√q z), instead of t's and
+/// the exponent's two.
+#[inline]
+pub(super) fn lambda_qz(q: f64, z: f64) -> f64 {
+    let s = libm::sqrt(q);
+    // z ≥ 1e−100 and, past the caller's negligible-Λ test, s > z/5.8: the
+    // product neither underflows nor overflows.
+    if s <= LAMBDA_POLY_MAX_X * z && z > 0.0 {
+        let inv = 1.0 / (s * z);
+        let a = z * z * inv;
+        return exp(-a * a) * scaled_lambda(q * inv);
+    }
+    lambda(q / (z * z))
+}
+
 /// From a = 1/(α tanθ) = 5.8 on, Λ < 1.8·10⁻¹⁸ is taken as 0 (see
 /// [`super::Distribution::lambda_frac`]).
 pub(super) const LAMBDA_NEGLIGIBLE_A: f64 = 5.8;
@@ -643,6 +660,79 @@ mod tests {
             assert!(l <= last && l >= 0.0, "a = {a}");
             last = l;
         }
+    }
+
+    #[test]
+    fn lambda_from_q_and_z_is_lambda_from_t() {
+        // a = z/√q from 0.01 to 6 (both sides of the polynomial's end at
+        // 1.25), cosθ from 1e−100 to 1: the one-division form against t's.
+        let mut worst = 0.0f64;
+        for i in 0..=3000 {
+            let a =
+                libm::exp(libm::log(0.01) + (libm::log(6.0) - libm::log(0.01)) * i as f64 / 3000.0);
+            for z in [1e-100, 1e-30, 1e-8, 1e-3, 0.2, 0.7071, 1.0] {
+                let q = (z / a) * (z / a);
+                let (got, want) = (lambda_qz(q, z), lambda(q / (z * z)));
+                assert!(got.is_finite() && got >= 0.0, "a {a} z {z}: {got}");
+                // e^{−a²} turns the argument's round-off (a few ulps of a²
+                // in either form) into a² times that, relative.
+                let rel = (got - want).abs() / want;
+                worst = worst.max(rel);
+                let tol = 1e-14 + 1e-15 * a * a;
+                assert!(rel < tol, "a {a} z {z}: {got} against {want}");
+            }
+        }
+        assert!(
+            worst > 0.0,
+            "the two forms never differ: the test compares a form with itself"
+        );
+    }
+
+    #[test]
+    fn d_on_the_unnormalised_half_vector_is_d() {
+        // The fraction on v = wi + wo (any scale) against D(v/|v|), over
+        // half vectors from the normal to 1e−9 rad of the horizon, α from
+        // 1e−4 to 1 and anisotropic; where D underflows the fraction must
+        // give 0 (or 0/0, which the callers read as 0).
+        use crate::microfacet::Distribution;
+        let mut compared = 0;
+        for (ax, ay) in [
+            (1e-4, 1e-4),
+            (0.05, 0.05),
+            (0.3, 0.1),
+            (1.0, 1.0),
+            (0.01, 0.9),
+        ] {
+            let dist = Distribution::beckmann(ax, ay).unwrap();
+            for i in 0..=500 {
+                let theta = core::f64::consts::FRAC_PI_2 * (i as f64 / 500.0) * (1.0 - 1e-9);
+                for phi in [0.0, 0.7, 2.2, 4.5] {
+                    for scale in [1e-3, 1.0, 1.9] {
+                        let (st, ct) = libm::sincos(theta);
+                        let h = DVec3::new(st * libm::cos(phi), st * libm::sin(phi), ct);
+                        let v = h * scale;
+                        let want = d(h, ax, ay);
+                        let (num, den) = dist.beckmann_d_fraction(v, v.length_squared());
+                        let got = num / den;
+                        if want == 0.0 {
+                            assert!(num == 0.0, "α ({ax}, {ay}) θ {theta}: {num}/{den}");
+                            continue;
+                        }
+                        compared += 1;
+                        // e^{−e} amplifies the exponent's round-off (a few
+                        // ulps in either form) by e.
+                        let e = (st / ct) * (st / ct) / (ax * ax).min(ay * ay);
+                        let rel = (got - want).abs() / want;
+                        let tol = 1e-14 + 1e-15 * e;
+                        assert!(
+                            rel < tol,
+                            "α ({ax}, {ay}) θ {theta} φ {phi}: {got} against {want}"
+                        );
+                    }
+                }
+            }
+        }
+        assert!(compared > 10_000, "{compared}");
     }
 
     #[test]

@@ -66,7 +66,7 @@ impl MicrofacetConductor {
             NdfKind::Beckmann => Self::geometry_with(
                 wi,
                 wo,
-                |v, q| (d.d_unnormalised(v, q), 1.0),
+                |v, q| d.beckmann_d_fraction(v, q),
                 |w| d.lambda_frac(w),
             ),
         }
@@ -184,7 +184,7 @@ impl Bxdf for MicrofacetConductor {
                     (h, (lambda, 1.0))
                 },
                 |w| d.lambda_frac(w),
-                |h, q| (d.d_unnormalised(h, q), 1.0),
+                |h, q| d.beckmann_d_fraction(h, q),
                 false,
             ),
         }

@@ -151,9 +151,30 @@ impl Distribution {
                 num / den
             }
             NdfKind::Beckmann => {
-                beckmann::d(v * (1.0 / libm::sqrt(len2)), self.alpha_x, self.alpha_y)
+                let (num, den) = self.beckmann_d_fraction(v, len2);
+                num / den
             }
         }
+    }
+
+    /// [`Distribution::d_unnormalised`] for a Beckmann distribution, as an
+    /// unformed fraction: e^{−tan²θ/α²} / (π αx αy cos⁴θ) with tan²θ/α² =
+    /// (vx²/αx² + vy²/αy²)/vz² and cos²θ = vz²/|v|², both invariant under the
+    /// scale of v, so v needs no normalisation (a square root and a division
+    /// fewer). Where cos⁴θ underflows, e^{−tan²θ/α²} has underflowed first
+    /// for every α ≤ 1 (it is positive only for tan²θ < 745 α²), so the
+    /// fraction is 0/0 there, which the callers' `finite_nonneg` turns into
+    /// the limit 0.
+    #[inline(always)]
+    pub(crate) fn beckmann_d_fraction(&self, v: DVec3, len2: f64) -> (f64, f64) {
+        let x = v.x * self.inv_alpha_x;
+        let y = v.y * self.inv_alpha_y;
+        let z2 = v.z * v.z;
+        let cos2 = z2 / len2;
+        (
+            crate::numerics::math::exp(-(x * x + y * y) / z2),
+            core::f64::consts::PI * self.alpha_x * self.alpha_y * (cos2 * cos2),
+        )
     }
 
     /// [`Distribution::d_unnormalised`] for a GGX distribution, as an unformed
@@ -186,10 +207,11 @@ impl Distribution {
                 let ay = self.alpha_y * w.y;
                 // a² = z² / (αx²x² + αy²y²) ≥ 5.8².
                 const A2: f64 = beckmann::LAMBDA_NEGLIGIBLE_A * beckmann::LAMBDA_NEGLIGIBLE_A;
-                if w.z > 0.0 && (ax * ax + ay * ay) * A2 <= w.z * w.z {
+                let q = ax * ax + ay * ay;
+                if w.z > 0.0 && q * A2 <= w.z * w.z {
                     return (0.0, 1.0);
                 }
-                (self.lambda(w), 1.0)
+                (beckmann::lambda_qz(q, w.z), 1.0)
             }
         }
     }
