@@ -341,11 +341,35 @@ pub fn bundled_scenes() -> anyhow::Result<Vec<(String, String)>> {
 }
 
 /// Runs `lustre preview`.
+/// The sky's parameters, checked as the flags they came from: the scene
+/// built from them would otherwise report them at a line of a generated file.
+fn check_sky_flags(args: &PreviewArgs) -> anyhow::Result<()> {
+    if matches!(args.light, Lighting::Studio) {
+        return Ok(());
+    }
+    let e = args.sun_elevation;
+    if !(e.is_finite() && e > 0.0 && e <= 90.0) {
+        bail!("--sun-elevation {e}: expected degrees in (0, 90] (the sky model has no night)");
+    }
+    if !args.sun_azimuth.is_finite() {
+        bail!(
+            "--sun-azimuth {}: expected a finite angle in degrees",
+            args.sun_azimuth
+        );
+    }
+    let t = args.turbidity;
+    if !(t.is_finite() && (2.0..=10.0).contains(&t)) {
+        bail!("--turbidity {t}: the Preetham sky covers 2 (very clear) to 10 (hazy)");
+    }
+    Ok(())
+}
+
 pub fn run(args: PreviewArgs) -> anyhow::Result<()> {
     if args.spp == 0 {
         bail!("--spp must be ≥ 1");
     }
     let budget = parse_duration(&args.time_limit)?;
+    check_sky_flags(&args)?;
     let (name, title, cells) = match &args.material {
         Some(path) => {
             let (name, cells) = material_cells(path, &args.models)?;

@@ -272,6 +272,26 @@ pub fn render(args: RenderArgs) -> anyhow::Result<()> {
             "--no-film: the scene names no `exr` or `png` output and none was given; nothing would be written"
         );
     }
+    {
+        let scene_dir = scene_path.parent().unwrap_or(Path::new(""));
+        let inputs: Vec<(String, PathBuf)> =
+            std::iter::once(("the scene file".to_string(), scene_path.clone()))
+                .chain(
+                    scene
+                        .inputs
+                        .iter()
+                        .skip(1)
+                        .map(|i| (format!("input {}", i.name), scene_dir.join(&i.name))),
+                )
+                .collect();
+        let film_out = (!args.no_film).then_some(&film_path);
+        check_outputs(
+            exr.as_deref(),
+            png.as_deref(),
+            film_out.map(|p| p.as_path()),
+            &inputs,
+        )?;
+    }
     if exr.is_none() && png.is_none() && !args.quiet {
         eprintln!(
             "note: the scene names no `exr` or `png` output; only the film {} is written",
@@ -391,6 +411,17 @@ pub fn render(args: RenderArgs) -> anyhow::Result<()> {
 
 /// Merges partial films.
 pub fn merge(args: MergeArgs) -> anyhow::Result<()> {
+    let inputs: Vec<(String, PathBuf)> = args
+        .inputs
+        .iter()
+        .map(|p| (format!("input film {}", p.display()), p.clone()))
+        .collect();
+    check_outputs(
+        args.exr.as_deref(),
+        args.png.as_deref(),
+        args.film.as_deref(),
+        &inputs,
+    )?;
     let mut inputs = args.inputs.iter();
     let first = inputs.next().context("give at least one film")?;
     let mut film = Film::load(first)?;
@@ -426,9 +457,117 @@ pub fn merge(args: MergeArgs) -> anyhow::Result<()> {
     write_images(&film, args.exr.as_deref(), args.png.as_deref(), args.quiet)
 }
 
+/// Whether two paths name the same file: the same absolute path after
+/// removing `.` and `..`, or the same file once both exist (symbolic links).
+fn same_file(a: &Path, b: &Path) -> bool {
+    fn lexical(p: &Path) -> PathBuf {
+        let abs = std::path::absolute(p).unwrap_or_else(|_| p.to_path_buf());
+        let mut out = PathBuf::new();
+        for c in abs.components() {
+            match c {
+                std::path::Component::CurDir => {}
+                std::path::Component::ParentDir => {
+                    out.pop();
+                }
+                c => out.push(c),
+            }
+        }
+        out
+    }
+    if lexical(a) == lexical(b) {
+        return true;
+    }
+    matches!(
+        (std::fs::canonicalize(a), std::fs::canonicalize(b)),
+        (Ok(x), Ok(y)) if x == y
+    )
+}
+
+/// Refuses outputs that would overwrite an input or each other, and image
+/// names whose extension says another format than the one written (an EXR
+/// written as `x.png` opens as a broken PNG).
+fn check_outputs(
+    exr: Option<&Path>,
+    png: Option<&Path>,
+    film: Option<&Path>,
+    inputs: &[(String, PathBuf)],
+) -> anyhow::Result<()> {
+    for (p, ext, flag) in [(exr, "exr", "--exr / `exr`"), (png, "png", "--png / `png`")] {
+        if let Some(p) = p {
+            let ok = p
+                .extension()
+                .is_some_and(|e| e.to_string_lossy().eq_ignore_ascii_case(ext));
+            if !ok {
+                bail!(
+                    "{flag} {}: the file would hold {} data; give it a name ending in .{ext}",
+                    p.display(),
+                    ext.to_uppercase()
+                );
+            }
+        }
+    }
+    let outputs: Vec<(&str, &Path)> = [("EXR", exr), ("PNG", png), ("film", film)]
+        .into_iter()
+        .filter_map(|(k, p)| p.map(|p| (k, p)))
+        .collect();
+    for (i, (kind, p)) in outputs.iter().enumerate() {
+        for (what, q) in inputs {
+            if same_file(p, q) {
+                bail!(
+                    "the {kind} output {} is {what}: writing it would destroy it; choose another output name",
+                    p.display()
+                );
+            }
+        }
+        for (other, q) in &outputs[..i] {
+            if same_file(p, q) {
+                bail!(
+                    "the {other} and {kind} outputs are both {}: one would overwrite the other; give them different names",
+                    p.display()
+                );
+            }
+        }
+    }
+    Ok(())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn outputs_never_overwrite_inputs_or_each_other() {
+        let dir = std::env::temp_dir().join(format!("lustre_outputs_{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let scene = dir.join("a.toml");
+        std::fs::write(&scene, "").unwrap();
+        let inputs = [("the scene file".to_string(), scene.clone())];
+        let p = |s: &str| dir.join(s);
+        // Sound: distinct names with their formats' extensions (any case).
+        check_outputs(
+            Some(&p("a.exr")),
+            Some(&p("a.PNG")),
+            Some(&p("a.film")),
+            &inputs,
+        )
+        .unwrap();
+        check_outputs(None, None, Some(&p("a.film")), &inputs).unwrap();
+        let err = |exr: Option<PathBuf>, png: Option<PathBuf>, film: Option<PathBuf>| {
+            check_outputs(exr.as_deref(), png.as_deref(), film.as_deref(), &inputs)
+                .unwrap_err()
+                .to_string()
+        };
+        // The scene file, also reached through `..` or `.`.
+        let via = dir.join("sub").join("..").join(".").join("a.toml");
+        assert!(err(None, None, Some(via)).contains("is the scene file"));
+        assert!(err(None, None, Some(scene.clone())).contains("would destroy it"));
+        // Two outputs on one file.
+        assert!(err(Some(p("b.exr")), None, Some(p("b.exr"))).contains("the EXR and film outputs"));
+        // A format under another's extension, or none.
+        assert!(err(Some(p("x.png")), None, None).contains("ending in .exr"));
+        assert!(err(None, Some(p("x")), None).contains("ending in .png"));
+        std::fs::remove_dir_all(&dir).ok();
+    }
 
     #[test]
     fn parses_ranges_and_durations() {

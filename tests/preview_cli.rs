@@ -132,7 +132,24 @@ fn bad_input_is_a_clear_error() {
                 "--models",
                 "ggx",
             ],
-            "turbidity",
+            "--turbidity 1",
+        ),
+        // Named as the flag, not as a line of the generated scene file.
+        (
+            vec!["preview", "--sample", "S280", "--sun-elevation", "100"],
+            "--sun-elevation 100",
+        ),
+        (
+            vec![
+                "preview",
+                "--sample",
+                "S280",
+                "--light",
+                "both",
+                "--sun-elevation",
+                "0",
+            ],
+            "--sun-elevation 0",
         ),
         (
             vec!["preview", "--sample", "S280", "--time-limit", "soon"],

@@ -31,6 +31,12 @@ use std::path::Path;
 const MAGIC: &[u8; 12] = b"LUSTREFILM2\n";
 const MAGIC_V1: &[u8; 12] = b"LUSTREFILM1\n";
 const SCALE: f64 = (1u64 << 40) as f64;
+/// Largest |X|, |Y| or |Z| of one camera sample the film adds: 10²⁰ · 2⁴⁰ is
+/// 1.1·10³², so the i128 sums (up to 1.7·10³⁸) hold a million such samples
+/// per pixel. A larger estimate (lights of radiance ~10²⁴ and up) is dropped
+/// and counted, where it used to saturate the fixed-point conversion and
+/// give every lit pixel the same value without a word.
+pub const MAX_SAMPLE_XYZ: f64 = 1e20;
 /// Largest width or height of a film (and of a scene's `resolution`).
 pub const MAX_SIDE: u32 = 1 << 15;
 /// Largest pixel count of a film: 2²⁷ pixels hold 6 GiB of sums.
@@ -45,7 +51,8 @@ const PIXEL_BYTES: u128 = 48;
 /// Why a camera sample was left out of the film.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum BadSample {
-    /// A wavelength's radiance estimate was NaN or infinite.
+    /// A wavelength's radiance estimate was NaN or infinite, or the
+    /// sample's XYZ lies beyond [`MAX_SAMPLE_XYZ`].
     NonFinite,
     /// A wavelength's radiance estimate was negative (a model returned f < 0).
     Negative,
@@ -112,7 +119,7 @@ impl fmt::Display for Dropped {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         write!(
             f,
-            "{} sample(s) dropped ({} non-finite, {} negative)",
+            "{} sample(s) dropped ({} non-finite or beyond the film's range, {} negative)",
             self.total(),
             self.non_finite,
             self.negative
@@ -824,7 +831,7 @@ mod tests {
         let msg = a.p.dropped.to_string();
         assert!(
             msg.starts_with(
-                "3 sample(s) dropped (1 non-finite, 2 negative), first at pixel (1, 0) sample 1"
+                "3 sample(s) dropped (1 non-finite or beyond the film's range, 2 negative), first at pixel (1, 0) sample 1"
             ),
             "{msg}"
         );

@@ -22,7 +22,7 @@
 //! symmetric in which wavelength was the hero, which makes hero sampling
 //! unbiased.
 
-use crate::film::BadSample;
+use crate::film::{BadSample, MAX_SAMPLE_XYZ};
 use crate::geometry::Ray;
 use crate::light::{Emission, LightSample, Lights};
 use crate::sampler::{Reserved2d, Sampler};
@@ -283,7 +283,7 @@ pub fn sample_pixel_checked(
             // folding this case into them (an empty radiance slice) made the
             // caller hold the whole `Traced` and cost +5.7 % instructions on
             // the wide-light plate. See below for why Y decides the sign.
-            let finite = xyz.iter().all(|v| v.is_finite());
+            let finite = xyz.iter().all(|v| in_film_range(*v));
             return match (finite, scene.signed_radiance || xyz[1] >= 0.0) {
                 (false, _) => Err(BadSample::NonFinite),
                 (true, false) => Err(BadSample::Negative),
@@ -312,12 +312,19 @@ pub fn sample_pixel_checked(
             xyz[k] += cs.radiance[j] * c[k];
         }
     }
-    // Finite radiances can still overflow in the sum.
-    if xyz.iter().all(|v| v.is_finite()) {
+    // Finite radiances can still overflow in the sum, or leave the film's range.
+    if xyz.iter().all(|v| in_film_range(*v)) {
         Ok(xyz)
     } else {
         Err(BadSample::NonFinite)
     }
+}
+
+/// Whether a sample's XYZ component can be added to the film: finite and
+/// within [`MAX_SAMPLE_XYZ`] (false for NaN).
+#[inline(always)]
+fn in_film_range(v: f64) -> bool {
+    v.abs() <= MAX_SAMPLE_XYZ
 }
 
 /// A path vertex on a reflecting surface, seen from the ray that reached it.

@@ -156,8 +156,10 @@ fn render_tile(
                 match sample_pixel_checked(scene, x, y, s) {
                     Ok(xyz) => {
                         let f = to_fixed(xyz);
+                        // Saturating: past a million samples at the film's
+                        // per-sample limit an i128 sum would wrap.
                         for k in 0..3 {
-                            acc[k] += f[k];
+                            acc[k] = acc[k].saturating_add(f[k]);
                         }
                     }
                     Err(why) => dropped.record(why, x, y, s),
