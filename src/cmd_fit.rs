@@ -256,11 +256,18 @@ fn stats(args: StatsArgs) -> anyhow::Result<()> {
         channel,
         notes: read_notes,
     } = scan;
-    let s = pipeline::summarise(topo, level_of(&args.read))?;
+    let s = pipeline::summarise(topo, level_of(&args.read))
+        .map_err(|e| in_file(e, &args.scan, None))?;
     let t = &s.prepared.scan;
     let form = &s.prepared.form;
     let kc = &s.kc;
     let mut warnings: Vec<String> = Vec::new();
+    if let Some(f) = &s.flat {
+        warnings.push(format!(
+            "{f}; the statistics stand but the K-correlation fit is of rounding noise, and \
+             `lustre fit` refuses this scan"
+        ));
+    }
     if let Some(w) = form.warning() {
         warnings.push(w);
     }
@@ -343,6 +350,16 @@ fn stats(args: StatsArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// An analysis error prefixed with the file it concerns: the library knows the step that
+/// failed, not the file name.
+fn in_file(e: fit::FitError, scan: &Path, stylus: Option<&Path>) -> anyhow::Error {
+    let file = match (&e, stylus) {
+        (fit::FitError::Stylus(_), Some(p)) => p,
+        _ => scan,
+    };
+    anyhow::Error::new(e).context(file.display().to_string())
+}
+
 fn material(args: MaterialArgs) -> anyhow::Result<()> {
     let scan_path = args
         .scan
@@ -380,27 +397,33 @@ fn material(args: MaterialArgs) -> anyhow::Result<()> {
         level: level_of(&args.read),
         ..Options::default()
     };
-    let analysis = pipeline::analyse(
-        topo.topo.clone(),
-        stylus.as_ref().map(|s| s.1.topo.clone()),
-        &opts,
-    )?;
+    let fit::io::Scan {
+        topo: scan_topo,
+        notes: read_notes,
+        ..
+    } = topo;
+    // Moved, not cloned: a second copy of a large map is a large share of the peak memory.
+    let (stylus, stylus_topo) = match stylus {
+        Some((b, s)) => (Some(b), Some(s.topo)),
+        None => (None, None),
+    };
+    let analysis = pipeline::analyse(scan_topo, stylus_topo, &opts)
+        .map_err(|e| in_file(e, &scan_path, args.stylus.as_deref()))?;
     let scan_name = scan_path.display().to_string();
     let stylus_name = args.stylus.as_ref().map(|p| p.display().to_string());
     let prov = fit::material::Provenance {
         file: &scan_name,
         bytes: &bytes,
-        stylus: stylus_name
-            .as_deref()
-            .zip(stylus.as_ref().map(|s| s.0.as_slice())),
+        stylus: stylus_name.as_deref().zip(stylus.as_deref()),
         merge_cutoff_rad_per_um: args.merge_cutoff,
         metal: &args.metal,
         model: &args.model,
-        notes: &topo.notes,
+        notes: &read_notes,
     };
     let doc = fit::material::build(&analysis, &prov);
     // Every model the file offers must build as a scene `include` of it would.
-    fit::material::renderer_materials(&doc)?;
+    fit::material::renderer_materials(&doc)
+        .with_context(|| format!("{}: the material fitted to it", scan_path.display()))?;
     let text = fit::material::to_toml(&doc)?;
     plot::write_atomic(&args.output, text.as_bytes())
         .with_context(|| format!("cannot write {}", args.output.display()))?;
@@ -451,4 +474,25 @@ fn material(args: MaterialArgs) -> anyhow::Result<()> {
         }
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn analysis_errors_name_the_file_they_concern() {
+        let err = || fit::FitError::Data {
+            what: "levelling",
+            problem: "singular".into(),
+        };
+        let (scan, stylus) = (Path::new("a/scan.gsf"), Path::new("b/stylus.csv"));
+        let msg = format!("{:#}", in_file(err(), scan, Some(stylus)));
+        assert_eq!(msg, "a/scan.gsf: levelling: singular");
+        let msg = format!(
+            "{:#}",
+            in_file(fit::FitError::Stylus(Box::new(err())), scan, Some(stylus))
+        );
+        assert_eq!(msg, "b/stylus.csv: stylus profile: levelling: singular");
+    }
 }

@@ -233,15 +233,25 @@ pub fn run(args: JudgeArgs) -> anyhow::Result<()> {
         Some(c) => fit::resample::crop_center(&analysis.scan, c, if profile { 1 } else { c }),
         None => analysis.scan.clone(),
     };
-    let explicit = ExplicitBrdf::new(&fit::resample::upsample(&base, args.upsample)?, &tiles)?;
+    // The explicit-BRDF steps report what failed, not on which file.
+    let in_scan = || args.scan.display().to_string();
+    let explicit = ExplicitBrdf::new(
+        &fit::resample::upsample(&base, args.upsample).with_context(in_scan)?,
+        &tiles,
+    )
+    .with_context(|| format!("{}: explicit BRDF", args.scan.display()))?;
     let surrogate = if args.no_surrogate {
         None
     } else {
-        let s = fit::surrogate::gaussian_surrogate(&base, 0x5eed)?;
-        Some(ExplicitBrdf::new(
-            &fit::resample::upsample(&s, args.upsample)?,
-            &tiles,
-        )?)
+        let s = fit::surrogate::gaussian_surrogate(&base, 0x5eed)
+            .with_context(|| format!("{}: Gaussian surrogate", args.scan.display()))?;
+        Some(
+            ExplicitBrdf::new(
+                &fit::resample::upsample(&s, args.upsample).with_context(in_scan)?,
+                &tiles,
+            )
+            .with_context(|| format!("{}: explicit BRDF of the surrogate", args.scan.display()))?,
+        )
     };
     let mut sets = Vec::new();
     for &theta_i in &args.theta_i {

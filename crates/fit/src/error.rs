@@ -46,6 +46,10 @@ pub enum FitError {
         /// Explanation, including how to fix it when possible.
         problem: String,
     },
+    /// A step failed on the stylus profile rather than on the scan, so a caller can name
+    /// the right file.
+    #[error("stylus profile: {0}")]
+    Stylus(Box<FitError>),
 }
 
 impl FitError {

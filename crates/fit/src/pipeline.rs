@@ -113,15 +113,111 @@ pub struct Prepared {
     pub form: Form,
 }
 
+/// Largest fraction of invalid points that is filled. Harmonic filling is smooth, so filled
+/// points carry no roughness: Sq falls roughly as `√(1 − fraction)` on a rough surface (a
+/// 91 % invalid map gave half the true Sq) and the fit is of the filling, not of the
+/// surface. Past one half the invented part would outweigh the measured one, which no
+/// warning can repair, so the map is refused.
+pub const MAX_INVALID_FRACTION: f64 = 0.5;
+
+/// Invalid fraction above which the result is kept but flagged in the notes: the
+/// √(1 − fraction) bias of Sq then exceeds a few per cent.
+pub const NOTE_INVALID_FRACTION: f64 = 0.1;
+
+/// Residual rms, relative to the largest height, below which the heights are taken as
+/// constant: f64 rounding of a levelled map is ~1e-16 of its values and float32 storage
+/// ~1e-8, while any roughness worth fitting is orders of magnitude above either.
+pub const CONSTANT_RELATIVE_RMS: f64 = 1e-10;
+
 /// Fill invalid points and level (`None`: a plane for maps, a line for profiles).
-pub fn prepare_with(mut t: Topography, level: Option<Level>) -> Result<Prepared, FitError> {
+///
+/// Refuses a single point, a map with more than [`MAX_INVALID_FRACTION`] invalid points,
+/// and heights that are constant (to rounding) once the form is removed.
+pub fn prepare_with(t: Topography, level: Option<Level>) -> Result<Prepared, FitError> {
+    let (prepared, flat) = prepare_unchecked_flat(t, level)?;
+    match flat {
+        Some(problem) => Err(FitError::data("constant heights", problem)),
+        None => Ok(prepared),
+    }
+}
+
+/// [`prepare_with`], but heights constant to rounding are returned with the reason instead
+/// of refused: their statistics (Sq ≈ 0) are true, only fits to them are meaningless.
+fn prepare_unchecked_flat(
+    t: Topography,
+    level: Option<Level>,
+) -> Result<(Prepared, Option<String>), FitError> {
+    let mut t = t.column_as_profile();
+    if t.nx * t.ny < 2 {
+        return Err(FitError::data(
+            "reading the scan",
+            "the scan holds a single point; a roughness fit needs a profile or a map. Fix: \
+             export the whole profile or map, not one value",
+        ));
+    }
+    let n = t.heights.len();
+    let invalid = t.invalid_count();
+    let fraction = invalid as f64 / n as f64;
+    if invalid < n && fraction > MAX_INVALID_FRACTION {
+        return Err(FitError::data(
+            "invalid points",
+            format!(
+                "{:.1} % of the {n} points ({invalid}) are invalid (NaN/masked); filling more \
+                 than {:.0} % would invent most of the surface and bias Sq and the PSD low. \
+                 Fix: crop the scan to its valid region, or re-measure with fewer dropouts",
+                100.0 * fraction,
+                100.0 * MAX_INVALID_FRACTION
+            ),
+        ));
+    }
     let filled = fill::harmonic(&mut t)?;
+    let scale = t.heights.iter().fold(0.0f64, |m, h| m.max(h.abs()));
     let l = level.unwrap_or_else(|| Level::default_for(&t));
     let form = level::apply(&mut t, l)?;
-    Ok(Prepared {
-        scan: t,
-        filled,
-        form,
+    let mean = t.heights.iter().sum::<f64>() / n as f64;
+    let rms = (t.heights.iter().map(|h| (h - mean).powi(2)).sum::<f64>() / n as f64).sqrt();
+    let flat = if n <= form.terms.len() {
+        Some(format!(
+            "only {n} points, no more than the {} terms of the {} form removed, so nothing is \
+             left to fit. Fix: export the whole profile or map (or pass --level none)",
+            form.terms.len(),
+            l.name()
+        ))
+    } else if rms <= CONSTANT_RELATIVE_RMS * scale {
+        let removed = match l {
+            Level::None => String::new(),
+            l => format!(" once the {} form is removed", l.name()),
+        };
+        Some(format!(
+            "the heights are constant (to rounding){removed}: rms {rms:.3e} m for values up \
+             to {scale:.3e} m, so there is no roughness to fit. Fix: check that the height \
+             channel was exported (--channel; `lustre fit channels FILE` lists them) and that \
+             the scan is not a blank or placeholder"
+        ))
+    } else {
+        None
+    };
+    Ok((
+        Prepared {
+            scan: t,
+            filled,
+            form,
+        },
+        flat,
+    ))
+}
+
+/// The note for a scan with more than [`NOTE_INVALID_FRACTION`] of its points filled.
+fn filled_note(t: &Topography, filled: usize) -> Option<String> {
+    let fraction = filled as f64 / t.heights.len().max(1) as f64;
+    (fraction > NOTE_INVALID_FRACTION).then(|| {
+        format!(
+            "{:.1} % of the points were invalid and filled by smooth interpolation: Sq, the \
+             slopes and the PSD may be low by up to {:.0} % (√(1 − fraction)); crop to the \
+             valid region for unbiased numbers",
+            100.0 * fraction,
+            100.0 * (1.0 - (1.0 - fraction).sqrt())
+        )
     })
 }
 
@@ -158,6 +254,9 @@ pub fn analyse(
 ) -> Result<Analysis, FitError> {
     let Prepared { scan, filled, form } = prepare_with(scan, opts.level)?;
     let mut notes = Vec::new();
+    if let Some(n) = filled_note(&scan, filled) {
+        notes.push(n);
+    }
     let stats = stats::compute(&scan);
     let line_psd = psd::welch(&scan, &opts.welch)?;
     let nseg = line_psd.f.len().saturating_sub(1) * 2;
@@ -167,7 +266,8 @@ pub fn analyse(
 
     let (stylus_psd, fit_psd, f_lo) = match stylus {
         Some(st) => {
-            let st = prepare_with(st, None)?.scan;
+            let stylus_err = |e| FitError::Stylus(Box::new(e));
+            let st = prepare_with(st, None).map_err(stylus_err)?.scan;
             let nperseg = (st.nx / opts.stylus_segments.max(1)).max(8).min(st.nx);
             let sp = psd::welch(
                 &st,
@@ -175,7 +275,8 @@ pub fn analyse(
                     nperseg: Some(nperseg),
                     noverlap: None,
                 },
-            )?;
+            )
+            .map_err(stylus_err)?;
             let f_lo = sp.f.get(3).copied().unwrap_or(0.0);
             let merged = psd::merge(&sp, &line_psd, f_merge);
             (Some(sp), merged, f_lo)
@@ -265,29 +366,32 @@ pub fn analyse(
         ),
     };
 
-    let (sx, sy) = ndf::slopes(&scan);
-    let ndf = if scan.is_profile() {
-        let smax = 6.0 * stats.rdq_x.max(1e-9);
-        NdfFits {
-            ndf: None,
-            alpha_ggx: ndf::fit_alpha_marginal(&sx, 2 * opts.ndf_bins, smax, ndf::ggx_marginal),
-            alpha_beckmann: ndf::fit_alpha_marginal(
-                &sx,
-                2 * opts.ndf_bins,
-                smax,
-                ndf::beckmann_marginal,
-            ),
-            alpha_beckmann_moment: 2f64.sqrt() * stats.rdq_x,
-        }
-    } else {
-        let tmax = ndf::theta_max_for(&sx, &sy);
-        let bin = tmax / opts.ndf_bins as f64;
-        let h = ndf::histogram(&sx, &sy, opts.ndf_bins, tmax, opts.ndf_smooth_bins * bin);
-        NdfFits {
-            alpha_ggx: ndf::fit_alpha(&h, ndf::ggx),
-            alpha_beckmann: ndf::fit_alpha(&h, ndf::beckmann),
-            alpha_beckmann_moment: stats.sdq,
-            ndf: Some(h),
+    // Scoped so the slopes (two map-sized arrays) are freed before the two-scale splits.
+    let ndf = {
+        let (sx, sy) = ndf::slopes(&scan);
+        if scan.is_profile() {
+            let smax = 6.0 * stats.rdq_x.max(1e-9);
+            NdfFits {
+                ndf: None,
+                alpha_ggx: ndf::fit_alpha_marginal(&sx, 2 * opts.ndf_bins, smax, ndf::ggx_marginal),
+                alpha_beckmann: ndf::fit_alpha_marginal(
+                    &sx,
+                    2 * opts.ndf_bins,
+                    smax,
+                    ndf::beckmann_marginal,
+                ),
+                alpha_beckmann_moment: 2f64.sqrt() * stats.rdq_x,
+            }
+        } else {
+            let tmax = ndf::theta_max_for(&sx, &sy);
+            let bin = tmax / opts.ndf_bins as f64;
+            let h = ndf::histogram(&sx, &sy, opts.ndf_bins, tmax, opts.ndf_smooth_bins * bin);
+            NdfFits {
+                alpha_ggx: ndf::fit_alpha(&h, ndf::ggx),
+                alpha_beckmann: ndf::fit_alpha(&h, ndf::beckmann),
+                alpha_beckmann_moment: stats.sdq,
+                ndf: Some(h),
+            }
         }
     };
 
@@ -350,16 +454,23 @@ pub struct Summary {
     pub anisotropy: Option<Anisotropy>,
     /// Parts skipped, in words.
     pub notes: Vec<String>,
+    /// Why the heights are constant to rounding, when they are: the statistics stand
+    /// (Sq ≈ 0, as reference tools report it) but the K-correlation fit is of rounding
+    /// noise, so [`analyse`] refuses such a scan.
+    pub flat: Option<String>,
 }
 
 /// The `fit stats` analysis of one scan.
 pub fn summarise(scan: Topography, level: Option<Level>) -> Result<Summary, FitError> {
-    let prepared = prepare_with(scan, level)?;
+    let (prepared, flat) = prepare_unchecked_flat(scan, level)?;
     let t = &prepared.scan;
     let stats = stats::compute(t);
     let line_psd = psd::welch(t, &WelchOptions::default())?;
     let kc = kc_of(t, &stats, &line_psd);
     let mut notes = Vec::new();
+    if let Some(n) = filled_note(t, prepared.filled) {
+        notes.push(n);
+    }
     if kc.reason == Some(kc::Degeneracy::TooFewPoints) {
         notes.push(format!(
             "the line PSD has only {} bins: K-correlation parameters estimated from Sq and Sdq",
@@ -384,5 +495,6 @@ pub fn summarise(scan: Topography, level: Option<Level>) -> Result<Summary, FitE
         kc,
         anisotropy,
         notes,
+        flat,
     })
 }

@@ -28,6 +28,21 @@ impl Topography {
         self.ny == 1
     }
 
+    /// A single column (`nx == 1`, several lines) as the profile along y it is, so it is
+    /// analysed like a single row; anything else unchanged.
+    pub fn column_as_profile(self) -> Topography {
+        if self.nx == 1 && self.ny > 1 {
+            Topography {
+                nx: self.ny,
+                ny: 1,
+                dx: self.dy,
+                ..self
+            }
+        } else {
+            self
+        }
+    }
+
     /// One scan line.
     pub fn line(&self, y: usize) -> &[f64] {
         &self.heights[y * self.nx..(y + 1) * self.nx]

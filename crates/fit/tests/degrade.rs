@@ -158,11 +158,15 @@ fn tiny_maps_give_statistics_and_a_psd() {
     let a = analyse(t, None, &Options::default()).unwrap();
     let doc = material::build(&a, &prov("txt_example.txt", b"", &[]));
     assert_renderer_accepts(&doc, "txt_example");
-    let tiny = map(2, 2, 1e-6, |x, y| {
+    // On a 2 × 2 grid y² = y, so this is a plane: nothing is left once it is removed.
+    let plane = map(2, 2, 1e-6, |x, y| {
         1e-9 * (x * 1e6 + 2.0 * y * 1e6 * y * 1e6)
     });
-    let s = summarise(tiny.clone(), Some(Level::None)).unwrap();
-    assert!(s.stats.sq > 0.0);
+    let s = summarise(plane.clone(), Some(Level::None)).unwrap();
+    assert!(s.stats.sq > 0.0 && s.flat.is_none());
+    let e = analyse(plane, None, &Options::default()).unwrap_err();
+    assert!(e.to_string().contains("constant (to rounding)"), "{e}");
+    let tiny = map(2, 2, 1e-6, |x, y| 1e-9 * (x * 1e6 + 3.0 * x * y * 1e12));
     analyse(tiny, None, &Options::default()).unwrap();
 }
 

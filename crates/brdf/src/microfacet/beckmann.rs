@@ -670,7 +670,7 @@ mod tests {
         for i in 0..=3000 {
             let a =
                 libm::exp(libm::log(0.01) + (libm::log(6.0) - libm::log(0.01)) * i as f64 / 3000.0);
-            for z in [1e-100, 1e-30, 1e-8, 1e-3, 0.2, 0.7071, 1.0] {
+            for z in [1e-100, 1e-30, 1e-8, 1e-3, 0.2, 0.7, 1.0] {
                 let q = (z / a) * (z / a);
                 let (got, want) = (lambda_qz(q, z), lambda(q / (z * z)));
                 assert!(got.is_finite() && got >= 0.0, "a {a} z {z}: {got}");

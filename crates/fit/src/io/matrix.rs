@@ -96,6 +96,13 @@ pub(crate) fn sniff(bytes: &[u8]) -> Sniff {
     }
 }
 
+/// True when a line of `lines` is a header key this reader understands (`Width: 10 µm`).
+pub(crate) fn has_header_key(lines: &[&str]) -> bool {
+    lines
+        .iter()
+        .any(|l| text::key_value(l).is_some_and(|(k, _)| classify(&k).is_some()))
+}
+
 fn looks_numeric(l: &str) -> bool {
     let t = l.trim();
     !t.is_empty()

@@ -527,7 +527,7 @@ pub fn open_path(path: &Path, opts: &ReadOptions) -> Result<Scan, ReadError> {
 /// Read and convert a file already in memory; `name` is used for format detection
 /// (extension) and messages.
 pub fn open_bytes(name: &str, bytes: &[u8], opts: &ReadOptions) -> Result<Scan, ReadError> {
-    let format = format_of(name, bytes, opts)?;
+    let (format, guessed) = format_of(name, bytes, opts)?;
     let ctx = Ctx { file: name };
     let d = (format.reader().read)(ctx, bytes, Want::Channel(opts.channel.as_ref()))?;
     let raw = d.raw.ok_or_else(|| {
@@ -537,7 +537,17 @@ pub fn open_bytes(name: &str, bytes: &[u8], opts: &ReadOptions) -> Result<Scan, 
             "report this file as a bug",
         )
     })?;
-    let (mut topo, notes) = finish(ctx, raw, opts, format)?;
+    let (mut topo, mut notes) = finish(ctx, raw, opts, format)?;
+    if guessed {
+        notes.insert(
+            0,
+            format!(
+                "format not recognised from its content; read as `{}` from its layout of \
+                 numbers (force another with --format)",
+                format.name()
+            ),
+        );
+    }
     topo.channel = clean(&topo.channel, 80);
     Ok(Scan {
         topo,
@@ -554,7 +564,7 @@ pub fn list_channels(
     bytes: &[u8],
     opts: &ReadOptions,
 ) -> Result<(Format, Vec<ChannelInfo>), ReadError> {
-    let format = format_of(name, bytes, opts)?;
+    let (format, _) = format_of(name, bytes, opts)?;
     let d = (format.reader().read)(Ctx { file: name }, bytes, Want::List)?;
     Ok((format, cleaned(d.channels)))
 }
@@ -577,17 +587,27 @@ pub fn read_bytes(name: &str, bytes: &[u8], opts: &ReadOptions) -> Result<Topogr
     open_bytes(name, bytes, opts).map(|s| s.topo)
 }
 
-fn format_of(name: &str, bytes: &[u8], opts: &ReadOptions) -> Result<Format, ReadError> {
-    match opts.format {
-        Some(f) => Ok(f),
-        None => registry::detect(name, bytes).ok_or_else(|| ReadError::UnknownFormat {
+/// The format to read with, and whether it was only guessed by [`registry::text_fallback`].
+fn format_of(name: &str, bytes: &[u8], opts: &ReadOptions) -> Result<(Format, bool), ReadError> {
+    if let Some(f) = opts.format {
+        return Ok((f, false));
+    }
+    if let Some(f) = registry::sniffed(name, bytes) {
+        return Ok((f, false));
+    }
+    // Numbers in a text file say more than a binary format's extension (a text `.dat`).
+    if let Some(f) = registry::text_fallback(bytes) {
+        return Ok((f, true));
+    }
+    registry::by_extension(name)
+        .map(|f| (f, false))
+        .ok_or_else(|| ReadError::UnknownFormat {
             file: name.to_string(),
             fix: format!(
                 "supported: {}; force one with --format",
                 registry::supported_list()
             ),
-        }),
-    }
+        })
 }
 
 /// Apply the user's units and sizes to a decoded channel; name every missing fact.
@@ -612,6 +632,13 @@ fn finish(
             "data",
             format!("{} values for a {nx} × {ny} grid", heights.len()),
             "the file is corrupt",
+        ));
+    }
+    if nx == 1 && ny == 1 {
+        return Err(ctx.err(
+            "data",
+            "the file holds a single point (a 1 × 1 grid)",
+            "a roughness fit needs a profile or a map; export the whole scan",
         ));
     }
     let mut missing: Vec<&str> = Vec::new();
@@ -702,11 +729,26 @@ fn finish(
             format!("pass {}", fixes.join(" and ")),
         ));
     }
-    let dx = check_spacing(ctx, "pixel size", dx)?;
+    // A single column is a profile along y, as a single row is one along x: its x spacing
+    // means nothing and is not checked.
+    let column = nx == 1;
+    let dx = if column {
+        f64::NAN
+    } else {
+        check_spacing(ctx, "pixel size", dx)?
+    };
     let dy = if ny == 1 {
         dx
     } else {
         check_spacing(ctx, "pixel size", dy)?
+    };
+    let (nx, ny, dx) = if column {
+        notes.push(format!(
+            "a single column of {ny} points: read as a profile along y"
+        ));
+        (ny, 1, dy)
+    } else {
+        (nx, ny, dx)
     };
     if !(z.is_finite() && z != 0.0) {
         return Err(ctx.err(

@@ -322,10 +322,19 @@ pub fn format_help() -> String {
 /// Guess the format: a magic number wins, then content checks (with the extension as
 /// tie-breaker), then the extension of a binary format alone.
 pub fn detect(name: &str, bytes: &[u8]) -> Option<Format> {
-    let ext = Path::new(name)
+    sniffed(name, bytes).or_else(|| by_extension(name))
+}
+
+fn extension(name: &str) -> String {
+    Path::new(name)
         .extension()
         .map(|e| e.to_string_lossy().to_ascii_lowercase())
-        .unwrap_or_default();
+        .unwrap_or_default()
+}
+
+/// The format whose magic number or content check accepts `bytes` (the extension breaks ties).
+pub(crate) fn sniffed(name: &str, bytes: &[u8]) -> Option<Format> {
+    let ext = extension(name);
     let head = &bytes[..bytes.len().min(1 << 16)];
     let mut best: Option<(u8, &'static Reader)> = None;
     for r in READERS {
@@ -338,11 +347,41 @@ pub fn detect(name: &str, bytes: &[u8]) -> Option<Format> {
             best = Some((score, r));
         }
     }
-    if let Some((_, r)) = best {
-        return Some(Format(r));
-    }
+    best.map(|(_, r)| Format(r))
+}
+
+/// The binary format that uses the extension of `name`.
+pub(crate) fn by_extension(name: &str) -> Option<Format> {
+    let ext = extension(name);
     READERS
         .iter()
         .find(|r| r.binary && r.extensions.contains(&ext.as_str()))
         .map(Format)
+}
+
+/// The text reader a text file with numbers most resembles, for when [`detect`] finds none:
+/// reading it with that reader gives either the data or that reader's own, specific
+/// complaint (a ragged row, a single data line), where "unknown format" helps nobody.
+/// A matrix header key means a matrix; unit titles or rows of 2–5 numbers mean columns;
+/// any other numbers are taken as a matrix. `None` for binary files and text without numbers.
+pub fn text_fallback(bytes: &[u8]) -> Option<Format> {
+    use super::text::SNIFF_LEN;
+    let sample = super::text::sniff_sample(bytes)?;
+    // The sniffers drop the sample's last line in case the cut split it; a short file is
+    // whole, and its last line may be its only data line.
+    let lines: Vec<&str> = if bytes.len() <= SNIFF_LEN {
+        sample.lines().collect()
+    } else {
+        super::text::sample_lines(&sample)
+    };
+    let name = if matrix::has_header_key(&lines) {
+        "matrix"
+    } else if !xyz::has_numeric_line(&lines) {
+        return None;
+    } else if xyz::column_layout(&lines).is_some() {
+        "xyz"
+    } else {
+        "matrix"
+    };
+    Format::from_name(name)
 }

@@ -55,8 +55,11 @@ fn utf16(bytes: &[u8], little: bool) -> String {
 /// What a content check of a text format reads: the first 16 kB decoded, or `None` when
 /// the file does not look like text.
 pub(crate) fn sniff_sample(bytes: &[u8]) -> Option<Cow<'_, str>> {
-    looks_like_text(bytes).then(|| decode(&bytes[..bytes.len().min(16384)]))
+    looks_like_text(bytes).then(|| decode(&bytes[..bytes.len().min(SNIFF_LEN)]))
 }
+
+/// Bytes of a file that [`sniff_sample`] reads.
+pub(crate) const SNIFF_LEN: usize = 16384;
 
 /// The first 200 lines of a [`sniff_sample`] without the last one, which the cut may have
 /// split (a single line is kept).

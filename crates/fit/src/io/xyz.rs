@@ -82,6 +82,27 @@ pub(crate) fn sniff(bytes: &[u8]) -> Sniff {
     if titled { Sniff::Likely } else { Sniff::Maybe }
 }
 
+/// Whether the sample `lines` look like column data: `Some(true)` when a title before the
+/// first numeric row names a length unit, `Some(false)` when the first numeric row has 2–5
+/// fields, `None` otherwise.
+pub(crate) fn column_layout(lines: &[&str]) -> Option<bool> {
+    let d = text::Dialect::guess(lines.iter().copied().filter(|l| numeric_start(l)));
+    let titled = lines
+        .iter()
+        .take_while(|l| d.row(l).is_none())
+        .any(|l| d.fields(l).iter().any(|f| unit_in_title(f).is_some()));
+    if titled {
+        return Some(true);
+    }
+    let first = lines.iter().find_map(|l| d.row(l))?;
+    (2..=5).contains(&first.len()).then_some(false)
+}
+
+/// True when some line of `lines` starts like a number.
+pub(crate) fn has_numeric_line(lines: &[&str]) -> bool {
+    lines.iter().any(|l| numeric_start(l))
+}
+
 fn numeric_start(l: &str) -> bool {
     l.trim()
         .chars()
