@@ -18,6 +18,13 @@ pub struct Camera {
     pub height: u32,
 }
 
+/// `v` normalised, where its length squared neither overflows nor underflows
+/// to zero (1e-150 < |v| < 1e150: a camera's directions need no more).
+fn unit(v: DVec3) -> Option<DVec3> {
+    let l2 = v.length_squared();
+    (l2.is_finite() && l2 > 1e-300).then(|| v / l2.sqrt())
+}
+
 impl Camera {
     /// Builds the camera; errors name the offending key.
     pub fn new(
@@ -28,17 +35,30 @@ impl Camera {
         width: u32,
         height: u32,
     ) -> Result<Camera, String> {
-        let forward = (look_at - look_from)
-            .try_normalize()
-            .ok_or("`look_at` must differ from `look_from`")?;
-        let right = forward
-            .cross(up)
-            .try_normalize()
-            .ok_or("`up` must not be parallel to the viewing direction (`up` defaults to +y)")?;
+        let d = look_at - look_from;
+        if !d.is_finite() {
+            return Err(format!(
+                "`look_at` − `look_from` = {d} overflows f64: place the camera and the point \
+                 it looks at within ~1e300 of each other"
+            ));
+        }
+        if d == DVec3::ZERO {
+            return Err("`look_at` must differ from `look_from`".into());
+        }
+        let forward = unit(d).ok_or_else(|| {
+            format!(
+                "`look_at` is {:e} from `look_from`, too far or too near for f64 to take \
+                 the viewing direction from; place them between 1e-150 and 1e150 apart",
+                d.abs().max_element()
+            )
+        })?;
+        let right = unit(up).map(|u| forward.cross(u)).and_then(unit).ok_or(
+            "`up` must not be parallel to the viewing direction, nor zero (`up` defaults to +y)",
+        )?;
         let up = right.cross(forward);
         if !(fov_deg.is_finite() && fov_deg > 0.0 && fov_deg < 179.0) {
             return Err(format!(
-                "fov_deg = {fov_deg} is invalid: expected 0 < fov_deg < 179"
+                "fov_deg = {fov_deg} is invalid: expected 0 < fov_deg < 179 (degrees, vertical)"
             ));
         }
         Ok(Camera {
@@ -105,5 +125,30 @@ mod tests {
         assert!((x - 10.5).abs() < 1e-9 && (y - 7.25).abs() < 1e-9);
         assert!(Camera::new(DVec3::ZERO, DVec3::ZERO, DVec3::Y, 40.0, 1, 1).is_err());
         assert!(Camera::new(DVec3::ZERO, DVec3::Y, DVec3::Y, 40.0, 1, 1).is_err());
+    }
+
+    #[test]
+    fn distinct_points_are_not_called_equal() {
+        let at = |from: DVec3| Camera::new(from, DVec3::ZERO, DVec3::Y, 40.0, 1, 1).unwrap_err();
+        // The difference overflows when squared, or underflows.
+        for from in [
+            DVec3::new(0.0, 1e300, 1e300),
+            DVec3::new(0.0, 1e-300, 1e-300),
+        ] {
+            let e = at(from);
+            assert!(!e.contains("must differ") && e.contains("apart"), "{e}");
+        }
+        let c = Camera::new(
+            DVec3::new(1.7e308, 0.0, 0.0),
+            DVec3::new(-1.7e308, 0.0, 0.0),
+            DVec3::Y,
+            40.0,
+            1,
+            1,
+        );
+        assert!(c.unwrap_err().contains("overflows"));
+        assert!(at(DVec3::ZERO).contains("must differ"));
+        let e = Camera::new(DVec3::Z, DVec3::ZERO, DVec3::Y, 180.0, 1, 1).unwrap_err();
+        assert!(e.contains("< 179"), "{e}");
     }
 }

@@ -371,8 +371,11 @@ impl Film {
     /// samples, so it is no part of a film's identity); non-finite values
     /// are refused.
     pub fn set_exposure(&mut self, stops: f64) -> Result<(), String> {
-        if !stops.is_finite() {
-            return Err(format!("exposure {stops} is not finite"));
+        let m = crate::scene::MAX_EXPOSURE_STOPS;
+        if !(stops.is_finite() && stops.abs() <= m) {
+            return Err(format!(
+                "exposure {stops} is outside ±{m} stops (2^{m} already takes any sane pixel past f32's range); give a value within it"
+            ));
         }
         self.p.exposure = stops;
         Ok(())
@@ -766,6 +769,18 @@ mod tests {
         assert_eq!(f, g);
         assert!(Film::from_bytes(&f.to_bytes()[..50]).is_err());
         assert!(Film::from_bytes(b"nonsense").is_err());
+    }
+
+    #[test]
+    fn exposure_is_bounded_as_in_a_scene() {
+        // `lustre merge --exposure 200` wrote infinite pixels.
+        let mut f = Film::new(1, 1, 1, 0, 0.0);
+        for bad in [61.0, -200.0, f64::INFINITY, f64::NAN] {
+            assert!(f.set_exposure(bad).is_err(), "{bad}");
+        }
+        for good in [60.0, -60.0, 0.0, 2.5] {
+            f.set_exposure(good).unwrap();
+        }
     }
 
     #[test]

@@ -15,6 +15,17 @@ use obvhs::triangle::Triangle;
 use std::path::Path;
 use std::time::Duration;
 
+/// Largest |coordinate| of a mesh vertex after its transform. Both f32
+/// stages overflow with size: obvhs's build squares box extents (inf past
+/// √f32::MAX ≈ 1.8e19, which then panicked in its CWBVH conversion), and
+/// its Möller–Trumbore test forms the triangle normal (edge²) dotted with
+/// the origin-to-vertex vector, a cube of the scene's size that must stay
+/// below f32::MAX ≈ 3.4e38. With coordinates within ±1e12 that product is
+/// at most ~(2e12)³·√3 ≈ 1.4e37 for rays starting among the meshes. The ray
+/// offset off mesh hits is relative to the coordinates' magnitude, so it
+/// sets no bound.
+pub const MAX_MESH_COORDINATE: f64 = 1e12;
+
 /// Triangles of one OBJ file after its transform, tagged with a surface id.
 pub struct MeshSource {
     /// Triangle vertices in world space.
@@ -51,6 +62,9 @@ pub fn obj_from_bytes(
     .map_err(|e| format!("cannot parse OBJ file {}: {e}", path.display()))?;
     let mut triangles = Vec::new();
     let mut normals = Vec::new();
+    // Triangles with area in the file: if none survive the transform, it is
+    // the transform's fault, and the message says so.
+    let mut proper_in_file = 0usize;
     for m in &models {
         let pos = &m.mesh.positions;
         let nrm = &m.mesh.normals;
@@ -61,13 +75,13 @@ pub fn obj_from_bytes(
             xf.direction(DVec3::new(v[0] as f64, v[1] as f64, v[2] as f64))
                 .try_normalize()
         };
-        let vertex = |i: u32| -> Option<DVec3> {
+        let local = |i: u32| -> Option<DVec3> {
             let i = 3 * i as usize;
             let p = pos.get(i..i + 3)?;
-            Some(xf.point(DVec3::new(p[0] as f64, p[1] as f64, p[2] as f64)))
+            Some(DVec3::new(p[0] as f64, p[1] as f64, p[2] as f64))
         };
         for tri in m.mesh.indices.chunks_exact(3) {
-            let (Some(a), Some(b), Some(c)) = (vertex(tri[0]), vertex(tri[1]), vertex(tri[2]))
+            let (Some(la), Some(lb), Some(lc)) = (local(tri[0]), local(tri[1]), local(tri[2]))
             else {
                 return Err(format!(
                     "{}: model `{}` has a vertex index out of range",
@@ -75,6 +89,23 @@ pub fn obj_from_bytes(
                     m.name
                 ));
             };
+            let [a, b, c] = [la, lb, lc].map(|v| xf.point(v));
+            for (l, w) in [(la, a), (lb, b), (lc, c)] {
+                if !w.is_finite() || w.abs().max_element() > MAX_MESH_COORDINATE {
+                    let xyz = |v: DVec3| [v.x, v.y, v.z].map(number).join(", ");
+                    return Err(format!(
+                        "{}: model `{}` has the vertex ({}), which lies at ({}) after the \
+                         shape's transform, outside ±{MAX_MESH_COORDINATE:e}, the range the \
+                         mesh BVH (f32) handles; make the coordinates finite and reduce \
+                         transform.scale / transform.translate (or rescale the file)",
+                        path.display(),
+                        m.name,
+                        xyz(l),
+                        xyz(w)
+                    ));
+                }
+            }
+            proper_in_file += usize::from((lb - la).cross(lc - la).length_squared() > 0.0);
             // Degenerate triangles have no normal; dropping them changes nothing visible.
             if (b - a).cross(c - a).length_squared() > 0.0 {
                 triangles.push([a, b, c]);
@@ -85,9 +116,18 @@ pub fn obj_from_bytes(
             }
         }
     }
+    if triangles.is_empty() && proper_in_file > 0 {
+        return Err(format!(
+            "{}: all {proper_in_file} triangle(s) of the OBJ file degenerate to zero area after \
+             the shape's transform (f64 cannot resolve them at that scale and offset); use a \
+             transform.scale nearer 1 or a smaller transform.translate, or rescale the file",
+            path.display()
+        ));
+    }
     if triangles.is_empty() {
         return Err(format!(
-            "{}: the OBJ file contains no triangles",
+            "{}: the OBJ file contains no triangles of non-zero area (faces `f` with three \
+             distinct, non-collinear vertices)",
             path.display()
         ));
     }
@@ -96,6 +136,15 @@ pub fn obj_from_bytes(
         normals,
         surface,
     })
+}
+
+/// A coordinate for messages: plain where that is short, else in e-notation.
+fn number(x: f64) -> String {
+    if x == 0.0 || (1e-4..1e6).contains(&x.abs()) {
+        format!("{x}")
+    } else {
+        format!("{x:e}")
+    }
 }
 
 /// All mesh triangles of a scene in one BVH, stored in leaf order.
@@ -230,6 +279,57 @@ impl MeshAccel {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    const QUAD: &[u8] =
+        b"v -0.5 0 -0.5\nv 0.5 0 -0.5\nv 0.5 0 0.5\nv -0.5 0 0.5\nf 1 3 2\nf 1 4 3\n";
+
+    fn load(bytes: &[u8], scale: f64, translate: [f64; 3]) -> Result<MeshSource, String> {
+        let xf = Transform::new([0.0; 3], scale, translate);
+        obj_from_bytes(Path::new("q.obj"), bytes, &xf, 0)
+    }
+
+    #[test]
+    fn vertices_beyond_the_f32_bvh_range_are_refused() {
+        // Scale 1e20 once panicked inside obvhs's CWBVH conversion.
+        for (bytes, scale) in [
+            (QUAD, 1e20),
+            (QUAD, 1e15),
+            (QUAD, 2.1e12),
+            (&b"v 0 0 0\nv 3e38 0 3e38\nv 1 0 0\nf 1 2 3\n"[..], 1.0),
+            (&b"v 0 0 0\nv inf 0 0\nv 1 0 1\nf 1 2 3\n"[..], 1.0),
+            (&b"v 0 0 0\nv nan 0 0\nv 1 0 1\nf 1 2 3\n"[..], 1.0),
+        ] {
+            let e = load(bytes, scale, [0.0; 3]).err().expect("refused");
+            assert!(
+                e.contains("q.obj") && e.contains("1e12") && e.contains("transform.scale"),
+                "{e}"
+            );
+        }
+        // The largest accepted extent builds a BVH that still finds the quad.
+        // Scaled to 1e15 the f32 triangle test overflowed and missed it.
+        let src = load(QUAD, 2e12, [0.0; 3]).unwrap();
+        let accel = MeshAccel::build(vec![src]);
+        for o in [
+            DVec3::new(1e10, 1e12, 2e10),
+            DVec3::new(-9.9e11, 1e12, 9.9e11),
+        ] {
+            let ray = Ray { o, d: DVec3::NEG_Y };
+            let (h, _, _) = accel.intersect(&ray, 0.0, f64::INFINITY).unwrap();
+            assert!((h.t / 1e12 - 1.0).abs() < 1e-9, "{}", h.t);
+        }
+    }
+
+    #[test]
+    fn triangles_collapsed_by_the_transform_are_named_so() {
+        for (scale, translate) in [(1e-300, [0.0; 3]), (1e-6, [1e12, 0.0, 0.0])] {
+            let e = load(QUAD, scale, translate).err().expect("refused");
+            assert!(e.contains("after the shape's transform"), "{e}");
+        }
+        let e = load(b"v 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\n", 1.0, [0.0; 3])
+            .err()
+            .expect("refused");
+        assert!(e.contains("no triangles of non-zero area"), "{e}");
+    }
 
     #[test]
     fn bvh_finds_the_nearest_triangle_and_occlusion() {

@@ -304,6 +304,18 @@ fn interpolate(rows: &[[f64; 2]], lambda: f64) -> f64 {
 /// line; a second non-numeric line before the data is an error, not a
 /// header (a garbled file must not lose its first rows silently).
 pub fn parse_csv_rows(text: &str, columns: usize) -> Result<Vec<Vec<f64>>, String> {
+    Ok(parse_csv_lines(text, columns)?
+        .into_iter()
+        .map(|(_, row)| row)
+        .collect())
+}
+
+/// [`parse_csv_rows`] with each row's 1-based line number, for messages
+/// about the values themselves.
+pub fn parse_csv_lines(text: &str, columns: usize) -> Result<Vec<(usize, Vec<f64>)>, String> {
+    // Editors on Windows prefix a UTF-8 BOM; left in, it made a headerless
+    // file's first data row unparsable, and so taken for the header.
+    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
     let mut rows = Vec::new();
     let mut header_allowed = true;
     for (i, line) in text.lines().enumerate() {
@@ -315,7 +327,7 @@ pub fn parse_csv_rows(text: &str, columns: usize) -> Result<Vec<Vec<f64>>, Strin
         let parsed: Result<Vec<f64>, _> = fields.iter().map(|f| f.parse::<f64>()).collect();
         let first = std::mem::replace(&mut header_allowed, false);
         match parsed {
-            Ok(v) if v.len() == columns && v.iter().all(|x| x.is_finite()) => rows.push(v),
+            Ok(v) if v.len() == columns && v.iter().all(|x| x.is_finite()) => rows.push((i + 1, v)),
             Ok(v) => {
                 return Err(format!(
                     "line {}: expected {columns} finite numbers, found {} field(s)",
@@ -330,7 +342,7 @@ pub fn parse_csv_rows(text: &str, columns: usize) -> Result<Vec<Vec<f64>>, Strin
     if rows.len() < 2 {
         return Err(format!("needs at least two data rows of {columns} numbers"));
     }
-    if rows.windows(2).any(|w| w[1][0] <= w[0][0]) {
+    if rows.windows(2).any(|w| w[1].1[0] <= w[0].1[0]) {
         return Err("the wavelength column (first) must be strictly increasing".into());
     }
     Ok(rows)
@@ -493,6 +505,18 @@ mod tests {
             "{} vs {want}",
             s.luminance()
         );
+    }
+
+    #[test]
+    fn a_byte_order_mark_does_not_cost_the_first_row() {
+        let rows = parse_csv_lines("\u{feff}300,0.2,3\n900,0.2,3\n", 3).unwrap();
+        assert_eq!(
+            rows,
+            vec![(1, vec![300.0, 0.2, 3.0]), (2, vec![900.0, 0.2, 3.0])]
+        );
+        // A header after the mark is still a header.
+        let rows = parse_csv_rows("\u{feff}wavelength_nm,n,k\n300,0.2,3\n900,0.2,3\n", 3).unwrap();
+        assert_eq!(rows.len(), 2);
     }
 
     #[test]

@@ -149,3 +149,114 @@ fn a_sound_render_drops_nothing() {
     assert_eq!(film.dropped().total(), 0);
     assert!(film.sums().iter().any(|p| p[1] > 0));
 }
+
+/// A sun 1° above the horizon: the sky's CIE daylight spectrum is negative
+/// at the blue end for the reddish chromaticities near the sun, and those
+/// samples are part of the sky's colour, not a model's failure (they were
+/// dropped: 134 of 4 096 here, and sky pixels came out black).
+#[test]
+fn a_low_sun_sky_drops_no_sample() {
+    let text = r#"
+[camera]
+look_from = [0.0, 0.0, 0.0]
+look_at = [0.0, 0.3, -1.0]
+fov_deg = 90.0
+resolution = [32, 32]
+
+[film]
+spp = 4
+seed = 1
+
+[[lights]]
+type = "sky"
+sun_elevation_deg = 1.0
+turbidity = 2.5
+scale = 1e-4
+"#;
+    let scene = load_str(Path::new("low_sun.toml"), text).unwrap();
+    // The case under test occurs: some direction's spectrum is negative.
+    let negative = (0..4096).any(|i| {
+        let d = DVec3::new((i % 64) as f64 / 32.0 - 1.0, (i / 64) as f64 / 200.0, -1.0).normalize();
+        let render::light::LightKind::Environment(render::light::Environment::Sky(sky)) =
+            &scene.lights.lights[0]
+        else {
+            panic!("the sky is the only light");
+        };
+        let c = sky.coefficients(d);
+        (360..830).any(|l| sky.spectral(&c, l as f64) < 0.0)
+    });
+    assert!(negative, "no direction of this sky has a negative spectrum");
+    let mut sum_y = 0.0;
+    for y in 0..32 {
+        for x in 0..32 {
+            for s in 0..4 {
+                let xyz = sample_pixel_checked(&scene, x, y, s)
+                    .unwrap_or_else(|e| panic!("pixel ({x}, {y}) sample {s}: {e:?}"));
+                sum_y += xyz[1];
+            }
+        }
+    }
+    assert!(sum_y > 0.0);
+}
+
+/// A light so bright that one sample's XYZ leaves the film's fixed-point
+/// range: each such sample is dropped and counted, where the conversion used
+/// to saturate and give every lit pixel the same value silently.
+#[test]
+fn samples_beyond_the_films_range_are_dropped_not_saturated() {
+    for (intensity, beyond) in [(1e10, false), (1e30, true)] {
+        let text = format!(
+            r#"
+[camera]
+look_from = [0.0, 0.6, 1.0]
+look_at = [0.0, 0.0, 0.0]
+fov_deg = 40.0
+resolution = [9, 7]
+
+[film]
+spp = 2
+seed = 3
+
+[materials.plate]
+model = "ggx"
+alpha = 0.3
+fresnel = "one"
+
+[[shapes]]
+type = "rectangle"
+size = [1.0, 1.0]
+material = "plate"
+transform = {{ rotate_deg = [-90.0, 0.0, 0.0] }}
+
+[[lights]]
+type = "point"
+position = [0.0, 1.0, 0.5]
+intensity = {intensity:e}
+"#
+        );
+        let scene = load_str(Path::new("bright.toml"), &text).unwrap();
+        let (mut lit, mut dropped) = (0, 0);
+        for y in 0..7 {
+            for x in 0..9 {
+                for s in 0..2 {
+                    match sample_pixel_checked(&scene, x, y, s) {
+                        Ok(xyz) => lit += usize::from(xyz[1] > 0.0),
+                        Err(BadSample::NonFinite) => dropped += 1,
+                        Err(e) => panic!("({x}, {y}) {s}: {e:?}"),
+                    }
+                }
+            }
+        }
+        if beyond {
+            assert!(
+                dropped > 60 && lit == 0,
+                "{intensity:e}: {dropped} dropped, {lit} lit"
+            );
+        } else {
+            assert!(
+                dropped == 0 && lit > 60,
+                "{intensity:e}: {dropped} dropped, {lit} lit"
+            );
+        }
+    }
+}

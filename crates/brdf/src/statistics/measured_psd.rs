@@ -18,6 +18,14 @@ use crate::BrdfError;
 use crate::numerics::hankel::{Correlation, FftLog};
 use crate::numerics::interp::lagrange4;
 
+/// Steepest accepted last segment, d ln P/d ln ζ: the tail of a KC surface
+/// with γ = [`GAMMA_MAX`](super::kc::GAMMA_MAX), ζ^−(γ+1). The tail sets the
+/// Matérn smoothness ν_t = (−slope − 2)/2 of the covariance, whose
+/// evaluation costs O(ν_t) and is called millions of times while the GHS
+/// table is built (a segment falling as ζ^−7e6 took minutes); past ν ≈ 50
+/// the Matérn function is Gaussian to far below any measurable difference.
+pub const TAIL_SLOPE_MIN: f64 = -(super::kc::GAMMA_MAX + 1.0);
+
 /// Radial PSD given by samples (ζ_j in rad/µm, P_j in µm⁴).
 #[derive(Clone, Debug, PartialEq)]
 pub struct TabulatedPsd {
@@ -71,6 +79,16 @@ impl TabulatedPsd {
             return Err(BrdfError::InvalidTable {
                 reason: "the last segment must fall faster than zeta^-2.02 (finite, normalisable \
                          tail); extend the table to higher frequencies or trim the noise floor",
+                row: Some(n - 1),
+            });
+        }
+        // The relative slack admits a table written at exactly ζ^−101
+        // whose logarithms round past it.
+        if slope_hi < TAIL_SLOPE_MIN * (1.0 + 1e-9) {
+            return Err(BrdfError::InvalidTable {
+                reason: "the last segment falls faster than zeta^-101 (the tail of KC gamma = \
+                         100, the steepest accepted): end the table before the roll-off or \
+                         drop its last row",
                 row: Some(n - 1),
             });
         }
@@ -482,6 +500,34 @@ mod tests {
         assert!(TabulatedPsd::new(&[1.0, 2.0], &[1.0, 0.0]).is_err());
         assert!(TabulatedPsd::new(&[1.0, 2.0], &[1.0, 0.5]).is_err()); // tail too shallow
         assert!(TabulatedPsd::new(&[1.0, 2.0], &[1.0, 0.1]).is_ok());
+    }
+
+    #[test]
+    fn the_steepest_accepted_tail_sets_up_in_bounded_time() {
+        // Rows 1,1e-3 / 1.0001,1e-300 (slope −6.9e6) hung the scene setup.
+        let steep = TabulatedPsd::new(&[1.0, 1.0001], &[1e-3, 1e-300]);
+        assert!(
+            matches!(steep, Err(BrdfError::InvalidTable { row: Some(1), .. })),
+            "{steep:?}"
+        );
+        let just_past = 2f64.powf(TAIL_SLOPE_MIN - 1e-5);
+        assert!(TabulatedPsd::new(&[1.0, 2.0], &[1e-3, 1e-3 * just_past]).is_err());
+        // The worst accepted table: the transform and the covariance at the
+        // number of separations a GHS table asks for (a ζ^−1000 segment
+        // needed ~2 s for this; ζ^−7e6 hours).
+        extern crate std;
+        let start = std::time::Instant::now();
+        let t = TabulatedPsd::new(&[1.0, 2.0], &[1e-3, 1e-3 * 2f64.powf(TAIL_SLOPE_MIN)]).unwrap();
+        assert!((t.tail_nu() - 49.5).abs() < 1e-9, "{}", t.tail_nu());
+        let c = TabulatedCorrelation::new(&t);
+        let mut acc = 0.0;
+        for i in 0..200_000 {
+            let x = crate::numerics::math::exp(-20.0 + 30.0 * i as f64 / 200_000.0);
+            acc += c.m(x) + c.one_minus_m(x);
+        }
+        assert!(acc.is_finite());
+        let secs = start.elapsed().as_secs_f64();
+        assert!(secs < 5.0, "{secs} s");
     }
 
     #[test]

@@ -4,11 +4,12 @@
 //! points at the scene text it is about.
 
 use super::desc::{
-    LightDesc, ModelKind, SamplerKind, SceneDesc, ShapeDesc, SpectralIntegration, TransformDesc,
-    WavelengthMode,
+    FresnelKind, LightDesc, MaterialDesc, ModelKind, SamplerKind, SceneDesc, ShapeDesc,
+    SpectralIntegration, TransformDesc, WavelengthMode,
 };
 use super::inputs::{self, Inputs};
 use super::shapes::Shapes;
+use super::tables;
 use super::{ESTIMATOR, Scene, Settings, Surface};
 use crate::camera::Camera;
 use crate::error::SceneError;
@@ -249,10 +250,16 @@ impl<'a> Builder<'a> {
         if *film.spp.get_ref() == 0 {
             return Err(self.at(film.spp.span(), "spp = 0 is invalid: expected ≥ 1".into()));
         }
-        if !film.exposure.is_finite() {
-            return Err(SceneError::new(
-                self.path,
-                "[film]: exposure must be finite",
+        let exposure = *film.exposure.get_ref();
+        if !exposure.is_finite() || exposure.abs() > super::MAX_EXPOSURE_STOPS {
+            return Err(self.at(
+                film.exposure.span(),
+                format!(
+                    "[film]: exposure = {exposure} is invalid: expected a number of stops in \
+                     −{m}..={m} (2^{m} already scales a radiance of 1 to ~1e18; larger gains \
+                     overflow the f32 outputs to inf)",
+                    m = super::MAX_EXPOSURE_STOPS
+                ),
             ));
         }
         let integrator = &self.desc.integrator;
@@ -313,7 +320,7 @@ impl<'a> Builder<'a> {
             spectral_integration: integrator.spectral_integration,
             exr: film.exr.clone(),
             png: film.png.clone(),
-            exposure: film.exposure,
+            exposure,
         })
     }
 
@@ -337,12 +344,65 @@ impl<'a> Builder<'a> {
                 ),
             ));
         };
+        self.check_material(m.get_ref())
+            .map_err(|e| self.at(m.span(), format!("[materials.{name}]: {e}")))?;
         let built = build_material(name, m.get_ref(), &self.base, &mut self.inputs)
             .map_err(|e| self.at(m.span(), format!("[materials.{name}]: {e}")))?;
         let i = self.materials.len() as u32;
         self.materials.push(built);
         self.material_index.insert(name.to_string(), i);
         Ok(i)
+    }
+
+    /// What `brdf::spec` would let pass in a material table but cannot be
+    /// meant: keys that silently override others, and `nk_csv` / `psd_csv`
+    /// contents that need the file's line numbers to explain. An `include`d
+    /// file may answer for `psd_csv` and supply keys, so then the build
+    /// alone judges the table.
+    fn check_material(&mut self, m: &MaterialDesc) -> Result<(), String> {
+        if m.alpha.is_some() && (m.alpha_x.is_some() || m.alpha_y.is_some()) {
+            let other = if m.alpha_x.is_some() {
+                "alpha_x"
+            } else {
+                "alpha_y"
+            };
+            return Err(format!(
+                "`alpha` and `{other}` are both set, and `alpha_x`/`alpha_y` would win; give \
+                 `alpha` (isotropic) or `alpha_x` and `alpha_y` (anisotropic), not both"
+            ));
+        }
+        if m.fresnel == Some(FresnelKind::One) {
+            let given = [
+                ("metal", m.metal.is_some()),
+                ("nk", m.nk.is_some()),
+                ("nk_csv", m.nk_csv.is_some()),
+            ];
+            if let Some((key, _)) = given.iter().find(|(_, set)| *set) {
+                return Err(format!(
+                    "`fresnel = \"one\"` (R ≡ 1) and `{key}` are both set, and `{key}` would \
+                     be ignored; remove one of them"
+                ));
+            }
+        }
+        if m.include.is_some() {
+            return Ok(());
+        }
+        let mut read = |key: &str, path: &str| -> Result<(String, String), String> {
+            let full = self.base.join(path);
+            // The same role and limit as the material build's own read: the
+            // file is then read (and fingerprinted) once, in the same order.
+            let text = self.inputs.read_text(&full, key, inputs::MAX_CSV_BYTES)?;
+            Ok((full.display().to_string(), text))
+        };
+        if let Some(path) = &m.nk_csv {
+            let (name, text) = read("nk_csv", path)?;
+            tables::check_nk_csv(&name, &text).map_err(|e| format!("`nk_csv`: {e}"))?;
+        }
+        if let (Some(path), Some(ModelKind::MeasuredPsd)) = (&m.psd_csv, m.model) {
+            let (name, text) = read("psd_csv", path)?;
+            tables::check_psd_csv(&name, &text).map_err(|e| format!("`psd_csv`: {e}"))?;
+        }
+        Ok(())
     }
 
     /// Stage 4: `[[shapes]]`, with the materials they use.
@@ -556,8 +616,18 @@ impl<'a> Builder<'a> {
                 }
             }
         }
-        let signed_radiance = environment
-            .is_some_and(|i| matches!(lights[i], LightKind::Environment(Environment::Map(_))));
+        // Both spectra are reconstructions that may dip below zero: the RGB
+        // lift of a map's colours, and the CIE daylight basis S0 + M1 S1 +
+        // M2 S2 at the reddish chromaticities of a sun a few degrees above
+        // the horizon, whose M1 makes the blue end negative. Dropping those
+        // samples darkened such skies (up to 40 % of samples at 0.5°); kept,
+        // they average to the sky's own XYZ.
+        let signed_radiance = environment.is_some_and(|i| {
+            matches!(
+                lights[i],
+                LightKind::Environment(Environment::Map(_) | Environment::Sky(_))
+            )
+        });
         Ok((
             Lights {
                 lights,

@@ -100,11 +100,15 @@ pub struct CameraDesc {
     /// Up direction (default +y).
     #[serde(default = "default_up", deserialize_with = "exact_spanned")]
     pub up: Spanned<[f64; 3]>,
-    /// Vertical field of view in degrees, in (0, 180).
+    /// Vertical field of view in degrees, in (0, 179).
     pub fov_deg: Spanned<f64>,
     /// Image width and height in pixels.
     #[serde(deserialize_with = "exact_spanned")]
     pub resolution: Spanned<[u32; 2]>,
+}
+
+fn zero_stops() -> Spanned<f64> {
+    Spanned::new(0..0, 0.0)
 }
 
 fn default_up() -> Spanned<[f64; 3]> {
@@ -126,9 +130,10 @@ pub struct FilmDesc {
     /// 8-bit sRGB PNG output, relative to the working directory.
     #[serde(default)]
     pub png: Option<PathBuf>,
-    /// Exposure in stops applied to both outputs (default 0).
-    #[serde(default)]
-    pub exposure: f64,
+    /// Exposure in stops applied to both outputs (default 0; at most
+    /// [`MAX_EXPOSURE_STOPS`](super::MAX_EXPOSURE_STOPS) either way).
+    #[serde(default = "zero_stops")]
+    pub exposure: Spanned<f64>,
 }
 
 /// How wavelengths are sampled per camera path.

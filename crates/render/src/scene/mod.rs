@@ -7,6 +7,7 @@ mod build;
 pub mod desc;
 pub mod inputs;
 mod shapes;
+mod tables;
 
 use crate::camera::Camera;
 use crate::error::SceneError;
@@ -34,6 +35,11 @@ pub const ESTIMATOR: &str = "lustre estimator 10: sobol sampler with 64-bit samp
                              the light density counted up to twice in MIS where a microfacet \
                              lobe is not much narrower than the light, the emission \
                              along a mixed delta lobe's mirror direction traced at every vertex";
+
+/// Largest |`[film] exposure`|, in stops: the gain 2^exposure must leave
+/// the f32 EXR and the PNG conversion finite for any radiance a scene can
+/// reasonably produce (exposure 127 wrote inf pixels).
+pub const MAX_EXPOSURE_STOPS: f64 = 60.0;
 
 /// What a ray hit.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -147,7 +153,9 @@ pub struct Scene {
     /// One line describing what was prepared and how long it took.
     pub prepared: String,
     /// Whether an emitter's spectrum may be negative at some wavelengths
-    /// (an RGB-lifted environment map, see [`crate::light::RgbLift`]): then a
+    /// (an RGB-lifted environment map, see [`crate::light::RgbLift`], or a
+    /// daylight sky, whose CIE basis spectrum is negative in the blue for a
+    /// low sun): then a
     /// negative estimate at one wavelength is part of an unbiased colour
     /// average, and only non-finite samples are dropped.
     pub signed_radiance: bool,
@@ -156,12 +164,39 @@ pub struct Scene {
 /// Parses a scene file's text into its description, with positioned errors.
 pub fn parse(path: &Path, text: &str) -> Result<SceneDesc, SceneError> {
     toml::from_str::<SceneDesc>(text).map_err(|e| {
-        let msg = e.message().trim().to_string();
+        let mut msg = e.message().trim().to_string();
+        if let Some(hint) = shape_hint(text) {
+            msg = format!("{msg} ({hint})");
+        }
         match e.span() {
             Some(span) => SceneError::at(path, text, span.start, msg),
             None => SceneError::new(path, msg),
         }
     })
+}
+
+/// The fix for a top-level table written with the wrong brackets, which
+/// serde reports only as a type mismatch ("invalid type: map, expected a
+/// sequence").
+fn shape_hint(text: &str) -> Option<&'static str> {
+    let table: toml::Table = text.parse().ok()?;
+    for key in ["shapes", "lights"] {
+        if matches!(table.get(key), Some(v) if !v.is_array()) {
+            return Some(if key == "shapes" {
+                "shapes are an array of tables: write [[shapes]] before each shape"
+            } else {
+                "lights are an array of tables: write [[lights]] before each light"
+            });
+        }
+    }
+    match table.get("materials") {
+        Some(toml::Value::Table(m)) if m.values().all(toml::Value::is_table) => None,
+        Some(_) => Some(
+            "materials are named tables: write [materials.NAME] (single brackets) before each \
+             material's keys",
+        ),
+        None => None,
+    }
 }
 
 /// Loads and builds a scene file.
