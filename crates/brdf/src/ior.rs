@@ -215,7 +215,9 @@ impl Ior {
     }
 
     /// A user-supplied table of `[λ nm, n, κ]` rows: at least two rows,
-    /// λ strictly increasing and positive, n > 0, κ ≥ 0, all finite.
+    /// λ strictly increasing and positive, 1e−6 ≤ n ≤ 1e6, 0 ≤ κ ≤ 1e6 (the
+    /// bounds of [`Ior::constant`]: past them the Fresnel arithmetic loses
+    /// its precision, and at n = κ = 1e77 it returned 0 for a mirror).
     #[cfg(feature = "alloc")]
     pub fn table(rows: alloc::vec::Vec<[f64; 3]>) -> Result<Ior, BrdfError> {
         if rows.len() < 2 {
@@ -225,9 +227,10 @@ impl Ior {
             });
         }
         for (i, r) in rows.iter().enumerate() {
-            if !(r.iter().all(|v| v.is_finite()) && r[0] > 0.0 && r[1] > 0.0 && r[2] >= 0.0) {
+            let (n_ok, k_ok) = ((1e-6..=1e6).contains(&r[1]), (0.0..=1e6).contains(&r[2]));
+            if !(r[0].is_finite() && r[0] > 0.0 && n_ok && k_ok) {
                 return Err(BrdfError::InvalidTable {
-                    reason: "each row needs finite wavelength_nm > 0, n > 0 and k ≥ 0",
+                    reason: "each row needs finite wavelength_nm > 0, 1e-6 ≤ n ≤ 1e6 and 0 ≤ k ≤ 1e6",
                     row: Some(i),
                 });
             }
@@ -464,6 +467,15 @@ mod tests {
             }
         );
         assert!(Ior::table(vec![[400.0, 1.0, 1.0], [500.0, f64::NAN, 1.0]]).is_err());
+        // The bounds of a constant index, row by row (n = κ = 1e77 rendered black).
+        for bad in [[500.0, 1e77, 1e77], [500.0, 1.0, 2e6], [500.0, 1e-7, 1.0]] {
+            let e = Ior::table(vec![[400.0, 1.0, 1.0], bad]).unwrap_err();
+            assert!(
+                matches!(e, BrdfError::InvalidTable { row: Some(1), .. }),
+                "{bad:?}"
+            );
+        }
+        Ior::table(vec![[400.0, 1e6, 1e6], [500.0, 1e-6, 0.0]]).unwrap();
         assert!(Ior::constant(0.0, 1.0).is_err());
         assert!(Ior::metal(Metal::Al).check_covers(200.0, 830.0).is_err());
     }

@@ -559,20 +559,34 @@ mod desc {
     impl MaterialDesc {
         /// Fills every key this description leaves unset from `base` (an
         /// included file): keys set here win.
+        ///
+        /// Keys that together describe one quantity are inherited as a group,
+        /// and only when none of them is set here: the roughness (`alpha`,
+        /// `alpha_x`, `alpha_y`, `alpha_beckmann`) and the index (`metal`,
+        /// `nk`, `nk_csv`, `fresnel`; an explicit `fresnel = "conductor"` here
+        /// still takes the index from `base`). Key by key, a fit file's `alpha_x`
+        /// and `alpha_y` (or `alpha_beckmann`) would silently beat an `alpha`
+        /// set here, and its `metal` would clash with an `nk` set here.
         pub fn inherit(&mut self, base: &MaterialDesc) {
             macro_rules! inherit {
                 ($($f:ident),*) => { $( if self.$f.is_none() { self.$f = base.$f.clone(); } )* };
             }
+            let roughness_here = self.alpha.is_some()
+                || self.alpha_x.is_some()
+                || self.alpha_y.is_some()
+                || self.alpha_beckmann.is_some();
+            if !roughness_here {
+                inherit!(alpha, alpha_x, alpha_y, alpha_beckmann);
+            }
+            let index_here = self.metal.is_some()
+                || self.nk.is_some()
+                || self.nk_csv.is_some()
+                || self.fresnel == Some(FresnelKind::One);
+            if !index_here {
+                inherit!(metal, nk_csv, nk, fresnel);
+            }
             inherit!(
                 model,
-                metal,
-                nk_csv,
-                nk,
-                fresnel,
-                alpha,
-                alpha_x,
-                alpha_y,
-                alpha_beckmann,
                 sigma_um,
                 lc_um,
                 gamma,
@@ -1020,6 +1034,45 @@ mod tests {
             assert_eq!(d.into_spec(&mut NoFiles).unwrap_err().field, "sigma_um");
             let e = desc(r#"{"model": "phong"}"#).unwrap_err();
             assert!(e.contains("ghs_ssa"), "{e}");
+        }
+
+        #[test]
+        fn a_group_set_here_replaces_the_included_one_whole() {
+            let base = desc(
+                r#"{"model": "ggx", "metal": "brass", "alpha_x": 0.3, "alpha_y": 0.1,
+                    "alpha_beckmann": 0.25}"#,
+            )
+            .unwrap();
+            // `alpha` here: the file's anisotropic pair (or its Beckmann α)
+            // used to win over it without a word.
+            for model in ["ggx", "beckmann"] {
+                let own = desc(&format!(r#"{{"model": "{model}", "alpha": 0.05}}"#)).unwrap();
+                let s = own.resolve(Some(&base), &mut NoFiles).unwrap();
+                let (ModelSpec::Ggx { alpha_x, alpha_y }
+                | ModelSpec::Beckmann { alpha_x, alpha_y }) = s.model
+                else {
+                    panic!("{model}: {:?}", s.model);
+                };
+                assert_eq!((alpha_x, alpha_y), (0.05, 0.05), "{model}");
+            }
+            // An index here replaces the file's metal instead of clashing with it.
+            let own = desc(r#"{"nk": [1.5, 3.0]}"#).unwrap();
+            let s = own.resolve(Some(&base), &mut NoFiles).unwrap();
+            assert_eq!(s.fresnel, FresnelSpec::Constant { n: 1.5, k: 3.0 });
+            let own = desc(r#"{"fresnel": "one"}"#).unwrap();
+            let s = own.resolve(Some(&base), &mut NoFiles).unwrap();
+            assert_eq!(s.fresnel, FresnelSpec::One);
+            // Nothing of a group here: the file's whole group.
+            let own = desc(r#"{"fresnel": "conductor"}"#).unwrap();
+            let s = own.resolve(Some(&base), &mut NoFiles).unwrap();
+            assert_eq!(s.fresnel, FresnelSpec::Metal(Metal::BrassCu70Zn30));
+            assert_eq!(
+                s.model,
+                ModelSpec::Ggx {
+                    alpha_x: 0.3,
+                    alpha_y: 0.1
+                }
+            );
         }
 
         #[test]
