@@ -65,6 +65,7 @@ pub fn obj_from_bytes(
     // Triangles with area in the file: if none survive the transform, it is
     // the transform's fault, and the message says so.
     let mut proper_in_file = 0usize;
+    let mut seen = std::collections::HashSet::new();
     for m in &models {
         let pos = &m.mesh.positions;
         let nrm = &m.mesh.normals;
@@ -107,7 +108,13 @@ pub fn obj_from_bytes(
             }
             proper_in_file += usize::from((lb - la).cross(lc - la).length_squared() > 0.0);
             // Degenerate triangles have no normal; dropping them changes nothing visible.
-            if (b - a).cross(c - a).length_squared() > 0.0 {
+            // Neither does dropping a repeat of a triangle already kept (the
+            // first hit is the same surface), and the BVH build's time grows
+            // with the square of the repeats of one triangle (20 000 copies
+            // took 21 s, against 0.4 s for 10 000 distinct triangles).
+            let mut key = [a, b, c].map(|v| [v.x, v.y, v.z].map(f64::to_bits));
+            key.sort_unstable();
+            if (b - a).cross(c - a).length_squared() > 0.0 && seen.insert(key) {
                 triangles.push([a, b, c]);
                 normals.push(match (normal(tri[0]), normal(tri[1]), normal(tri[2])) {
                     (Some(x), Some(y), Some(z)) => Some([x, y, z]),
@@ -286,6 +293,21 @@ mod tests {
     fn load(bytes: &[u8], scale: f64, translate: [f64; 3]) -> Result<MeshSource, String> {
         let xf = Transform::new([0.0; 3], scale, translate);
         obj_from_bytes(Path::new("q.obj"), bytes, &xf, 0)
+    }
+
+    #[test]
+    fn repeated_triangles_are_kept_once() {
+        // The quad's first triangle three times more, once in another vertex
+        // order and once through vertices of its own: the two distinct
+        // triangles remain, the first copy of each with its place.
+        let obj = b"v -0.5 0 -0.5\nv 0.5 0 -0.5\nv 0.5 0 0.5\nv -0.5 0 0.5\n\
+            v -0.5 0 -0.5\nv 0.5 0 0.5\nv 0.5 0 -0.5\n\
+            f 1 3 2\nf 1 4 3\nf 1 3 2\nf 3 2 1\nf 5 6 7\n";
+        let m = load(obj, 1.0, [0.0; 3]).unwrap();
+        assert_eq!(m.triangles.len(), 2);
+        assert_eq!(m.normals.len(), 2);
+        let q = load(QUAD, 1.0, [0.0; 3]).unwrap();
+        assert_eq!(m.triangles, q.triangles);
     }
 
     #[test]
