@@ -255,3 +255,28 @@ fn bad_reference_is_reported_with_line_and_column() {
         assert!(err.contains(want), "expected {want:?} in: {err}");
     }
 }
+
+#[test]
+fn a_scan_too_short_for_any_direction_is_refused() {
+    // An 8-point stylus profile: no direction of its explicit BRDF can be
+    // compared, which gave a ranking of nothing and then a plot error.
+    let dir = scratch("short");
+    let scan = Path::new(env!("CARGO_MANIFEST_DIR")).join("data/surfaces/corpus/csv-1.csv");
+    let out = lustre()
+        .args([
+            "judge",
+            scan.to_str().unwrap(),
+            "--no-plots",
+            "-o",
+            dir.join("o").to_str().unwrap(),
+        ])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success(), "{err}");
+    assert!(
+        err.contains("csv-1.csv") && err.contains("no direction"),
+        "{err}"
+    );
+    assert!(!dir.join("o/judge.json").exists());
+}
