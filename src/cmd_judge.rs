@@ -339,7 +339,11 @@ pub fn run(args: JudgeArgs) -> anyhow::Result<()> {
     // profile gave one, and a plot error for its empty series).
     if judged.iter().all(|j| j.overall.n == 0) {
         bail!(
-            "{}: no direction of the scan's explicit BRDF could be compared with a model (every              value was unresolved or outside the compared range at these θi and λ): the scan is              too short or too coarse for its wave-optical BRDF. Fix: judge a longer profile or a              larger map (the explicit BRDF needs many correlation lengths), or other --theta-i /              --lambda",
+            "{}: no direction of the scan's explicit BRDF could be compared with a model (every \
+             value was unresolved or outside the compared range at these θi and λ): the scan is \
+             too short or too coarse for its wave-optical BRDF. Fix: judge a longer profile or a \
+             larger map (the explicit BRDF needs many correlation lengths), or other --theta-i / \
+             --lambda",
             args.scan.display()
         );
     }

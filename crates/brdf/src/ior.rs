@@ -201,16 +201,27 @@ pub enum Ior {
     Table(alloc::sync::Arc<[[f64; 3]]>),
 }
 
+/// Smallest n of a user-given index (constant or table).
+pub const N_MIN: f64 = 1e-6;
+/// Largest n and κ of a user-given index: past it the Fresnel arithmetic
+/// loses the reflectance (n = κ = 1e77 gave 0 for a mirror).
+pub const NK_MAX: f64 = 1e6;
+
+/// Whether (n, κ) lies within the bounds every user-given index obeys.
+pub fn nk_in_bounds(n: f64, k: f64) -> bool {
+    (N_MIN..=NK_MAX).contains(&n) && (0.0..=NK_MAX).contains(&k)
+}
+
 impl Ior {
     /// A built-in metal.
     pub fn metal(metal: Metal) -> Ior {
         Ior::Metal(metal)
     }
 
-    /// A constant index; `n > 0`, `k ≥ 0`, both finite.
+    /// A constant index; [`N_MIN`] ≤ n ≤ [`NK_MAX`], 0 ≤ k ≤ [`NK_MAX`].
     pub fn constant(n: f64, k: f64) -> Result<Ior, BrdfError> {
-        crate::error::check_range("n", n, 1e-6, 1e6, "0 < n ≤ 1e6")?;
-        crate::error::check_range("k", k, 0.0, 1e6, "0 ≤ k ≤ 1e6")?;
+        crate::error::check_range("n", n, N_MIN, NK_MAX, "0 < n ≤ 1e6")?;
+        crate::error::check_range("k", k, 0.0, NK_MAX, "0 ≤ k ≤ 1e6")?;
         Ok(Ior::Constant { n, k })
     }
 
@@ -227,7 +238,7 @@ impl Ior {
             });
         }
         for (i, r) in rows.iter().enumerate() {
-            let (n_ok, k_ok) = ((1e-6..=1e6).contains(&r[1]), (0.0..=1e6).contains(&r[2]));
+            let (n_ok, k_ok) = (nk_in_bounds(r[1], 0.0), nk_in_bounds(1.0, r[2]));
             if !(r[0].is_finite() && r[0] > 0.0 && n_ok && k_ok) {
                 return Err(BrdfError::InvalidTable {
                     reason: "each row needs finite wavelength_nm > 0, 1e-6 ≤ n ≤ 1e6 and 0 ≤ k ≤ 1e6",

@@ -598,6 +598,43 @@ mod desc {
             );
         }
 
+        /// Keys set together here of which one would silently override the
+        /// other (keys inherited from an included file cannot clash with
+        /// these: [`MaterialDesc::inherit`] takes each group whole).
+        fn check_conflicts(&self) -> Result<(), SpecError> {
+            if self.alpha.is_some() && (self.alpha_x.is_some() || self.alpha_y.is_some()) {
+                let other = if self.alpha_x.is_some() {
+                    "alpha_x"
+                } else {
+                    "alpha_y"
+                };
+                return Err(SpecError::new(
+                    "alpha",
+                    format!(
+                        "`alpha` and `{other}` are both set, and `alpha_x`/`alpha_y` would win; \
+                         give `alpha` (isotropic) or `alpha_x` and `alpha_y` (anisotropic), not both"
+                    ),
+                ));
+            }
+            if self.fresnel == Some(FresnelKind::One) {
+                let given = [
+                    ("metal", self.metal.is_some()),
+                    ("nk", self.nk.is_some()),
+                    ("nk_csv", self.nk_csv.is_some()),
+                ];
+                if let Some((key, _)) = given.iter().find(|(_, set)| *set) {
+                    return Err(SpecError::new(
+                        "fresnel",
+                        format!(
+                            "`fresnel = \"one\"` (R ≡ 1) and `{key}` are both set, and `{key}` \
+                             would be ignored; remove one of them"
+                        ),
+                    ));
+                }
+            }
+            Ok(())
+        }
+
         /// The keys that are set, by name.
         fn set_keys(&self) -> Vec<&'static str> {
             let mut k = Vec::new();
@@ -641,6 +678,7 @@ mod desc {
             base: Option<&MaterialDesc>,
             files: &mut dyn FileLoader,
         ) -> Result<MaterialSpec, SpecError> {
+            self.check_conflicts()?;
             let mut merged = self.clone();
             if let Some(b) = base {
                 merged.inherit(b);
@@ -1034,6 +1072,23 @@ mod tests {
             assert_eq!(d.into_spec(&mut NoFiles).unwrap_err().field, "sigma_um");
             let e = desc(r#"{"model": "phong"}"#).unwrap_err();
             assert!(e.contains("ghs_ssa"), "{e}");
+        }
+
+        #[test]
+        fn keys_that_would_silently_override_each_other_are_refused() {
+            for (json, field) in [
+                (
+                    r#"{"model": "ggx", "metal": "cu", "alpha": 0.2, "alpha_x": 0.1, "alpha_y": 0.3}"#,
+                    "alpha",
+                ),
+                (
+                    r#"{"model": "ggx", "fresnel": "one", "nk": [0.2, 3.0], "alpha": 0.2}"#,
+                    "fresnel",
+                ),
+            ] {
+                let e = desc(json).unwrap().into_spec(&mut NoFiles).unwrap_err();
+                assert_eq!(e.field, field, "{json}: {e}");
+            }
         }
 
         #[test]

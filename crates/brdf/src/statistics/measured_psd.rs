@@ -26,6 +26,14 @@ use crate::numerics::interp::lagrange4;
 /// the Matérn function is Gaussian to far below any measurable difference.
 pub const TAIL_SLOPE_MIN: f64 = -(super::kc::GAMMA_MAX + 1.0);
 
+/// Whether a last segment of log-log slope `slope` falls faster than
+/// [`TAIL_SLOPE_MIN`] allows (false for NaN, which other checks refuse); the
+/// relative slack admits a table written at exactly ζ^−101 whose logarithms
+/// round past it.
+pub fn tail_too_steep(slope: f64) -> bool {
+    slope < TAIL_SLOPE_MIN * (1.0 + 1e-9)
+}
+
 /// Radial PSD given by samples (ζ_j in rad/µm, P_j in µm⁴).
 #[derive(Clone, Debug, PartialEq)]
 pub struct TabulatedPsd {
@@ -82,9 +90,7 @@ impl TabulatedPsd {
                 row: Some(n - 1),
             });
         }
-        // The relative slack admits a table written at exactly ζ^−101
-        // whose logarithms round past it.
-        if slope_hi < TAIL_SLOPE_MIN * (1.0 + 1e-9) {
+        if tail_too_steep(slope_hi) {
             return Err(BrdfError::InvalidTable {
                 reason: "the last segment falls faster than zeta^-101 (the tail of KC gamma = \
                          100, the steepest accepted): end the table before the roll-off or \

@@ -4,8 +4,8 @@
 //! points at the scene text it is about.
 
 use super::desc::{
-    FresnelKind, LightDesc, MaterialDesc, ModelKind, SamplerKind, SceneDesc, ShapeDesc,
-    SpectralIntegration, TransformDesc, WavelengthMode,
+    LightDesc, MaterialDesc, ModelKind, SamplerKind, SceneDesc, ShapeDesc, SpectralIntegration,
+    TransformDesc, WavelengthMode,
 };
 use super::inputs::{self, Inputs};
 use super::shapes::Shapes;
@@ -354,36 +354,11 @@ impl<'a> Builder<'a> {
         Ok(i)
     }
 
-    /// What `brdf::spec` would let pass in a material table but cannot be
-    /// meant: keys that silently override others, and `nk_csv` / `psd_csv`
-    /// contents that need the file's line numbers to explain. An `include`d
-    /// file may answer for `psd_csv` and supply keys, so then the build
-    /// alone judges the table.
+    /// The `nk_csv` / `psd_csv` contents of a material table that brdf would
+    /// refuse or mis-read without the file's line numbers to explain it. An
+    /// `include`d file may answer for `psd_csv`, so then the build alone
+    /// judges the table.
     fn check_material(&mut self, m: &MaterialDesc) -> Result<(), String> {
-        if m.alpha.is_some() && (m.alpha_x.is_some() || m.alpha_y.is_some()) {
-            let other = if m.alpha_x.is_some() {
-                "alpha_x"
-            } else {
-                "alpha_y"
-            };
-            return Err(format!(
-                "`alpha` and `{other}` are both set, and `alpha_x`/`alpha_y` would win; give \
-                 `alpha` (isotropic) or `alpha_x` and `alpha_y` (anisotropic), not both"
-            ));
-        }
-        if m.fresnel == Some(FresnelKind::One) {
-            let given = [
-                ("metal", m.metal.is_some()),
-                ("nk", m.nk.is_some()),
-                ("nk_csv", m.nk_csv.is_some()),
-            ];
-            if let Some((key, _)) = given.iter().find(|(_, set)| *set) {
-                return Err(format!(
-                    "`fresnel = \"one\"` (R ≡ 1) and `{key}` are both set, and `{key}` would \
-                     be ignored; remove one of them"
-                ));
-            }
-        }
         if m.include.is_some() {
             return Ok(());
         }

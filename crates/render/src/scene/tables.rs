@@ -3,13 +3,8 @@
 //! it would accept but that cannot be meant, or that would stall the build.
 
 use crate::spectrum::parse_csv_lines;
-use brdf::statistics::measured_psd::TAIL_SLOPE_MIN;
-
-/// Bounds of `nk = [n, k]` (`brdf::Ior::constant`), applied to every row of
-/// an `nk_csv` too: past 1e6 the Fresnel factor's arithmetic loses the
-/// reflectance (n = k = 1e77 rendered black).
-const N_MIN: f64 = 1e-6;
-const NK_MAX: f64 = 1e6;
+use brdf::ior::nk_in_bounds;
+use brdf::statistics::measured_psd::{TAIL_SLOPE_MIN, tail_too_steep};
 
 /// A wavelength column spanning no more than this range reads as
 /// micrometres: no nm table of a metal covers only 0.2–20 nm.
@@ -23,7 +18,8 @@ pub fn check_nk_csv(name: &str, text: &str) -> Result<(), String> {
     };
     for (line, r) in &rows {
         let (n, k) = (r[1], r[2]);
-        if !(N_MIN..=NK_MAX).contains(&n) || !(0.0..=NK_MAX).contains(&k) {
+        // The bounds `brdf::Ior::table` applies too, here with the line.
+        if !nk_in_bounds(n, k) {
             return Err(format!(
                 "{name}: line {line}: n = {n:e}, k = {k:e} is outside 1e-6 ≤ n ≤ 1e6, \
                  0 ≤ k ≤ 1e6 (the bounds of `nk = [n, k]`); check the columns are \
@@ -49,8 +45,7 @@ pub fn check_psd_csv(name: &str, text: &str) -> Result<(), String> {
     };
     let [(l0, a), (l1, b)] = [&rows[rows.len() - 2], &rows[rows.len() - 1]];
     let slope = (b[1].ln() - a[1].ln()) / (b[0].ln() - a[0].ln());
-    // The same slack as `TabulatedPsd::new`, so that both agree at the bound.
-    if slope < TAIL_SLOPE_MIN * (1.0 + 1e-9) {
+    if tail_too_steep(slope) {
         return Err(format!(
             "{name}: the last segment (lines {l0}–{l1}: zeta {} → {} rad/µm, P {:e} → {:e} µm⁴) \
              falls as zeta^{slope:.4e}; the steepest accepted is zeta^{TAIL_SLOPE_MIN} (the tail \
