@@ -25,6 +25,29 @@ pub enum ReadError {
         /// What the user can do about it.
         fix: String,
     },
+    /// The extension names a format whose files carry a signature (magic bytes), and this
+    /// file does not carry it: reading it by its extension would parse whatever overwrote
+    /// the signature, or fail later with an error about some other field.
+    #[error(
+        "{file}: the file's signature does not match its extension: `.{extension}` names \
+         the `{format}` format, whose files have {expected} at byte {offset}, but this file \
+         has {found} there. Fix: the file is damaged (its first bytes overwritten) or misnamed; re-copy \
+         or re-export it, or give it the extension of the format it is in"
+    )]
+    Signature {
+        /// File name.
+        file: String,
+        /// The file's extension (lower case, no dot).
+        extension: String,
+        /// The format that extension names (its `--format` name).
+        format: &'static str,
+        /// The signature that format's files carry.
+        expected: &'static str,
+        /// Where the signature stands.
+        offset: usize,
+        /// What stands there instead.
+        found: String,
+    },
     /// The format of the file could not be determined.
     #[error("{file}: unknown surface format. Fix: {fix}")]
     UnknownFormat {

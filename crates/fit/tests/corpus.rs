@@ -58,11 +58,13 @@ fn every_readable_corpus_file_matches_the_reference() {
         let unitless = r["unit"].is_null();
         let mut opts = ReadOptions::default();
         let scale = if unitless && !TITLE_UNITS.contains(&file) {
+            // Unitless numbers are read as micrometres: read as metres, xy-1's steps of
+            // 1.4 would be 1.4 m pixels, which no surface scan has and the readers refuse.
             opts.units = Some(Units {
-                lateral: 1.0,
-                height: 1.0,
+                lateral: 1e-6,
+                height: 1e-6,
             });
-            1.0
+            1e-6
         } else if unitless {
             1e-6
         } else {

@@ -67,8 +67,9 @@ fn torture(name: &str, bytes: &[u8], format: Format, seed: u64, flips: usize) {
     for c in cuts.into_iter().filter(|&c| c < n) {
         check(&bytes[..c], &format!("truncated at {c}"));
         // Formats whose header fixes the data size must reject a file cut in half (text
-        // formats and multi-channel NanoScope files can legitimately hold less data).
-        if ["x3p", "bcr", "sdf", "gsf"].contains(&format.name()) && c < n / 2 {
+        // formats can legitimately hold less data). A NanoScope file cut short must be
+        // refused too, even where the channel read is still whole.
+        if ["x3p", "bcr", "sdf", "gsf", "nanoscope"].contains(&format.name()) && c < n / 2 {
             assert!(
                 read_bytes(name, &bytes[..c], &o).is_err(),
                 "{name}: truncated file at {c} accepted"

@@ -225,3 +225,69 @@ fn wrong_brackets_get_the_fix() {
     let e = refused("shapes-table", &text.replace("[[shapes]]", "[shapes]"), &[]);
     assert!(e.contains("[[shapes]]"), "{e}");
 }
+
+/// The 1-based line of the `n`-th (0-based) line equal to `header` in `text`.
+fn line_of(text: &str, header: &str, n: usize) -> usize {
+    text.lines()
+        .enumerate()
+        .filter(|(_, l)| l.trim() == header)
+        .nth(n)
+        .map(|(i, _)| i + 1)
+        .unwrap_or_else(|| panic!("no {n}-th `{header}`"))
+}
+
+/// Two `[lights]` (or `[shapes]`) tables where `[[lights]]` was meant: toml
+/// reports only "duplicate key" at the second header. The message names the
+/// key and the brackets to write, at that header's line.
+#[test]
+fn a_repeated_table_that_should_be_an_array_of_tables_gets_the_fix() {
+    const POINT: &str = "type = \"point\"\nposition = [0.0, 1.0, 0.0]\nintensity = 1.0\n";
+    let two_lights = format!(
+        "{}\n[lights]\n{POINT}",
+        scene(GGX, PLATE, "").replace("[[lights]]", "[lights]")
+    );
+    let e = refused("two-lights", &two_lights, &[]);
+    println!("{e}");
+    let line = line_of(&two_lights, "[lights]", 1);
+    assert!(e.contains(&format!("scene.toml:{line}:2: ")), "{e}");
+    assert!(
+        e.contains(
+            "duplicate key `lights` (lights are an array of tables: write [[lights]] (two \
+             brackets) for each light)"
+        ),
+        "{e}"
+    );
+
+    let two_shapes = format!(
+        "{}\n[shapes]\n{}",
+        scene(GGX, PLATE, "").replace("[[shapes]]", "[shapes]"),
+        PLATE.replace("[[shapes]]\n", "")
+    );
+    let e = refused("two-shapes", &two_shapes, &[]);
+    println!("{e}");
+    let line = line_of(&two_shapes, "[shapes]", 1);
+    assert!(e.contains(&format!("scene.toml:{line}:2: ")), "{e}");
+    assert!(
+        e.contains("write [[shapes]] (two brackets) for each shape"),
+        "{e}"
+    );
+
+    // One `[[lights]]` and then a `[lights]`: the same fix.
+    let mixed = format!("{}\n[lights]\n{POINT}", scene(GGX, PLATE, ""));
+    let e = refused("mixed-lights", &mixed, &[]);
+    let line = line_of(&mixed, "[lights]", 0);
+    assert!(e.contains(&format!("scene.toml:{line}:2: ")), "{e}");
+    assert!(
+        e.contains("write [[lights]] (two brackets) for each light"),
+        "{e}"
+    );
+
+    // A key repeated inside a table is another mistake: toml's own message.
+    let twice = scene(GGX, PLATE, "").replace("radiance = 1.0", "radiance = 1.0\nradiance = 2.0");
+    let e = refused("key-twice", &twice, &[]);
+    assert!(e.contains("duplicate key") && !e.contains("[["), "{e}");
+    // Two tables of a kind that is not an array keep the bare message too.
+    let two_cameras = format!("{}\n[camera]\nfov_deg = 30.0\n", scene(GGX, PLATE, ""));
+    let e = refused("two-cameras", &two_cameras, &[]);
+    assert!(e.contains("duplicate key") && !e.contains("[["), "{e}");
+}

@@ -93,8 +93,28 @@ pub(crate) fn read(ctx: Ctx<'_>, bytes: &[u8], want: Want<'_>) -> Result<Decoded
             if bad { f64::NAN } else { v }
         }));
     }
+    // The texture planes follow the depth image to the end of the file, one byte or more
+    // per pixel (their sample size is not stated): a file cut inside them holds the depth
+    // image whole, and reading it would hide that the copy is broken.
+    let texture = count_of("TextureImageOffset").unwrap_or(0);
+    let planes = count_of("NumberOfPlanes").unwrap_or(0);
+    if texture > 0 && planes > 0 {
+        let end = planes
+            .saturating_mul(ny)
+            .saturating_mul(nx)
+            .saturating_add(texture);
+        if end > bytes.len() as u64 {
+            return Err(ctx.truncated(
+                "TextureImageOffset",
+                &format!("{planes} texture planes of {nx} × {ny} pixels"),
+                (texture, end),
+                bytes.len() as u64,
+            ));
+        }
+    }
     let dx = check_spacing(ctx, "PixelSizeXMeter", num("PixelSizeXMeter")?)?;
     let dy = check_spacing(ctx, "PixelSizeYMeter", num("PixelSizeYMeter")?)?;
-    let raw = Raw::si(nx as usize, ny as usize, dx, dy, heights, "depth");
+    let raw = Raw::si(nx as usize, ny as usize, dx, dy, heights, "depth")
+        .spacing_from("PixelSizeXMeter", "PixelSizeYMeter");
     Decoded::single(ctx, want, raw)
 }

@@ -133,12 +133,14 @@ fn parse(ctx: Ctx<'_>, bytes: &[u8]) -> Result<Raw, ReadError> {
             })
             .collect()
     };
-    Ok(Raw::si(
-        nx as usize,
-        ny as usize,
-        dx,
-        dy,
-        heights,
-        fileformat,
-    ))
+    // Without a `ylength` the pixels are square: y's spacing is x's.
+    let y_field = if ylen.is_finite() {
+        "ylength"
+    } else {
+        "xlength"
+    };
+    Ok(
+        Raw::si(nx as usize, ny as usize, dx, dy, heights, fileformat)
+            .spacing_from("xlength", y_field),
+    )
 }

@@ -170,6 +170,7 @@ pub(crate) fn read(ctx: Ctx<'_>, bytes: &[u8], want: Want<'_>) -> Result<Decoded
         dx,
         zs,
         cols.get(1).copied().unwrap_or("height").to_string(),
-    );
+    )
+    .spacing_from("lateral column", "lateral column");
     Decoded::single(ctx, want, raw)
 }

@@ -34,23 +34,39 @@ pub(crate) fn read(ctx: Ctx<'_>, bytes: &[u8], want: Want<'_>) -> Result<Decoded
     let mut c = Cursor::le(bytes, MAGIC.len() + 4);
     let nblocks = c.u16().unwrap_or(0);
     let mut blocks: HashMap<u16, (usize, usize)> = HashMap::new();
-    for _ in 0..nblocks {
-        let Some(id) = c.u16() else { break };
-        let size = if wide {
-            c.u64()
-        } else {
-            c.u32().map(u64::from)
+    let head = if wide { 10 } else { 6 };
+    for i in 0..nblocks {
+        // A file cut between blocks still reads the blocks before the cut; the block
+        // count says more were written.
+        let at = c.pos;
+        let header = |c: &mut Cursor<'_>| {
+            let id = c.u16()?;
+            let size = if wide {
+                c.u64()
+            } else {
+                c.u32().map(u64::from)
+            };
+            Some((id, size?))
         };
-        let Some(size) = size else { break };
+        let Some((id, size)) = header(&mut c) else {
+            return Err(ctx.truncated(
+                "block count",
+                &format!("block {}'s id and size ({nblocks} blocks counted)", i + 1),
+                (at as u64, at as u64 + head),
+                bytes.len() as u64,
+            ));
+        };
         let start = c.pos;
-        let Some(end) = start
-            .checked_add(size as usize)
+        let Some(end) = usize::try_from(size)
+            .ok()
+            .and_then(|size| start.checked_add(size))
             .filter(|&e| e <= bytes.len())
         else {
-            return Err(ctx.err(
+            return Err(ctx.truncated(
                 &format!("block 0x{id:04x}"),
-                format!("{size} bytes at offset {start} run past the end of the file"),
-                "the file is truncated",
+                &format!("block 0x{id:04x} ({size} bytes)"),
+                (start as u64, (start as u64).saturating_add(size)),
+                bytes.len() as u64,
             ));
         };
         blocks.entry(id).or_insert((start, end));
@@ -114,6 +130,7 @@ pub(crate) fn read(ctx: Ctx<'_>, bytes: &[u8], want: Want<'_>) -> Result<Decoded
         .into_iter()
         .map(|v| if v == 1.0 { f64::NAN } else { v * q })
         .collect();
-    let out = Raw::si(nx as usize, ny as usize, dx, dy, heights, "topography");
+    let out = Raw::si(nx as usize, ny as usize, dx, dy, heights, "topography")
+        .spacing_from("block 0x0067", "block 0x0067");
     Decoded::single(ctx, want, out)
 }

@@ -76,5 +76,5 @@ fn parse(ctx: Ctx<'_>, bytes: &[u8]) -> Result<Raw, ReadError> {
         .map(|v| if v.is_finite() { v * zu } else { f64::NAN })
         .collect();
     let channel = kv.get("Title").map_or("gsf", String::as_str);
-    Ok(Raw::si(nx as usize, ny as usize, dx, dy, heights, channel))
+    Ok(Raw::si(nx as usize, ny as usize, dx, dy, heights, channel).spacing_from("XReal", "YReal"))
 }

@@ -32,6 +32,16 @@ pub(crate) fn sniff(b: &[u8]) -> Sniff {
     }
 }
 
+/// A version word of an Igor binary wave (1, 2, 3 or 5) in either byte order: the
+/// format's signature, looser than [`sniff`] so that a file of an older version gets the
+/// reader's explanation rather than being called damaged.
+pub(crate) fn has_version_word(b: &[u8]) -> bool {
+    match b {
+        [0, v, ..] | [v, 0, ..] => matches!(v, 1 | 2 | 3 | 5),
+        _ => false,
+    }
+}
+
 fn checksum(h: &[u8], little: bool) -> u16 {
     h.chunks_exact(2).fold(0u16, |s, c| {
         let w = if little {
@@ -193,7 +203,28 @@ pub(crate) fn read(ctx: Ctx<'_>, bytes: &[u8], want: Want<'_>) -> Result<Decoded
     if data_end > bytes.len() as u64 {
         return Err(ctx.short("wave data", data_end, bytes.len() as u64));
     }
-    // Note, then extended units, then labels.
+    // Note, then extended units, then labels. They name the channels and give their
+    // units, so a file cut inside them is refused rather than read with guessed ones.
+    let sections = [
+        ("formulaSize", formula),
+        ("noteSize", note_size),
+        ("dataEUnitsSize", data_e_units),
+        ("dimEUnitsSize", dim_e_units.iter().sum()),
+        ("dimLabelsSize", dim_labels.iter().sum()),
+    ];
+    let mut end = data_end;
+    for (field, size) in sections {
+        let start = end;
+        end = end.saturating_add(size);
+        if end > bytes.len() as u64 {
+            return Err(ctx.truncated(
+                field,
+                &format!("{size} bytes of the wave's {field} section"),
+                (start, end),
+                bytes.len() as u64,
+            ));
+        }
+    }
     let note_start = data_end + formula;
     let note: Vec<(String, String)> = bytes
         .get(note_start as usize..(note_start + note_size).min(bytes.len() as u64) as usize)
@@ -278,7 +309,8 @@ pub(crate) fn read(ctx: Ctx<'_>, bytes: &[u8], want: Want<'_>) -> Result<Decoded
         } else {
             check_spacing(ctx, "sfA[1]", sfa[1].abs())?
         };
-        let raw = Raw::si(nx as usize, ny as usize, dx, dy, heights, &channel.name);
+        let raw = Raw::si(nx as usize, ny as usize, dx, dy, heights, &channel.name)
+            .spacing_from("sfA[0]", "sfA[1]");
         Ok(raw.in_units(hu, lu))
     })
 }

@@ -142,6 +142,8 @@ pub(crate) fn read(ctx: Ctx<'_>, bytes: &[u8], want: Want<'_>) -> Result<Decoded
     let mut size_x = None;
     let mut size_y = None;
     let mut pixel = None;
+    // The keys as the header spells them (x size, y size, pixel size), for messages.
+    let mut keys = (String::new(), String::new(), String::new());
     let mut lateral_unit: Option<f64> = None;
     let mut height_unit: Option<Result<f64, String>> = None;
     let mut factor: Option<(f64, Option<f64>)> = None;
@@ -196,9 +198,18 @@ pub(crate) fn read(ctx: Ctx<'_>, bytes: &[u8], want: Want<'_>) -> Result<Decoded
             continue;
         };
         match key {
-            Key::SizeX => size_x = Some(header_length(ctx, &k, &v)?),
-            Key::SizeY => size_y = Some(header_length(ctx, &k, &v)?),
-            Key::PixelSize => pixel = Some(header_length(ctx, &k, &v)?),
+            Key::SizeX => {
+                size_x = Some(header_length(ctx, &k, &v)?);
+                keys.0 = k.trim().to_string();
+            }
+            Key::SizeY => {
+                size_y = Some(header_length(ctx, &k, &v)?);
+                keys.1 = k.trim().to_string();
+            }
+            Key::PixelSize => {
+                pixel = Some(header_length(ctx, &k, &v)?);
+                keys.2 = k.trim().to_string();
+            }
             Key::LateralUnit => {
                 lateral_unit = Some(units::length_factor(&v).ok_or_else(|| {
                     ctx.err(
@@ -307,6 +318,13 @@ pub(crate) fn read(ctx: Ctx<'_>, bytes: &[u8], want: Want<'_>) -> Result<Decoded
         }
         _ => Unit::Unknown,
     };
+    let spacing_fields = if pixel.is_some() {
+        (keys.2.clone(), keys.2)
+    } else if size_y.is_some() {
+        (keys.0, keys.1)
+    } else {
+        (keys.0.clone(), keys.0)
+    };
     let raw = Raw {
         nx,
         ny,
@@ -314,6 +332,7 @@ pub(crate) fn read(ctx: Ctx<'_>, bytes: &[u8], want: Want<'_>) -> Result<Decoded
         height_unit,
         spacing,
         lateral_unit,
+        spacing_fields,
         channel,
         notes,
     };

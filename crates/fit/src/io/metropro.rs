@@ -115,6 +115,7 @@ pub(crate) fn read(ctx: Ctx<'_>, bytes: &[u8], want: Want<'_>) -> Result<Decoded
         heights.push(if v >= INVALID { f64::NAN } else { v as f64 * q });
     }
     let dx = check_spacing(ctx, "lateral_res", lateral)?;
-    let raw = Raw::si(cn_w as usize, cn_h as usize, dx, dx, heights, "phase");
+    let raw = Raw::si(cn_w as usize, cn_h as usize, dx, dx, heights, "phase")
+        .spacing_from("lateral_res", "lateral_res");
     Decoded::single(ctx, want, raw)
 }

@@ -6,7 +6,8 @@
 //! bufferRange` in `bufferUnit`.
 
 use super::{
-    ChannelInfo, Ctx, Decoded, Raw, Unit, Want, binary, check_spacing, checked_grid, units,
+    ChannelInfo, Ctx, Decoded, MAX_POINTS, Raw, Unit, Want, binary, check_spacing, checked_grid,
+    units,
 };
 use crate::ReadError;
 
@@ -117,11 +118,38 @@ pub(crate) fn read(ctx: Ctx<'_>, bytes: &[u8], want: Want<'_>) -> Result<Decoded
             ny: ny as usize,
         })
         .collect();
+    let format = match kind.as_str() {
+        "BINARY" => Some((binary::Sample::I16, 32768.0)),
+        "BINARY_32" => Some((binary::Sample::I32, 2147483648.0)),
+        _ => None,
+    };
+    // Every channel, not only the one asked for: a copy cut short holds its first
+    // channels whole, and reading them would hide that the file is broken.
+    // (A grid beyond the supported size is `checked_grid`'s to report.)
+    if let Some((sample, _)) = format.filter(|_| nx.saturating_mul(ny) <= MAX_POINTS) {
+        let block = nx.saturating_mul(ny).saturating_mul(sample.size() as u64);
+        let file_len = bytes.len() as u64;
+        for c in &channels {
+            let start = (pos as u64).saturating_add(block.saturating_mul(c.index as u64));
+            let end = start.saturating_add(block);
+            if end > file_len {
+                return Err(ctx.truncated(
+                    "data",
+                    &format!(
+                        "channel {} `{}` ({nx} × {ny} {kind} values)",
+                        c.index, c.name
+                    ),
+                    (start, end),
+                    file_len,
+                ));
+            }
+        }
+    }
     Decoded::pick(ctx, want, channels, |selected, channel| {
-        let (sample, full) = match kind.as_str() {
-            "BINARY" => (binary::Sample::I16, 32768.0),
-            "BINARY_32" => (binary::Sample::I32, 2147483648.0),
-            k => {
+        let (sample, full) = match format {
+            Some(f) => f,
+            None => {
+                let k = kind.as_str();
                 return Err(ctx.err(
                     "data",
                     format!("`{k}` data are not supported (only BINARY and BINARY_32)"),
@@ -149,7 +177,8 @@ pub(crate) fn read(ctx: Ctx<'_>, bytes: &[u8], want: Want<'_>) -> Result<Decoded
             check_spacing(ctx, "yLength", num("yLength")? / ny as f64)?
         };
         let heights = raw.into_iter().map(|v| v * q).collect();
-        let out = Raw::si(nx as usize, ny as usize, dx, dy, heights, &channel.name);
+        let out = Raw::si(nx as usize, ny as usize, dx, dy, heights, &channel.name)
+            .spacing_from("xLength", "yLength");
         Ok(out.in_units(Unit::Known(zu), Unit::Known(1.0)))
     })
 }

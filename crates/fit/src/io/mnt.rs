@@ -308,7 +308,8 @@ pub(crate) fn read(ctx: Ctx<'_>, bytes: &[u8], want: Want<'_>) -> Result<Decoded
         .collect();
     let dx = check_spacing(ctx, "x spacing", x.spacing_m)?;
     let dy = check_spacing(ctx, "y spacing", y.spacing_m)?;
-    let mut raw = Raw::si(nx as usize, ny as usize, dx, dy, heights, "surface");
+    let mut raw = Raw::si(nx as usize, ny as usize, dx, dy, heights, "surface")
+        .spacing_from("x spacing", "y spacing");
     if invalid > 0 {
         raw.notes
             .push(format!("{invalid} points were not measured"));

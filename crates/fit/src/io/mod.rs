@@ -156,6 +156,8 @@ pub(crate) struct Raw {
     /// Pixel spacing `(dx, dy)` in `lateral_unit`; `None` when the file gives no size.
     pub spacing: Option<(f64, f64)>,
     pub lateral_unit: Unit,
+    /// The header fields `spacing` comes from (x, y), named when it is refused.
+    pub spacing_fields: (String, String),
     pub channel: String,
     pub notes: Vec<String>,
 }
@@ -177,8 +179,17 @@ impl Raw {
             height_unit: Unit::Known(1.0),
             spacing: Some((dx, dy)),
             lateral_unit: Unit::Known(1.0),
+            spacing_fields: ("pixel size".into(), "pixel size".into()),
             channel: channel.into(),
             notes: Vec::new(),
+        }
+    }
+
+    /// The same channel, its spacing taken from the header fields `x` and `y`.
+    pub fn spacing_from(self, x: impl Into<String>, y: impl Into<String>) -> Raw {
+        Raw {
+            spacing_fields: (x.into(), y.into()),
+            ..self
         }
     }
 
@@ -410,6 +421,27 @@ impl Ctx<'_> {
         }
     }
 
+    /// Error for data that the header places beyond the end of the file: `what` (a
+    /// channel, a block) at bytes `start..end` of a file `file_len` bytes long. A file cut
+    /// short can still hold the part a reader needs whole; reading that part would hide
+    /// that the copy is broken.
+    pub fn truncated(
+        &self,
+        field: &str,
+        what: &str,
+        (start, end): (u64, u64),
+        file_len: u64,
+    ) -> ReadError {
+        self.err(
+            field,
+            format!(
+                "the header puts {what} at bytes {start}..{end}, but the file is only \
+                 {file_len} bytes long"
+            ),
+            "the file is truncated: re-export or re-copy it",
+        )
+    }
+
     /// Error for a truncated or inconsistent data block.
     pub fn short(&self, field: &str, need: u64, have: u64) -> ReadError {
         self.err(
@@ -502,7 +534,40 @@ pub(crate) fn decode_grid(
         .ok_or_else(|| ctx.short(name, n as u64 * size, data.len() as u64))
 }
 
-/// Check a pixel spacing: finite and positive.
+/// Pixel spacings a surface scan can have [m]. Finer than a femtometre or coarser than a
+/// metre is a header that is corrupt or in the wrong unit, and no statistic of such a map
+/// means anything: at 1e-300 m the slopes Δz/Δx overflow to infinity (RMS slope `null`).
+pub const PIXEL_SIZE_RANGE: (f64, f64) = (1e-15, 1.0);
+
+/// Check a pixel spacing in metres, `d` along `axis`, against [`PIXEL_SIZE_RANGE`]: the one
+/// check every reader's spacing and the `--pixel-size`, `--size` and `--units` flags go
+/// through. `field` is where the value came from; `fix` how to correct it there.
+fn check_pixel_size(
+    ctx: Ctx<'_>,
+    field: &str,
+    axis: &str,
+    d: f64,
+    fix: &str,
+) -> Result<f64, ReadError> {
+    let (lo, hi) = PIXEL_SIZE_RANGE;
+    if d.is_finite() && (lo..=hi).contains(&d) {
+        return Ok(d);
+    }
+    let why = if !(d.is_finite() && d > 0.0) {
+        "is not a positive finite length".to_string()
+    } else if d < lo {
+        format!("is below {lo:e} m, finer than any instrument resolves")
+    } else {
+        format!("is above {hi} m, coarser than any surface scan")
+    };
+    Err(ctx.err(
+        field,
+        format!("the pixel spacing along {axis}, {d:e} m, {why}"),
+        fix,
+    ))
+}
+
+/// Check a pixel spacing in the file's units: finite and positive.
 pub(crate) fn check_spacing(ctx: Ctx<'_>, field: &str, d: f64) -> Result<f64, ReadError> {
     if d.is_finite() && d > 0.0 {
         Ok(d)
@@ -592,7 +657,16 @@ fn format_of(name: &str, bytes: &[u8], opts: &ReadOptions) -> Result<(Format, bo
     if let Some(f) = opts.format {
         return Ok((f, false));
     }
-    if let Some(f) = registry::sniffed(name, bytes) {
+    let found = registry::sniffed(name, bytes);
+    if let Some((f, Sniff::Magic)) = found {
+        return Ok((f, false));
+    }
+    // Checked before the weaker content matches: a NanoScope header whose first bytes
+    // were overwritten is still text with numbers, and would be read as a matrix.
+    if let Some(e) = registry::signature_mismatch(name, bytes, found.map(|(f, _)| f)) {
+        return Err(e);
+    }
+    if let Some((f, _)) = found {
         return Ok((f, false));
     }
     // Numbers in a text file say more than a binary format's extension (a text `.dat`).
@@ -624,6 +698,7 @@ fn finish(
         height_unit,
         spacing,
         lateral_unit,
+        spacing_fields: raw_fields,
         channel,
         mut notes,
     } = raw;
@@ -689,6 +764,40 @@ fn finish(
             (Unit::Unknown, None) => None,
         }
     };
+    // Where the spacing comes from, for the range check below: a flag, or header fields
+    // (read in the unit --units gave when the file states none).
+    let flag_fix = |flag: &str| {
+        let (lo, hi) = PIXEL_SIZE_RANGE;
+        format!("give {flag} as a length with its unit within {lo:e} m … {hi} m, e.g. {flag} 0.5um")
+    };
+    let from_units = matches!(lateral_unit, Unit::Unknown) && opts.units.is_some();
+    let file_fix = |field: &str| {
+        if from_units {
+            format!(
+                "`{field}` is in the lateral unit --units gives: pass the unit it is really in, \
+                 or override the spacing with --pixel-size or --size"
+            )
+        } else {
+            format!(
+                "the header's `{field}` is corrupt or in the wrong unit: correct it, or override \
+                 it with --pixel-size or --size"
+            )
+        }
+    };
+    let (range_fields, range_fixes) = if opts.pixel_size.is_some() {
+        let f = "--pixel-size".to_string();
+        (
+            (f.clone(), f),
+            (flag_fix("--pixel-size"), flag_fix("--pixel-size")),
+        )
+    } else if opts.size.is_some() {
+        let f = "--size".to_string();
+        ((f.clone(), f), (flag_fix("--size"), flag_fix("--size")))
+    } else {
+        let (x, y) = raw_fields;
+        let fixes = (file_fix(&x), file_fix(&y));
+        ((x, y), fixes)
+    };
     let (dx, dy) = if let Some(p) = opts.pixel_size {
         if spacing.is_some() {
             notes.push("--pixel-size overrides the file's pixel size".into());
@@ -735,12 +844,12 @@ fn finish(
     let dx = if column {
         f64::NAN
     } else {
-        check_spacing(ctx, "pixel size", dx)?
+        check_pixel_size(ctx, &range_fields.0, "x", dx, &range_fixes.0)?
     };
     let dy = if ny == 1 {
         dx
     } else {
-        check_spacing(ctx, "pixel size", dy)?
+        check_pixel_size(ctx, &range_fields.1, "y", dy, &range_fixes.1)?
     };
     let (nx, ny, dx) = if column {
         notes.push(format!(

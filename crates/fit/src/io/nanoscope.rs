@@ -48,9 +48,39 @@ pub(crate) fn read(ctx: Ctx<'_>, bytes: &[u8], want: Want<'_>) -> Result<Decoded
         .enumerate()
         .map(|(i, img)| describe(ctx, i, img, &sections))
         .collect();
+    // Every image, not only the one asked for: a copy cut short holds its first
+    // channels whole, and reading them would hide that the file is broken.
+    let file_len = bytes.len() as u64;
+    for (img, info) in images.iter().zip(&channels) {
+        if let Some((offset, length)) = data_range(img)
+            && offset.saturating_add(length) > file_len
+        {
+            return Err(ctx.truncated(
+                "\\Data offset + \\Data length",
+                &format!(
+                    "the image data of channel {} `{}` ({length} bytes)",
+                    info.index, info.name
+                ),
+                (offset, offset.saturating_add(length)),
+                file_len,
+            ));
+        }
+    }
     Decoded::pick(ctx, want, channels, |selected, _| {
         decode(ctx, bytes, images[selected], &sections)
     })
+}
+
+/// Where an image section says its data are: `(offset, length)` in bytes, when both are
+/// valid numbers (`decode` names the field that is not).
+fn data_range(img: &Section) -> Option<(u64, u64)> {
+    let num = |key: &str| {
+        img.get(key)
+            .and_then(|v| v.split_whitespace().next())
+            .and_then(|v| v.parse::<f64>().ok())
+            .filter(|v| *v >= 0.0 && v.fract() == 0.0 && *v <= 1e15)
+    };
+    Some((num("Data offset")? as u64, num("Data length")? as u64))
 }
 
 /// Name, unit and size of an image section, without decoding it.
@@ -188,7 +218,8 @@ fn decode(
         .rev()
         .flat_map(|line| line.iter().map(|v| v * zfactor))
         .collect();
-    Ok(Raw::si(nx as usize, ny as usize, dx, dy, heights, name))
+    Ok(Raw::si(nx as usize, ny as usize, dx, dy, heights, name)
+        .spacing_from("Scan Size", "Scan Size"))
 }
 
 fn parse_sections(header: &str) -> Vec<Section> {

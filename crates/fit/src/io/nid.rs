@@ -6,11 +6,15 @@
 //! Values are `raw · Dim2Range / 2^bits`, x fastest.
 
 use super::binary::Sample;
-use super::{ChannelInfo, Ctx, Decoded, Raw, Unit, Want, check_spacing, decode_grid, units};
+use super::{
+    ChannelInfo, Ctx, Decoded, MAX_POINTS, Raw, Unit, Want, check_spacing, decode_grid, units,
+};
 use crate::ReadError;
 use std::collections::HashMap;
 
 struct DataSet {
+    /// Its header section (`DataSet-0:1`).
+    section: String,
     name: String,
     unit: String,
     nx: u64,
@@ -126,6 +130,7 @@ pub(crate) fn read(ctx: Ctx<'_>, bytes: &[u8], want: Want<'_>) -> Result<Decoded
             let frame = s.get("Frame").cloned().unwrap_or_default();
             let dim2 = s.get("Dim2Name").cloned().unwrap_or_default();
             sets.push(DataSet {
+                section: name.clone(),
                 name: format!("{frame} ({dim2})"),
                 unit: s.get("Dim2Unit").cloned().unwrap_or_default(),
                 nx,
@@ -157,6 +162,29 @@ pub(crate) fn read(ctx: Ctx<'_>, bytes: &[u8], want: Want<'_>) -> Result<Decoded
             ny: s.ny as usize,
         })
         .collect();
+    // Every data set, not only the one asked for: a copy cut short holds its first
+    // channels whole, and reading them would hide that the file is broken. (A grid
+    // beyond the supported size is `checked_grid`'s to report.)
+    let data_start = (marker + 2) as u64;
+    let file_len = bytes.len() as u64;
+    for (s, c) in sets.iter().zip(&channels) {
+        if s.nx.saturating_mul(s.ny) > MAX_POINTS {
+            continue;
+        }
+        let start = data_start.saturating_add(s.offset);
+        let end = start.saturating_add(s.nx * s.ny * (s.bits as u64 / 8));
+        if end > file_len {
+            return Err(ctx.truncated(
+                &format!("[{}] Points × Lines", s.section),
+                &format!(
+                    "data set {} `{}` ({} × {} {}-bit values)",
+                    c.index, c.name, s.nx, s.ny, s.bits
+                ),
+                (start, end),
+                file_len,
+            ));
+        }
+    }
     Decoded::pick(ctx, want, channels, |selected, _| {
         let s = &sets[selected];
         let block = data
@@ -186,7 +214,8 @@ pub(crate) fn read(ctx: Ctx<'_>, bytes: &[u8], want: Want<'_>) -> Result<Decoded
             check_spacing(ctx, "Dim1Range", s.range_y * xu / s.ny as f64)?
         };
         let heights = raw.into_iter().map(|v| v * q).collect();
-        let out = Raw::si(s.nx as usize, s.ny as usize, dx, dy, heights, &s.name);
+        let out = Raw::si(s.nx as usize, s.ny as usize, dx, dy, heights, &s.name)
+            .spacing_from("Dim0Range", "Dim1Range");
         Ok(out.in_units(Unit::Known(zu), Unit::Known(1.0)))
     })
 }

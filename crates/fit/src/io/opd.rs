@@ -53,6 +53,20 @@ pub(crate) fn read(ctx: Ctx<'_>, bytes: &[u8], want: Want<'_>) -> Result<Decoded
         blocks.push(Block { name, len, offset });
         offset = offset.saturating_add(len);
     }
+    // Every block, not only those read: a copy cut short holds the first arrays whole,
+    // and the scale blocks missing from its end would be taken as absent (Mult = 1).
+    let file_len = bytes.len() as u64;
+    if let Some(b) = blocks
+        .iter()
+        .find(|b| b.offset.saturating_add(b.len) as u64 > file_len)
+    {
+        return Err(ctx.truncated(
+            "Directory",
+            &format!("block `{}` ({} bytes)", b.name, b.len),
+            (b.offset as u64, b.offset.saturating_add(b.len) as u64),
+            file_len,
+        ));
+    }
     let value = |name: &str| blocks.iter().find(|b| b.name == name && b.len > 0);
     let f32_of = |b: &Block| Cursor::le(bytes, b.offset).f32();
     let wavelength = value("Wavelength").and_then(f32_of).ok_or_else(|| {
@@ -150,6 +164,7 @@ pub(crate) fn read(ctx: Ctx<'_>, bytes: &[u8], want: Want<'_>) -> Result<Decoded
             height_unit: Unit::Known(1e-9),
             spacing,
             lateral_unit,
+            spacing_fields: ("Pixel_size".into(), "Pixel_size × Aspect".into()),
             channel: b.name.clone(),
             notes: Vec::new(),
         })

@@ -122,6 +122,7 @@ pub(crate) fn read(ctx: Ctx<'_>, bytes: &[u8], want: Want<'_>) -> Result<Decoded
     let dy = check_spacing(ctx, "Y scan size", sy / ny as f64)?;
     let heights = raw.into_iter().map(|v| v * q).collect();
     let out = Raw::si(nx as usize, ny as usize, dx, dy, heights, name)
+        .spacing_from("X scan size", "Y scan size")
         .in_units(height_unit, Unit::Known(1e-6));
     let info = ChannelInfo {
         unit,

@@ -84,6 +84,7 @@ pub(crate) fn read(ctx: Ctx<'_>, bytes: &[u8], want: Want<'_>) -> Result<Decoded
         }
     }
     let mut raw = Raw::si(nx as usize, ny as usize, dx, dy, heights, "layer0")
+        .spacing_from("micrometers_per_pixel_x", "micrometers_per_pixel_y")
         .in_units(Unit::Known(1e-6), Unit::Known(1e-6));
     if num_layers > 1 {
         raw.notes.push(format!(

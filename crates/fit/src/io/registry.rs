@@ -29,8 +29,12 @@ pub struct Reader {
     /// File extensions (lower case, no dot).
     pub extensions: &'static [&'static str],
     /// True for binary formats: an extension match alone selects the reader, so a
-    /// damaged file gets that reader's specific error.
+    /// damaged file gets that reader's specific error (unless the format has a
+    /// [`signature`](Self::signature) and the file lacks it).
     pub binary: bool,
+    /// What every file of this format carries, when the format has such a thing; `None`
+    /// for formats without one (text exports, Sensofar's date-string header).
+    pub signature: Option<Signature>,
     /// Content check on the whole file (it must only look at the first few kB).
     pub sniff: fn(&[u8]) -> Sniff,
     pub(crate) read: fn(Ctx<'_>, &[u8], Want<'_>) -> Result<Decoded, ReadError>,
@@ -40,6 +44,36 @@ impl std::fmt::Debug for Reader {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.write_str(self.name)
     }
+}
+
+/// The bytes every file of a format carries, so a file named like that format but
+/// without them is refused as damaged or misnamed instead of being parsed as garbage.
+pub struct Signature {
+    /// Byte offset the signature stands at.
+    pub offset: usize,
+    /// The signature as messages show it.
+    pub describe: &'static str,
+    /// True when the file carries it. Looser than the format's sniff where a dialect or
+    /// a version the reader explains (Igor version 2, a NanoScope force curve) would
+    /// otherwise be called damaged.
+    pub present: fn(&[u8]) -> bool,
+}
+
+impl std::fmt::Debug for Signature {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.describe)
+    }
+}
+
+/// The signature standing first in the file, one of several spellings.
+macro_rules! prefix {
+    ($describe:expr, $magics:expr) => {
+        Some(Signature {
+            offset: 0,
+            describe: $describe,
+            present: |b| starts(b, $magics) == Sniff::Magic,
+        })
+    };
 }
 
 /// A reader chosen by name or detection.
@@ -90,6 +124,26 @@ fn starts(bytes: &[u8], magics: &[&[u8]]) -> Sniff {
     magic_at(bytes, 0, magics)
 }
 
+/// What a NanoScope file starts with: images, electrochemistry images and force curves
+/// (which the reader names as such rather than calling them damaged).
+const NANOSCOPE: &[&[u8]] = &[b"\\*File list", b"\\*EC File list", b"\\*Force file list"];
+
+// The magic numbers of the formats identified by their first bytes alone (some formats
+// have variants, ASCII or binary, compressed or not, that differ there).
+const X3P: &[&[u8]] = &[b"PK\x03\x04"];
+const SDF: &[&[u8]] = &[b"aBCR-", b"bBCR-", b"aISO-", b"bISO-"];
+// The UTF-16LE variant of BCR spells `fileformat` with NULs between the letters.
+const BCR: &[&[u8]] = &[b"fileformat", b"f\0i\0l\0e\0f\0o\0r\0m\0a\0t\0"];
+const GSF: &[&[u8]] = &[b"Gwyddion Simple Field"];
+const SUR: &[&[u8]] = &[b"DIGITAL SURF", b"DSCOMPRESSED"];
+const AL3D: &[&[u8]] = &[b"AliconaImaging"];
+const NID: &[&[u8]] = &[b"[DataSet]"];
+const WSXM: &[&[u8]] = &[b"WSxM file copyright"];
+const FRT: &[&[u8]] = &[b"FRTM_GLIDERV"];
+const TMD: &[&[u8]] = &[b"Binary TrueMap Data File"];
+// After OPD's 2-byte header, the directory's own descriptor names itself.
+const OPD: &[&[u8]] = &[b"Directory"];
+
 /// `Magic` when any of `magics` stands at byte `offset`.
 fn magic_at(bytes: &[u8], offset: usize, magics: &[&[u8]]) -> Sniff {
     let tail = bytes.get(offset..).unwrap_or(&[]);
@@ -108,7 +162,8 @@ pub static READERS: &[Reader] = &[
         description: "ISO 25178-72 X3P (zip with main.xml)",
         extensions: &["x3p"],
         binary: true,
-        sniff: |b| starts(b, &[b"PK\x03\x04"]),
+        signature: prefix!("`PK\\x03\\x04` (a zip archive)", X3P),
+        sniff: |b| starts(b, X3P),
         read: x3p::read,
     },
     Reader {
@@ -117,7 +172,8 @@ pub static READERS: &[Reader] = &[
         description: "Surface Data File (BCR/ISO 25178-71 SDF, binary or ASCII)",
         extensions: &["sdf"],
         binary: true,
-        sniff: |b| starts(b, &[b"aBCR-", b"bBCR-", b"aISO-", b"bISO-"]),
+        signature: prefix!("`aBCR-`, `bBCR-`, `aISO-` or `bISO-`", SDF),
+        sniff: |b| starts(b, SDF),
         read: sdf::read,
     },
     Reader {
@@ -126,8 +182,8 @@ pub static READERS: &[Reader] = &[
         description: "BCR-STM (bcrstm/bcrf, ASCII or UTF-16 header)",
         extensions: &["bcr", "bcrf", "bcrstm"],
         binary: true,
-        // The UTF-16LE variant spells `fileformat` with NULs between the letters.
-        sniff: |b| starts(b, &[b"fileformat", b"f\0i\0l\0e\0f\0o\0r\0m\0a\0t\0"]),
+        signature: prefix!("`fileformat` (ASCII or UTF-16)", BCR),
+        sniff: |b| starts(b, BCR),
         read: bcr::read,
     },
     Reader {
@@ -136,7 +192,8 @@ pub static READERS: &[Reader] = &[
         description: "Gwyddion Simple Field .gsf",
         extensions: &["gsf"],
         binary: true,
-        sniff: |b| starts(b, &[b"Gwyddion Simple Field"]),
+        signature: prefix!("`Gwyddion Simple Field`", GSF),
+        sniff: |b| starts(b, GSF),
         read: gsf::read,
     },
     Reader {
@@ -145,7 +202,12 @@ pub static READERS: &[Reader] = &[
         description: "Bruker/Veeco NanoScope .di/.spm/.001 (multi-channel)",
         extensions: &["di", "spm", "001", "002", "003", "004"],
         binary: true,
-        sniff: |b| starts(b, &[b"\\*File list"]),
+        signature: Some(Signature {
+            offset: 0,
+            describe: "`\\*File list`",
+            present: |b| starts(b, NANOSCOPE) == Sniff::Magic,
+        }),
+        sniff: |b| starts(b, NANOSCOPE),
         read: nanoscope::read,
     },
     Reader {
@@ -154,6 +216,7 @@ pub static READERS: &[Reader] = &[
         description: "Sensofar .plu/.apx (confocal/interferometric)",
         extensions: &["plu", "apx"],
         binary: true,
+        signature: None,
         sniff: plu::sniff,
         read: plu::read,
     },
@@ -163,7 +226,8 @@ pub static READERS: &[Reader] = &[
         description: "Digital Surf .sur (MountainsMap)",
         extensions: &["sur"],
         binary: true,
-        sniff: |b| starts(b, &[b"DIGITAL SURF", b"DSCOMPRESSED"]),
+        signature: prefix!("`DIGITAL SURF` or `DSCOMPRESSED`", SUR),
+        sniff: |b| starts(b, SUR),
         read: sur::read,
     },
     Reader {
@@ -172,6 +236,11 @@ pub static READERS: &[Reader] = &[
         description: "Digital Surf MountainsMap document .mnt (OLE compound file)",
         extensions: &["mnt"],
         binary: true,
+        signature: Some(Signature {
+            offset: 0,
+            describe: "the compound-file (OLE) magic D0 CF 11 E0 A1 B1 1A E1",
+            present: super::ole::is_ole,
+        }),
         sniff: mnt::sniff,
         read: mnt::read,
     },
@@ -181,6 +250,11 @@ pub static READERS: &[Reader] = &[
         description: "Zygo MetroPro .dat",
         extensions: &["dat"],
         binary: true,
+        signature: Some(Signature {
+            offset: 0,
+            describe: "the MetroPro magic number 88 1B 03 6F, 70 or 71",
+            present: |b| metropro::sniff(b) == Sniff::Magic,
+        }),
         sniff: metropro::sniff,
         read: metropro::read,
     },
@@ -190,8 +264,12 @@ pub static READERS: &[Reader] = &[
         description: "Veeco/Bruker Wyko Vision .opd",
         extensions: &["opd"],
         binary: true,
-        // After the 2-byte header, the directory's own descriptor names itself.
-        sniff: |b| magic_at(b, 2, &[b"Directory"]),
+        signature: Some(Signature {
+            offset: 2,
+            describe: "`Directory`",
+            present: |b| magic_at(b, 2, OPD) == Sniff::Magic,
+        }),
+        sniff: |b| magic_at(b, 2, OPD),
         read: opd::read,
     },
     Reader {
@@ -200,7 +278,8 @@ pub static READERS: &[Reader] = &[
         description: "Alicona Imaging .al3d",
         extensions: &["al3d"],
         binary: true,
-        sniff: |b| starts(b, &[b"AliconaImaging"]),
+        signature: prefix!("`AliconaImaging`", AL3D),
+        sniff: |b| starts(b, AL3D),
         read: al3d::read,
     },
     Reader {
@@ -209,7 +288,8 @@ pub static READERS: &[Reader] = &[
         description: "Nanosurf easyScan .nid/.ezd (multi-channel)",
         extensions: &["nid", "ezd"],
         binary: true,
-        sniff: |b| starts(b, &[b"[DataSet]"]),
+        signature: prefix!("`[DataSet]`", NID),
+        sniff: |b| starts(b, NID),
         read: nid::read,
     },
     Reader {
@@ -218,6 +298,11 @@ pub static READERS: &[Reader] = &[
         description: "Igor binary wave .ibw (Asylum Research; multi-channel)",
         extensions: &["ibw"],
         binary: true,
+        signature: Some(Signature {
+            offset: 0,
+            describe: "an Igor version word (1, 2, 3 or 5)",
+            present: ibw::has_version_word,
+        }),
         sniff: ibw::sniff,
         read: ibw::read,
     },
@@ -227,6 +312,11 @@ pub static READERS: &[Reader] = &[
         description: "Park Systems TIFF (private tags 50432–50435)",
         extensions: &["tiff", "tif"],
         binary: true,
+        signature: Some(Signature {
+            offset: 0,
+            describe: "a TIFF byte-order mark (`II*\\0` or `MM\\0*`)",
+            present: super::tiff::is_tiff,
+        }),
         sniff: park::sniff,
         read: park::read,
     },
@@ -236,6 +326,7 @@ pub static READERS: &[Reader] = &[
         description: "Keysight/Agilent PicoView .mi (multi-channel)",
         extensions: &["mi"],
         binary: true,
+        signature: prefix!("`fileType`", &[b"fileType"]),
         sniff: |b| starts(b, &[b"fileType      Image"]),
         read: mi::read,
     },
@@ -245,7 +336,8 @@ pub static READERS: &[Reader] = &[
         description: "WSxM .stp/.top",
         extensions: &["stp", "top", "tom"],
         binary: true,
-        sniff: |b| starts(b, &[b"WSxM file copyright"]),
+        signature: prefix!("`WSxM file copyright`", WSXM),
+        sniff: |b| starts(b, WSXM),
         read: wsxm::read,
     },
     Reader {
@@ -254,7 +346,8 @@ pub static READERS: &[Reader] = &[
         description: "FRT MicroProf .frt",
         extensions: &["frt"],
         binary: true,
-        sniff: |b| starts(b, &[b"FRTM_GLIDERV"]),
+        signature: prefix!("`FRTM_GLIDERV`", FRT),
+        sniff: |b| starts(b, FRT),
         read: frt::read,
     },
     Reader {
@@ -263,7 +356,8 @@ pub static READERS: &[Reader] = &[
         description: "TrueMap .tmd",
         extensions: &["tmd"],
         binary: true,
-        sniff: |b| starts(b, &[b"Binary TrueMap Data File"]),
+        signature: prefix!("`Binary TrueMap Data File`", TMD),
+        sniff: |b| starts(b, TMD),
         read: tmd::read,
     },
     Reader {
@@ -272,6 +366,7 @@ pub static READERS: &[Reader] = &[
         description: "Bruker Dektak CSV profile",
         extensions: &["csv"],
         binary: false,
+        signature: None,
         sniff: dektak::sniff,
         read: dektak::read,
     },
@@ -281,6 +376,7 @@ pub static READERS: &[Reader] = &[
         description: "text matrix (Gwyddion export in any locale, key=value / key: value headers)",
         extensions: &["txt", "asc", "dat", "csv"],
         binary: false,
+        signature: None,
         sniff: matrix::sniff,
         read: matrix::read,
     },
@@ -290,6 +386,7 @@ pub static READERS: &[Reader] = &[
         description: "column text: x z profiles or x y z maps (CSV/TSV, unit headers, UTF-16)",
         extensions: &["xyz", "csv", "txt", "asc", "dat", "prf"],
         binary: false,
+        signature: None,
         sniff: xyz::sniff,
         read: xyz::read,
     },
@@ -320,9 +417,15 @@ pub fn format_help() -> String {
 }
 
 /// Guess the format: a magic number wins, then content checks (with the extension as
-/// tie-breaker), then the extension of a binary format alone.
+/// tie-breaker), then the extension of a binary format alone; `None` also for a file
+/// whose extension names a format with a signature the file lacks.
 pub fn detect(name: &str, bytes: &[u8]) -> Option<Format> {
-    sniffed(name, bytes).or_else(|| by_extension(name))
+    let found = sniffed(name, bytes);
+    match found {
+        Some((f, Sniff::Magic)) => Some(f),
+        _ if signature_mismatch(name, bytes, found.map(|(f, _)| f)).is_some() => None,
+        _ => found.map(|(f, _)| f).or_else(|| by_extension(name)),
+    }
 }
 
 fn extension(name: &str) -> String {
@@ -332,22 +435,79 @@ fn extension(name: &str) -> String {
         .unwrap_or_default()
 }
 
-/// The format whose magic number or content check accepts `bytes` (the extension breaks ties).
-pub(crate) fn sniffed(name: &str, bytes: &[u8]) -> Option<Format> {
+/// The format whose magic number or content check accepts `bytes` (the extension breaks
+/// ties), with how sure that check is.
+pub(crate) fn sniffed(name: &str, bytes: &[u8]) -> Option<(Format, Sniff)> {
     let ext = extension(name);
     let head = &bytes[..bytes.len().min(1 << 16)];
-    let mut best: Option<(u8, &'static Reader)> = None;
+    let mut best: Option<(u8, Sniff, &'static Reader)> = None;
     for r in READERS {
         let s = (r.sniff)(head);
         if s == Sniff::No {
             continue;
         }
         let score = 2 * s as u8 + u8::from(r.extensions.contains(&ext.as_str()));
-        if best.is_none_or(|(b, _)| score > b) {
-            best = Some((score, r));
+        if best.is_none_or(|(b, _, _)| score > b) {
+            best = Some((score, s, r));
         }
     }
-    best.map(|(_, r)| Format(r))
+    best.map(|(_, s, r)| (Format(r), s))
+}
+
+/// The refusal of a file whose extension names a format with a signature (magic bytes)
+/// that the file does not carry, when no format's magic was found in it either
+/// (`found` is the best weaker content match). Extensions that text formats share (a
+/// text `.dat` is no MetroPro file) let a text file through to those formats.
+pub(crate) fn signature_mismatch(
+    name: &str,
+    bytes: &[u8],
+    found: Option<Format>,
+) -> Option<ReadError> {
+    let ext = extension(name);
+    let named: Vec<&'static Reader> = READERS
+        .iter()
+        .filter(|r| r.extensions.contains(&ext.as_str()))
+        .collect();
+    let (reader, sig) = named
+        .iter()
+        .find_map(|r| r.signature.as_ref().map(|s| (*r, s)))?;
+    let carried = named
+        .iter()
+        .filter_map(|r| r.signature.as_ref())
+        .any(|s| (s.present)(bytes));
+    if carried {
+        return None;
+    }
+    let shared_with_text = named.iter().any(|r| r.signature.is_none());
+    let taken_as_text = found.is_some_and(|f| named.iter().any(|r| std::ptr::eq(*r, f.0)))
+        || text_fallback(bytes).is_some();
+    if shared_with_text && taken_as_text {
+        return None;
+    }
+    Some(ReadError::Signature {
+        file: name.to_string(),
+        extension: ext,
+        format: reader.name,
+        expected: sig.describe,
+        offset: sig.offset,
+        found: shown(bytes, sig.offset),
+    })
+}
+
+/// The first bytes at `offset` as a message shows them: quoted when printable ASCII,
+/// in hex otherwise.
+fn shown(bytes: &[u8], offset: usize) -> String {
+    let Some(tail) = bytes.get(offset..).filter(|t| !t.is_empty()) else {
+        return format!("nothing (the file is {} bytes long)", bytes.len());
+    };
+    let head = &tail[..tail.len().min(16)];
+    let more = if tail.len() > head.len() { " …" } else { "" };
+    if head.iter().all(|b| (0x20..0x7f).contains(b)) {
+        format!("`{}`{more}", String::from_utf8_lossy(head))
+    } else {
+        let hex: Vec<String> = head.iter().map(|b| format!("{b:02X}")).collect();
+        format!("{}{more}", hex.join(" "))
+    }
 }
 
 /// The binary format that uses the extension of `name`.

@@ -173,5 +173,5 @@ fn finish(
         .into_iter()
         .map(|v| if v.is_finite() { v * zs } else { f64::NAN })
         .collect();
-    Ok(Raw::si(nx as usize, ny as usize, dx, dy, heights, "sdf"))
+    Ok(Raw::si(nx as usize, ny as usize, dx, dy, heights, "sdf").spacing_from("Xscale", "Yscale"))
 }

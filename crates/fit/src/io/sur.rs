@@ -159,7 +159,8 @@ pub(crate) fn read(ctx: Ctx<'_>, bytes: &[u8], want: Want<'_>) -> Result<Decoded
             }
         })
         .collect();
-    let mut out = Raw::si(nx as usize, ny as usize, dx, dy, heights, &names[2]);
+    let mut out = Raw::si(nx as usize, ny as usize, dx, dy, heights, &names[2])
+        .spacing_from("x spacing", "y spacing");
     if invalid > 0 {
         out.notes
             .push(format!("{invalid} points were not measured"));

@@ -42,6 +42,7 @@ pub(crate) fn read(ctx: Ctx<'_>, bytes: &[u8], want: Want<'_>) -> Result<Decoded
         check_spacing(ctx, "y length", ly / ny as f64)?
     };
     let out = Raw::si(nx as usize, ny as usize, dx, dy, raw, "height")
+        .spacing_from("x length", "y length")
         .in_units(Unit::Known(1e-3), Unit::Known(1e-3));
     Decoded::single(ctx, want, out)
 }

@@ -95,6 +95,7 @@ pub(crate) fn read(ctx: Ctx<'_>, bytes: &[u8], want: Want<'_>) -> Result<Decoded
         .get("General Info/Acquisition channel")
         .map_or("topography", String::as_str);
     let out = Raw::si(nx as usize, ny as usize, dx, dy, heights, channel)
+        .spacing_from("X Amplitude", "Y Amplitude")
         .in_units(Unit::Known(zf), Unit::Known(1.0));
     Decoded::single(ctx, want, out)
 }

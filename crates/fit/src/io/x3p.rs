@@ -232,7 +232,8 @@ fn parse(ctx: Ctx<'_>, bytes: &[u8]) -> Result<Raw, ReadError> {
         }
     }
     let channel = get("Record2/Comment").unwrap_or("x3p").trim();
-    Ok(Raw::si(nx as usize, ny as usize, dx, dy, heights, channel))
+    Ok(Raw::si(nx as usize, ny as usize, dx, dy, heights, channel)
+        .spacing_from("Record1/Axes/CX/Increment", "Record1/Axes/CY/Increment"))
 }
 
 fn entry<'z, R: Read + std::io::Seek>(

@@ -393,6 +393,7 @@ fn profile(
         height_unit: Unit::Unknown,
         spacing: Some((dx, dx)),
         lateral_unit: Unit::Unknown,
+        spacing_fields: ("x column".into(), "x column".into()),
         channel: String::new(),
         notes: Vec::new(),
     })
@@ -495,6 +496,7 @@ fn grid(
         height_unit: Unit::Unknown,
         spacing: Some((dx, dy)),
         lateral_unit: Unit::Unknown,
+        spacing_fields: ("x column".into(), "y column".into()),
         channel: String::new(),
         notes: Vec::new(),
     })

@@ -165,7 +165,9 @@ pub struct Scene {
 pub fn parse(path: &Path, text: &str) -> Result<SceneDesc, SceneError> {
     toml::from_str::<SceneDesc>(text).map_err(|e| {
         let mut msg = e.message().trim().to_string();
-        if let Some(hint) = shape_hint(text) {
+        if let Some(hint) = e.span().and_then(|span| duplicate_hint(text, &msg, span)) {
+            msg = hint;
+        } else if let Some(hint) = shape_hint(text) {
             msg = format!("{msg} ({hint})");
         }
         match e.span() {
@@ -175,25 +177,48 @@ pub fn parse(path: &Path, text: &str) -> Result<SceneDesc, SceneError> {
     })
 }
 
+/// The tables a scene holds as arrays of tables, with what one entry is.
+const ARRAYS_OF_TABLES: [(&str, &str); 2] = [("shapes", "shape"), ("lights", "light")];
+
+/// The fix for an array of tables written as a table twice (`[lights]` …
+/// `[lights]`), which toml reports only as "duplicate key", at the second
+/// header: the key named, and the brackets to write.
+fn duplicate_hint(text: &str, msg: &str, span: std::ops::Range<usize>) -> Option<String> {
+    if !msg.starts_with("duplicate key") {
+        return None;
+    }
+    let key = text.get(span.clone())?.trim().trim_matches(['"', '\'']);
+    let (key, one) = ARRAYS_OF_TABLES.into_iter().find(|(k, _)| *k == key)?;
+    // Only a table header: a duplicated key inside a table (`lights = 1`
+    // twice) is another mistake, which the bare message describes.
+    let line_start = text[..span.start].rfind('\n').map_or(0, |i| i + 1);
+    if !text[line_start..span.start].trim_start().starts_with('[') {
+        return None;
+    }
+    Some(format!(
+        "duplicate key `{key}` ({key} are an array of tables: write [[{key}]] (two \
+         brackets) for each {one})"
+    ))
+}
+
 /// The fix for a top-level table written with the wrong brackets, which
 /// serde reports only as a type mismatch ("invalid type: map, expected a
 /// sequence").
-fn shape_hint(text: &str) -> Option<&'static str> {
+fn shape_hint(text: &str) -> Option<String> {
     let table: toml::Table = text.parse().ok()?;
-    for key in ["shapes", "lights"] {
+    for (key, one) in ARRAYS_OF_TABLES {
         if matches!(table.get(key), Some(v) if !v.is_array()) {
-            return Some(if key == "shapes" {
-                "shapes are an array of tables: write [[shapes]] before each shape"
-            } else {
-                "lights are an array of tables: write [[lights]] before each light"
-            });
+            return Some(format!(
+                "{key} are an array of tables: write [[{key}]] before each {one}"
+            ));
         }
     }
     match table.get("materials") {
         Some(toml::Value::Table(m)) if m.values().all(toml::Value::is_table) => None,
         Some(_) => Some(
             "materials are named tables: write [materials.NAME] (single brackets) before each \
-             material's keys",
+             material's keys"
+                .to_string(),
         ),
         None => None,
     }
