@@ -354,6 +354,71 @@ mod tests {
         assert!(hits > 1000 && misses > 1000, "{hits} hits, {misses} misses");
     }
 
+    /// The contract the integrator's shading frame relies on for analytic
+    /// shapes (it skips Gram–Schmidt there): a unit tangent orthogonal to
+    /// the unit normal, to round-off, at every hit, near a sphere's poles
+    /// and for planes under any rotation and scale.
+    #[test]
+    fn analytic_hit_tangents_are_orthonormal() {
+        let check = |g: &HitGeometry, what: &str| {
+            assert!(
+                (g.n.length() - 1.0).abs() < 1e-15,
+                "{what}: |n| = {}",
+                g.n.length()
+            );
+            let t = g.tangent;
+            assert!(
+                (t.length() - 1.0).abs() < 1e-15,
+                "{what}: |t| = {}",
+                t.length()
+            );
+            assert!(t.dot(g.n).abs() < 1e-15, "{what}: t·n = {}", t.dot(g.n));
+        };
+        let mut rng = brdf::numerics::splitmix::SplitMix64::new(5);
+        let mut hits = 0;
+        for i in 0..2000 {
+            let mut u = || rng.uniform();
+            let rotate = [360.0 * u(), 360.0 * u(), 360.0 * u()];
+            let scale = 10f64.powf(8.0 * u() - 4.0);
+            let xf = Transform::new(rotate, scale, [u() - 0.5, u() - 0.5, u() - 0.5]);
+            let plane = if i % 2 == 0 {
+                Planar::rectangle([2.0, 1.0], &xf)
+            } else {
+                Planar::disk(1.0, &xf)
+            };
+            // A ray from off the plane through a point inside it.
+            let target = plane.center + 0.4 * plane.half.0 * plane.u + 0.3 * plane.half.1 * plane.v;
+            let o = target + scale * (plane.n + 0.5 * plane.u);
+            let ray = Ray {
+                o,
+                d: (target - o).normalize(),
+            };
+            if let Some(g) = plane.intersect(&ray, 0.0, f64::INFINITY) {
+                check(&g, "plane");
+                hits += 1;
+            }
+            // Sphere hits all over, and within 1e−12 rad of the poles.
+            let s = Sphere {
+                center: DVec3::new(u(), u(), u()),
+                radius: 10f64.powf(6.0 * u() - 3.0),
+            };
+            let pole = if i % 2 == 0 { 1.0 } else { -1.0 };
+            for dir in [
+                DVec3::new(u() - 0.5, u() - 0.5, u() - 0.5).normalize(),
+                DVec3::new(1e-12 * (u() - 0.5), 1e-12 * (u() - 0.5), pole).normalize(),
+            ] {
+                let o = s.center + 3.0 * s.radius * dir;
+                let ray = Ray { o, d: -dir };
+                let g = s
+                    .intersect(&ray, 0.0, f64::INFINITY)
+                    .expect("aimed at the centre");
+                check(&g, "sphere");
+                hits += 1;
+            }
+        }
+        assert!(hits > 5000, "{hits}");
+    }
+
     #[test]
     fn disk_samples_stay_inside() {
         let d = Planar::disk(0.5, &Transform::default());

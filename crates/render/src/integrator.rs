@@ -55,6 +55,15 @@ impl Frame {
             n,
         }
     }
+    /// From a unit normal and a unit tangent orthogonal to it.
+    #[inline]
+    fn from_orthonormal(n: DVec3, t: DVec3) -> Frame {
+        Frame {
+            t,
+            b: n.cross(t),
+            n,
+        }
+    }
     #[inline]
     fn to_local(&self, v: DVec3) -> DVec3 {
         DVec3::new(v.dot(self.t), v.dot(self.b), v.dot(self.n))
@@ -362,7 +371,17 @@ impl Vertex {
             Some(s) => s,
             None => ng,
         };
-        let frame = Frame::new(ns, hit.geo.tangent);
+        // On an analytic shape the hit's tangent is a unit vector orthogonal
+        // to its normal to round-off (`analytic_hit_tangents_are_orthonormal`),
+        // so the Gram–Schmidt step (a square root and a division on every
+        // hit's critical path) is skipped. A mesh triangle's normal, a cross
+        // product of its edges, loses that on slivers; an interpolated normal
+        // never had it.
+        let frame = if smooth || hit.mesh {
+            Frame::new(ns, hit.geo.tangent)
+        } else {
+            Frame::from_orthonormal(ns, hit.geo.tangent)
+        };
         let wi = frame.to_local(-ray.d);
         (wi.z > 0.0).then(|| Vertex {
             frame,
