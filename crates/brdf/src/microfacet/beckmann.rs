@@ -151,35 +151,42 @@ pub(super) fn sample_visible(wi: DVec3, ax: f64, ay: f64, u: [f64; 2]) -> DVec3 
 /// sampler's caller needs G1(wi) and would otherwise evaluate it again.
 /// Λ is 0 from a = cotθ ≥ 5.8 on, as in [`super::Distribution::lambda_frac`].
 pub(super) fn sample_visible_with_lambda(wi: DVec3, ax: f64, ay: f64, u: [f64; 2]) -> (DVec3, f64) {
-    let ws = DVec3::new(ax * wi.x, ay * wi.y, wi.z).normalize();
-    let sin_t = libm::sqrt((ws.x * ws.x + ws.y * ws.y).min(1.0));
-    let (cos_phi, sin_phi) = if sin_t > 0.0 {
-        (ws.x / sin_t, ws.y / sin_t)
+    // The stretched view (αx x, αy y, z), left unnormalised: the inversion
+    // needs only its azimuth and cotθ, ratios of its components, so one
+    // square root and one division give both (normalising first put two
+    // more of each on the sample's critical path).
+    let (vx, vy, vz) = (ax * wi.x, ay * wi.y, wi.z);
+    let r2 = vx * vx + vy * vy;
+    let (rx, ry, lambda) = if !(r2 >= 1e-14 * (r2 + vz * vz)) {
+        // sinθ < 1e−7 (or a NaN view): the normal view, whose visible slope
+        // density is the isotropic Gaussian; the azimuth plays no part.
+        let r = libm::sqrt(-libm::log1p(-u[0]));
+        let (sp, cp) = libm::sincos(2.0 * PI * u[1]);
+        (r * cp, r * sp, 0.0)
     } else {
-        (1.0, 0.0)
+        let inv_r = 1.0 / libm::sqrt(r2);
+        let (cos_phi, sin_phi) = (vx * inv_r, vy * inv_r);
+        let (sx, sy, lambda) = sample_slopes_unit(vz * inv_r, vz, r2 * inv_r, u);
+        // Rotate back to the view azimuth.
+        (
+            cos_phi * sx - sin_phi * sy,
+            sin_phi * sx + cos_phi * sy,
+            lambda,
+        )
     };
-    let (sx, sy, lambda) = sample_slopes_unit(ws.z, sin_t, u);
-    // Rotate back to the view azimuth and unstretch; the normal is (−s, 1).
-    let rx = cos_phi * sx - sin_phi * sy;
-    let ry = sin_phi * sx + cos_phi * sy;
+    // Unstretch; the normal is (−s, 1).
     let h = super::normalize_or_none(DVec3::new(-rx * ax, -ry * ay, 1.0)).unwrap_or(DVec3::Z);
     (h, lambda)
 }
 
 /// Slopes of the visible normals of a unit-roughness Beckmann surface, for a
-/// view at cosθ = `c`, sinθ = `s` along +x, and Λ at that view. The x-slope
-/// density is ∝ (cotθ − x) e^{−x²} on x < cotθ, with CDF
+/// view along +x at cotθ = `cot` (= `c`/`s`, with `c`, `s` any positive
+/// multiple of cosθ, sinθ), and Λ at that view. The x-slope density is
+/// ∝ (cotθ − x) e^{−x²} on x < cotθ, with CDF
 /// C(x) = [cotθ (1 + erf x) + e^{−x²}/√π] / 2; y is Gaussian with variance ½.
-fn sample_slopes_unit(c: f64, s: f64, u: [f64; 2]) -> (f64, f64, f64) {
-    if s < 1e-7 {
-        // Normal view: the visible slope density is the isotropic Gaussian.
-        let r = libm::sqrt(-libm::log1p(-u[0]));
-        let (sp, cp) = libm::sincos(2.0 * PI * u[1]);
-        return (r * cp, r * sp, 0.0);
-    }
+fn sample_slopes_unit(cot: f64, c: f64, s: f64, u: [f64; 2]) -> (f64, f64, f64) {
     // Per-axis slope variance ½ at unit roughness: a standard normal / √2.
     let sy = normal_quantile(u[1]) * FRAC_1_SQRT_2;
-    let cot = c / s;
     // Start from the cotθ → ∞ limit, moved by the tabulated difference
     // between it and the root: within 1e−4 of the root for nine draws in
     // ten, so one Halley step usually finishes (from the limit alone it
@@ -526,9 +533,9 @@ mod tests {
                     _ => b as f64 / 400.0,
                 };
                 for u0 in [u0, u0 * 1e-6, 1.0 - (1.0 - u0) * 1e-6] {
-                    let (x, _, _) = sample_slopes_unit(c, s, [u0, 0.5]);
-                    // Bisection to adjacent floats: independent of Halley.
                     let cot = c / s;
+                    let (x, _, _) = sample_slopes_unit(cot, c, s, [u0, 0.5]);
+                    // Bisection to adjacent floats: independent of Halley.
                     let cdf = |x: f64| 0.5 * (cot * libm::erfc(-x) + exp(-x * x) / SQRT_PI);
                     let total = cdf(cot);
                     let (mut lo, mut hi) = ((-8.0f64).min(cot - 1.0), cot);
