@@ -143,12 +143,14 @@ fn estrin<const N: usize>(c: &[f64; N], tau: f64) -> f64 {
 /// the view azimuth from its visible marginal by inverting its CDF, draw the
 /// orthogonal slope from the (independent) Gaussian marginal, unstretch.
 pub(super) fn sample_visible(wi: DVec3, ax: f64, ay: f64, u: [f64; 2]) -> DVec3 {
-    sample_visible_with_lambda(wi, ax, ay, u).0
+    super::normalize_or_none(sample_visible_with_lambda(wi, ax, ay, u).0).unwrap_or(DVec3::Z)
 }
 
-/// [`sample_visible`] and Smith Λ(wi), which the inversion computes on the
-/// way (its normalisation is cotθ (1 + Λ) in the stretched frame): the
-/// sampler's caller needs G1(wi) and would otherwise evaluate it again.
+/// [`sample_visible`] up to a positive factor (h.z = 1: the unstretched
+/// normal (−s, 1) of the sampled slopes s), and Smith Λ(wi), which the
+/// inversion computes on the way (its normalisation is cotθ (1 + Λ) in the
+/// stretched frame): the sampler's caller needs G1(wi) and would otherwise
+/// evaluate it again, and works with an unnormalised h, as for GGX.
 /// Λ is 0 from a = cotθ ≥ 5.8 on, as in [`super::Distribution::lambda_frac`].
 pub(super) fn sample_visible_with_lambda(wi: DVec3, ax: f64, ay: f64, u: [f64; 2]) -> (DVec3, f64) {
     // The stretched view (αx x, αy y, z), left unnormalised: the inversion
@@ -175,8 +177,7 @@ pub(super) fn sample_visible_with_lambda(wi: DVec3, ax: f64, ay: f64, u: [f64; 2
         )
     };
     // Unstretch; the normal is (−s, 1).
-    let h = super::normalize_or_none(DVec3::new(-rx * ax, -ry * ay, 1.0)).unwrap_or(DVec3::Z);
-    (h, lambda)
+    (DVec3::new(-rx * ax, -ry * ay, 1.0), lambda)
 }
 
 /// Slopes of the visible normals of a unit-roughness Beckmann surface, for a

@@ -269,8 +269,9 @@ impl Distribution {
         }
     }
 
-    /// [`Distribution::sample_visible`] for a Beckmann distribution, with
-    /// Smith Λ(wi), which the inversion computes on the way.
+    /// [`Distribution::sample_visible`] for a Beckmann distribution, up to a
+    /// positive factor (no normalisation: a square root and a division
+    /// fewer), with Smith Λ(wi), which the inversion computes on the way.
     #[inline]
     pub(crate) fn beckmann_sample_visible_with_lambda(
         &self,
