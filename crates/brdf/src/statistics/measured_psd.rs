@@ -113,7 +113,7 @@ impl TabulatedPsd {
             return Err(BrdfError::OutOfRange {
                 name: "sigma_um of the tabulated PSD",
                 value: libm::sqrt(sigma2),
-                valid: "≤ 10 µm (the wave models' validated range; check the PSD's units:                         zeta in rad/µm, psd in µm⁴)",
+                valid: "≤ 10 µm (the wave models' validated range; check the PSD's units: zeta in rad/µm, psd in µm⁴)",
             });
         }
         for c in cum.iter_mut() {
@@ -506,6 +506,18 @@ mod tests {
         assert!(TabulatedPsd::new(&[1.0, 2.0], &[1.0, 0.0]).is_err());
         assert!(TabulatedPsd::new(&[1.0, 2.0], &[1.0, 0.5]).is_err()); // tail too shallow
         assert!(TabulatedPsd::new(&[1.0, 2.0], &[1.0, 0.1]).is_ok());
+    }
+
+    #[test]
+    fn a_too_rough_table_names_the_units_in_one_clean_line() {
+        // σ = sqrt(π·1²·1e4 + tail) ≫ 10 µm. The message went out (material files'
+        // [reliability].psd, scene errors) with 25 spaces in the middle of a sentence.
+        extern crate std;
+        use std::string::ToString;
+        let e = TabulatedPsd::new(&[1.0, 2.0], &[1e4, 1e3]).unwrap_err();
+        let msg = e.to_string();
+        assert!(msg.contains("units: zeta in rad/µm, psd in µm⁴"), "{msg}");
+        assert!(!msg.contains("  "), "{msg}");
     }
 
     #[test]
