@@ -209,6 +209,15 @@ pub fn run(args: CompareArgs) -> anyhow::Result<()> {
         .out
         .clone()
         .unwrap_or_else(|| PathBuf::from(format!("out/compare/{name}.png")));
+    if let Some(material) = &args.material {
+        models::refuse_overwriting_input(
+            material,
+            &[
+                (out.clone(), "compare PNG"),
+                (out.with_extension("cells.csv"), "cell table"),
+            ],
+        )?;
+    }
     if let Some(dir) = out.parent().filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
     }

@@ -251,11 +251,8 @@ fn material_cells(path: &Path, names: &[String]) -> anyhow::Result<(String, Vec<
         .and_then(toml::Value::as_str)
         .unwrap_or("ggx")
         .to_string();
-    let names = if names.is_empty() {
-        vec![own]
-    } else {
-        names.to_vec()
-    };
+    let from_file = names.is_empty();
+    let names = if from_file { vec![own] } else { names.to_vec() };
     let cutoffs: Vec<String> = doc
         .get("two_scale")
         .and_then(toml::Value::as_table)
@@ -265,6 +262,15 @@ fn material_cells(path: &Path, names: &[String]) -> anyhow::Result<(String, Vec<
     let row = |model, cutoff| models::fit_material_toml(&abs, model, cutoff);
     for n in names {
         let Some(kind) = ModelKind::from_name(n.trim()) else {
+            // The model came from the file unless --models named it: say which.
+            if from_file {
+                bail!(
+                    "{}: [material].model = {n:?}: unknown model. Fix: set it to one of {} \
+                     (or pick models with --models)",
+                    path.display(),
+                    ModelKind::names()
+                );
+            }
             bail!("--models {n}: unknown model; use {}", ModelKind::names());
         };
         if kind == ModelKind::TwoScale && mat.get("beta").is_none() {
@@ -412,6 +418,23 @@ pub fn run(args: PreviewArgs) -> anyhow::Result<()> {
         .parent()
         .filter(|d| !d.as_os_str().is_empty())
         .map_or_else(|| PathBuf::from("."), Path::to_path_buf);
+    let stem_of = |cell: &Cell| {
+        if grid {
+            cell.file.clone()
+        } else {
+            out.file_stem()
+                .map_or_else(|| name.clone(), |s| s.to_string_lossy().into_owned())
+        }
+    };
+    if let Some(material) = &args.material {
+        let mut outputs = vec![(out.clone(), "preview PNG")];
+        for cell in &cells {
+            let stem = stem_of(cell);
+            outputs.push((dir.join(format!("{stem}.toml")), "preview scene file"));
+            outputs.push((dir.join(format!("{stem}.exr")), "preview EXR"));
+        }
+        models::refuse_overwriting_input(material, &outputs)?;
+    }
     std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
     let assets_dir = dir.join("assets");
     std::fs::create_dir_all(&assets_dir)
@@ -443,12 +466,7 @@ pub fn run(args: PreviewArgs) -> anyhow::Result<()> {
     let start = Instant::now();
     let mut single_rgb = None;
     for (i, cell) in cells.iter().enumerate() {
-        let stem = if grid {
-            cell.file.clone()
-        } else {
-            out.file_stem()
-                .map_or_else(|| name.clone(), |s| s.to_string_lossy().into_owned())
-        };
+        let stem = stem_of(cell);
         let text = scene_text(&SceneSpec {
             width: w,
             height: h,

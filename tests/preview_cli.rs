@@ -164,3 +164,90 @@ fn bad_input_is_a_clear_error() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn preview_and_compare_never_write_over_the_material_file() {
+    // `lustre preview steel.toml --out steel.png` wrote its scene file `steel.toml` over the
+    // fitted material (and then failed to load it as one); `compare --out steel.toml` would
+    // write its PNG there. Both now refuse before writing anything.
+    let dir = scratch("overwrite");
+    let material = "[material]\nmodel = \"ggx\"\nmetal = \"stainless_steel\"\nalpha = 0.05\n";
+    std::fs::write(dir.join("steel.toml"), material).unwrap();
+    for args in [
+        vec!["preview", "steel.toml", "--out", "steel.png"],
+        vec!["preview", "steel.toml", "--out", "./steel.toml"],
+        vec![
+            "preview",
+            "steel.toml",
+            "--models",
+            "ggx",
+            "--out",
+            "steel.png",
+        ],
+        vec!["compare", "--material", "steel.toml", "--out", "steel.toml"],
+    ] {
+        let mut args = args;
+        args.extend(["--size", "8x6", "--spp", "1", "-q"]);
+        let out = lustre(&args, &dir);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success(), "{args:?} succeeded");
+        assert!(
+            err.contains("over the input steel.toml") && err.contains("Fix:"),
+            "{args:?}: {err}"
+        );
+        assert_eq!(
+            std::fs::read_to_string(dir.join("steel.toml")).unwrap(),
+            material,
+            "{args:?} changed the material file"
+        );
+    }
+    // Another name beside it is fine.
+    let out = lustre(
+        &[
+            "preview",
+            "steel.toml",
+            "--out",
+            "steel_preview.png",
+            "--size",
+            "8x6",
+            "--spp",
+            "1",
+            "-q",
+        ],
+        &dir,
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert_eq!(
+        std::fs::read_to_string(dir.join("steel.toml")).unwrap(),
+        material
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn an_unknown_model_in_the_material_file_is_blamed_on_the_file() {
+    // It was reported as `--models phong: unknown model`, naming a flag that was never given.
+    let dir = scratch("filemodel");
+    std::fs::write(
+        dir.join("steel.toml"),
+        "[material]\nmodel = \"phong\"\nmetal = \"stainless_steel\"\nalpha = 0.05\n",
+    )
+    .unwrap();
+    let out = lustre(
+        &["preview", "steel.toml", "--size", "8x6", "--spp", "1"],
+        &dir,
+    );
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success());
+    assert!(
+        err.contains("steel.toml: [material].model = \"phong\"")
+            && err.contains("Fix:")
+            && !err.contains("--models phong"),
+        "{err}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
