@@ -107,6 +107,13 @@ const KERNEL_REACH: f64 = 2.5;
 /// logarithms (a model that is zero there is wrong by at least this much, not infinitely).
 const LOG_FLOOR: f64 = 1e-6;
 const REFERENCE_LAMBDA_NM: f64 = brdf::paper::REFERENCE_LAMBDA_NM;
+/// Most directions per slice: the run time is linear in them (`--angles 100000` ran for hours).
+const MAX_ANGLES: usize = 1000;
+/// Most points of the (cropped, upsampled) map the explicit BRDF is computed on: 2048² takes
+/// about 1.5 min on 2 cores (twice that with the surrogate), 4096² more than 5 min;
+/// `--upsample 16` of a 512² map (8192²) ran for half an hour.
+const MAX_EXPLICIT_SIDE: usize = 2048;
+const MAX_EXPLICIT_POINTS: usize = MAX_EXPLICIT_SIDE * MAX_EXPLICIT_SIDE;
 /// Log-spaced points of the denoised measured-PSD table.
 const PSD_NODES: usize = 120;
 
@@ -126,8 +133,22 @@ fn check_args(args: &JudgeArgs) -> anyhow::Result<()> {
             bail!("--cutoff {c}: must be a positive multiple of 550 nm");
         }
     }
-    if args.angles < 8 {
-        bail!("--angles {}: need at least 8", args.angles);
+    if !(8..=MAX_ANGLES).contains(&args.angles) {
+        bail!(
+            "--angles {}: must lie in 8..={MAX_ANGLES} (the run time grows with it: 360 takes \
+             ~30 s on a 512 × 512 map, and the explicit BRDF resolves no finer than its tiles)",
+            args.angles
+        );
+    }
+    if let Some(r) = &args.reference
+        && !r.is_file()
+    {
+        // Checked before the minute of analysis that precedes reading it.
+        bail!(
+            "--reference {}: no such file. Fix: give the measured-BRDF CSV (header theta_i_deg, \
+             theta_o_deg, phi_o_deg, lambda_nm, brdf)",
+            r.display()
+        );
     }
     if let Some(t) = args.tile
         && t < 8
@@ -141,6 +162,47 @@ fn check_args(args: &JudgeArgs) -> anyhow::Result<()> {
     }
     if !(1..=16).contains(&args.upsample) {
         bail!("--upsample {}: must lie in 1..=16", args.upsample);
+    }
+    Ok(())
+}
+
+/// Refuses a `--crop` larger than the scan (it was clamped while the report claimed the
+/// requested size) and a `--upsample` whose map would take many minutes.
+fn check_explicit_size(
+    args: &JudgeArgs,
+    nx: usize,
+    ny: usize,
+    profile: bool,
+) -> anyhow::Result<()> {
+    let scan = args.scan.display();
+    let side = if profile { nx } else { nx.min(ny) };
+    if let Some(c) = args.crop
+        && c > side
+    {
+        let grid = if profile {
+            format!("a profile of {nx} points")
+        } else {
+            format!("{nx} × {ny} points")
+        };
+        bail!(
+            "{scan}: --crop {c}: larger than the scan ({grid}). Fix: --crop {side} or less, \
+             or drop --crop to use the whole scan"
+        );
+    }
+    let (cx, cy) = match args.crop {
+        Some(c) if profile => (c, 1),
+        Some(c) => (c, c),
+        None => (nx, ny),
+    };
+    let u = args.upsample;
+    let (ux, uy) = (cx * u, if profile { 1 } else { cy * u });
+    if ux.saturating_mul(uy) > MAX_EXPLICIT_POINTS {
+        bail!(
+            "{scan}: --upsample {u} would compute the explicit BRDF on {ux} × {uy} points, more \
+             than {MAX_EXPLICIT_SIDE}² (which already takes about 1.5 min). Fix: upsample the centre \
+             only with --crop (e.g. --crop {}), or a smaller --upsample",
+            (MAX_EXPLICIT_SIDE / u).min(side)
+        );
     }
     Ok(())
 }
@@ -229,6 +291,7 @@ pub fn run(args: JudgeArgs) -> anyhow::Result<()> {
         size: args.tile,
         ..TileOptions::default()
     };
+    check_explicit_size(&args, analysis.scan.nx, analysis.scan.ny, profile)?;
     let base = match args.crop {
         Some(c) => fit::resample::crop_center(&analysis.scan, c, if profile { 1 } else { c }),
         None => analysis.scan.clone(),

@@ -280,3 +280,49 @@ fn a_scan_too_short_for_any_direction_is_refused() {
     );
     assert!(!dir.join("o/judge.json").exists());
 }
+
+#[test]
+fn flags_that_would_run_for_minutes_or_misreport_are_refused_up_front() {
+    // `--angles 100000` and `--upsample 16` on a 512 × 512 map each ran past 5 minutes;
+    // `--crop 100000` was clamped to the map while the report said "central 100000 px";
+    // a missing `--reference` was noticed only after the whole analysis.
+    let dir = scratch("extremes");
+    let scan = dir.join("kc.txt");
+    write_kc_map(&scan, 64, 0.05, 0.01, 0.2, 3.0);
+    let di6 = Path::new(env!("CARGO_MANIFEST_DIR")).join("data/surfaces/di-6.di");
+    let (kc, di6) = (scan.to_str().unwrap(), di6.to_str().unwrap());
+    for (file, flags, want) in [
+        (
+            kc,
+            vec!["--angles", "100000"],
+            "--angles 100000: must lie in 8..=1000",
+        ),
+        (
+            kc,
+            vec!["--crop", "100000"],
+            "--crop 100000: larger than the scan (64 × 64 points)",
+        ),
+        (di6, vec!["--upsample", "16"], "--upsample 16 would"),
+        (
+            kc,
+            vec!["--reference", "no/such.csv"],
+            "--reference no/such.csv: no such file",
+        ),
+    ] {
+        let start = std::time::Instant::now();
+        let mut args = vec!["judge", file, "--no-plots", "-o", dir.to_str().unwrap()];
+        args.extend(flags.iter().copied());
+        let out = lustre().args(&args).output().unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success(), "{flags:?}: {err}");
+        assert!(err.contains(want), "{flags:?}: {err}");
+        if flags[0] != "--angles" && flags[0] != "--reference" {
+            assert!(
+                err.contains(file) && err.contains("Fix:"),
+                "{flags:?}: {err}"
+            );
+        }
+        assert!(start.elapsed().as_secs() < 30, "{flags:?}");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
