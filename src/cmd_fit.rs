@@ -365,6 +365,27 @@ fn material(args: MaterialArgs) -> anyhow::Result<()> {
         .scan
         .clone()
         .context("missing <SCAN>: usage `lustre fit <scan> -o material.toml`")?;
+    // `lustre fit s.txt -o s.txt` replaced the raw scan with the material file; a scan named
+    // like a plot (`m_psd.csv` for `-o m.toml`) went the same way.
+    let mut outputs = vec![(args.output.clone(), "material file (-o)")];
+    if !args.no_plots {
+        outputs.extend(plots::paths(&args.output).into_iter().map(|p| (p, "plot")));
+    }
+    for input in std::iter::once(&scan_path).chain(args.stylus.as_ref()) {
+        for (out, what) in &outputs {
+            if std::fs::canonicalize(out)
+                .is_ok_and(|o| std::fs::canonicalize(input).is_ok_and(|i| i == o))
+            {
+                anyhow::bail!(
+                    "{}: the {what} would be written over the input {} itself. Fix: pass another \
+                     -o, e.g. -o {}",
+                    out.display(),
+                    input.display(),
+                    input.with_extension("material.toml").display()
+                );
+            }
+        }
+    }
     let ropts = read_options(&args.read)?;
     let (bytes, topo) = load(&scan_path, &ropts)?;
     let stylus = match &args.stylus {

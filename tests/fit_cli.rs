@@ -213,3 +213,76 @@ fn tiny_maps_and_levelling_choices_report_what_they_did() {
     let (code, _, err) = lustre(&["fit", "stats", "x.txt", "--level", "poly9"]);
     assert_eq!(code, 2, "{err}");
 }
+
+/// Every float of a TOML value, with its dotted key.
+fn floats(v: &toml::Value, key: &str, out: &mut Vec<(String, f64)>) {
+    match v {
+        toml::Value::Float(f) => out.push((key.to_string(), *f)),
+        toml::Value::Array(a) => a
+            .iter()
+            .enumerate()
+            .for_each(|(i, x)| floats(x, &format!("{key}[{i}]"), out)),
+        toml::Value::Table(t) => t
+            .iter()
+            .for_each(|(k, x)| floats(x, &format!("{key}.{k}"), out)),
+        _ => {}
+    }
+}
+
+#[test]
+fn a_material_file_holds_no_nan_even_when_the_kc_fit_had_no_points() {
+    // txt_example.txt is a 6 × 3 map: the K-correlation fit has no range, and
+    // `[provenance].fit_f_range_per_m = [nan, nan]` went into the material file.
+    let dir = std::env::temp_dir().join(format!("lustre-fit-cli-nan-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let out = dir.join("tiny.toml");
+    let (code, _, err) = lustre(&[
+        "fit",
+        "data/surfaces/corpus/txt_example.txt",
+        "--no-plots",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let text = std::fs::read_to_string(&out).unwrap();
+    let v: toml::Table = text.parse().unwrap();
+    let mut all = Vec::new();
+    floats(&toml::Value::Table(v.clone()), "", &mut all);
+    for (k, f) in &all {
+        assert!(f.is_finite(), "{k} = {f}");
+    }
+    assert!(v["provenance"].get("fit_f_range_per_m").is_none());
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn fit_never_writes_over_its_own_scan() {
+    // `lustre fit s.txt -o s.txt` replaced the instrument file with the material file, and a
+    // scan named like one of the plots (`m_psd.csv` for `-o m.toml`) was overwritten too.
+    let dir = std::env::temp_dir().join(format!("lustre-fit-cli-self-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let original = std::fs::read(root().join("data/surfaces/corpus/txt_example.txt")).unwrap();
+    for (scan, out) in [("s.txt", "s.txt"), ("m_psd.csv", "m.toml")] {
+        let scan_path = dir.join(scan);
+        std::fs::write(&scan_path, &original).unwrap();
+        let (code, _, err) = lustre(&[
+            "fit",
+            scan_path.to_str().unwrap(),
+            "--format",
+            "matrix",
+            "-o",
+            dir.join(out).to_str().unwrap(),
+        ]);
+        assert_eq!(code, 1, "{scan}: {err}");
+        assert!(
+            err.contains("over the input") && err.contains("Fix:"),
+            "{scan}: {err}"
+        );
+        assert_eq!(
+            std::fs::read(&scan_path).unwrap(),
+            original,
+            "{scan} changed"
+        );
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -8,6 +8,22 @@ use plot::{Axis, LineStyle, Marker, Plot, PlotError, Series};
 use std::path::{Path, PathBuf};
 
 /// Write the plots; returns the files written.
+/// Every file [`write`] may write next to `material` (PSD and NDF, PNG and CSV).
+pub fn paths(material: &Path) -> Vec<PathBuf> {
+    let stem = material
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "material".into());
+    let dir = material
+        .parent()
+        .filter(|p| !p.as_os_str().is_empty())
+        .unwrap_or(Path::new("."));
+    ["psd.png", "psd.csv", "ndf.png", "ndf.csv"]
+        .iter()
+        .map(|s| dir.join(format!("{stem}_{s}")))
+        .collect()
+}
+
 pub fn write(a: &Analysis, material: &Path) -> Result<Vec<PathBuf>, PlotError> {
     let stem = material
         .file_stem()

@@ -89,8 +89,10 @@ pub struct ProvenanceTable {
     pub file: String,
     /// SHA-256 of the scan file.
     pub sha256: String,
-    /// Frequency range of the material KC fit [cycles/m].
-    pub fit_f_range_per_m: [f64; 2],
+    /// Frequency range of the material KC fit [cycles/m] (absent when the fit had no range,
+    /// e.g. too few PSD points: never written as `nan`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub fit_f_range_per_m: Option<[f64; 2]>,
     /// Tool and version.
     pub tool: String,
     /// Reader used.
@@ -294,8 +296,9 @@ pub struct TwoScaleTable {
     pub gamma: f64,
     /// Cutoff period [µm].
     pub cutoff_um: f64,
-    /// Residual KC fit range [cycles/m].
-    pub fit_f_range_per_m: [f64; 2],
+    /// Residual KC fit range [cycles/m] (absent when the fit had none).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub fit_f_range_per_m: Option<[f64; 2]>,
     /// Degenerate flag of the residual fit.
     pub kc_degenerate: bool,
     /// What is unreliable in this split (absent when it is sound).
@@ -322,6 +325,12 @@ pub struct PsdTable {
 
 fn finite(v: f64) -> f64 {
     if v.is_finite() { v } else { -1.0 }
+}
+
+/// A fit's frequency range, or `None` when it has none (a NaN pair: the fit had no points).
+/// TOML can spell `nan`, but a range of `nan` tells a reader nothing and trips scripts.
+fn finite_range(r: (f64, f64)) -> Option<[f64; 2]> {
+    (r.0.is_finite() && r.1.is_finite()).then_some([r.0, r.1])
 }
 
 /// Largest Lc the two-scale model accepts [µm] (its micro scale is a `KcPsd`).
@@ -489,7 +498,7 @@ pub fn build(a: &Analysis, prov: &Provenance<'_>) -> MaterialFile {
                         lc_um: l,
                         gamma: g,
                         cutoff_um: t.cutoff * UM,
-                        fit_f_range_per_m: [t.kc.range.0, t.kc.range.1],
+                        fit_f_range_per_m: finite_range(t.kc.range),
                         kc_degenerate: t.kc.degenerate,
                         problem,
                     },
@@ -588,7 +597,7 @@ pub fn build(a: &Analysis, prov: &Provenance<'_>) -> MaterialFile {
         provenance: ProvenanceTable {
             file: prov.file.to_string(),
             sha256: sha256::hex(prov.bytes),
-            fit_f_range_per_m: [a.kc.range.0, a.kc.range.1],
+            fit_f_range_per_m: finite_range(a.kc.range),
             tool: format!("lustre fit {}", env!("CARGO_PKG_VERSION")),
             format: a.scan.format.to_string(),
             channel: a.scan.channel.clone(),
