@@ -167,7 +167,8 @@ fn check_args(args: &JudgeArgs) -> anyhow::Result<()> {
 }
 
 /// Refuses a `--crop` larger than the scan (it was clamped while the report claimed the
-/// requested size) and a `--upsample` whose map would take many minutes.
+/// requested size) and a `--upsample` whose map would take many minutes (a scan
+/// measured larger than that is not refused: only the upsampling is).
 fn check_explicit_size(
     args: &JudgeArgs,
     nx: usize,
@@ -196,7 +197,9 @@ fn check_explicit_size(
     };
     let u = args.upsample;
     let (ux, uy) = (cx * u, if profile { 1 } else { cy * u });
-    if ux.saturating_mul(uy) > MAX_EXPLICIT_POINTS {
+    // Only what upsampling adds is refused: a scan measured that large is the
+    // user's data, and is computed on as it is, however long that takes.
+    if u > 1 && ux.saturating_mul(uy) > MAX_EXPLICIT_POINTS.max(cx.saturating_mul(cy)) {
         bail!(
             "{scan}: --upsample {u} would compute the explicit BRDF on {ux} × {uy} points, more \
              than {MAX_EXPLICIT_SIDE}² (which already takes about 1.5 min). Fix: upsample the centre \
@@ -446,4 +449,36 @@ pub fn run(args: JudgeArgs) -> anyhow::Result<()> {
         start.elapsed().as_secs_f64()
     );
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use clap::Parser;
+
+    #[derive(Parser)]
+    struct Cli {
+        #[command(flatten)]
+        judge: JudgeArgs,
+    }
+
+    fn args(extra: &[&str]) -> JudgeArgs {
+        let mut argv = vec!["judge", "scan.x3p"];
+        argv.extend_from_slice(extra);
+        Cli::try_parse_from(argv).expect("valid flags").judge
+    }
+
+    /// The size limit is on what `--upsample` adds: a scan measured at
+    /// 4096² is computed on as it is, while upsampling a 512² scan to
+    /// 8192² (half an hour) is refused, and so is a crop past the scan.
+    #[test]
+    fn only_upsampling_past_the_limit_is_refused_not_a_large_scan() {
+        assert!(check_explicit_size(&args(&[]), 4096, 4096, false).is_ok());
+        assert!(check_explicit_size(&args(&[]), 1 << 20, 1, true).is_ok());
+        assert!(check_explicit_size(&args(&["--upsample", "2"]), 1024, 1024, false).is_ok());
+        let e = check_explicit_size(&args(&["--upsample", "16"]), 512, 512, false).unwrap_err();
+        assert!(e.to_string().contains("--crop 128"), "{e}");
+        assert!(check_explicit_size(&args(&["--upsample", "2"]), 4096, 4096, false).is_err());
+        assert!(check_explicit_size(&args(&["--crop", "600"]), 512, 512, false).is_err());
+    }
 }
