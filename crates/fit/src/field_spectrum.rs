@@ -214,7 +214,8 @@ pub(crate) fn check(t: &Topography) -> Result<(), FitError> {
         return Err(FitError::data(
             "explicit BRDF",
             format!(
-                "needs a profile of ≥ 4 points or a map of ≥ 4 × 4 points, got {} × {}",
+                "needs a profile of ≥ 4 points or a map of ≥ 4 × 4 points, got {} × {}. \
+                 Fix: give it a longer profile or a larger map (re-export the whole scan)",
                 t.nx, t.ny
             ),
         ));
@@ -321,4 +322,27 @@ pub fn hemispherical_albedo(
         evanescent_frozen: spec.total() - inside_frozen * cell,
         bands,
     })
+}
+
+#[cfg(test)]
+mod too_small_tests {
+    use super::*;
+
+    /// A map too small for the explicit BRDF is refused with its size and
+    /// what to do about it (`judge` on a 3 × 4 text export said what was
+    /// wrong but not how to fix it).
+    #[test]
+    fn a_map_too_small_is_refused_with_its_size_and_the_fix() {
+        let t = Topography {
+            nx: 3,
+            ny: 4,
+            dx: 1e-6,
+            dy: 1e-6,
+            heights: vec![0.0; 12],
+            channel: "z".into(),
+            format: "test",
+        };
+        let e = check(&t).unwrap_err().to_string();
+        assert!(e.contains("got 3 × 4") && e.contains("Fix: "), "{e}");
+    }
 }
