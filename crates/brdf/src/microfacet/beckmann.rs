@@ -159,13 +159,7 @@ pub(super) fn sample_visible_with_lambda(wi: DVec3, ax: f64, ay: f64, u: [f64; 2
     // more of each on the sample's critical path).
     let (vx, vy, vz) = (ax * wi.x, ay * wi.y, wi.z);
     let r2 = vx * vx + vy * vy;
-    let (rx, ry, lambda) = if !(r2 >= 1e-14 * (r2 + vz * vz)) {
-        // sinθ < 1e−7 (or a NaN view): the normal view, whose visible slope
-        // density is the isotropic Gaussian; the azimuth plays no part.
-        let r = libm::sqrt(-libm::log1p(-u[0]));
-        let (sp, cp) = libm::sincos(2.0 * PI * u[1]);
-        (r * cp, r * sp, 0.0)
-    } else {
+    let (rx, ry, lambda) = if r2 > 0.0 && r2 >= 1e-14 * (r2 + vz * vz) {
         let inv_r = 1.0 / libm::sqrt(r2);
         let (cos_phi, sin_phi) = (vx * inv_r, vy * inv_r);
         let (sx, sy, lambda) = sample_slopes_unit(vz * inv_r, vz, r2 * inv_r, u);
@@ -175,6 +169,12 @@ pub(super) fn sample_visible_with_lambda(wi: DVec3, ax: f64, ay: f64, u: [f64; 2
             sin_phi * sx + cos_phi * sy,
             lambda,
         )
+    } else {
+        // sinθ < 1e−7 (or a NaN or zero view): the normal view, whose visible slope
+        // density is the isotropic Gaussian; the azimuth plays no part.
+        let r = libm::sqrt(-libm::log1p(-u[0]));
+        let (sp, cp) = libm::sincos(2.0 * PI * u[1]);
+        (r * cp, r * sp, 0.0)
     };
     // Unstretch; the normal is (−s, 1).
     (DVec3::new(-rx * ax, -ry * ay, 1.0), lambda)
