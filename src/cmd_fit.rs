@@ -373,9 +373,7 @@ fn material(args: MaterialArgs) -> anyhow::Result<()> {
     }
     for input in std::iter::once(&scan_path).chain(args.stylus.as_ref()) {
         for (out, what) in &outputs {
-            if std::fs::canonicalize(out)
-                .is_ok_and(|o| std::fs::canonicalize(input).is_ok_and(|i| i == o))
-            {
+            if crate::paths::same_file(out, input) {
                 anyhow::bail!(
                     "{}: the {what} would be written over the input {} itself. Fix: pass another \
                      -o, e.g. -o {}",

@@ -457,32 +457,6 @@ pub fn merge(args: MergeArgs) -> anyhow::Result<()> {
     write_images(&film, args.exr.as_deref(), args.png.as_deref(), args.quiet)
 }
 
-/// Whether two paths name the same file: the same absolute path after
-/// removing `.` and `..`, or the same file once both exist (symbolic links).
-fn same_file(a: &Path, b: &Path) -> bool {
-    fn lexical(p: &Path) -> PathBuf {
-        let abs = std::path::absolute(p).unwrap_or_else(|_| p.to_path_buf());
-        let mut out = PathBuf::new();
-        for c in abs.components() {
-            match c {
-                std::path::Component::CurDir => {}
-                std::path::Component::ParentDir => {
-                    out.pop();
-                }
-                c => out.push(c),
-            }
-        }
-        out
-    }
-    if lexical(a) == lexical(b) {
-        return true;
-    }
-    matches!(
-        (std::fs::canonicalize(a), std::fs::canonicalize(b)),
-        (Ok(x), Ok(y)) if x == y
-    )
-}
-
 /// Refuses outputs that would overwrite an input or each other, and image
 /// names whose extension says another format than the one written (an EXR
 /// written as `x.png` opens as a broken PNG).
@@ -512,7 +486,7 @@ fn check_outputs(
         .collect();
     for (i, (kind, p)) in outputs.iter().enumerate() {
         for (what, q) in inputs {
-            if same_file(p, q) {
+            if crate::paths::same_file(p, q) {
                 bail!(
                     "the {kind} output {} is {what}: writing it would destroy it; choose another output name",
                     p.display()
@@ -520,7 +494,7 @@ fn check_outputs(
             }
         }
         for (other, q) in &outputs[..i] {
-            if same_file(p, q) {
+            if crate::paths::same_file(p, q) {
                 bail!(
                     "the {other} and {kind} outputs are both {}: one would overwrite the other; give them different names",
                     p.display()

@@ -12,6 +12,7 @@ mod cmd_preview;
 mod cmd_render;
 mod cmd_scenes;
 mod models;
+mod paths;
 mod progress;
 
 use clap::{Parser, Subcommand};

@@ -218,11 +218,8 @@ pub fn refuse_overwriting_input(
     input: &std::path::Path,
     outputs: &[(std::path::PathBuf, &str)],
 ) -> anyhow::Result<()> {
-    let Ok(input_abs) = std::fs::canonicalize(input) else {
-        return Ok(());
-    };
     for (out, what) in outputs {
-        if std::fs::canonicalize(out).is_ok_and(|o| o == input_abs) {
+        if crate::paths::same_file(out, input) {
             bail!(
                 "{}: the {what} would be written over the input {} itself. Fix: pass another \
                  --out name or directory (e.g. --out {})",

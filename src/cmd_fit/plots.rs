@@ -7,9 +7,8 @@ use fit::pipeline::Analysis;
 use plot::{Axis, LineStyle, Marker, Plot, PlotError, Series};
 use std::path::{Path, PathBuf};
 
-/// Write the plots; returns the files written.
-/// Every file [`write`] may write next to `material` (PSD and NDF, PNG and CSV).
-pub fn paths(material: &Path) -> Vec<PathBuf> {
+/// The plot file `<stem>_<suffix>` next to `material`.
+fn plot_path(material: &Path, suffix: &str) -> PathBuf {
     let stem = material
         .file_stem()
         .map(|s| s.to_string_lossy().into_owned())
@@ -18,21 +17,19 @@ pub fn paths(material: &Path) -> Vec<PathBuf> {
         .parent()
         .filter(|p| !p.as_os_str().is_empty())
         .unwrap_or(Path::new("."));
+    dir.join(format!("{stem}_{suffix}"))
+}
+
+/// Every file [`write`] may write next to `material` (PSD and NDF, PNG and CSV).
+pub fn paths(material: &Path) -> Vec<PathBuf> {
     ["psd.png", "psd.csv", "ndf.png", "ndf.csv"]
         .iter()
-        .map(|s| dir.join(format!("{stem}_{s}")))
+        .map(|s| plot_path(material, s))
         .collect()
 }
 
+/// Write the plots; returns the files written.
 pub fn write(a: &Analysis, material: &Path) -> Result<Vec<PathBuf>, PlotError> {
-    let stem = material
-        .file_stem()
-        .map(|s| s.to_string_lossy().into_owned())
-        .unwrap_or_else(|| "material".into());
-    let dir = material
-        .parent()
-        .filter(|p| !p.as_os_str().is_empty())
-        .unwrap_or(Path::new("."));
     let mut written = Vec::new();
 
     // PSD in cycles/µm and µm³ so the numbers read naturally.
@@ -88,9 +85,9 @@ pub fn write(a: &Analysis, material: &Path) -> Result<Vec<PathBuf>, PlotError> {
             .style(LineStyle::Dashed),
         );
     }
-    let png = dir.join(format!("{stem}_psd.png"));
+    let png = plot_path(material, "psd.png");
     psd_plot.save_png(&png, 900, 650)?;
-    let csv = dir.join(format!("{stem}_psd.csv"));
+    let csv = plot_path(material, "psd.csv");
     psd_plot.save_csv(&csv)?;
     written.extend([png, csv]);
 
@@ -125,9 +122,9 @@ pub fn write(a: &Analysis, material: &Path) -> Result<Vec<PathBuf>, PlotError> {
                     .style(LineStyle::Dashed)
                     .width(2.0),
             );
-        let png = dir.join(format!("{stem}_ndf.png"));
+        let png = plot_path(material, "ndf.png");
         ndf_plot.save_png(&png, 900, 650)?;
-        let csv = dir.join(format!("{stem}_ndf.csv"));
+        let csv = plot_path(material, "ndf.csv");
         ndf_plot.save_csv(&csv)?;
         written.extend([png, csv]);
     }
