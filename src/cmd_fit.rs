@@ -276,11 +276,18 @@ fn stats(args: StatsArgs) -> anyhow::Result<()> {
     }
     if let Some(a) = s.anisotropy.as_ref().filter(|a| a.anisotropic) {
         warnings.push(format!(
-            "anisotropic surface (principal slope ratio {:.2}, lay at {:.1}°): the isotropic \
+            "anisotropic surface ({}, lay at {:.1}°): the isotropic \
              K-correlation fit is an approximation",
-            a.ratio,
+            a.ratio_text(),
             a.lay_direction_deg()
         ));
+    }
+    if s.flat.is_none()
+        && kc.reason.is_none()
+        && let Some(w) =
+            fit::material::variance_mismatch(kc.params.sigma * 1e6, s.stats.sq * 1e6, kc.range)
+    {
+        warnings.push(w);
     }
     for w in &warnings {
         eprintln!("warning: {}: {w}", args.scan.display());
@@ -475,6 +482,7 @@ fn material(args: MaterialArgs) -> anyhow::Result<()> {
         ("two_scale", &r.two_scale),
         ("form", &r.form),
         ("anisotropy", &r.anisotropy),
+        ("variance", &r.variance),
     ] {
         if state != "ok" {
             eprintln!("warning: {part}: {state}");

@@ -41,6 +41,16 @@ pub struct Anisotropy {
 }
 
 impl Anisotropy {
+    /// The principal slope ratio for a message: "principal slope ratio 7.30", or, for a
+    /// map that varies along one direction only (an infinite ratio), what that means.
+    pub fn ratio_text(&self) -> String {
+        if self.ratio.is_finite() {
+            format!("principal slope ratio {:.2}", self.ratio)
+        } else {
+            "no slope at all along the lay".to_string()
+        }
+    }
+
     /// Direction of the lay (the grooves), degrees in (−90, 90].
     pub fn lay_direction_deg(&self) -> f64 {
         let d = self.slope_direction_deg + 90.0;

@@ -162,6 +162,8 @@ pub struct ReliabilityTable {
     pub form: String,
     /// Anisotropy that the isotropic models ignore.
     pub anisotropy: String,
+    /// Whether the K-correlation σ accounts for the measured height variance (Sq²).
+    pub variance: String,
     /// Why `[material].model` is what it is.
     pub model: String,
     /// The parts flagged above, for scripts.
@@ -194,11 +196,13 @@ pub struct AnisotropyTable {
     /// Rms slope along y.
     pub rms_slope_y: f64,
     /// Larger over smaller of the two.
-    pub ratio_xy: f64,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub ratio_xy: Option<f64>,
     /// Principal rms slopes `[steepest, across it]`.
     pub principal_rms_slopes: [f64; 2],
     /// Principal ratio (> 1.5: anisotropic).
-    pub ratio: f64,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub ratio: Option<f64>,
     /// Direction of the steepest slope (`alpha_x`), degrees from +x towards +y.
     pub slope_direction_deg: f64,
     /// Direction of the lay (grooves, `alpha_y`), degrees from +x towards +y.
@@ -231,15 +235,19 @@ pub struct AsymptoteTable {
 #[derive(Debug, Serialize)]
 pub struct FitTable {
     /// Standard error of σ [µm].
-    pub sigma_um_err: f64,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub sigma_um_err: Option<f64>,
     /// Standard error of Lc [µm].
-    pub lc_um_err: f64,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub lc_um_err: Option<f64>,
     /// Standard error of γ.
-    pub gamma_err: f64,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub gamma_err: Option<f64>,
     /// README 1D-form length `L = 2π·Lc` [µm].
     pub l_1d_um: f64,
     /// Rms natural-log residual of the KC fit.
-    pub kc_rms_log_residual: f64,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub kc_rms_log_residual: Option<f64>,
     /// PSD points in the KC fit.
     pub kc_points: usize,
     /// True if the KC fit is not meaningful.
@@ -255,11 +263,14 @@ pub struct FitTable {
     /// Rms slope (Sdq; Rdq for profiles).
     pub rms_slope: f64,
     /// Rms log residual of the GGX NDF fit.
-    pub alpha_ggx_rms_log_residual: f64,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub alpha_ggx_rms_log_residual: Option<f64>,
     /// Rms log residual of the Beckmann NDF fit.
-    pub alpha_beckmann_rms_log_residual: f64,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub alpha_beckmann_rms_log_residual: Option<f64>,
     /// Beckmann α from the slope second moment.
-    pub alpha_beckmann_moment: f64,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub alpha_beckmann_moment: Option<f64>,
 }
 
 /// `[kc_2d]`.
@@ -271,8 +282,9 @@ pub struct KcTable {
     pub lc_um: f64,
     /// γ.
     pub gamma: f64,
-    /// Standard errors `[σ µm, Lc µm, γ]`.
-    pub stderr: [f64; 3],
+    /// Standard errors `[σ µm, Lc µm, γ]` (absent unless all three are known).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub stderr: Option<[f64; 3]>,
     /// Fitted ζ range [rad/µm].
     pub fit_zeta_range_rad_per_um: [f64; 2],
     /// Rms log residual.
@@ -323,8 +335,11 @@ pub struct PsdTable {
     pub p_um4: Vec<f64>,
 }
 
-fn finite(v: f64) -> f64 {
-    if v.is_finite() { v } else { -1.0 }
+/// A value for the file, or `None` (the key left out) when it is not known: a NaN or an
+/// infinity, which TOML can spell but scripts trip on, and a sentinel such as −1 would
+/// read as a number.
+fn finite(v: f64) -> Option<f64> {
+    v.is_finite().then_some(v)
 }
 
 /// A fit's frequency range, or `None` when it has none (a NaN pair: the fit had no points).
@@ -363,6 +378,52 @@ pub fn renderer_kc(k: &KcParams) -> ((f64, f64, f64), Option<String>) {
             "σ {s:.4e} µm, Lc {l:.4e} µm, γ {g:.4} brought into the renderer's range"
         )),
     )
+}
+
+/// How far the K-correlation σ may be from the measured Sq before the material file
+/// says so: a factor 2 (a quarter or four times the variance).
+pub const SIGMA_SQ_RATIO_MAX: f64 = 2.0;
+
+/// The problem when the fitted σ (`sigma_um`, of the model over all frequencies) and the
+/// measured rms height (`sq_um`) differ by more than [`SIGMA_SQ_RATIO_MAX`]. The fit
+/// matches the PSD inside its band (`band`, cycles/m); σ ≪ Sq means most of the height
+/// variance lies outside it, at wavelengths longer than the band (waviness, form), which
+/// the GHS models then render as mirror reflection; σ ≫ Sq means the fitted roll-off lies
+/// beyond the scan, and the model has more long-wavelength roughness than was measured.
+/// Either way g = (kσ(cosθi + cosθo))², the specular weight e^−g and the lobe width
+/// follow σ, not Sq.
+pub fn variance_mismatch(sigma_um: f64, sq_um: f64, band: (f64, f64)) -> Option<String> {
+    if !(sigma_um.is_finite() && sq_um.is_finite() && sigma_um > 0.0 && sq_um > 0.0) {
+        return None;
+    }
+    let ratio = sigma_um / sq_um;
+    if (1.0 / SIGMA_SQ_RATIO_MAX..=SIGMA_SQ_RATIO_MAX).contains(&ratio) {
+        return None;
+    }
+    let (lo, hi) = band;
+    let wavelengths = if lo.is_finite() && hi.is_finite() && lo > 0.0 && hi > lo {
+        format!(" (wavelengths {:.3e}–{:.3e} µm)", UM / hi, UM / lo)
+    } else {
+        String::new()
+    };
+    Some(if ratio < 1.0 {
+        format!(
+            "the K-correlation σ {sigma_um:.4e} µm holds {:.2} % of the measured height \
+             variance (Sq {sq_um:.4e} µm): the rest lies outside the fitted band{wavelengths}, \
+             mostly at longer wavelengths, and the GHS models render it as mirror \
+             reflection; if it is form, level it away (--level), otherwise compare with \
+             model = \"measured_psd\", whose table holds the whole measured spectrum",
+            100.0 * ratio * ratio
+        )
+    } else {
+        format!(
+            "the K-correlation σ {sigma_um:.4e} µm is {ratio:.2}× the measured Sq \
+             {sq_um:.4e} µm: the fitted roll-off lies beyond the scan{wavelengths}, so the \
+             model holds long-wavelength roughness that was not measured and renders \
+             rougher than the scan; a longer scan (or a stylus profile, --stylus) would \
+             measure it, otherwise compare with model = \"measured_psd\""
+        )
+    })
 }
 
 /// A microfacet α the renderer accepts (1e-4 … 1); `Some(problem)` if clamped.
@@ -526,12 +587,12 @@ pub fn build(a: &Analysis, prov: &Provenance<'_>) -> MaterialFile {
             alpha_beckmann: [bx, by],
             warning: an.anisotropic.then(|| {
                 format!(
-                    "anisotropic (principal slope ratio {:.2}, lay at {:.1}°): the isotropic \
+                    "anisotropic ({}, lay at {:.1}°): the isotropic \
                      K-correlation and NDF fits average over directions and are only an \
                      approximation; [material].alpha_x/alpha_y (GGX) and \
                      [anisotropy].alpha_beckmann describe the two axes, with alpha_x across \
                      the lay (at {:.1}°)",
-                    an.ratio,
+                    an.ratio_text(),
                     an.lay_direction_deg(),
                     an.slope_direction_deg
                 )
@@ -540,6 +601,11 @@ pub fn build(a: &Analysis, prov: &Provenance<'_>) -> MaterialFile {
     });
     let anisotropic = aniso.as_ref().is_some_and(|t| t.anisotropic);
     let kc_ok = a.kc.reason.is_none() && kc_range.is_none();
+    // A degenerate or clamped fit is flagged as such already; the silent case is a sound
+    // fit whose σ is not the measured one.
+    let variance_warning = kc_ok
+        .then(|| variance_mismatch(sigma_um, a.stats.sq * UM, a.kc.range))
+        .flatten();
     let (model, model_reason) = match prov.model {
         "auto" if kc_ok => (
             "ghs".to_string(),
@@ -582,9 +648,17 @@ pub fn build(a: &Analysis, prov: &Provenance<'_>) -> MaterialFile {
     if anisotropic {
         unreliable.push("anisotropy".into());
     }
+    if variance_warning.is_some() {
+        unreliable.push("variance".into());
+    }
     let uses_kc = matches!(model.as_str(), "ghs" | "ghs_ssa");
     let model_reason = if uses_kc && !kc_ok {
         format!("{model_reason}; WARNING: it uses the unreliable K-correlation parameters")
+    } else if uses_kc && variance_warning.is_some() {
+        format!(
+            "{model_reason}; WARNING: its σ does not match the measured Sq \
+             (see [reliability].variance)"
+        )
     } else if model == "measured_psd" && psd_problem.is_some() {
         format!("{model_reason}; WARNING: the renderer rejects the PSD table")
     } else {
@@ -667,6 +741,7 @@ pub fn build(a: &Analysis, prov: &Provenance<'_>) -> MaterialFile {
                 .as_ref()
                 .and_then(|t| t.warning.clone())
                 .unwrap_or_else(|| "ok".into()),
+            variance: variance_warning.unwrap_or_else(|| "ok".into()),
             model: model_reason,
             unreliable,
         },
@@ -693,11 +768,14 @@ pub fn build(a: &Analysis, prov: &Provenance<'_>) -> MaterialFile {
             sigma_um: f.params.sigma * UM,
             lc_um: f.params.lc * UM,
             gamma: f.params.gamma,
-            stderr: [
+            stderr: match (
                 finite(f.stderr.sigma * UM),
                 finite(f.stderr.lc * UM),
                 finite(f.stderr.gamma),
-            ],
+            ) {
+                (Some(s), Some(l), Some(g)) => Some([s, l, g]),
+                _ => None,
+            },
             fit_zeta_range_rad_per_um: [f.range.0 / UM, f.range.1 / UM],
             rms_log_residual: f.rms_log_residual,
             degenerate: f.degenerate,

@@ -364,3 +364,111 @@ fn anisotropy_finds_the_lay_of_a_grooved_surface() {
     // The PSD slopes agree with the finite-difference ones to the band limit.
     assert!((a.psd_slopes.0 / a.rms_slope_x - 1.0).abs() < 0.25);
 }
+
+/// The K-correlation σ is the model's rms height over all frequencies; where a sound fit
+/// leaves most of the measured variance outside its band the material file must say so
+/// (σ far below Sq renders the surface smoother than measured), and a surface the model
+/// describes must not be flagged.
+#[test]
+fn sigma_far_from_sq_is_flagged_and_a_kc_surface_is_not() {
+    let truth = KcParams {
+        sigma: 5e-9,
+        lc: 20e-9,
+        gamma: 4.0,
+    };
+    let (n, dx) = (256, 10e-9);
+    let kc = synth::kc_surface(n, n, dx, truth, 3);
+    let a = analyse(kc.clone(), None, &Options::default()).unwrap();
+    let doc = material::build(&a, &prov("kc", b"", &[]));
+    println!(
+        "KC surface: σ {} µm, Sq {} µm, variance {}",
+        doc.material.sigma_um, doc.fit.sq_um, doc.reliability.variance
+    );
+    assert_eq!(doc.reliability.variance, "ok");
+    assert!(!doc.reliability.unreliable.contains(&"variance".into()));
+
+    // A real AFM scan whose sound K-correlation fit (bins 3 … n/4) holds under 1 % of the
+    // measured variance: the rest is at longer wavelengths (SurfaceTopography's Sq for it
+    // is 7.1 nm, the fit's σ 0.63 nm).
+    let f = "corpus/nid-1.nid";
+    let path = data(f);
+    let bytes = std::fs::read(&path).unwrap();
+    let a = analyse(
+        read_path(&path, &ReadOptions::default()).unwrap(),
+        None,
+        &Options::default(),
+    )
+    .unwrap();
+    let doc = material::build(&a, &prov(f, &bytes, &[]));
+    let v = &doc.reliability.variance;
+    println!(
+        "{f}: σ {} µm, Sq {} µm, model {}, kc {}, variance {v}",
+        doc.material.sigma_um, doc.fit.sq_um, doc.material.model, doc.reliability.kc
+    );
+    assert_eq!(doc.reliability.kc, "ok");
+    assert!(doc.fit.sq_um > 4.0 * doc.material.sigma_um);
+    assert!(
+        v.contains("holds") && v.contains("% of the measured height"),
+        "{v}"
+    );
+    assert!(doc.reliability.unreliable.contains(&"variance".into()));
+    assert_eq!(doc.material.model, "ghs");
+    assert!(doc.reliability.model.contains("[reliability].variance"));
+    let text = material::to_toml(&doc).unwrap();
+    assert!(
+        text.lines()
+            .any(|l| l.starts_with("variance = ") && l.contains("the K-correlation σ")),
+        "{text}"
+    );
+    assert_renderer_accepts(&doc, f);
+
+    // The threshold is a factor 2 either way, and values that are not positive and
+    // finite are not judged.
+    let band = (1e5, 1e7);
+    assert!(material::variance_mismatch(1.0, 1.9, band).is_none());
+    assert!(material::variance_mismatch(1.9, 1.0, band).is_none());
+    let low = material::variance_mismatch(1.0, 2.1, band).unwrap();
+    assert!(
+        low.contains("22.68 %") && low.contains("1.000e-1–1.000e1 µm"),
+        "{low}"
+    );
+    let high = material::variance_mismatch(2.1, 1.0, band).unwrap();
+    assert!(high.contains("2.10×"), "{high}");
+    for bad in [0.0, -1.0, f64::NAN, f64::INFINITY] {
+        assert!(material::variance_mismatch(bad, 1.0, band).is_none());
+        assert!(material::variance_mismatch(1.0, bad, band).is_none());
+    }
+    let no_band = material::variance_mismatch(1.0, 3.0, (f64::NAN, 1.0)).unwrap();
+    assert!(!no_band.contains("(wavelengths"), "{no_band}");
+}
+
+/// A map that varies along one direction only (ideal grooves) has an infinite principal
+/// slope ratio: the material file says what that means instead of "ratio inf", and leaves
+/// the unknown numbers out instead of writing `inf`, `nan` or a −1 sentinel.
+#[test]
+fn a_map_flat_along_its_lay_has_no_inf_or_sentinel_in_its_material_file() {
+    let (n, dx) = (128, 10e-9);
+    let mut rng = fit::rng::SplitMix64::new(4);
+    // Random grooves along y: the same random profile on every line.
+    let profile: Vec<f64> = (0..n).map(|_| 2e-9 * rng.normal()).collect();
+    let t = map(n, n, dx, |x, _| profile[(x / dx).round() as usize]);
+    let a = analyse(t, None, &Options::default()).unwrap();
+    let doc = material::build(&a, &prov("grooves", b"", &[]));
+    let text = material::to_toml(&doc).unwrap();
+    let an = doc
+        .anisotropy
+        .as_ref()
+        .expect("a map has an anisotropy table");
+    assert!(an.anisotropic);
+    assert_eq!(an.ratio, None, "an infinite ratio is left out");
+    let w = an.warning.as_ref().unwrap();
+    assert!(w.contains("no slope at all along the lay"), "{w}");
+    for line in text.lines() {
+        let value = line.split_once(" = ").map_or("", |(_, v)| v);
+        assert!(
+            !(value.contains("inf") || value.contains("nan") || value.trim() == "-1.0"),
+            "{line}"
+        );
+    }
+    assert_renderer_accepts(&doc, "grooves");
+}
