@@ -1,6 +1,9 @@
 //! Bad scene files give the documented errors: file, line, column, and the
 //! valid choices — never a panic.
 
+#[path = "support/scene_fixtures.rs"]
+mod scene_fixtures;
+
 use std::path::PathBuf;
 
 const GOOD: &str = r#"[camera]
@@ -311,4 +314,43 @@ fn mis_light_weight_is_per_vertex_unless_set_and_bad_values_are_refused() {
     }
     let e = integrator_error("mis_light_weight = \"two\"");
     assert!(e.contains(":26:") && e.contains("expected f64"), "{e}");
+}
+
+/// A value that an `include`d fit file supplies is reported at its own file,
+/// line and table, not at the scene's material table, which does not contain
+/// it; a value the scene sets is still the scene's.
+#[test]
+fn an_invalid_value_from_an_include_is_located_in_the_include() {
+    let dir = scene_fixtures::temp_dir("include-errors");
+    let fit = "# written by lustre fit\n\
+[provenance]\nfile = \"scan.x3p\"\n\n\
+[material]\nmetal = \"cu\"\nmodel = \"ghs\"\nsigma_um = -3.0\nlc_um = 1.0\ngamma = 3.0\n\
+alpha = 0.2\nalpha_beckmann = 0.2\n\n\
+[two_scale.cutoff_50]\nbeta = 99.0\nsigma_um = 0.01\nlc_um = 1.0\ngamma = 3.0\n";
+    std::fs::write(dir.join("fit.toml"), fit).unwrap();
+    let load = |material: &str| {
+        let text = GOOD.replacen(
+            "model = \"ggx\"\nmetal = \"brass\"\nalpha = 0.2",
+            material,
+            1,
+        );
+        match render::load_str(&dir.join("scene.toml"), &text) {
+            Ok(_) => panic!("`{material}` was accepted"),
+            Err(e) => format!("{e:#}"),
+        }
+    };
+    // σ of [material], line 8 of the include.
+    let e = load("include = \"fit.toml\"");
+    assert!(e.contains("fit.toml:8: [material]: `sigma_um`"), "{e}");
+    assert!(e.contains("0 ≤ sigma_um ≤ 10"), "{e}");
+    // β of the chosen split, line 15.
+    let e = load("include = \"fit.toml\"\nmodel = \"two_scale\"\ncutoff = \"cutoff_50\"");
+    assert!(
+        e.contains("fit.toml:15: [two_scale.cutoff_50]: `beta`"),
+        "{e}"
+    );
+    // The scene's own value is blamed on the scene.
+    let e = load("include = \"fit.toml\"\nsigma_um = -1.0");
+    assert!(!e.contains("fit.toml:"), "{e}");
+    assert!(e.contains("`sigma_um`") && e.contains("-1"), "{e}");
 }

@@ -75,6 +75,75 @@ struct Included {
     base: MaterialDesc,
     /// Its `[psd]` table under the name `psd_csv` refers to it by.
     psd: Option<NamedPsd>,
+    /// The file as read, and the table the two-scale keys came from, so that
+    /// an invalid value it supplied is reported at its own line.
+    path: std::path::PathBuf,
+    text: String,
+    split: Option<String>,
+}
+
+/// Whether the scene's own material table sets `field` (a key of
+/// [`MaterialDesc`]); a key it does not set came from the include.
+fn sets(desc: &MaterialDesc, field: &str) -> bool {
+    match field {
+        "model" => desc.model.is_some(),
+        "metal" => desc.metal.is_some(),
+        "nk_csv" => desc.nk_csv.is_some(),
+        "nk" => desc.nk.is_some(),
+        "fresnel" => desc.fresnel.is_some(),
+        "alpha" => desc.alpha.is_some(),
+        "alpha_x" => desc.alpha_x.is_some(),
+        "alpha_y" => desc.alpha_y.is_some(),
+        "alpha_beckmann" => desc.alpha_beckmann.is_some(),
+        "sigma_um" => desc.sigma_um.is_some(),
+        "lc_um" => desc.lc_um.is_some(),
+        "gamma" => desc.gamma.is_some(),
+        "energy" => desc.energy.is_some(),
+        "fresnel_angle" => desc.fresnel_angle.is_some(),
+        "psd_csv" => desc.psd_csv.is_some(),
+        "beta" => desc.beta.is_some(),
+        "coherent" => desc.coherent.is_some(),
+        "include" => desc.include.is_some(),
+        "cutoff" => desc.cutoff.is_some(),
+        // A key this list does not know: blame the scene, which the user edits.
+        _ => true,
+    }
+}
+
+/// 1-based line of `key = …` inside `[table]` of a TOML text (as `lustre fit`
+/// writes it: one key per line, tables by header).
+fn key_line(text: &str, table: &str, key: &str) -> Option<usize> {
+    let header = format!("[{table}]");
+    let mut inside = false;
+    for (i, line) in text.lines().enumerate() {
+        let t = line.trim();
+        if t.starts_with('[') {
+            inside = t == header;
+        } else if inside
+            && let Some(rest) = t.strip_prefix(key)
+            && rest.trim_start().starts_with('=')
+        {
+            return Some(i + 1);
+        }
+    }
+    None
+}
+
+impl Included {
+    /// Where an invalid value of `field` that the include supplied is: the
+    /// file, line and table.
+    fn locate(&self, field: &str) -> String {
+        let table = match &self.split {
+            Some(name) if matches!(field, "beta" | "sigma_um" | "lc_um" | "gamma") => {
+                format!("two_scale.{name}")
+            }
+            _ => "material".to_string(),
+        };
+        match key_line(&self.text, &table, field) {
+            Some(l) => format!("{}:{l}: [{table}]", self.path.display()),
+            None => format!("{}: [{table}]", self.path.display()),
+        }
+    }
 }
 
 /// A `lustre fit` material file. `[material]` is a [`MaterialDesc`]; the
@@ -179,6 +248,7 @@ fn read_include(
     }
 
     let model = desc.model.or(base.model);
+    let mut split = None;
     if model == Some(ModelKind::TwoScale) {
         let names: Vec<&str> = file.two_scale.keys().map(String::as_str).collect();
         let listed = if names.is_empty() {
@@ -207,6 +277,7 @@ fn read_include(
         base.sigma_um = Some(t.sigma_um);
         base.lc_um = Some(t.lc_um);
         base.gamma = Some(t.gamma);
+        split = Some(chosen.to_string());
     }
     let psd = match file.psd {
         Some(t) if model == Some(ModelKind::MeasuredPsd) => {
@@ -218,7 +289,13 @@ fn read_include(
         }
         _ => None,
     };
-    Ok(Included { base, psd })
+    Ok(Included {
+        base,
+        psd,
+        path,
+        text,
+        split,
+    })
 }
 
 /// Builds the named material. `base_dir` resolves relative paths; every
@@ -241,8 +318,8 @@ pub fn build_material(
             None
         }
     };
-    let (base, inline_psd) = match included {
-        Some(Included { base, psd }) => (Some(base), psd),
+    let (base, inline_psd) = match &included {
+        Some(inc) => (Some(&inc.base), inc.psd.clone()),
         None => (None, None),
     };
     let mut files = SceneFiles {
@@ -251,8 +328,12 @@ pub fn build_material(
         inline_psd,
     };
     let spec = desc
-        .resolve(base.as_ref(), &mut files)
-        .map_err(|e| e.to_string())?;
+        .resolve(base, &mut files)
+        .map_err(|e| match &included {
+            // The value came from the include: say where it is, not only which key.
+            Some(inc) if !sets(desc, e.field) => format!("{}: {e}", inc.locate(e.field)),
+            _ => e.to_string(),
+        })?;
     let bxdf = spec.build().map_err(|e| e.to_string())?;
     let fresnel_only = if spec.model.kind().fresnel_only() {
         let unit = MaterialSpec {
