@@ -456,3 +456,57 @@ fn a_pixel_spacing_outside_the_physical_range_is_refused_naming_the_field() {
         assert!(s.sdq.is_finite() && s.sdq > 0.0, "{x_real}: Sdq {}", s.sdq);
     }
 }
+
+/// A NanoScope Z sensitivity of 2.2e300 nm/V gave heights near 1e290 m, whose squares
+/// overflow: `fit` wrote a material file with Sq `inf`, σ 0 and α at its floor. Heights
+/// are bounded like pixel spacings; the test files of a few metres still read.
+#[test]
+fn heights_beyond_any_scan_are_refused_naming_the_height_scale() {
+    let o = ReadOptions::default();
+    let huge = replace_all(
+        &data("di-6.di"),
+        b"Zsens: V 22.02707 nm/V",
+        b"Zsens: V 2.20e300 nm/V",
+    );
+    let e = refused("huge.di", &huge, &o);
+    assert_mentions(
+        &e,
+        &["field `height scale`", "above 1e3 m", "re-export the scan"],
+    );
+    // A 1e11 times larger sensitivity: nanometre heights become kilometres.
+    let tall = replace_all(
+        &data("di-6.di"),
+        b"Zsens: V 22.02707 nm/V",
+        b"Zsens: V 2.202e12 nm/V",
+    );
+    let e = refused("tall.di", &tall, &o);
+    assert_mentions(&e, &["the heights reach", "above 1e3 m"]);
+    // Heights of a file without units, taken in the unit --units gives: the fix names it.
+    let text: String = (0..16)
+        .map(|y| {
+            (0..16)
+                .map(|x| format!("{}", 5000 + (x * 7 + y * 3) % 11))
+                .collect::<Vec<_>>()
+                .join(" ")
+                + "\n"
+        })
+        .collect();
+    let in_metres = ReadOptions {
+        units: Units::parse("m"),
+        pixel_size: Some((1e-6, 1e-6)),
+        ..ReadOptions::default()
+    };
+    let e = refused("nm_as_m.txt", text.as_bytes(), &in_metres);
+    assert_mentions(&e, &["the heights reach 5.0100e3 m", "--units"]);
+    let in_nm = ReadOptions {
+        units: Units::parse("nm"),
+        ..in_metres
+    };
+    read_bytes("nm.txt", text.as_bytes(), &in_nm).unwrap();
+    // The Gwyddion test exports hold heights of up to 9 m, stated in metres: still read.
+    for f in ["gwyddion-export-english.txt", "gwyddion-export-german.txt"] {
+        let t = read_bytes(f, &corpus(f), &o).unwrap();
+        let max = t.heights.iter().fold(0.0f64, |m, h| m.max(h.abs()));
+        assert!(max > 1.0 && max <= 1e3, "{f}: {max}");
+    }
+}

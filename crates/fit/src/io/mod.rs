@@ -539,6 +539,12 @@ pub(crate) fn decode_grid(
 /// means anything: at 1e-300 m the slopes Δz/Δx overflow to infinity (RMS slope `null`).
 pub const PIXEL_SIZE_RANGE: (f64, f64) = (1e-15, 1.0);
 
+/// Largest height magnitude a surface scan can have [m]. A kilometre is far beyond any
+/// profilometer (the corpus's largest are test files of a few metres); past it the header's
+/// height scale or unit is corrupt, and squares of such heights overflow to infinity
+/// (Sq `inf`, a material file of nothing but bounds).
+pub const HEIGHT_MAX: f64 = 1e3;
+
 /// Check a pixel spacing in metres, `d` along `axis`, against [`PIXEL_SIZE_RANGE`]: the one
 /// check every reader's spacing and the `--pixel-size`, `--size` and `--units` flags go
 /// through. `field` is where the value came from; `fix` how to correct it there.
@@ -866,11 +872,39 @@ fn finish(
             "the header is corrupt",
         ));
     }
+    let mut overflowed = 0usize;
+    let mut largest = 0.0f64;
     for h in &mut heights {
-        *h = if h.is_finite() { *h * z } else { f64::NAN };
-        if !h.is_finite() {
+        if h.is_finite() {
+            *h *= z;
+            if h.is_finite() {
+                largest = largest.max(h.abs());
+            } else {
+                overflowed += 1;
+                *h = f64::NAN;
+            }
+        } else {
             *h = f64::NAN;
         }
+    }
+    if overflowed > 0 || largest > HEIGHT_MAX {
+        let what = if overflowed > 0 {
+            format!("{overflowed} heights overflow to infinity")
+        } else {
+            format!("the heights reach {largest:.4e} m")
+        };
+        let fix = if matches!(height_unit, Unit::Unknown) {
+            "the file states no height unit: pass the one it is in with --units \
+             (`--units um,nm` for lateral,height)"
+        } else {
+            "the header's height scale (sensitivity, multiplier or unit) is corrupt: \
+             re-export the scan"
+        };
+        return Err(ctx.err(
+            "height scale",
+            format!("{what}, above {HEIGHT_MAX:e} m: no surface scan is that tall"),
+            fix,
+        ));
     }
     Ok((
         Topography {
