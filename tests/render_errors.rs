@@ -353,4 +353,10 @@ alpha = 0.2\nalpha_beckmann = 0.2\n\n\
     let e = load("include = \"fit.toml\"\nsigma_um = -1.0");
     assert!(!e.contains("fit.toml:"), "{e}");
     assert!(e.contains("`sigma_um`") && e.contains("-1"), "{e}");
+    // So is a key of a group the scene replaces (alpha_x without alpha_y drops the
+    // include's roughness group), and a key that neither file sets.
+    let e = load("include = \"fit.toml\"\nsigma_um = 0.01\nmodel = \"ggx\"\nalpha_x = 0.1");
+    assert!(!e.contains("fit.toml:") && e.contains("alpha"), "{e}");
+    let e = load("include = \"fit.toml\"\nsigma_um = 0.01\nmodel = \"measured_psd\"");
+    assert!(!e.contains("fit.toml:") && e.contains("psd_csv"), "{e}");
 }

@@ -82,8 +82,7 @@ struct Included {
     split: Option<String>,
 }
 
-/// Whether the scene's own material table sets `field` (a key of
-/// [`MaterialDesc`]); a key it does not set came from the include.
+/// Whether `desc` sets `field` (a key of [`MaterialDesc`]).
 fn sets(desc: &MaterialDesc, field: &str) -> bool {
     match field {
         "model" => desc.model.is_some(),
@@ -105,9 +104,28 @@ fn sets(desc: &MaterialDesc, field: &str) -> bool {
         "coherent" => desc.coherent.is_some(),
         "include" => desc.include.is_some(),
         "cutoff" => desc.cutoff.is_some(),
-        // A key this list does not know: blame the scene, which the user edits.
+        // A key this list does not know: taken as set (the scene is blamed).
         _ => true,
     }
+}
+
+/// The keys a scene's material replaces as a group when it sets any of them
+/// (`MaterialDesc::resolve`'s inheritance): roughness and index.
+const GROUPS: [&[&str]; 2] = [
+    &["alpha", "alpha_x", "alpha_y", "alpha_beckmann"],
+    &["metal", "nk", "nk_csv", "fresnel"],
+];
+
+/// Whether the value of `field` that `resolve` rejected came from the
+/// include: the include sets it and the scene neither sets it nor replaces
+/// its group.
+fn from_include(desc: &MaterialDesc, base: &MaterialDesc, field: &str) -> bool {
+    let alone = [field];
+    let group = GROUPS
+        .iter()
+        .find(|g| g.contains(&field))
+        .map_or(&alone[..], |g| *g);
+    sets(base, field) && !group.iter().any(|k| sets(desc, k))
 }
 
 /// 1-based line of `key = …` inside `[table]` of a TOML text (as `lustre fit`
@@ -331,7 +349,9 @@ pub fn build_material(
         .resolve(base, &mut files)
         .map_err(|e| match &included {
             // The value came from the include: say where it is, not only which key.
-            Some(inc) if !sets(desc, e.field) => format!("{}: {e}", inc.locate(e.field)),
+            Some(inc) if from_include(desc, &inc.base, e.field) => {
+                format!("{}: {e}", inc.locate(e.field))
+            }
             _ => e.to_string(),
         })?;
     let bxdf = spec.build().map_err(|e| e.to_string())?;
