@@ -10,6 +10,18 @@ fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
 }
 
+/// `lustre fit SCAN --no-plots -o <scratch>/<tag>.toml`, which must succeed:
+/// the scratch folder, its stderr and the material file written.
+fn fit_material(scan: &str, tag: &str) -> (std::path::PathBuf, String, String) {
+    let dir = std::env::temp_dir().join(format!("lustre-fit-cli-{tag}-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let out = dir.join(format!("{tag}.toml"));
+    let (code, _, err) = lustre(&["fit", scan, "--no-plots", "-o", out.to_str().unwrap()]);
+    assert_eq!(code, 0, "{err}");
+    let text = std::fs::read_to_string(&out).unwrap();
+    (dir, err, text)
+}
+
 fn lustre(args: &[&str]) -> (i32, String, String) {
     let out = Command::new(env!("CARGO_BIN_EXE_lustre"))
         .args(args)
@@ -76,19 +88,8 @@ fn every_corpus_file_gives_statistics_or_a_one_line_error() {
 
 #[test]
 fn bcrf_material_file_is_accepted_by_the_renderer() {
-    let dir = std::env::temp_dir().join(format!("lustre-fit-cli-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let out = dir.join("bcrf.toml");
-    let (code, _, err) = lustre(&[
-        "fit",
-        "data/surfaces/bcrf-1.bcrf",
-        "--no-plots",
-        "-o",
-        out.to_str().unwrap(),
-    ]);
-    assert_eq!(code, 0, "{err}");
+    let (dir, err, text) = fit_material("data/surfaces/bcrf-1.bcrf", "bcrf");
     assert!(err.contains("DEGENERATE"), "{err}");
-    let text = std::fs::read_to_string(&out).unwrap();
     let v: toml::Table = text.parse().unwrap();
     let gamma = v["material"]["gamma"].as_float().unwrap();
     assert!((1.001..=100.0).contains(&gamma), "{gamma}");
@@ -233,18 +234,7 @@ fn floats(v: &toml::Value, key: &str, out: &mut Vec<(String, f64)>) {
 fn a_material_file_holds_no_nan_even_when_the_kc_fit_had_no_points() {
     // txt_example.txt is a 6 × 3 map: the K-correlation fit has no range, and
     // `[provenance].fit_f_range_per_m = [nan, nan]` went into the material file.
-    let dir = std::env::temp_dir().join(format!("lustre-fit-cli-nan-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let out = dir.join("tiny.toml");
-    let (code, _, err) = lustre(&[
-        "fit",
-        "data/surfaces/corpus/txt_example.txt",
-        "--no-plots",
-        "-o",
-        out.to_str().unwrap(),
-    ]);
-    assert_eq!(code, 0, "{err}");
-    let text = std::fs::read_to_string(&out).unwrap();
+    let (dir, _, text) = fit_material("data/surfaces/corpus/txt_example.txt", "tiny");
     let v: toml::Table = text.parse().unwrap();
     let mut all = Vec::new();
     floats(&toml::Value::Table(v.clone()), "", &mut all);

@@ -571,18 +571,10 @@ mod desc {
             macro_rules! inherit {
                 ($($f:ident),*) => { $( if self.$f.is_none() { self.$f = base.$f.clone(); } )* };
             }
-            let roughness_here = self.alpha.is_some()
-                || self.alpha_x.is_some()
-                || self.alpha_y.is_some()
-                || self.alpha_beckmann.is_some();
-            if !roughness_here {
+            if !self.roughness_here() {
                 inherit!(alpha, alpha_x, alpha_y, alpha_beckmann);
             }
-            let index_here = self.metal.is_some()
-                || self.nk.is_some()
-                || self.nk_csv.is_some()
-                || self.fresnel == Some(FresnelKind::One);
-            if !index_here {
+            if !self.index_here() {
                 inherit!(metal, nk_csv, nk, fresnel);
             }
             inherit!(
@@ -596,6 +588,64 @@ mod desc {
                 beta,
                 coherent
             );
+        }
+
+        /// Whether a roughness key is set here ([`inherit`](Self::inherit)
+        /// then takes none of the base's).
+        fn roughness_here(&self) -> bool {
+            self.alpha.is_some()
+                || self.alpha_x.is_some()
+                || self.alpha_y.is_some()
+                || self.alpha_beckmann.is_some()
+        }
+
+        /// Whether the index is set here ([`inherit`](Self::inherit) then
+        /// takes none of the base's index keys).
+        fn index_here(&self) -> bool {
+            self.metal.is_some()
+                || self.nk.is_some()
+                || self.nk_csv.is_some()
+                || self.fresnel == Some(FresnelKind::One)
+        }
+
+        /// Whether `key` (a key of this table as written in a scene) is set.
+        fn is_set(&self, key: &str) -> bool {
+            macro_rules! set {
+                ($($f:ident),*) => { match key { $( stringify!($f) => self.$f.is_some(), )* _ => false } };
+            }
+            set!(
+                model,
+                metal,
+                nk_csv,
+                nk,
+                fresnel,
+                alpha,
+                alpha_x,
+                alpha_y,
+                alpha_beckmann,
+                sigma_um,
+                lc_um,
+                gamma,
+                energy,
+                fresnel_angle,
+                psd_csv,
+                beta,
+                coherent
+            )
+        }
+
+        /// Whether [`inherit`](Self::inherit) from `base` takes the value of
+        /// `key` from `base`: `base` sets it, and this description neither
+        /// sets it nor replaces its group (roughness, index). A caller that
+        /// reports an invalid merged value uses it to name the file the value
+        /// came from.
+        pub fn inherits(&self, base: &MaterialDesc, key: &str) -> bool {
+            let replaced = match key {
+                "alpha" | "alpha_x" | "alpha_y" | "alpha_beckmann" => self.roughness_here(),
+                "metal" | "nk_csv" | "nk" | "fresnel" => self.index_here() || self.is_set(key),
+                _ => self.is_set(key),
+            };
+            base.is_set(key) && !replaced
         }
 
         /// Keys set together here of which one would silently override the

@@ -384,19 +384,20 @@ pub fn renderer_kc(k: &KcParams) -> ((f64, f64, f64), Option<String>) {
 /// says so: a factor 2 (a quarter or four times the variance).
 pub const SIGMA_SQ_RATIO_MAX: f64 = 2.0;
 
-/// The problem when the fitted σ (`sigma_um`, of the model over all frequencies) and the
-/// measured rms height (`sq_um`) differ by more than [`SIGMA_SQ_RATIO_MAX`]. The fit
+/// The problem when the fitted σ (`sigma`, of the model over all frequencies) and the
+/// measured rms height (`sq`), both in metres, differ by more than [`SIGMA_SQ_RATIO_MAX`]. The fit
 /// matches the PSD inside its band (`band`, cycles/m); σ ≪ Sq means most of the height
 /// variance lies outside it, at wavelengths longer than the band (waviness, form), which
 /// the GHS models then render as mirror reflection; σ ≫ Sq means the fitted roll-off lies
 /// beyond the scan, and the model has more long-wavelength roughness than was measured.
 /// Either way g = (kσ(cosθi + cosθo))², the specular weight e^−g and the lobe width
 /// follow σ, not Sq.
-pub fn variance_mismatch(sigma_um: f64, sq_um: f64, band: (f64, f64)) -> Option<String> {
-    if !(sigma_um.is_finite() && sq_um.is_finite() && sigma_um > 0.0 && sq_um > 0.0) {
+pub fn variance_mismatch(sigma: f64, sq: f64, band: (f64, f64)) -> Option<String> {
+    if !(sigma.is_finite() && sq.is_finite() && sigma > 0.0 && sq > 0.0) {
         return None;
     }
-    let ratio = sigma_um / sq_um;
+    let ratio = sigma / sq;
+    let (sigma_um, sq_um) = (sigma * UM, sq * UM);
     if (1.0 / SIGMA_SQ_RATIO_MAX..=SIGMA_SQ_RATIO_MAX).contains(&ratio) {
         return None;
     }
@@ -604,7 +605,7 @@ pub fn build(a: &Analysis, prov: &Provenance<'_>) -> MaterialFile {
     // A degenerate or clamped fit is flagged as such already; the silent case is a sound
     // fit whose σ is not the measured one.
     let variance_warning = kc_ok
-        .then(|| variance_mismatch(sigma_um, a.stats.sq * UM, a.kc.range))
+        .then(|| variance_mismatch(a.kc.params.sigma, a.stats.sq, a.kc.range))
         .flatten();
     let (model, model_reason) = match prov.model {
         "auto" if kc_ok => (

@@ -82,52 +82,6 @@ struct Included {
     split: Option<String>,
 }
 
-/// Whether `desc` sets `field` (a key of [`MaterialDesc`]).
-fn sets(desc: &MaterialDesc, field: &str) -> bool {
-    match field {
-        "model" => desc.model.is_some(),
-        "metal" => desc.metal.is_some(),
-        "nk_csv" => desc.nk_csv.is_some(),
-        "nk" => desc.nk.is_some(),
-        "fresnel" => desc.fresnel.is_some(),
-        "alpha" => desc.alpha.is_some(),
-        "alpha_x" => desc.alpha_x.is_some(),
-        "alpha_y" => desc.alpha_y.is_some(),
-        "alpha_beckmann" => desc.alpha_beckmann.is_some(),
-        "sigma_um" => desc.sigma_um.is_some(),
-        "lc_um" => desc.lc_um.is_some(),
-        "gamma" => desc.gamma.is_some(),
-        "energy" => desc.energy.is_some(),
-        "fresnel_angle" => desc.fresnel_angle.is_some(),
-        "psd_csv" => desc.psd_csv.is_some(),
-        "beta" => desc.beta.is_some(),
-        "coherent" => desc.coherent.is_some(),
-        "include" => desc.include.is_some(),
-        "cutoff" => desc.cutoff.is_some(),
-        // A key this list does not know: taken as set (the scene is blamed).
-        _ => true,
-    }
-}
-
-/// The keys a scene's material replaces as a group when it sets any of them
-/// (`MaterialDesc::resolve`'s inheritance): roughness and index.
-const GROUPS: [&[&str]; 2] = [
-    &["alpha", "alpha_x", "alpha_y", "alpha_beckmann"],
-    &["metal", "nk", "nk_csv", "fresnel"],
-];
-
-/// Whether the value of `field` that `resolve` rejected came from the
-/// include: the include sets it and the scene neither sets it nor replaces
-/// its group.
-fn from_include(desc: &MaterialDesc, base: &MaterialDesc, field: &str) -> bool {
-    let alone = [field];
-    let group = GROUPS
-        .iter()
-        .find(|g| g.contains(&field))
-        .map_or(&alone[..], |g| *g);
-    sets(base, field) && !group.iter().any(|k| sets(desc, k))
-}
-
 /// 1-based line of `key = …` inside `[table]` of a TOML text (as `lustre fit`
 /// writes it: one key per line, tables by header).
 fn key_line(text: &str, table: &str, key: &str) -> Option<usize> {
@@ -349,7 +303,7 @@ pub fn build_material(
         .resolve(base, &mut files)
         .map_err(|e| match &included {
             // The value came from the include: say where it is, not only which key.
-            Some(inc) if from_include(desc, &inc.base, e.field) => {
+            Some(inc) if desc.inherits(&inc.base, e.field) => {
                 format!("{}: {e}", inc.locate(e.field))
             }
             _ => e.to_string(),

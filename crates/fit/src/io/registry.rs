@@ -202,11 +202,7 @@ pub static READERS: &[Reader] = &[
         description: "Bruker/Veeco NanoScope .di/.spm/.001 (multi-channel)",
         extensions: &["di", "spm", "001", "002", "003", "004"],
         binary: true,
-        signature: Some(Signature {
-            offset: 0,
-            describe: "`\\*File list`",
-            present: |b| starts(b, NANOSCOPE) == Sniff::Magic,
-        }),
+        signature: prefix!("`\\*File list`", NANOSCOPE),
         sniff: |b| starts(b, NANOSCOPE),
         read: nanoscope::read,
     },
