@@ -284,8 +284,7 @@ fn stats(args: StatsArgs) -> anyhow::Result<()> {
     }
     if s.flat.is_none()
         && kc.reason.is_none()
-        && let Some(w) =
-            fit::material::variance_mismatch(kc.params.sigma * 1e6, s.stats.sq * 1e6, kc.range)
+        && let Some(w) = fit::material::variance_mismatch(kc.params.sigma, s.stats.sq, kc.range)
     {
         warnings.push(w);
     }

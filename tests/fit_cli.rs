@@ -276,3 +276,15 @@ fn fit_never_writes_over_its_own_scan() {
     }
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn fit_stats_warns_when_the_kc_sigma_misses_most_of_the_variance() {
+    // nid-1.nid: a sound K-correlation fit whose σ (0.63 nm) holds under 1 % of Sq² (7.1 nm).
+    let (code, _, err) = lustre(&["fit", "stats", "data/surfaces/corpus/nid-1.nid"]);
+    assert_eq!(code, 0, "{err}");
+    assert!(
+        err.contains("the K-correlation σ 6.2997e-4 µm holds 0.78 % of the measured height")
+            && err.contains("(Sq 7.1119e-3 µm)"),
+        "{err}"
+    );
+}
