@@ -218,6 +218,7 @@ fn new_film(scene: &Scene) -> Film {
         scene.settings.seed,
         0.0,
     )
+    .unwrap()
 }
 
 /// Linear sRGB of every pixel, in f64.

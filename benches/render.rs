@@ -46,7 +46,8 @@ fn render_spp(pool: &render::render::ThreadPool, scene: &Scene) -> Film {
         scene.fingerprint,
         1,
         0.0,
-    );
+    )
+    .unwrap();
     let opts = RenderOptions {
         pass_target: Duration::from_secs(3600),
         ..RenderOptions::default()

@@ -247,20 +247,14 @@ fn parse_line(line: &str) -> Result<Map<String, Value>, QueryError> {
 /// working directory.
 struct EvalFiles;
 
-/// Largest CSV a query may name.
-const MAX_CSV_BYTES: u64 = 64 << 20;
-
 fn read_csv(path: &str, columns: usize) -> Result<Vec<Vec<f64>>, String> {
-    let len = std::fs::metadata(path)
-        .map_err(|e| format!("cannot read {path}: {e}"))?
-        .len();
-    if len > MAX_CSV_BYTES {
-        return Err(format!(
-            "{path}: {len} bytes is more than the {} MiB a table may have",
-            MAX_CSV_BYTES >> 20
-        ));
-    }
-    let text = std::fs::read_to_string(path).map_err(|e| format!("cannot read {path}: {e}"))?;
+    let bytes = safe_io::read_input(
+        std::path::Path::new(path),
+        "table",
+        render::scene::inputs::MAX_CSV_BYTES,
+    )
+    .map_err(|e| e.to_string())?;
+    let text = String::from_utf8(bytes).map_err(|_| format!("{path}: not UTF-8 text"))?;
     render::spectrum::parse_csv_rows(&text, columns).map_err(|e| format!("{path}: {e}"))
 }
 

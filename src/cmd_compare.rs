@@ -210,13 +210,11 @@ pub fn run(args: CompareArgs) -> anyhow::Result<()> {
         .clone()
         .unwrap_or_else(|| PathBuf::from(format!("out/compare/{name}.png")));
     if let Some(material) = &args.material {
-        models::refuse_overwriting_input(
-            material,
-            &[
-                (out.clone(), "compare PNG"),
-                (out.with_extension("cells.csv"), "cell table"),
-            ],
-        )?;
+        safe_io::register_input(material);
+        crate::outputs::check(&[
+            (out.clone(), "compare PNG"),
+            (out.with_extension("cells.csv"), "cell table"),
+        ])?;
     }
     if let Some(dir) = out.parent().filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
@@ -247,7 +245,8 @@ pub fn run(args: CompareArgs) -> anyhow::Result<()> {
                 scene.fingerprint,
                 scene.settings.seed,
                 scene.settings.exposure,
-            );
+            )
+            .map_err(anyhow::Error::msg)?;
             render::render_range_in(&pool, &scene, &mut film, 0..args.spp, &opts)?;
             let px: Vec<u8> = film.rgb().iter().flat_map(|p| p.map(to_srgb8)).collect();
             grid.set_rgb8(r, c, w, h, px)?;

@@ -191,7 +191,7 @@ pub(crate) fn read_options(a: &ScanArgs) -> anyhow::Result<ReadOptions> {
 }
 
 fn load(path: &Path, opts: &ReadOptions) -> anyhow::Result<(Vec<u8>, fit::io::Scan)> {
-    let bytes = std::fs::read(path).with_context(|| format!("cannot read {}", path.display()))?;
+    let bytes = fit::io::read_scan_file(path)?;
     let scan = fit::io::open_bytes(&path.display().to_string(), &bytes, opts)?;
     for n in &scan.notes {
         eprintln!("note: {}: {n}", path.display());
@@ -200,8 +200,7 @@ fn load(path: &Path, opts: &ReadOptions) -> anyhow::Result<(Vec<u8>, fit::io::Sc
 }
 
 fn channels(args: ChannelsArgs) -> anyhow::Result<()> {
-    let bytes = std::fs::read(&args.scan)
-        .with_context(|| format!("cannot read {}", args.scan.display()))?;
+    let bytes = fit::io::read_scan_file(&args.scan)?;
     let name = args.scan.display().to_string();
     let (format, list) = fit::io::list_channels(&name, &bytes, &read_options(&args.read)?)?;
     let default = list.iter().position(|c| c.is_height);
@@ -378,18 +377,9 @@ fn material(args: MaterialArgs) -> anyhow::Result<()> {
         outputs.extend(plots::paths(&args.output).into_iter().map(|p| (p, "plot")));
     }
     for input in std::iter::once(&scan_path).chain(args.stylus.as_ref()) {
-        for (out, what) in &outputs {
-            if crate::paths::same_file(out, input) {
-                anyhow::bail!(
-                    "{}: the {what} would be written over the input {} itself. Fix: pass another \
-                     -o, e.g. -o {}",
-                    out.display(),
-                    input.display(),
-                    input.with_extension("material.toml").display()
-                );
-            }
-        }
+        safe_io::register_input(input);
     }
+    crate::outputs::check(&outputs)?;
     let ropts = read_options(&args.read)?;
     let (bytes, topo) = load(&scan_path, &ropts)?;
     let stylus = match &args.stylus {

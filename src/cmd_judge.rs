@@ -226,8 +226,19 @@ pub fn run(args: JudgeArgs) -> anyhow::Result<()> {
             })?,
     };
     let fresnel = fresnel_of(&fresnel_name)?;
-    let bytes = std::fs::read(&args.scan)
-        .with_context(|| format!("cannot read {}", args.scan.display()))?;
+    let bytes = fit::io::read_scan_file(&args.scan)?;
+    if let Some(r) = &args.reference {
+        safe_io::register_input(r);
+    }
+    let mut outputs = vec![
+        (args.out.join("judge.json"), "report"),
+        (args.out.join("judge_table.md"), "table"),
+        (args.out.join("judge_points.csv"), "point table"),
+    ];
+    if !args.no_plots {
+        outputs.push((args.out.join("judge_slices.png"), "figure"));
+    }
+    crate::outputs::check(&outputs)?;
     let topo = fit::io::read_bytes(
         &args.scan.display().to_string(),
         &bytes,

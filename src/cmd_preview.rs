@@ -433,7 +433,8 @@ pub fn run(args: PreviewArgs) -> anyhow::Result<()> {
             outputs.push((dir.join(format!("{stem}.toml")), "preview scene file"));
             outputs.push((dir.join(format!("{stem}.exr")), "preview EXR"));
         }
-        models::refuse_overwriting_input(material, &outputs)?;
+        safe_io::register_input(material);
+        crate::outputs::check(&outputs)?;
     }
     std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
     let assets_dir = dir.join("assets");
@@ -442,7 +443,8 @@ pub fn run(args: PreviewArgs) -> anyhow::Result<()> {
     for (file, text) in assets() {
         let p = assets_dir.join(file);
         // Rewrite only when different, so a scene's fingerprint stays put between runs.
-        if std::fs::read_to_string(&p).ok().as_deref() != Some(text.as_str()) {
+        let old = safe_io::read_regular(&p, "preview asset", render::scene::inputs::MAX_CSV_BYTES);
+        if old.ok().as_deref() != Some(text.as_bytes()) {
             plot::write_atomic(&p, text.as_bytes())?;
         }
     }
@@ -503,7 +505,8 @@ pub fn run(args: PreviewArgs) -> anyhow::Result<()> {
             pass_target: Duration::from_secs(1),
             ..RenderOptions::default()
         };
-        let mut film = Film::new(w, h, scene.fingerprint, scene.settings.seed, args.exposure);
+        let mut film = Film::new(w, h, scene.fingerprint, scene.settings.seed, args.exposure)
+            .map_err(anyhow::Error::msg)?;
         let t0 = Instant::now();
         let outcome = render::render_range_in(&pool, &scene, &mut film, 0..args.spp, &opts)?;
         if film.spp() == 0 {

@@ -109,6 +109,12 @@ pub fn parse_range(s: &str) -> anyhow::Result<Range<u64>> {
     if b <= a {
         bail!("--spp-range `{s}`: the end must be greater than the start");
     }
+    if b > render::scene::MAX_SPP {
+        bail!(
+            "--spp-range `{s}`: sample indices end at {}",
+            render::scene::MAX_SPP
+        );
+    }
     Ok(a..b)
 }
 
@@ -231,8 +237,8 @@ pub fn render(args: RenderArgs) -> anyhow::Result<()> {
         scene.settings.seed = seed;
     }
     let spp = args.spp.unwrap_or(scene.settings.spp);
-    if spp == 0 {
-        bail!("--spp must be ≥ 1");
+    if spp == 0 || spp > render::scene::MAX_SPP {
+        bail!("--spp {spp}: expected 1..={}", render::scene::MAX_SPP);
     }
     let shard = args.spp_range.as_deref().map(parse_range).transpose()?;
     let target = shard.clone().unwrap_or(0..spp);
@@ -272,26 +278,9 @@ pub fn render(args: RenderArgs) -> anyhow::Result<()> {
             "--no-film: the scene names no `exr` or `png` output and none was given; nothing would be written"
         );
     }
-    {
-        let scene_dir = scene_path.parent().unwrap_or(Path::new(""));
-        let inputs: Vec<(String, PathBuf)> =
-            std::iter::once(("the scene file".to_string(), scene_path.clone()))
-                .chain(
-                    scene
-                        .inputs
-                        .iter()
-                        .skip(1)
-                        .map(|i| (format!("input {}", i.name), scene_dir.join(&i.name))),
-                )
-                .collect();
-        let film_out = (!args.no_film).then_some(&film_path);
-        check_outputs(
-            exr.as_deref(),
-            png.as_deref(),
-            film_out.map(|p| p.as_path()),
-            &inputs,
-        )?;
-    }
+    // The scene build recorded every file it read, so these checks refuse all of them.
+    let film_out = (!args.no_film).then_some(film_path.as_path());
+    check_outputs(exr.as_deref(), png.as_deref(), film_out)?;
     if exr.is_none() && png.is_none() && !args.quiet {
         eprintln!(
             "note: the scene names no `exr` or `png` output; only the film {} is written",
@@ -302,11 +291,13 @@ pub fn render(args: RenderArgs) -> anyhow::Result<()> {
     let time_limit = args.time_limit.as_deref().map(parse_duration).transpose()?;
     let checkpoint_every = parse_checkpoint_every(&args.checkpoint_every)?;
     let threads = thread_count(args.threads, args.quiet)?;
-    let mut film = Film::for_scene(&scene);
+    render::memory::check_fits(scene.camera.width, scene.camera.height)
+        .map_err(|m| anyhow::anyhow!("{}: {m}", scene_path.display()))?;
+    let mut film = Film::for_scene(&scene).map_err(anyhow::Error::msg)?;
     let mut todo = target.clone();
     if args.resume {
         if film_path.exists() {
-            let old = Film::load(&film_path)?;
+            let old = Film::load_checkpoint(&film_path)?;
             todo = match film.resume(old, target.clone()) {
                 Ok(todo) => todo,
                 Err(e @ ResumeError::Incompatible(_)) => bail!(
@@ -359,6 +350,12 @@ pub fn render(args: RenderArgs) -> anyhow::Result<()> {
         (Some(a), Some(b)) => format!(", {:.3} CPU s", b - a),
         _ => String::new(),
     };
+    if film.spp() == 0 {
+        // Stopped before the first pass finished: there is nothing to keep, and an
+        // earlier film or image at these names stays as it was.
+        eprintln!("stopped before any sample was complete; nothing written");
+        return Ok(());
+    }
     if !args.no_film {
         film.save(&film_path)?;
     }
@@ -411,16 +408,14 @@ pub fn render(args: RenderArgs) -> anyhow::Result<()> {
 
 /// Merges partial films.
 pub fn merge(args: MergeArgs) -> anyhow::Result<()> {
-    let inputs: Vec<(String, PathBuf)> = args
-        .inputs
-        .iter()
-        .map(|p| (format!("input film {}", p.display()), p.clone()))
-        .collect();
+    // Recorded before they are read, so a bad output is refused before any film is loaded.
+    for p in &args.inputs {
+        safe_io::register_input(p);
+    }
     check_outputs(
         args.exr.as_deref(),
         args.png.as_deref(),
         args.film.as_deref(),
-        &inputs,
     )?;
     let mut inputs = args.inputs.iter();
     let first = inputs.next().context("give at least one film")?;
@@ -457,14 +452,14 @@ pub fn merge(args: MergeArgs) -> anyhow::Result<()> {
     write_images(&film, args.exr.as_deref(), args.png.as_deref(), args.quiet)
 }
 
-/// Refuses outputs that would overwrite an input or each other, and image
-/// names whose extension says another format than the one written (an EXR
-/// written as `x.png` opens as a broken PNG).
+/// Refuses outputs that would overwrite an input of this process, a
+/// directory or each other, and image names whose extension says another
+/// format than the one written (an EXR written as `x.png` opens as a broken
+/// PNG).
 fn check_outputs(
     exr: Option<&Path>,
     png: Option<&Path>,
     film: Option<&Path>,
-    inputs: &[(String, PathBuf)],
 ) -> anyhow::Result<()> {
     for (p, ext, flag) in [(exr, "exr", "--exr / `exr`"), (png, "png", "--png / `png`")] {
         if let Some(p) = p {
@@ -485,16 +480,9 @@ fn check_outputs(
         .filter_map(|(k, p)| p.map(|p| (k, p)))
         .collect();
     for (i, (kind, p)) in outputs.iter().enumerate() {
-        for (what, q) in inputs {
-            if crate::paths::same_file(p, q) {
-                bail!(
-                    "the {kind} output {} is {what}: writing it would destroy it; choose another output name",
-                    p.display()
-                );
-            }
-        }
+        safe_io::check_output(p).with_context(|| format!("the {kind} output"))?;
         for (other, q) in &outputs[..i] {
-            if crate::paths::same_file(p, q) {
+            if safe_io::same_file(p, q) {
                 bail!(
                     "the {other} and {kind} outputs are both {}: one would overwrite the other; give them different names",
                     p.display()
@@ -515,26 +503,24 @@ mod tests {
         std::fs::create_dir_all(&dir).unwrap();
         let scene = dir.join("a.toml");
         std::fs::write(&scene, "").unwrap();
-        let inputs = [("the scene file".to_string(), scene.clone())];
+        safe_io::register_input(&scene);
         let p = |s: &str| dir.join(s);
         // Sound: distinct names with their formats' extensions (any case).
-        check_outputs(
-            Some(&p("a.exr")),
-            Some(&p("a.PNG")),
-            Some(&p("a.film")),
-            &inputs,
-        )
-        .unwrap();
-        check_outputs(None, None, Some(&p("a.film")), &inputs).unwrap();
+        check_outputs(Some(&p("a.exr")), Some(&p("a.PNG")), Some(&p("a.film"))).unwrap();
+        check_outputs(None, None, Some(&p("a.film"))).unwrap();
         let err = |exr: Option<PathBuf>, png: Option<PathBuf>, film: Option<PathBuf>| {
-            check_outputs(exr.as_deref(), png.as_deref(), film.as_deref(), &inputs)
-                .unwrap_err()
-                .to_string()
+            format!(
+                "{:#}",
+                check_outputs(exr.as_deref(), png.as_deref(), film.as_deref()).unwrap_err()
+            )
         };
         // The scene file, also reached through `..` or `.`.
+        std::fs::create_dir_all(dir.join("sub")).unwrap();
         let via = dir.join("sub").join("..").join(".").join("a.toml");
-        assert!(err(None, None, Some(via)).contains("is the scene file"));
+        assert!(err(None, None, Some(via)).contains("is the input"));
         assert!(err(None, None, Some(scene.clone())).contains("would destroy it"));
+        // A directory.
+        assert!(err(None, None, Some(dir.join("sub"))).contains("a directory"));
         // Two outputs on one file.
         assert!(err(Some(p("b.exr")), None, Some(p("b.exr"))).contains("the EXR and film outputs"));
         // A format under another's extension, or none.

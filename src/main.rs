@@ -12,7 +12,7 @@ mod cmd_preview;
 mod cmd_render;
 mod cmd_scenes;
 mod models;
-mod paths;
+mod outputs;
 mod progress;
 
 use clap::{Parser, Subcommand};
@@ -69,8 +69,24 @@ fn main() -> std::process::ExitCode {
     match result {
         Ok(()) => std::process::ExitCode::SUCCESS,
         Err(err) => {
-            eprintln!("error: {err:#}");
+            eprintln!("error: {}", report(&err));
             std::process::ExitCode::FAILURE
         }
     }
+}
+
+/// The error and its causes joined by ": ", leaving out a cause whose text the message
+/// before it already holds (the library errors quote their I/O cause in their own text).
+fn report(err: &anyhow::Error) -> String {
+    let mut out = String::new();
+    for cause in err.chain() {
+        let text = cause.to_string();
+        if !out.contains(&text) {
+            if !out.is_empty() {
+                out.push_str(": ");
+            }
+            out.push_str(&text);
+        }
+    }
+    out
 }

@@ -209,41 +209,12 @@ pub fn fit_material_toml(
     })
 }
 
-/// Refuses a run that would write over its own input: `outputs` are the files the command is
-/// about to write (with what each one is), `input` the file it reads. Only a file that exists
-/// can be the input, so the check compares canonical paths of the existing ones (relative
-/// spellings, `./`, symlinks). `lustre preview m.toml --out m.png` wrote its scene file `m.toml`
-/// over the fitted material and then failed to load it.
-pub fn refuse_overwriting_input(
-    input: &std::path::Path,
-    outputs: &[(std::path::PathBuf, &str)],
-) -> anyhow::Result<()> {
-    for (out, what) in outputs {
-        if crate::paths::same_file(out, input) {
-            bail!(
-                "{}: the {what} would be written over the input {} itself. Fix: pass another \
-                 --out name or directory (e.g. --out {})",
-                out.display(),
-                input.display(),
-                input
-                    .with_file_name(format!(
-                        "{}_preview.png",
-                        input
-                            .file_stem()
-                            .map_or_else(|| "material".into(), |s| s.to_string_lossy())
-                    ))
-                    .display()
-            );
-        }
-    }
-    Ok(())
-}
-
 /// Reads a `lustre fit` material file; an error names the file and what is missing.
 pub fn read_fit_file(path: &std::path::Path) -> anyhow::Result<FitFile> {
     use anyhow::Context;
-    let text =
-        std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
+    let bytes = safe_io::read_input(path, "material file", render::scene::inputs::MAX_TOML_BYTES)?;
+    let text = String::from_utf8(bytes)
+        .map_err(|_| anyhow!("{}: the material file is not UTF-8 text", path.display()))?;
     let doc: toml::Table =
         toml::from_str(&text).with_context(|| format!("parsing {}", path.display()))?;
     let material = doc

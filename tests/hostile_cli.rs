@@ -195,3 +195,39 @@ fn no_film_and_shard_films_named_after_their_range() {
     );
     let _ = std::fs::remove_dir_all(&d);
 }
+
+/// The documented resolution limit, at the limit: the largest film is accepted by
+/// the scene, one pixel row more is refused naming the limit, and a render the
+/// process cannot hold (here under `ulimit -v`) is refused up front with the
+/// numbers, never an abort on the allocation.
+#[test]
+fn resolution_limit_and_memory_are_checked_before_allocating() {
+    let d = tempdir("resolution");
+    let at_limit = SCENE.replace("resolution = [4, 3]", "resolution = [32768, 1024]");
+    let over = SCENE.replace("resolution = [4, 3]", "resolution = [32768, 1025]");
+    std::fs::write(d.join("limit.toml"), &at_limit).unwrap();
+    std::fs::write(d.join("over.toml"), &over).unwrap();
+    render::load_str(&d.join("limit.toml"), &at_limit).unwrap();
+    fails_with(
+        &d,
+        &["render", "over.toml", "-q"],
+        "at most 33554432 pixels",
+    );
+    let out = Command::new("sh")
+        .current_dir(&d)
+        .arg("-c")
+        .arg(format!(
+            "ulimit -v 1500000 && exec {} render limit.toml -q",
+            env!("CARGO_BIN_EXE_lustre")
+        ))
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains("32768×1024 render needs about 2.44 GiB")
+            && err.contains("lower the resolution"),
+        "{err}"
+    );
+    let _ = std::fs::remove_dir_all(&d);
+}

@@ -36,7 +36,8 @@ fn render(scene: &Scene, spp: u64, threads: usize) -> Film {
         scene.fingerprint,
         scene.settings.seed,
         0.0,
-    );
+    )
+    .unwrap();
     let opts = RenderOptions {
         threads: Some(threads),
         ..RenderOptions::default()

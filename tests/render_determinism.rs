@@ -63,7 +63,7 @@ fn scene() -> Scene {
 }
 
 fn render(scene: &Scene, range: std::ops::Range<u64>, threads: usize) -> Film {
-    let mut film = Film::new(40, 24, scene.fingerprint, scene.settings.seed, 0.0);
+    let mut film = Film::new(40, 24, scene.fingerprint, scene.settings.seed, 0.0).unwrap();
     let opts = RenderOptions {
         threads: Some(threads),
         ..Default::default()
@@ -236,7 +236,7 @@ fn resume_completes_to_the_same_film() {
 #[test]
 fn time_limit_writes_what_it_has() {
     let s = scene();
-    let mut film = Film::new(40, 24, s.fingerprint, s.settings.seed, 0.0);
+    let mut film = Film::new(40, 24, s.fingerprint, s.settings.seed, 0.0).unwrap();
     let opts = RenderOptions {
         threads: Some(2),
         time_limit: Some(std::time::Duration::from_millis(1)),

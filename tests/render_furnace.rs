@@ -59,7 +59,7 @@ spectrum = "constant"
 
 fn check_furnace(mode: &str, tol: f64, pixel_tol: f64) {
     let scene = render::load_str(&scene_path("furnace.toml"), &furnace_scene(mode)).unwrap();
-    let mut film = Film::new(24, 16, scene.fingerprint, 3, 0.0);
+    let mut film = Film::new(24, 16, scene.fingerprint, 3, 0.0).unwrap();
     render::render_range(
         &scene,
         &mut film,

@@ -89,7 +89,7 @@ spectrum = "constant"
 fn render_y(dir: &std::path::Path, text: &str, seed: u64) -> Vec<f64> {
     let mut scene = render::load_str(&dir.join("scene.toml"), text).unwrap();
     scene.settings.seed = seed;
-    let mut film = Film::new(32, 32, scene.fingerprint, seed, 0.0);
+    let mut film = Film::new(32, 32, scene.fingerprint, seed, 0.0).unwrap();
     render::render_range(&scene, &mut film, 0..64, &RenderOptions::default()).unwrap();
     (0..film.sums().len()).map(|i| film.xyz(i)[1]).collect()
 }

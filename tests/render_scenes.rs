@@ -69,7 +69,7 @@ spectrum = "constant"
         "{}",
         scene.prepared
     );
-    let mut film = Film::new(24, 18, scene.fingerprint, 5, 0.0);
+    let mut film = Film::new(24, 18, scene.fingerprint, 5, 0.0).unwrap();
     render::render_range(&scene, &mut film, 0..32, &RenderOptions::default()).unwrap();
     let ys: Vec<f64> = (0..film.sums().len()).map(|i| film.xyz(i)[1]).collect();
     let mean = ys.iter().sum::<f64>() / ys.len() as f64;
@@ -146,7 +146,7 @@ file = "sky.exr"
     let scene = render::load_str(&dir.join("view.toml"), view).unwrap();
     let d = glam::DVec3::new(0.3, 0.5, -1.0).normalize();
     let want = px[texel(w, h, d)];
-    let mut film = Film::new(1, 1, scene.fingerprint, 0, 0.0);
+    let mut film = Film::new(1, 1, scene.fingerprint, 0, 0.0).unwrap();
     render::render_range(&scene, &mut film, 0..20_000, &RenderOptions::default()).unwrap();
     let got = film.rgb()[0];
     eprintln!("env texel {want:?}, rendered {got:?}");

@@ -120,7 +120,7 @@ fn check_scene(path: &Path) -> Vec<String> {
             bad.push(format!("{}: {m}", path.display()));
         }
     }
-    let mut film = Film::new(RES, RES, scene.fingerprint, scene.settings.seed, 0.0);
+    let mut film = Film::new(RES, RES, scene.fingerprint, scene.settings.seed, 0.0).unwrap();
     let opts = RenderOptions {
         threads: Some(1),
         ..RenderOptions::default()

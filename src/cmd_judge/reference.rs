@@ -2,7 +2,7 @@
 
 use std::path::Path;
 
-use anyhow::{Context, anyhow, bail};
+use anyhow::{anyhow, bail};
 use fit::explicit_brdf::{ExplicitBrdf, Validity};
 
 use super::LOG_FLOOR;
@@ -80,8 +80,9 @@ pub(super) fn judge_reference(
 
 /// Rows `[θi, θo, φo, λ, brdf]` of a reference CSV.
 pub(super) fn read_reference(path: &Path) -> anyhow::Result<Vec<[f64; 5]>> {
-    let text = std::fs::read_to_string(path)
-        .with_context(|| format!("cannot read the reference {}", path.display()))?;
+    let bytes = safe_io::read_input(path, "reference BRDF", render::scene::inputs::MAX_CSV_BYTES)?;
+    let text = String::from_utf8(bytes)
+        .map_err(|_| anyhow!("{}: the reference is not UTF-8 text", path.display()))?;
     let names = [
         "theta_i_deg",
         "theta_o_deg",

@@ -1,18 +1,12 @@
 //! Error types: reading files ([`ReadError`]) and analysing data ([`FitError`]).
 
-use std::path::PathBuf;
-
 /// A scan file could not be read or is not valid.
 #[derive(Debug, thiserror::Error)]
 pub enum ReadError {
-    /// The operating system refused to read the file.
-    #[error("{file}: cannot read the file: {source}")]
-    Io {
-        /// File that failed.
-        file: PathBuf,
-        /// Underlying error.
-        source: std::io::Error,
-    },
+    /// The path is not a regular file, or is larger than any scan
+    /// ([`crate::io::MAX_SCAN_BYTES`]); the message names it and the fix.
+    #[error(transparent)]
+    NotAScanFile(#[from] safe_io::ReadError),
     /// A header field or the data block is missing, malformed or inconsistent.
     #[error("{file}: field `{field}`: {problem}. Fix: {fix}")]
     Invalid {

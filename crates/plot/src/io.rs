@@ -7,7 +7,7 @@ use std::path::Path;
 
 /// Writes `bytes` to `path` atomically (temporary file in the same folder + rename).
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), PlotError> {
-    atomic_write::write_atomic(path, bytes).map_err(|e| PlotError::Io {
+    safe_io::write_atomic(path, bytes).map_err(|e| PlotError::Io {
         action: e.action,
         path: e.path,
         source: e.source,

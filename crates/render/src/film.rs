@@ -37,16 +37,138 @@ const SCALE: f64 = (1u64 << 40) as f64;
 /// and counted, where it used to saturate the fixed-point conversion and
 /// give every lit pixel the same value without a word.
 pub const MAX_SAMPLE_XYZ: f64 = 1e20;
+/// Largest |exposure| of a film (and of a scene's `[film] exposure`), in
+/// stops: the gain 2^exposure must leave the f32 EXR and the PNG conversion
+/// finite for any radiance a scene can reasonably produce.
+pub const MAX_EXPOSURE_STOPS: f64 = 60.0;
+/// Most samples per pixel, and the end of any sample range a film holds
+/// (2⁴⁰, far beyond any render: a billion samples of one pixel take hours;
+/// shards may still start past 2³²).
+pub const MAX_SPP: u64 = 1 << 40;
+/// [`MAX_SAMPLE_XYZ`] in the film's fixed point: no pixel sum exceeds the
+/// pixel's sample count times this.
+const MAX_SAMPLE_FIXED: i128 = (MAX_SAMPLE_XYZ * SCALE) as i128;
 /// Largest width or height of a film (and of a scene's `resolution`).
 pub const MAX_SIDE: u32 = 1 << 15;
-/// Largest pixel count of a film: 2²⁷ pixels hold 6 GiB of sums.
-pub const MAX_PIXELS: u64 = 1 << 27;
+/// Largest pixel count of a film: 2²⁵ pixels (8K UHD, 7680 × 4320, fits)
+/// hold 1.5 GiB of sums, and a render of them about 2.4 GiB at its peak
+/// ([`crate::memory::PEAK_BYTES_PER_PIXEL`]).
+pub const MAX_PIXELS: u64 = 1 << 25;
 /// Most input files a film records.
 const MAX_INPUTS: usize = 1 << 16;
 /// Longest recorded input name, bytes.
 const MAX_NAME: usize = 4096;
+fn check_resolution(width: u32, height: u32) -> Result<(), String> {
+    if width == 0 || height == 0 || width > MAX_SIDE || height > MAX_SIDE {
+        return Err(format!(
+            "resolution {width}×{height} (expected 1..={MAX_SIDE} each)"
+        ));
+    }
+    if width as u64 * height as u64 > MAX_PIXELS {
+        return Err(format!("{width}×{height} is more than {MAX_PIXELS} pixels"));
+    }
+    Ok(())
+}
+
+fn check_exposure(stops: f64) -> Result<(), String> {
+    let m = MAX_EXPOSURE_STOPS;
+    if stops.is_finite() && stops.abs() <= m {
+        Ok(())
+    } else {
+        Err(format!(
+            "exposure {stops} is outside ±{m} stops (2^{m} already takes any sane pixel past \
+             f32's range); give a value within it"
+        ))
+    }
+}
+
+/// Sample ranges as renders leave them: at least one, each non-empty, sorted,
+/// disjoint, and ending by [`MAX_SPP`].
+fn check_ranges(ranges: &[Range<u64>]) -> Result<(), String> {
+    if ranges.is_empty() {
+        return Err("no sample range: a render writes a film only once it holds samples".into());
+    }
+    for (i, r) in ranges.iter().enumerate() {
+        if r.start >= r.end || (i > 0 && ranges[i - 1].end >= r.start) {
+            return Err(format!(
+                "sample range {}..{} is empty, unsorted or overlaps",
+                r.start, r.end
+            ));
+        }
+        if r.end > MAX_SPP {
+            return Err(format!(
+                "sample range {}..{} ends beyond sample {MAX_SPP}, the most a render takes",
+                r.start, r.end
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// The first dropped sample inside the image and present exactly when some
+/// were dropped; no more dropped than were taken.
+fn check_dropped(d: &Dropped, width: u32, height: u32, spp: u64) -> Result<(), String> {
+    if let Some(a) = d.first
+        && (a.x >= width || a.y >= height)
+    {
+        return Err(format!(
+            "first dropped sample at pixel ({}, {}) outside {width}×{height}",
+            a.x, a.y
+        ));
+    }
+    if d.first.is_some() != (d.total() > 0) {
+        return Err("dropped-sample counts and location disagree".into());
+    }
+    let taken = spp as u128 * width as u128 * height as u128;
+    if d.non_finite as u128 + d.negative as u128 > taken {
+        return Err(format!(
+            "{} dropped samples of the {taken} taken",
+            d.non_finite as u128 + d.negative as u128
+        ));
+    }
+    Ok(())
+}
+
+/// Sums a render can produce: no component beyond `spp` samples at the
+/// film's per-sample limit, and luminance Y never negative (a sample's Y is
+/// non-negative, or the sample is dropped, except under a signed sky whose
+/// negative part lies where Y's matching function is nearly zero).
+fn check_sums(sums: &[[i128; 3]], width: u32, spp: u64) -> Result<(), String> {
+    let bound = MAX_SAMPLE_FIXED.saturating_mul(spp as i128);
+    let bad = sums
+        .iter()
+        .position(|s| s[1] < 0 || s.iter().any(|v| v.unsigned_abs() > bound.unsigned_abs()));
+    match bad {
+        None => Ok(()),
+        Some(i) => {
+            let (x, y) = (i as u64 % width as u64, i as u64 / width as u64);
+            Err(format!(
+                "pixel ({x}, {y}) holds sums {:?}, which {spp} samples cannot produce \
+                 (Y must be ≥ 0 and every component within {spp} × {MAX_SAMPLE_XYZ:e})",
+                sums[i]
+            ))
+        }
+    }
+}
+
+/// A writer that passes bytes on and keeps their CRC-32.
+struct Crc32Writer<'a> {
+    inner: &'a mut dyn std::io::Write,
+    crc: crc32fast::Hasher,
+}
+
+impl Crc32Writer<'_> {
+    fn put(&mut self, bytes: &[u8]) -> std::io::Result<()> {
+        self.crc.update(bytes);
+        self.inner.write_all(bytes)
+    }
+}
+
 /// Bytes per pixel: three i128 sums.
 const PIXEL_BYTES: u128 = 48;
+/// Largest film file read: the sums of [`MAX_PIXELS`] pixels and room for the
+/// largest input and range records.
+pub const MAX_FILM_BYTES: u64 = MAX_PIXELS * PIXEL_BYTES as u64 + (1 << 30);
 
 /// Why a camera sample was left out of the film.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -240,9 +362,29 @@ fn fixed_one(v: f64) -> i128 {
 }
 
 impl Film {
-    /// An empty film.
-    pub fn new(width: u32, height: u32, fingerprint: u64, seed: u64, exposure: f64) -> Film {
-        Film {
+    /// An empty film. The resolution must be within [`MAX_SIDE`] and
+    /// [`MAX_PIXELS`], the exposure within [`MAX_EXPOSURE_STOPS`]; memory the
+    /// sums cannot get is an error with the number of bytes, not an abort.
+    pub fn new(
+        width: u32,
+        height: u32,
+        fingerprint: u64,
+        seed: u64,
+        exposure: f64,
+    ) -> Result<Film, String> {
+        check_resolution(width, height)?;
+        check_exposure(exposure)?;
+        let pixels = width as usize * height as usize;
+        let mut sums = Vec::new();
+        sums.try_reserve_exact(pixels).map_err(|_| {
+            format!(
+                "cannot allocate the film's {} MiB of sums for {width}×{height} pixels: lower \
+                 the resolution",
+                (pixels as u128 * PIXEL_BYTES) >> 20
+            )
+        })?;
+        sums.resize(pixels, [0; 3]);
+        Ok(Film {
             p: FilmParts {
                 width,
                 height,
@@ -252,22 +394,22 @@ impl Film {
                 inputs: Vec::new(),
                 dropped: Dropped::default(),
                 ranges: Vec::new(),
-                sums: vec![[0; 3]; width as usize * height as usize],
+                sums,
             },
-        }
+        })
     }
 
     /// An empty film for `scene` (its resolution, fingerprint, inputs,
     /// seed and exposure).
-    pub fn for_scene(scene: &crate::Scene) -> Film {
-        Film::new(
+    pub fn for_scene(scene: &crate::Scene) -> Result<Film, String> {
+        Ok(Film::new(
             scene.camera.width,
             scene.camera.height,
             scene.fingerprint,
             scene.settings.seed,
             scene.settings.exposure,
-        )
-        .with_inputs(scene.inputs.clone())
+        )?
+        .with_inputs(scene.inputs.clone()))
     }
 
     /// The film with `inputs` recorded as the files its scene was built from.
@@ -281,52 +423,21 @@ impl Film {
     /// exposure, ranges non-empty, sorted and disjoint, the first dropped
     /// sample inside the image and present exactly when some were dropped.
     pub fn from_parts(p: FilmParts) -> Result<Film, String> {
-        let FilmParts {
-            width,
-            height,
-            exposure,
-            ref dropped,
-            ref ranges,
-            ref sums,
-            ..
-        } = p;
-        if width == 0 || height == 0 || width > MAX_SIDE || height > MAX_SIDE {
+        check_resolution(p.width, p.height)?;
+        let pixels = p.width as u64 * p.height as u64;
+        if p.sums.len() as u64 != pixels {
             return Err(format!(
-                "resolution {width}×{height} (expected 1..={MAX_SIDE} each)"
+                "{} pixel sums for {}×{} pixels",
+                p.sums.len(),
+                p.width,
+                p.height
             ));
         }
-        let pixels = width as u64 * height as u64;
-        if pixels > MAX_PIXELS {
-            return Err(format!("{width}×{height} is more than {MAX_PIXELS} pixels"));
-        }
-        if sums.len() as u64 != pixels {
-            return Err(format!(
-                "{} pixel sums for {width}×{height} pixels",
-                sums.len()
-            ));
-        }
-        if !exposure.is_finite() {
-            return Err(format!("exposure {exposure}"));
-        }
-        if let Some(a) = dropped.first
-            && (a.x >= width || a.y >= height)
-        {
-            return Err(format!(
-                "first dropped sample at pixel ({}, {}) outside {width}×{height}",
-                a.x, a.y
-            ));
-        }
-        if dropped.first.is_some() != (dropped.total() > 0) {
-            return Err("dropped-sample counts and location disagree".into());
-        }
-        for (i, r) in ranges.iter().enumerate() {
-            if r.start >= r.end || (i > 0 && ranges[i - 1].end >= r.start) {
-                return Err(format!(
-                    "sample range {}..{} is empty, unsorted or overlaps",
-                    r.start, r.end
-                ));
-            }
-        }
+        check_exposure(p.exposure)?;
+        check_ranges(&p.ranges)?;
+        let spp: u64 = p.ranges.iter().map(|r| r.end - r.start).sum();
+        check_dropped(&p.dropped, p.width, p.height, spp)?;
+        check_sums(&p.sums, p.width, spp)?;
         Ok(Film { p })
     }
 
@@ -371,12 +482,7 @@ impl Film {
     /// samples, so it is no part of a film's identity); non-finite values
     /// are refused.
     pub fn set_exposure(&mut self, stops: f64) -> Result<(), String> {
-        let m = crate::scene::MAX_EXPOSURE_STOPS;
-        if !(stops.is_finite() && stops.abs() <= m) {
-            return Err(format!(
-                "exposure {stops} is outside ±{m} stops (2^{m} already takes any sane pixel past f32's range); give a value within it"
-            ));
-        }
+        check_exposure(stops)?;
         self.p.exposure = stops;
         Ok(())
     }
@@ -472,12 +578,22 @@ impl Film {
         for r in &other.p.ranges {
             ranges = with_range(&ranges, r.clone())?;
         }
-        self.p.ranges = ranges;
+        let overflow = (self.p.sums.iter().zip(&other.p.sums))
+            .position(|(a, b)| (0..3).any(|k| a[k].checked_add(b[k]).is_none()));
+        if let Some(i) = overflow {
+            let w = self.p.width as usize;
+            return Err(format!(
+                "the sums of pixel ({}, {}) overflow when added",
+                i % w,
+                i / w
+            ));
+        }
         for (a, b) in self.p.sums.iter_mut().zip(&other.p.sums) {
             for k in 0..3 {
-                a[k] = a[k].saturating_add(b[k]);
+                a[k] += b[k];
             }
         }
+        self.p.ranges = ranges;
         self.p.dropped.add(&other.p.dropped);
         Ok(())
     }
@@ -514,52 +630,59 @@ impl Film {
     /// Serialises the film.
     pub fn to_bytes(&self) -> Vec<u8> {
         let mut out = Vec::with_capacity(128 + self.p.sums.len() * 48);
-        out.extend_from_slice(MAGIC);
-        out.extend_from_slice(&self.p.width.to_le_bytes());
-        out.extend_from_slice(&self.p.height.to_le_bytes());
-        out.extend_from_slice(&self.p.fingerprint.to_le_bytes());
-        out.extend_from_slice(&self.p.seed.to_le_bytes());
-        out.extend_from_slice(&self.p.exposure.to_le_bytes());
-        out.extend_from_slice(&self.p.dropped.non_finite.to_le_bytes());
-        out.extend_from_slice(&self.p.dropped.negative.to_le_bytes());
+        self.write_to(&mut out)
+            .expect("writing to memory cannot fail");
+        out
+    }
+
+    /// Writes the film's bytes (those of [`Film::to_bytes`]) to `w` as they
+    /// are made, with the checksum computed on the way.
+    pub fn write_to(&self, w: &mut dyn std::io::Write) -> std::io::Result<()> {
+        let mut out = Crc32Writer {
+            inner: w,
+            crc: crc32fast::Hasher::new(),
+        };
+        out.put(MAGIC)?;
+        out.put(&self.p.width.to_le_bytes())?;
+        out.put(&self.p.height.to_le_bytes())?;
+        out.put(&self.p.fingerprint.to_le_bytes())?;
+        out.put(&self.p.seed.to_le_bytes())?;
+        out.put(&self.p.exposure.to_le_bytes())?;
+        out.put(&self.p.dropped.non_finite.to_le_bytes())?;
+        out.put(&self.p.dropped.negative.to_le_bytes())?;
         let first = self.p.dropped.first.unwrap_or(DroppedAt {
             x: u32::MAX,
             y: u32::MAX,
             sample: u64::MAX,
         });
-        out.extend_from_slice(&first.sample.to_le_bytes());
-        out.extend_from_slice(&first.x.to_le_bytes());
-        out.extend_from_slice(&first.y.to_le_bytes());
+        out.put(&first.sample.to_le_bytes())?;
+        out.put(&first.x.to_le_bytes())?;
+        out.put(&first.y.to_le_bytes())?;
         let inputs = &self.p.inputs[..self.p.inputs.len().min(MAX_INPUTS)];
-        out.extend_from_slice(&(inputs.len() as u32).to_le_bytes());
+        out.put(&(inputs.len() as u32).to_le_bytes())?;
         for f in inputs {
-            let mut name = f.name.as_bytes();
-            if name.len() > MAX_NAME {
-                // Keep a valid UTF-8 prefix.
-                let mut end = MAX_NAME;
-                while !f.name.is_char_boundary(end) {
-                    end -= 1;
-                }
-                name = &name[..end];
+            let mut end = f.name.len().min(MAX_NAME);
+            // Keep a valid UTF-8 prefix.
+            while !f.name.is_char_boundary(end) {
+                end -= 1;
             }
-            out.extend_from_slice(&(name.len() as u32).to_le_bytes());
-            out.extend_from_slice(name);
-            out.extend_from_slice(&f.len.to_le_bytes());
-            out.extend_from_slice(&f.hash.to_le_bytes());
+            out.put(&(end as u32).to_le_bytes())?;
+            out.put(&f.name.as_bytes()[..end])?;
+            out.put(&f.len.to_le_bytes())?;
+            out.put(&f.hash.to_le_bytes())?;
         }
-        out.extend_from_slice(&(self.p.ranges.len() as u32).to_le_bytes());
+        out.put(&(self.p.ranges.len() as u32).to_le_bytes())?;
         for r in &self.p.ranges {
-            out.extend_from_slice(&r.start.to_le_bytes());
-            out.extend_from_slice(&r.end.to_le_bytes());
+            out.put(&r.start.to_le_bytes())?;
+            out.put(&r.end.to_le_bytes())?;
         }
         for s in &self.p.sums {
             for v in s {
-                out.extend_from_slice(&v.to_le_bytes());
+                out.put(&v.to_le_bytes())?;
             }
         }
-        let crc = crc32fast::hash(&out);
-        out.extend_from_slice(&crc.to_le_bytes());
-        out
+        let crc = out.crc.finalize();
+        out.inner.write_all(&crc.to_le_bytes())
     }
 
     /// Parses a film, checking its checksum and every length before
@@ -595,17 +718,8 @@ impl Film {
         let mut r = Reader { b: body, at: 12 };
         let width = u32::from_le_bytes(r.array()?);
         let height = u32::from_le_bytes(r.array()?);
-        if width == 0 || height == 0 || width > MAX_SIDE || height > MAX_SIDE {
-            return Err(format!(
-                "corrupt film: resolution {width}×{height} (expected 1..={MAX_SIDE} each)"
-            ));
-        }
+        check_resolution(width, height).map_err(|m| format!("corrupt film: {m}"))?;
         let pixels = width as u64 * height as u64;
-        if pixels > MAX_PIXELS {
-            return Err(format!(
-                "corrupt film: {width}×{height} is more than {MAX_PIXELS} pixels"
-            ));
-        }
         let fingerprint = u64::from_le_bytes(r.array()?);
         let seed = u64::from_le_bytes(r.array()?);
         let exposure = f64::from_le_bytes(r.array()?);
@@ -687,12 +801,30 @@ impl Film {
 
     /// Writes the film atomically.
     pub fn save(&self, path: &Path) -> Result<(), RenderError> {
-        crate::output::write_atomic(path, &self.to_bytes())
+        safe_io::create_parent(path).map_err(|e| RenderError::io(&e.path, e.source))?;
+        safe_io::write_atomic_with(path, &mut |w| self.write_to(w))
+            .map_err(|e| RenderError::io(path, e.source))
     }
 
-    /// Reads a film file; a corrupt film is an error naming the file.
+    /// Reads a film file as an input (a shard to merge: no output of this
+    /// process may replace it); a corrupt film is an error naming the file.
     pub fn load(path: &Path) -> Result<Film, RenderError> {
-        let bytes = std::fs::read(path).map_err(|e| RenderError::io(path, e))?;
+        Film::read(path, safe_io::read_input)
+    }
+
+    /// Reads the checkpoint a render resumes, which it goes on writing.
+    pub fn load_checkpoint(path: &Path) -> Result<Film, RenderError> {
+        Film::read(path, safe_io::read_regular)
+    }
+
+    fn read(
+        path: &Path,
+        read: fn(&Path, &str, u64) -> Result<Vec<u8>, safe_io::ReadError>,
+    ) -> Result<Film, RenderError> {
+        let bytes = read(path, "film", MAX_FILM_BYTES).map_err(|e| RenderError::Film {
+            path: path.to_path_buf(),
+            message: e.to_string(),
+        })?;
         Film::from_bytes(&bytes).map_err(|message| RenderError::Film {
             path: path.to_path_buf(),
             message,
@@ -758,7 +890,7 @@ mod tests {
 
     #[test]
     fn round_trip_and_range_bookkeeping() {
-        let mut f = Film::new(3, 2, 42, 7, 0.5);
+        let mut f = Film::new(3, 2, 42, 7, 0.5).unwrap();
         f.p.sums[4] = [1, -2, i128::MAX / 3];
         f.add_range(0..4).unwrap();
         f.add_range(8..10).unwrap();
@@ -774,7 +906,7 @@ mod tests {
     #[test]
     fn exposure_is_bounded_as_in_a_scene() {
         // `lustre merge --exposure 200` wrote infinite pixels.
-        let mut f = Film::new(1, 1, 1, 0, 0.0);
+        let mut f = Film::new(1, 1, 1, 0, 0.0).unwrap();
         for bad in [61.0, -200.0, f64::INFINITY, f64::NAN] {
             assert!(f.set_exposure(bad).is_err(), "{bad}");
         }
@@ -785,7 +917,7 @@ mod tests {
 
     #[test]
     fn merge_checks_compatibility() {
-        let mut a = Film::new(2, 2, 1, 0, 0.0);
+        let mut a = Film::new(2, 2, 1, 0, 0.0).unwrap();
         a.add_range(0..5).unwrap();
         let mut b = a.clone();
         b.p.ranges.clear();
@@ -794,7 +926,7 @@ mod tests {
         a.merge(&b).unwrap();
         assert_eq!(a.spp(), 9);
         assert_eq!(a.p.sums[0], [3, 3, 3]);
-        let c = Film::new(2, 2, 2, 0, 0.0);
+        let c = Film::new(2, 2, 2, 0, 0.0).unwrap();
         assert!(a.merge(&c).unwrap_err().contains("different scene"));
         let before = a.clone();
         assert!(a.merge(&b).unwrap_err().contains("overlaps"));
@@ -813,12 +945,12 @@ mod tests {
             len: 10,
             hash,
         };
-        let mut a = Film::new(2, 1, 1, 0, 0.0);
+        let mut a = Film::new(2, 1, 1, 0, 0.0).unwrap();
         a.p.inputs = vec![file("scene.toml", 1), file("fit.toml", 2)];
         a.add_range(0..4).unwrap();
         a.p.dropped.record(BadSample::Negative, 1, 0, 3);
         a.p.dropped.record(BadSample::NonFinite, 0, 0, 2);
-        let mut b = Film::new(2, 1, 9, 0, 0.0);
+        let mut b = Film::new(2, 1, 9, 0, 0.0).unwrap();
         b.p.inputs = vec![file("scene.toml", 1), file("fit.toml", 5)];
         let e = a.merge(&b).unwrap_err();
         assert!(e.contains("`fit.toml` changed"), "{e}");

@@ -9,7 +9,7 @@
 //! ```no_run
 //! let scene = render::scene::load(std::path::Path::new("scenes/default.toml"))?;
 //! let mut film = render::Film::new(scene.camera.width, scene.camera.height,
-//!     scene.fingerprint, scene.settings.seed, scene.settings.exposure);
+//!     scene.fingerprint, scene.settings.seed, scene.settings.exposure).map_err(render::RenderError::Options)?;
 //! render::render_range(&scene, &mut film, 0..scene.settings.spp, &Default::default())?;
 //! render::output::write_exr("out.exr".as_ref(), film.width(), film.height(), &film.rgb())?;
 //! # Ok::<(), render::RenderError>(())
@@ -25,6 +25,7 @@ pub mod integrator;
 pub mod interrupt;
 pub mod light;
 pub mod material;
+pub mod memory;
 pub mod mesh;
 pub mod output;
 pub mod preview_mesh;

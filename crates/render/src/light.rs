@@ -163,14 +163,8 @@ pub struct EnvMap {
 }
 
 impl EnvMap {
-    /// Loads a lat-long EXR, scaling by `scale` and rotating by `rotate_deg` about +y.
-    pub fn load(path: &Path, scale: f64, rotate_deg: f64) -> Result<EnvMap, String> {
-        let bytes = std::fs::read(path)
-            .map_err(|e| format!("cannot read environment EXR {}: {e}", path.display()))?;
-        EnvMap::from_exr_bytes(path, &bytes, scale, rotate_deg)
-    }
-
-    /// [`EnvMap::load`] from the file's bytes (`path` for messages).
+    /// A lat-long EXR from the file's bytes (`path` for messages), scaled by
+    /// `scale` and rotated by `rotate_deg` about +y.
     pub fn from_exr_bytes(
         path: &Path,
         bytes: &[u8],

@@ -36,14 +36,8 @@ pub struct MeshSource {
     pub surface: u32,
 }
 
-/// Loads every model of an OBJ file as triangles, transformed to world space.
-pub fn load_obj(path: &Path, xf: &Transform, surface: u32) -> Result<MeshSource, String> {
-    let bytes = std::fs::read(path)
-        .map_err(|e| format!("cannot open mesh file {}: {e}", path.display()))?;
-    obj_from_bytes(path, &bytes, xf, surface)
-}
-
-/// [`load_obj`] from the file's bytes (`path` for messages). `mtllib`
+/// Every model of an OBJ file, from the file's bytes (`path` for messages),
+/// as triangles transformed to world space. `mtllib`
 /// references are not followed: the renderer takes materials from the scene.
 pub fn obj_from_bytes(
     path: &Path,

@@ -9,8 +9,8 @@ use std::path::Path;
 /// Writes `bytes` to `path` atomically (temporary file, sync, rename),
 /// creating the folder if missing (renders name output folders freely).
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), RenderError> {
-    atomic_write::create_parent(path).map_err(|e| RenderError::io(&e.path, e.source))?;
-    atomic_write::write_atomic(path, bytes).map_err(|e| RenderError::io(path, e.source))
+    safe_io::create_parent(path).map_err(|e| RenderError::io(&e.path, e.source))?;
+    safe_io::write_atomic(path, bytes).map_err(|e| RenderError::io(path, e.source))
 }
 
 /// Writes a linear-sRGB float EXR (channels R, G, B; f32).

@@ -348,13 +348,6 @@ pub fn parse_csv_lines(text: &str, columns: usize) -> Result<Vec<(usize, Vec<f64
     Ok(rows)
 }
 
-/// Reads a two-column `wavelength_nm,value` CSV file as a spectrum table.
-pub fn read_spectrum_csv(path: &Path) -> Result<Spectrum, String> {
-    let text = std::fs::read_to_string(path)
-        .map_err(|e| format!("cannot read {}: {e}", path.display()))?;
-    spectrum_from_csv(path, &text)
-}
-
 /// A spectrum from the text of a `wavelength_nm,value` CSV (`path` for messages).
 pub fn spectrum_from_csv(path: &Path, text: &str) -> Result<Spectrum, String> {
     let rows = parse_csv_rows(text, 2).map_err(|e| format!("{}: {e}", path.display()))?;
@@ -386,7 +379,9 @@ fn bundled(csv: &str) -> Spectrum {
 /// unit luminance.
 pub fn parse_spectrum(desc: &str, base_dir: &Path) -> Result<Spectrum, String> {
     parse_spectrum_with(desc, base_dir, &mut |p: &Path| {
-        std::fs::read_to_string(p).map_err(|e| format!("cannot read {}: {e}", p.display()))
+        let bytes = safe_io::read_input(p, "spectrum CSV", crate::scene::inputs::MAX_CSV_BYTES)
+            .map_err(|e| e.to_string())?;
+        String::from_utf8(bytes).map_err(|_| format!("{} is not UTF-8 text", p.display()))
     })
 }
 

@@ -9,27 +9,27 @@ use render::scene::InputFile;
 
 /// A small film with every section populated.
 fn sample_film() -> Film {
-    let mut f = Film::new(5, 3, 0x1234_5678_9abc_def0, 42, 0.5).with_inputs(vec![
-        InputFile {
-            name: "scene.toml".into(),
-            len: 812,
-            hash: 0x0102_0304_0506_0708,
-        },
-        InputFile {
-            name: "materials/fit.toml".into(),
-            len: 90_210,
-            hash: 0xfeed_beef_cafe_f00d,
-        },
-    ]);
+    let mut f = Film::new(5, 3, 0x1234_5678_9abc_def0, 42, 0.5)
+        .unwrap()
+        .with_inputs(vec![
+            InputFile {
+                name: "scene.toml".into(),
+                len: 812,
+                hash: 0x0102_0304_0506_0708,
+            },
+            InputFile {
+                name: "materials/fit.toml".into(),
+                len: 90_210,
+                hash: 0xfeed_beef_cafe_f00d,
+            },
+        ]);
     f.add_range(0..64).unwrap();
     f.add_range(128..256).unwrap();
     let mut p = f.into_parts();
     for (i, s) in p.sums.iter_mut().enumerate() {
-        *s = [
-            i as i128 * 1_000_003,
-            -(i as i128),
-            i128::MAX / (i as i128 + 2),
-        ];
+        // X and Z may dip below zero (a narrow band's exactly integrated XYZ,
+        // a signed sky); Y may not.
+        *s = [-(i as i128), i as i128 * 7, i as i128 * 1_000_003];
     }
     p.dropped.record(BadSample::NonFinite, 2, 1, 17);
     p.dropped.record(BadSample::Negative, 4, 2, 130);
@@ -217,6 +217,36 @@ fn crafted_headers_with_valid_checksums_are_refused_without_allocating() {
     let mut b = good.clone();
     b[44..60].copy_from_slice(&[0; 16]);
     cases.push(("dropped counts", reseal(b)));
+    // Fields a render cannot produce, each with a valid checksum: an exposure past
+    // the scene's limit (every EXR value inf), a range to 2⁶⁴ − 1, no range at all,
+    // a negative luminance sum, a sum no 192 samples can reach, more dropped
+    // samples than were taken.
+    for stops in [1000.0f64, -61.0, f64::INFINITY] {
+        let mut b = good.clone();
+        b[36..44].copy_from_slice(&stops.to_le_bytes());
+        cases.push(("exposure", reseal(b)));
+    }
+    let mut b = good.clone();
+    range_at(&mut b, 1, 128, u64::MAX);
+    cases.push(("range end", reseal(b)));
+    let mut b = good[..off_ranges].to_vec();
+    b.extend_from_slice(&0u32.to_le_bytes());
+    b.extend_from_slice(&good[off_ranges + 4 + 32..]);
+    cases.push(("no range", reseal(b)));
+    let off_sums = off_ranges + 4 + 32;
+    let sum_at = |b: &mut Vec<u8>, px: usize, k: usize, v: i128| {
+        let o = off_sums + 48 * px + 16 * k;
+        b[o..o + 16].copy_from_slice(&v.to_le_bytes());
+    };
+    for (k, v) in [(1, -1), (1, i128::MAX), (0, i128::MIN), (2, i128::MAX / 2)] {
+        let mut b = good.clone();
+        sum_at(&mut b, 7, k, v);
+        cases.push(("sums", reseal(b)));
+    }
+    let mut b = good.clone();
+    b[44..52].copy_from_slice(&(5 * 3 * 192u64).to_le_bytes());
+    cases.push(("dropped count", reseal(b)));
+
     // Format 1 and foreign files.
     let mut v1 = good.clone();
     v1[..12].copy_from_slice(b"LUSTREFILM1\n");
@@ -250,7 +280,7 @@ fn load_errors_name_the_file() {
 fn merge_refuses_overlapping_or_duplicated_shards_and_keeps_high_indices_apart() {
     let base = sample_film();
     let shard = |r: std::ops::Range<u64>| {
-        let mut f = Film::new(5, 3, base.fingerprint(), 42, 0.0);
+        let mut f = Film::new(5, 3, base.fingerprint(), 42, 0.0).unwrap();
         f.add_range(r).unwrap();
         f
     };
@@ -265,6 +295,19 @@ fn merge_refuses_overlapping_or_duplicated_shards_and_keeps_high_indices_apart()
     m.merge(&high).unwrap();
     assert_eq!(m.spp(), 20);
     assert!(m.merge(&high).is_err());
+    // Sums that would overflow are an error, not a saturated pixel; the film is unchanged.
+    let big = |r: std::ops::Range<u64>| {
+        let mut p = shard(r).into_parts();
+        p.sums[4] = [0, i128::MAX / 2 + 1, 0];
+        Film::from_parts(p).unwrap()
+    };
+    // Two shards of 2²⁰ samples each, as many as those sums need.
+    let (a, b) = ((1u64 << 40) - (1 << 21), (1u64 << 40) - (1 << 20));
+    let mut m = big(a..b);
+    let before = m.clone();
+    let e = m.merge(&big(b..(1 << 40))).unwrap_err();
+    assert!(e.contains("overflow"), "{e}");
+    assert_eq!(m, before);
 }
 
 #[test]
@@ -284,13 +327,19 @@ fn from_parts_checks_what_a_film_file_is_checked_for() {
     refuse(&|p| p.width = 0, "resolution");
     refuse(&|p| p.dropped.first.as_mut().unwrap().x = 5, "outside 5×3");
     refuse(&|p| p.dropped.first = None, "disagree");
+    refuse(&|p| p.exposure = 1000.0, "exposure");
+    refuse(&|p| p.ranges.clear(), "no sample range");
+    refuse(&|p| p.ranges = vec![0..u64::MAX], "ends beyond");
+    refuse(&|p| p.sums[3][1] = -5, "pixel (3, 0)");
+    refuse(&|p| p.sums[14][2] = i128::MAX, "pixel (4, 2)");
+    refuse(&|p| p.dropped.negative = u64::MAX, "dropped samples");
     assert_eq!(Film::from_parts(good.clone()).unwrap(), sample_film());
 }
 
 #[test]
 fn resume_adopts_a_prefix_and_leaves_the_film_unchanged_otherwise() {
     let base = sample_film();
-    let empty = || Film::new(5, 3, base.fingerprint(), 42, 0.0);
+    let empty = || Film::new(5, 3, base.fingerprint(), 42, 0.0).unwrap();
     let mut done = empty();
     done.add_range(0..24).unwrap();
 
@@ -307,7 +356,7 @@ fn resume_adopts_a_prefix_and_leaves_the_film_unchanged_otherwise() {
         assert_eq!(f, empty(), "film changed by a refused resume");
         e
     };
-    let other_seed = Film::new(5, 3, base.fingerprint(), 7, 0.0);
+    let other_seed = Film::new(5, 3, base.fingerprint(), 7, 0.0).unwrap();
     assert!(matches!(
         refused(other_seed, 0..64),
         ResumeError::Incompatible(m) if m.contains("seed")

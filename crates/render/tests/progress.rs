@@ -42,7 +42,7 @@ fn progress_events_add_up() {
         progress: Some(Progress::new(move |e| sink.lock().unwrap().push(e))),
         ..RenderOptions::default()
     };
-    let mut film = Film::for_scene(&scene);
+    let mut film = Film::for_scene(&scene).unwrap();
     render::render_range(&scene, &mut film, 0..37, &opts).unwrap();
     let events = events.lock().unwrap();
     assert_eq!(

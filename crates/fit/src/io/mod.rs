@@ -586,12 +586,19 @@ pub(crate) fn check_spacing(ctx: Ctx<'_>, field: &str, d: f64) -> Result<f64, Re
     }
 }
 
+/// Largest scan file read: 4 GiB, above any instrument's export (a 16 384² map of
+/// 8-byte heights is 2 GiB; text exports run to ~1 GiB).
+pub const MAX_SCAN_BYTES: u64 = 4 << 30;
+
+/// The bytes of the scan file at `path`: a regular file of at most [`MAX_SCAN_BYTES`]
+/// (a FIFO, device or directory is refused by name rather than read forever).
+pub fn read_scan_file(path: &Path) -> Result<Vec<u8>, ReadError> {
+    Ok(safe_io::read_input(path, "scan file", MAX_SCAN_BYTES)?)
+}
+
 /// Read and convert a file. The format comes from `opts.format` or is detected.
 pub fn open_path(path: &Path, opts: &ReadOptions) -> Result<Scan, ReadError> {
-    let bytes = std::fs::read(path).map_err(|source| ReadError::Io {
-        file: path.to_path_buf(),
-        source,
-    })?;
+    let bytes = read_scan_file(path)?;
     open_bytes(&path.display().to_string(), &bytes, opts)
 }
 

@@ -247,8 +247,12 @@ impl<'a> Builder<'a> {
     /// Stage 2: `[film]` and `[integrator]`.
     fn settings(&self) -> Result<Settings, SceneError> {
         let film = &self.desc.film;
-        if *film.spp.get_ref() == 0 {
-            return Err(self.at(film.spp.span(), "spp = 0 is invalid: expected ≥ 1".into()));
+        let spp = *film.spp.get_ref();
+        if spp == 0 || spp > super::MAX_SPP {
+            return Err(self.at(
+                film.spp.span(),
+                format!("spp = {spp} is invalid: expected 1..={}", super::MAX_SPP),
+            ));
         }
         let exposure = *film.exposure.get_ref();
         if !exposure.is_finite() || exposure.abs() > super::MAX_EXPOSURE_STOPS {

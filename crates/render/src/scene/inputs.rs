@@ -12,7 +12,6 @@
 //! build then also cannot see two versions of it.
 
 use std::collections::HashMap;
-use std::io::Read;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
@@ -93,21 +92,9 @@ impl Inputs {
         if let Some(b) = self.cache.get(path) {
             return Ok(b.clone());
         }
-        let fail = |e: std::io::Error| format!("cannot read {what} {}: {e}", path.display());
-        let file = std::fs::File::open(path).map_err(fail)?;
-        let mut bytes = Vec::new();
-        // `take` bounds the read even if the file grows or lies about its size.
-        file.take(limit.saturating_add(1))
-            .read_to_end(&mut bytes)
-            .map_err(fail)?;
-        if bytes.len() as u64 > limit {
-            return Err(format!(
-                "{what} {} is larger than {} MiB; refusing to read it",
-                path.display(),
-                limit >> 20
-            ));
-        }
-        let bytes: Arc<[u8]> = bytes.into();
+        let bytes: Arc<[u8]> = safe_io::read_input(path, what, limit)
+            .map_err(|e| e.to_string())?
+            .into();
         let name = self.name_of(path);
         self.record(name, &bytes);
         self.cache.insert(path.to_path_buf(), bytes.clone());

@@ -36,10 +36,7 @@ pub const ESTIMATOR: &str = "lustre estimator 10: sobol sampler with 64-bit samp
                              lobe is not much narrower than the light, the emission \
                              along a mixed delta lobe's mirror direction traced at every vertex";
 
-/// Largest |`[film] exposure`|, in stops: the gain 2^exposure must leave
-/// the f32 EXR and the PNG conversion finite for any radiance a scene can
-/// reasonably produce (exposure 127 wrote inf pixels).
-pub const MAX_EXPOSURE_STOPS: f64 = 60.0;
+pub use crate::film::{MAX_EXPOSURE_STOPS, MAX_SPP};
 
 /// What a ray hit.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -232,23 +229,15 @@ pub fn load(path: &Path) -> Result<Scene, SceneError> {
 
 /// Reads a scene file: at most [`inputs::MAX_SCENE_BYTES`], UTF-8.
 fn read_scene_text(path: &Path) -> Result<String, SceneError> {
-    use std::io::Read;
-    let fail = |e: std::io::Error| SceneError::new(path, format!("cannot read scene file: {e}"));
-    let file = std::fs::File::open(path).map_err(fail)?;
-    let mut bytes = Vec::new();
-    file.take(inputs::MAX_SCENE_BYTES + 1)
-        .read_to_end(&mut bytes)
-        .map_err(fail)?;
-    if bytes.len() as u64 > inputs::MAX_SCENE_BYTES {
-        return Err(SceneError::new(
-            path,
-            format!(
-                "the scene file is larger than {} MiB; scenes describe geometry by reference \
-                 (put meshes in OBJ files)",
-                inputs::MAX_SCENE_BYTES >> 20
-            ),
-        ));
-    }
+    let bytes = safe_io::read_input(path, "scene file", inputs::MAX_SCENE_BYTES).map_err(|e| {
+        let hint = match e {
+            safe_io::ReadError::TooLarge { .. } => {
+                " (scenes describe geometry by reference: put meshes in OBJ files)"
+            }
+            _ => "",
+        };
+        SceneError::new(path, format!("{e}{hint}"))
+    })?;
     String::from_utf8(bytes).map_err(|e| {
         let off = e.utf8_error().valid_up_to();
         let text = String::from_utf8_lossy(e.as_bytes()).into_owned();
