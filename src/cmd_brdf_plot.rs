@@ -169,14 +169,25 @@ fn materials(args: &PlotArgs, s: &Surface) -> anyhow::Result<Vec<Labelled>> {
     Ok(out)
 }
 
+/// Most directions per slice: far past what a plot's width resolves.
+const MAX_POINTS: usize = 100_000;
+/// Most incidence angles of an albedo curve (one per 0.1° over 0°..89°).
+const MAX_ALBEDO_ANGLES: usize = 891;
+
 fn check_args(args: &PlotArgs) -> anyhow::Result<()> {
     models::check_wavelengths("--lambda-nm", &args.lambda_nm)?;
     models::check_incidence(&args.theta_i, 90.0)?;
     if args.lambda_nm.is_empty() || args.theta_i.is_empty() || args.models.is_empty() {
         bail!("--lambda-nm, --theta-i and --models each need at least one value");
     }
-    if args.points < 8 {
-        bail!("--points {}: need at least 8", args.points);
+    if !(8..=MAX_POINTS).contains(&args.points) {
+        bail!("--points {}: expected 8..={MAX_POINTS}", args.points);
+    }
+    if args.albedo_angles > MAX_ALBEDO_ANGLES {
+        bail!(
+            "--albedo-angles {}: expected 0..={MAX_ALBEDO_ANGLES} (0: no albedo plot)",
+            args.albedo_angles
+        );
     }
     Ok(())
 }
@@ -212,7 +223,8 @@ pub fn run(args: PlotArgs) -> anyhow::Result<()> {
         let slices = slice_plot(&fig)?;
         let stem = s.name.to_lowercase();
         let png = args.out.join(format!("{stem}_slices.png"));
-        let (img, report) = slices.0.render(w, h)?;
+        let size = || format!("--size {}", args.size);
+        let (img, report) = slices.0.render(w, h).with_context(size)?;
         plot::save_png(&img, &png)?;
         plot::write_atomic(
             &args.out.join(format!("{stem}_slices.csv")),
@@ -223,7 +235,7 @@ pub fn run(args: PlotArgs) -> anyhow::Result<()> {
         if args.albedo_angles > 0 {
             let (p, csv) = albedo_plot(&fig)?;
             let png = args.out.join(format!("{stem}_albedo.png"));
-            let (img, report) = p.render(w, h)?;
+            let (img, report) = p.render(w, h).with_context(size)?;
             plot::save_png(&img, &png)?;
             plot::write_atomic(&args.out.join(format!("{stem}_albedo.csv")), csv.as_bytes())?;
             note(&args, &png, &report.skipped);

@@ -170,9 +170,8 @@ pub fn scene_text(view_deg: f64, width: u32, height: u32, spp: u64, material: &s
 /// Runs `lustre compare`.
 pub fn run(args: CompareArgs) -> anyhow::Result<()> {
     let (w, h) = parse_size(&args.size)?;
-    if args.spp == 0 {
-        bail!("--spp must be ≥ 1");
-    }
+    crate::flags::check_spp(args.spp, crate::flags::MAX_FIGURE_SPP)?;
+    let threads = crate::flags::thread_count(args.threads, args.quiet)?;
     if args.views.is_empty() || args.views.iter().any(|v| !(0.0..90.0).contains(v)) {
         bail!("--views: give angles in [0, 90) degrees, e.g. 0,45,80");
     }
@@ -220,10 +219,10 @@ pub fn run(args: CompareArgs) -> anyhow::Result<()> {
         std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
     }
     let opts = RenderOptions {
-        threads: args.threads,
+        threads,
         ..RenderOptions::default()
     };
-    let pool = render::render::thread_pool(args.threads)?;
+    let pool = render::render::thread_pool(threads)?;
     let mut grid = ImageGrid::new(rows.len(), args.views.len())
         .title(format!("{title}\n{w}×{h} px, {} spp per cell", args.spp))
         .row_labels(rows.iter().map(|r| r.label.clone()))

@@ -371,9 +371,9 @@ fn check_sky_flags(args: &PreviewArgs) -> anyhow::Result<()> {
 }
 
 pub fn run(args: PreviewArgs) -> anyhow::Result<()> {
-    if args.spp == 0 {
-        bail!("--spp must be ≥ 1");
-    }
+    crate::flags::check_spp(args.spp, crate::flags::MAX_FIGURE_SPP)?;
+    crate::flags::check_exposure(args.exposure)?;
+    let threads = crate::flags::thread_count(args.threads, args.quiet)?;
     let budget = parse_duration(&args.time_limit)?;
     check_sky_flags(&args)?;
     let (name, title, cells) = match &args.material {
@@ -450,7 +450,7 @@ pub fn run(args: PreviewArgs) -> anyhow::Result<()> {
     }
 
     let stop = render::interrupt::ctrlc_flag().map_err(anyhow::Error::msg)?;
-    let pool = render::render::thread_pool(args.threads)?;
+    let pool = render::render::thread_pool(threads)?;
     let cols = if cells.len() <= 3 {
         cells.len()
     } else {
@@ -476,7 +476,8 @@ pub fn run(args: PreviewArgs) -> anyhow::Result<()> {
             material: cell.material.clone(),
             light: args.light,
             sun_elevation: args.sun_elevation,
-            sun_azimuth: args.sun_azimuth,
+            // Written into the scene as a plain decimal: one turn is all that matters.
+            sun_azimuth: args.sun_azimuth.rem_euclid(360.0),
             turbidity: args.turbidity,
             exposure: args.exposure,
             assets: "assets".into(),
@@ -498,7 +499,7 @@ pub fn run(args: PreviewArgs) -> anyhow::Result<()> {
         let left = budget.saturating_sub(start.elapsed());
         let share = left / (cells.len() - i) as u32;
         let opts = RenderOptions {
-            threads: args.threads,
+            threads,
             time_limit: Some(share.max(Duration::from_millis(100))),
             stop: stop.clone(),
             progress: crate::progress::bar(!args.quiet),

@@ -162,24 +162,6 @@ pub fn parse_checkpoint_every(s: &str) -> anyhow::Result<Duration> {
     Ok(d)
 }
 
-/// `--threads`, capped at [`render::render::max_threads`] with a note on stderr.
-fn thread_count(requested: Option<usize>, quiet: bool) -> anyhow::Result<Option<usize>> {
-    match requested {
-        Some(0) => bail!("--threads must be ≥ 1"),
-        Some(n) if n > render::render::max_threads() => {
-            let cap = render::render::max_threads();
-            if !quiet {
-                eprintln!(
-                    "note: --threads {n} capped at {cap} (4 per core): more threads than that \
-                     only add start-up and scheduling cost"
-                );
-            }
-            Ok(Some(cap))
-        }
-        other => Ok(other),
-    }
-}
-
 /// The warning printed after a render or merge whose film left samples out.
 pub fn dropped_warning(d: &render::film::Dropped) -> Option<String> {
     (d.total() > 0).then(|| format!("warning: {d}"))
@@ -290,7 +272,7 @@ pub fn render(args: RenderArgs) -> anyhow::Result<()> {
 
     let time_limit = args.time_limit.as_deref().map(parse_duration).transpose()?;
     let checkpoint_every = parse_checkpoint_every(&args.checkpoint_every)?;
-    let threads = thread_count(args.threads, args.quiet)?;
+    let threads = crate::flags::thread_count(args.threads, args.quiet)?;
     render::memory::check_fits(scene.camera.width, scene.camera.height)
         .map_err(|m| anyhow::anyhow!("{}: {m}", scene_path.display()))?;
     let mut film = Film::for_scene(&scene).map_err(anyhow::Error::msg)?;
@@ -556,12 +538,12 @@ mod tests {
             parse_checkpoint_every("2m").unwrap(),
             Duration::from_secs(120)
         );
-        assert!(thread_count(Some(0), true).is_err());
+        assert!(crate::flags::thread_count(Some(0), true).is_err());
         assert_eq!(
-            thread_count(Some(10_000), true).unwrap(),
+            crate::flags::thread_count(Some(10_000), true).unwrap(),
             Some(render::render::max_threads())
         );
-        assert_eq!(thread_count(Some(1), true).unwrap(), Some(1));
+        assert_eq!(crate::flags::thread_count(Some(1), true).unwrap(), Some(1));
         assert_eq!(
             with_suffix(Path::new("out/a.exr"), ".spp0-8"),
             PathBuf::from("out/a.spp0-8.exr")

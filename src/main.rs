@@ -11,6 +11,7 @@ mod cmd_judge;
 mod cmd_preview;
 mod cmd_render;
 mod cmd_scenes;
+mod flags;
 mod models;
 mod outputs;
 mod progress;

@@ -89,6 +89,62 @@ fn thread_counts_are_capped_and_said_so() {
         &["render", "s.toml", "-q", "--threads", "0"],
         "--threads",
     );
+    // The figure commands cap and say so too.
+    for args in [
+        &[
+            "compare",
+            "--sample",
+            "S027",
+            "--views",
+            "0",
+            "--cutoffs",
+            "100",
+        ][..],
+        &["preview", "--sample", "S027", "--models", "ggx"][..],
+    ] {
+        let mut args = args.to_vec();
+        args.extend([
+            "--size",
+            "8x6",
+            "--spp",
+            "1",
+            "--threads",
+            "4294967296",
+            "-o",
+            "f.png",
+        ]);
+        let out = lustre(&d, &args);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(out.status.success(), "{args:?}: {err}");
+        assert!(
+            err.contains("--threads 4294967296 capped at"),
+            "{args:?}: {err}"
+        );
+    }
+    // A sun azimuth of any finite size is one turn of the sky, not a generated file's error.
+    let out = lustre(
+        &d,
+        &[
+            "preview",
+            "--sample",
+            "S027",
+            "--models",
+            "ggx",
+            "--size",
+            "8x6",
+            "--spp",
+            "1",
+            "-q",
+            "-o",
+            "az.png",
+            "--sun-azimuth=-1e308",
+        ],
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let _ = std::fs::remove_dir_all(&d);
 }
 

@@ -56,7 +56,12 @@ fn lustre(dir: &Path, args: &[&str], stdin: &str) -> (i32, String, String) {
         .stderr(Stdio::piped())
         .spawn()
         .unwrap();
-    child.stdin.take().unwrap().write_all(stdin.as_bytes()).unwrap();
+    child
+        .stdin
+        .take()
+        .unwrap()
+        .write_all(stdin.as_bytes())
+        .unwrap();
     let start = Instant::now();
     loop {
         if child.try_wait().unwrap().is_some() {
@@ -101,7 +106,12 @@ const KINDS: [(&str, &str); 3] = [
 fn every_scene_input_is_refused_unless_a_regular_file() {
     // (what the scene names, the file's name, where it goes in the scene)
     let uses = [
-        ("include", "fit.toml", "MATERIAL_EXTRA", "include = \"fit.toml\""),
+        (
+            "include",
+            "fit.toml",
+            "MATERIAL_EXTRA",
+            "include = \"fit.toml\"",
+        ),
         ("nk_csv", "nk.csv", "MATERIAL_EXTRA", "nk_csv = \"nk.csv\""),
         (
             "mesh",
@@ -134,7 +144,11 @@ fn every_scene_input_is_refused_unless_a_regular_file() {
             }
             std::fs::write(d.join("s.toml"), scene).unwrap();
             bad_input(&d, file, kind);
-            let (code, _, err) = lustre(&d, &["render", "s.toml", "-q", "--no-film", "--png", "o.png"], "");
+            let (code, _, err) = lustre(
+                &d,
+                &["render", "s.toml", "-q", "--no-film", "--png", "o.png"],
+                "",
+            );
             assert_eq!(code, 1, "{what} as {kind}: {err}");
             assert!(
                 err.contains(file) && err.contains(described),
@@ -167,7 +181,9 @@ fn command_inputs_are_refused_unless_regular_files() {
             (&["fit", "scan.txt", "--no-plots", "-o", "m.toml"], ""),
             (&["fit", "stats", "scan.txt"], ""),
             (
-                &["preview", "mat.toml", "--size", "8x6", "--spp", "1", "-o", "p.png"],
+                &[
+                    "preview", "mat.toml", "--size", "8x6", "--spp", "1", "-o", "p.png",
+                ],
                 "",
             ),
             (&["judge", "scan.txt", "--no-plots", "-o", "j"], ""),
