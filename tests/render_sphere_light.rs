@@ -124,6 +124,9 @@ fn sphere_light_direct_lighting_is_unbiased_for_every_mis_and_sampler() {
         ("hero", "sobol", "balance", 4096, 0.003),
         ("hero", "sobol", "power 0.2", 4096, 0.003),
         ("hero", "sobol", "power 8", 4096, 0.003),
+        // The accepted extremes (mis_light_weight's bounds): one strategy in all but name.
+        ("hero", "sobol", "power 0.001", 16_384, 0.004),
+        ("hero", "sobol", "balance 1000", 16_384, 0.004),
         ("hero", "independent", "power 1", 65_536, 0.008),
         ("hero", "sobol", "power 0.2 sampled", 16_384, 0.004),
         ("hero", "sobol", "power auto sampled", 16_384, 0.004),

@@ -173,6 +173,15 @@ struct Builder<'a> {
     material_index: HashMap<String, u32>,
 }
 
+/// Range of `[integrator] mis_light_weight`: the factor multiplies light
+/// densities inside the MIS weights, and past these bounds the product leaves
+/// the range where both strategies' weights stay representable for the
+/// densities lights produce (at 1e306 a light's contribution vanished).
+/// Weights beyond 1e3 or below 1e-3 are one strategy alone in all but name.
+pub const MIS_LIGHT_WEIGHT_MIN: f64 = 1e-3;
+/// See [`MIS_LIGHT_WEIGHT_MIN`].
+pub const MIS_LIGHT_WEIGHT_MAX: f64 = 1e3;
+
 impl<'a> Builder<'a> {
     fn new(path: &'a Path, text: &'a str, desc: &'a SceneDesc) -> Builder<'a> {
         let base = path
@@ -296,11 +305,13 @@ impl<'a> Builder<'a> {
             None => 0,
         };
         let mis_light_weight = match &integrator.mis_light_weight {
-            Some(w) if !(w.get_ref().is_finite() && *w.get_ref() > 0.0) => {
+            Some(w) if !(MIS_LIGHT_WEIGHT_MIN..=MIS_LIGHT_WEIGHT_MAX).contains(w.get_ref()) => {
                 return Err(self.at(
                     w.span(),
                     format!(
-                        "mis_light_weight = {} is invalid: expected a finite number > 0 (1 is the textbook heuristic; leave it out for the per-vertex choice)",
+                        "mis_light_weight = {} is invalid: expected {MIS_LIGHT_WEIGHT_MIN} to \
+                         {MIS_LIGHT_WEIGHT_MAX} (1 is the textbook heuristic; leave it out for \
+                         the per-vertex choice)",
                         w.get_ref()
                     ),
                 ));
