@@ -485,6 +485,7 @@ mod tests {
         std::fs::create_dir_all(&dir).unwrap();
         let scene = dir.join("a.toml");
         std::fs::write(&scene, "").unwrap();
+        safe_io::protect_inputs();
         safe_io::register_input(&scene);
         let p = |s: &str| dir.join(s);
         // Sound: distinct names with their formats' extensions (any case).

@@ -56,6 +56,8 @@ enum Command {
 
 fn main() -> std::process::ExitCode {
     let cli = Cli::parse();
+    // No output of this run may replace a file it read, under any name.
+    safe_io::protect_inputs();
     let result = match cli.command {
         None => cmd_render::render(cli.render),
         Some(Command::Render(args)) => cmd_render::render(args),

@@ -431,3 +431,55 @@ fn include_files_reject_unknown_keys_and_accept_what_fit_writes() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// An environment map's NaN, infinite or negative texels are refused, naming the
+/// file and the first such pixel (they were zeroed, or made the image negative);
+/// `rotate_deg` must be finite with or without a map.
+#[test]
+fn environment_maps_hold_finite_non_negative_radiance() {
+    let dir = std::env::temp_dir().join(format!("lustre-hostile-env-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let scene = |file: &str, rotate: &str| {
+        SMALL.replace(
+            "[[lights]]\ntype = \"point\"",
+            &format!(
+                "[[lights]]\ntype = \"environment\"\nradiance = 1.0\n{file}rotate_deg = {rotate}\n\n\
+                 [[lights]]\ntype = \"point\""
+            ),
+        )
+    };
+    let (w, h) = (8u32, 4u32);
+    for (bad, label) in [(f32::NAN, "NaN"), (f32::INFINITY, "inf"), (-0.25, "-0.25")] {
+        let mut px = vec![[0.5f32; 3]; (w * h) as usize];
+        px[(2 * w + 5) as usize][1] = bad;
+        let map = dir.join("env.exr");
+        render::output::write_exr(&map, w, h, &px).unwrap();
+        let e = render::load_str(&dir.join("s.toml"), &scene("file = \"env.exr\"\n", "0.0"))
+            .err()
+            .unwrap_or_else(|| panic!("a texel of {label} was accepted"))
+            .to_string();
+        assert!(
+            e.contains("env.exr") && e.contains("pixel (5, 2)") && e.contains(label),
+            "{label}: {e}"
+        );
+    }
+    // All-NaN: the sky went black before.
+    let px = vec![[f32::NAN; 3]; (w * h) as usize];
+    render::output::write_exr(&dir.join("env.exr"), w, h, &px).unwrap();
+    let e = render::load_str(&dir.join("s.toml"), &scene("file = \"env.exr\"\n", "0.0"))
+        .err()
+        .unwrap()
+        .to_string();
+    assert!(e.contains("pixel (0, 0)"), "{e}");
+    // A sound map loads; rotate_deg = nan is refused with or without one.
+    render::output::write_exr(&dir.join("env.exr"), w, h, &vec![[0.5f32; 3]; 32]).unwrap();
+    render::load_str(&dir.join("s.toml"), &scene("file = \"env.exr\"\n", "30.0")).unwrap();
+    for file in ["file = \"env.exr\"\n", ""] {
+        let e = render::load_str(&dir.join("s.toml"), &scene(file, "nan"))
+            .err()
+            .unwrap()
+            .to_string();
+        assert!(e.contains("rotate_deg must be finite"), "{file}: {e}");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}

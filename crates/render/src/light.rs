@@ -210,11 +210,29 @@ impl EnvMap {
         if width == 0 || height == 0 {
             return Err(format!("environment EXR {} is empty", path.display()));
         }
+        // A NaN or negative texel has no radiance to stand for: zeroing it made an
+        // all-NaN sky black and negative ones a negative image, without a word.
+        if let Some(i) = rgb
+            .iter()
+            .position(|p| p.iter().any(|v| !v.is_finite() || *v < 0.0))
+        {
+            return Err(format!(
+                "environment EXR {}: pixel ({}, {}) from the top left has RGB ({}, {}, {}); \
+                 radiance must be finite and ≥ 0: repair the map (e.g. clamp it to 0 and \
+                 replace non-finite values in an image editor) or use another one",
+                path.display(),
+                i % width,
+                i / width,
+                rgb[i][0],
+                rgb[i][1],
+                rgb[i][2]
+            ));
+        }
         let lift = RgbLift::new();
         let mut coeffs = Vec::with_capacity(rgb.len());
         let mut weights = Vec::with_capacity(rgb.len());
         for (i, px) in rgb.iter().enumerate() {
-            let px = px.map(|v| if v.is_finite() { v * scale } else { 0.0 });
+            let px = px.map(|v| v * scale);
             coeffs.push(lift.coefficients(px));
             let y = i / width;
             let sin_theta = (PI * (y as f64 + 0.5) / height as f64).sin();

@@ -4,7 +4,8 @@
 //! - [`read_input`] reads a regular file, at most a stated number of bytes,
 //!   and refuses anything else (a FIFO would block forever, `/dev/zero`
 //!   would fill the memory) with a message naming the path and the fix.
-//!   Every file read this way is remembered as an input of the process.
+//!   Once a program calls [`protect_inputs`], every file read this way is
+//!   remembered as an input of the process.
 //! - [`write_atomic`] writes a result: a regular file (or a new name) is
 //!   replaced atomically (temporary file, sync, rename), so a reader sees the
 //!   old or the new contents and an interrupted write leaves the old ones; a
@@ -21,7 +22,7 @@ mod kind;
 mod read;
 mod write;
 
-pub use inputs::{input_at, register_input, same_file};
+pub use inputs::{input_at, protect_inputs, register_input, same_file};
 pub use kind::FileKind;
 pub use read::{ReadError, read_input, read_regular};
 pub use write::{WriteError, check_output, create_parent, write_atomic, write_atomic_with};

@@ -150,6 +150,7 @@ mod tests {
         let d = temp("ok");
         let p = d.join("a.csv");
         std::fs::write(&p, "400,1\n").unwrap();
+        crate::protect_inputs();
         assert_eq!(read_input(&p, "nk_csv", 6).unwrap(), b"400,1\n");
         assert!(crate::input_at(&p).is_some());
         let e = read_input(&p, "nk_csv", 5).unwrap_err();

@@ -246,6 +246,7 @@ mod tests {
         let dir = temp("inputs");
         let input = dir.join("scan.di");
         std::fs::write(&input, b"scan").unwrap();
+        crate::protect_inputs();
         crate::read_input(&input, "scan", 100).unwrap();
         let mut spellings = vec![input.clone(), dir.join(".").join("scan.di")];
         #[cfg(unix)]

@@ -549,6 +549,9 @@ impl<'a> Builder<'a> {
                         return Err(err(self, "only one environment light is allowed".into()));
                     }
                     non_negative("radiance", *radiance).map_err(|m| err(self, m))?;
+                    if !rotate_deg.is_finite() {
+                        return Err(err(self, "rotate_deg must be finite".into()));
+                    }
                     let env = match file {
                         Some(f) => {
                             if s.is_some() {
@@ -556,9 +559,6 @@ impl<'a> Builder<'a> {
                                     self,
                                     "an EXR environment takes its colour from the map; remove `spectrum`".into(),
                                 ));
-                            }
-                            if !rotate_deg.is_finite() {
-                                return Err(err(self, "rotate_deg must be finite".into()));
                             }
                             let full = self.base.join(f);
                             let bytes = self
