@@ -283,7 +283,8 @@ fn stats(args: StatsArgs) -> anyhow::Result<()> {
     }
     if s.flat.is_none()
         && kc.reason.is_none()
-        && let Some(w) = fit::material::variance_mismatch(kc.params.sigma, s.stats.sq, kc.range)
+        && let Some(w) =
+            fit::material::variance_mismatch(kc.params.sigma, s.stats.sq, kc.range, false)
     {
         warnings.push(w);
     }

@@ -288,3 +288,38 @@ fn fit_stats_warns_when_the_kc_sigma_misses_most_of_the_variance() {
         "{err}"
     );
 }
+
+/// `fit` never advises what the renderer would refuse, and no message shows Debug
+/// formatting: on the Dektak profile it advised `model = "measured_psd"` while
+/// reporting that the renderer rejects its PSD table (a roll-off steeper than any KC
+/// tail in the last row), and following the advice failed with `data row Some(4799)`.
+/// The roll-off is trimmed now, and the advice can be followed.
+#[test]
+fn fit_advice_can_be_followed() {
+    let (dir, err, text) = fit_material("data/surfaces/dektak-1.csv", "advice");
+    assert!(!err.contains("Some(") && !text.contains("Some("), "{err}");
+    assert!(!text.contains("rejects the PSD table"), "{text}");
+    for (what, advised) in [("stderr", &err), ("material file", &text)] {
+        if advised.contains("model = \"measured_psd\"") {
+            let (code, _, e) = lustre(&[
+                "preview",
+                dir.join("advice.toml").to_str().unwrap(),
+                "--models",
+                "measured_psd",
+                "--size",
+                "16x12",
+                "--spp",
+                "1",
+                "-q",
+                "-o",
+                dir.join("p.png").to_str().unwrap(),
+            ]);
+            assert_eq!(code, 0, "{what} advises measured_psd, which fails: {e}");
+        }
+    }
+    assert!(
+        err.contains("measured_psd"),
+        "the case this test is about: {err}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -28,13 +28,25 @@ pub enum BrdfError {
         max_nm: f64,
     },
     /// A user-supplied table is malformed.
-    #[error("invalid table (data row {row:?}, zero-based): {reason}")]
+    #[error("invalid table{}: {reason}", AtRow(*row))]
     InvalidTable {
         /// What is wrong and how to fix it.
         reason: &'static str,
         /// Zero-based row of the offending entry, if one row is to blame.
         row: Option<usize>,
     },
+}
+
+/// " (data row N, zero-based)" when one row is to blame, else nothing.
+struct AtRow(Option<usize>);
+
+impl core::fmt::Display for AtRow {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self.0 {
+            Some(r) => write!(f, " (data row {r}, zero-based)"),
+            None => Ok(()),
+        }
+    }
 }
 
 /// Checks that `value` is finite and within `[lo, hi]`.

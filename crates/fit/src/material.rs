@@ -392,7 +392,12 @@ pub const SIGMA_SQ_RATIO_MAX: f64 = 2.0;
 /// beyond the scan, and the model has more long-wavelength roughness than was measured.
 /// Either way g = (kσ(cosθi + cosθo))², the specular weight e^−g and the lobe width
 /// follow σ, not Sq.
-pub fn variance_mismatch(sigma: f64, sq: f64, band: (f64, f64)) -> Option<String> {
+pub fn variance_mismatch(
+    sigma: f64,
+    sq: f64,
+    band: (f64, f64),
+    suggest_measured_psd: bool,
+) -> Option<String> {
     if !(sigma.is_finite() && sq.is_finite() && sigma > 0.0 && sq > 0.0) {
         return None;
     }
@@ -407,13 +412,22 @@ pub fn variance_mismatch(sigma: f64, sq: f64, band: (f64, f64)) -> Option<String
     } else {
         String::new()
     };
+    // Suggested only where the material file's own table builds (the caller knows).
+    let (short, long) = if suggest_measured_psd {
+        (
+            ", otherwise compare with model = \"measured_psd\", whose table holds the whole \
+             measured spectrum",
+            ", otherwise compare with model = \"measured_psd\"",
+        )
+    } else {
+        ("", "")
+    };
     Some(if ratio < 1.0 {
         format!(
             "the K-correlation σ {sigma_um:.4e} µm holds {:.2} % of the measured height \
              variance (Sq {sq_um:.4e} µm): the rest lies outside the fitted band{wavelengths}, \
              mostly at longer wavelengths, and the GHS models render it as mirror \
-             reflection; if it is form, level it away (--level), otherwise compare with \
-             model = \"measured_psd\", whose table holds the whole measured spectrum",
+             reflection; if it is form, level it away (--level){short}",
             100.0 * ratio * ratio
         )
     } else {
@@ -422,7 +436,7 @@ pub fn variance_mismatch(sigma: f64, sq: f64, band: (f64, f64)) -> Option<String
              {sq_um:.4e} µm: the fitted roll-off lies beyond the scan{wavelengths}, so the \
              model holds long-wavelength roughness that was not measured and renders \
              rougher than the scan; a longer scan (or a stylus profile, --stylus) would \
-             measure it, otherwise compare with model = \"measured_psd\""
+             measure it{long}"
         )
     })
 }
@@ -462,7 +476,12 @@ pub fn renderer_psd(zeta: &[f64], p: &[f64]) -> (Vec<f64>, Vec<f64>, usize, Opti
         let n = z.len();
         (q[n - 1].ln() - q[n - 2].ln()) / (z[n - 1].ln() - z[n - 2].ln())
     };
-    while z.len() > 2 && slope(&z, &q).partial_cmp(&-2.02) != Some(std::cmp::Ordering::Less) {
+    // The tail must be normalisable (steeper than ζ^−2.02: a noise floor is not) and no
+    // steeper than the steepest KC tail (an instrument's roll-off is not surface).
+    while z.len() > 2 && {
+        let s = slope(&z, &q);
+        !(s < -2.02) || brdf::statistics::measured_psd::tail_too_steep(s)
+    } {
         z.pop();
         q.pop();
     }
@@ -605,7 +624,14 @@ pub fn build(a: &Analysis, prov: &Provenance<'_>) -> MaterialFile {
     // A degenerate or clamped fit is flagged as such already; the silent case is a sound
     // fit whose σ is not the measured one.
     let variance_warning = kc_ok
-        .then(|| variance_mismatch(a.kc.params.sigma, a.stats.sq, a.kc.range))
+        .then(|| {
+            variance_mismatch(
+                a.kc.params.sigma,
+                a.stats.sq,
+                a.kc.range,
+                psd_problem.is_none(),
+            )
+        })
         .flatten();
     let (model, model_reason) = match prov.model {
         "auto" if kc_ok => (

@@ -425,20 +425,26 @@ fn sigma_far_from_sq_is_flagged_and_a_kc_surface_is_not() {
     // The threshold is a factor 2 either way, and values that are not positive and
     // finite are not judged.
     let band = (1e5, 1e7);
-    assert!(material::variance_mismatch(1.0, 1.9, band).is_none());
-    assert!(material::variance_mismatch(1.9, 1.0, band).is_none());
-    let low = material::variance_mismatch(1.0, 2.1, band).unwrap();
+    assert!(material::variance_mismatch(1.0, 1.9, band, true).is_none());
+    assert!(material::variance_mismatch(1.9, 1.0, band, true).is_none());
+    let low = material::variance_mismatch(1.0, 2.1, band, true).unwrap();
     assert!(
         low.contains("22.68 %") && low.contains("1.000e-1–1.000e1 µm"),
         "{low}"
     );
-    let high = material::variance_mismatch(2.1, 1.0, band).unwrap();
+    let high = material::variance_mismatch(2.1, 1.0, band, true).unwrap();
     assert!(high.contains("2.10×"), "{high}");
-    for bad in [0.0, -1.0, f64::NAN, f64::INFINITY] {
-        assert!(material::variance_mismatch(bad, 1.0, band).is_none());
-        assert!(material::variance_mismatch(1.0, bad, band).is_none());
+    // The measured PSD is suggested only where its table builds.
+    assert!(low.contains("measured_psd") && high.contains("measured_psd"));
+    for (s, q) in [(1.0, 2.1), (2.1, 1.0)] {
+        let w = material::variance_mismatch(s, q, band, false).unwrap();
+        assert!(!w.contains("measured_psd"), "{w}");
     }
-    let no_band = material::variance_mismatch(1.0, 3.0, (f64::NAN, 1.0)).unwrap();
+    for bad in [0.0, -1.0, f64::NAN, f64::INFINITY] {
+        assert!(material::variance_mismatch(bad, 1.0, band, true).is_none());
+        assert!(material::variance_mismatch(1.0, bad, band, true).is_none());
+    }
+    let no_band = material::variance_mismatch(1.0, 3.0, (f64::NAN, 1.0), true).unwrap();
     assert!(!no_band.contains("(wavelengths"), "{no_band}");
 }
 
