@@ -472,15 +472,12 @@ fn albedo_plot(fig: &Figure<'_>) -> anyhow::Result<(Plot, String)> {
     let multi_lambda = args.lambda_nm.len() > 1;
     for (mi, (spec, model)) in fig.specs.iter().zip(fig.built).enumerate() {
         for (li, &lambda) in args.lambda_nm.iter().enumerate() {
-            let rho = models::lobe_rho(&spec.spec, lambda);
+            let rho = spec.spec.lobe_rho(lambda);
             let (mut xs, mut total, mut tis) = (Vec::new(), Vec::new(), Vec::new());
             for theta_i in albedo_angles(args.albedo_angles) {
                 let wi = direction(theta_i, 0.0);
-                let scattered = brdf::wave::energy::hemispherical_integral(wi, rho, |o| {
-                    model.eval(wi, o, lambda)
-                });
-                let spec_w = model.specular(wi, lambda).weight;
-                let t = scattered + spec_w;
+                let a = spec.spec.albedo(model.as_ref(), wi, lambda);
+                let (scattered, spec_w, t) = (a.scattered, a.specular, a.total());
                 let r = if t > 0.0 { scattered / t } else { 0.0 };
                 csv_row(
                     &mut csv,

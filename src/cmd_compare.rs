@@ -93,56 +93,53 @@ fn sample_rows(s: &Surface, cutoffs: &[f64]) -> anyhow::Result<Vec<Row>> {
         .collect()
 }
 
-/// Cutoff tables of a `lustre fit` file, ordered by their number (cutoff_50 < cutoff_100).
+/// The rows of a `lustre fit` file: GGX, GHS SSA, full GHS and each two-scale split as the
+/// file offers them, splits ordered by their number (cutoff_50 < cutoff_100).
 fn material_rows(path: &Path) -> anyhow::Result<(String, Vec<Row>)> {
-    let models::FitFile { doc, material, abs } = models::read_fit_file(path)?;
-    let mat = &material;
-    let num = |t: &toml::Table, k: &str| t.get(k).and_then(toml::Value::as_float);
-    let row = |model, cutoff| models::fit_material_toml(&abs, model, cutoff);
     use brdf::spec::ModelKind;
-    let mut rows = vec![
-        Row {
-            label: format!(
-                "GGX\nα {}",
-                brdf::paper::short(num(mat, "alpha").unwrap_or(f64::NAN))
-            ),
-            material: row(ModelKind::Ggx, None)?,
-        },
-        Row {
-            label: "GHS SSA".into(),
-            material: row(ModelKind::GhsSsa, None)?,
-        },
-        Row {
-            label: "full GHS".into(),
-            material: row(ModelKind::Ghs, None)?,
-        },
-    ];
-    let mut cuts: Vec<(f64, String, f64)> = doc
-        .get("two_scale")
-        .and_then(toml::Value::as_table)
-        .map(|t| {
-            t.iter()
-                .filter_map(|(name, v)| {
-                    let t = v.as_table()?;
-                    let order = name
-                        .trim_start_matches(|c: char| !c.is_ascii_digit())
-                        .parse()
-                        .unwrap_or(f64::MAX);
-                    Some((order, name.clone(), num(t, "beta").unwrap_or(f64::NAN)))
-                })
-                .collect()
+    let fit = models::read_fit_file(path)?;
+    let mat = &fit.file.material;
+    let order = |name: &str| -> f64 {
+        name.trim_start_matches(|c: char| !c.is_ascii_digit())
+            .parse()
+            .unwrap_or(f64::MAX)
+    };
+    let mut offers: Vec<_> = (fit.file.offered().into_iter())
+        .filter(|o| {
+            matches!(
+                o.model,
+                Some(ModelKind::Ggx | ModelKind::GhsSsa | ModelKind::Ghs | ModelKind::TwoScale)
+            )
         })
-        .unwrap_or_default();
-    cuts.sort_by(|a, b| a.0.total_cmp(&b.0));
-    for (order, name, beta) in cuts {
-        let what = if order < f64::MAX {
-            format!("{order}λ")
-        } else {
-            name.clone()
+        .collect();
+    offers.sort_by(|a, b| {
+        let key = |o: &brdf::spec::file::Offer| o.cutoff.as_deref().map_or(-1.0, order);
+        key(a).total_cmp(&key(b))
+    });
+    let mut rows = Vec::new();
+    for o in &offers {
+        let label = match (o.model, &o.cutoff) {
+            (Some(ModelKind::Ggx), _) => {
+                format!(
+                    "GGX\nα {}",
+                    brdf::paper::short(mat.alpha.unwrap_or(f64::NAN))
+                )
+            }
+            (Some(ModelKind::GhsSsa), _) => "GHS SSA".into(),
+            (Some(ModelKind::Ghs), _) => "full GHS".into(),
+            (_, Some(c)) => {
+                let beta = fit.file.two_scale.get(c).map_or(f64::NAN, |t| t.beta);
+                let what = match order(c) {
+                    o if o < f64::MAX => format!("{o}λ"),
+                    _ => c.clone(),
+                };
+                format!("two-scale {what}\nβ {}", brdf::paper::short(beta))
+            }
+            _ => continue,
         };
         rows.push(Row {
-            label: format!("two-scale {what}\nβ {}", brdf::paper::short(beta)),
-            material: row(ModelKind::TwoScale, Some(name))?,
+            label,
+            material: fit.material_toml(o)?,
         });
     }
     let name = path

@@ -284,7 +284,7 @@ fn stats(args: StatsArgs) -> anyhow::Result<()> {
     if s.flat.is_none()
         && kc.reason.is_none()
         && let Some(w) =
-            fit::material::variance_mismatch(kc.params.sigma, s.stats.sq, kc.range, false)
+            fit::material_file::variance_mismatch(kc.params.sigma, s.stats.sq, kc.range, false)
     {
         warnings.push(w);
     }
@@ -427,7 +427,7 @@ fn material(args: MaterialArgs) -> anyhow::Result<()> {
         .map_err(|e| in_file(e, &scan_path, args.stylus.as_deref()))?;
     let scan_name = scan_path.display().to_string();
     let stylus_name = args.stylus.as_ref().map(|p| p.display().to_string());
-    let prov = fit::material::Provenance {
+    let prov = fit::material_file::Provenance {
         file: &scan_name,
         bytes: &bytes,
         stylus: stylus_name.as_deref().zip(stylus.as_deref()),
@@ -436,30 +436,31 @@ fn material(args: MaterialArgs) -> anyhow::Result<()> {
         model: &args.model,
         notes: &read_notes,
     };
-    let doc = fit::material::build(&analysis, &prov);
+    let doc = fit::material_file::build(&analysis, &prov);
     // Every model the file offers must build as a scene `include` of it would.
-    fit::material::renderer_materials(&doc)
+    fit::material_file::check(&doc)
         .with_context(|| format!("{}: the material fitted to it", scan_path.display()))?;
-    let text = fit::material::to_toml(&doc)?;
+    let text = fit::material_file::to_toml(&doc)?;
     plot::write_atomic(&args.output, text.as_bytes())
         .with_context(|| format!("cannot write {}", args.output.display()))?;
     let m = &doc.material;
+    let n = |v: Option<f64>| v.unwrap_or(f64::NAN);
     eprintln!(
         "wrote {}: model {}, Sq {:.4} µm, rms slope {:.4}, KC σ {:.4} µm Lc {:.4} µm γ {:.3}{}, GGX α {:.4}, Beckmann α {:.4}",
         args.output.display(),
-        m.model,
+        m.model.map_or("none", |m| m.name()),
         analysis.stats.sq * 1e6,
         analysis.stats.rms_slope(),
-        m.sigma_um,
-        m.lc_um,
-        m.gamma,
+        n(m.sigma_um),
+        n(m.lc_um),
+        n(m.gamma),
         if analysis.kc.degenerate {
             " (DEGENERATE: bounded estimate)"
         } else {
             ""
         },
-        m.alpha,
-        m.alpha_beckmann,
+        n(m.alpha),
+        n(m.alpha_beckmann),
     );
     for n in &analysis.notes {
         eprintln!("note: {n}");

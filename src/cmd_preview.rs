@@ -241,61 +241,56 @@ fn sample_cells(s: &Surface, names: &[String], cutoff: f64) -> anyhow::Result<Ve
 }
 
 fn material_cells(path: &Path, names: &[String]) -> anyhow::Result<(String, Vec<Cell>)> {
-    let models::FitFile { doc, material, abs } = models::read_fit_file(path)?;
-    let mat = &material;
+    let fit = models::read_fit_file(path)?;
     let name = path
         .file_stem()
         .map_or_else(|| "material".into(), |s| s.to_string_lossy().into_owned());
-    let own = mat
-        .get("model")
-        .and_then(toml::Value::as_str)
-        .unwrap_or("ggx")
-        .to_string();
-    let from_file = names.is_empty();
-    let names = if from_file { vec![own] } else { names.to_vec() };
-    let cutoffs: Vec<String> = doc
-        .get("two_scale")
-        .and_then(toml::Value::as_table)
-        .map(|t| t.keys().cloned().collect())
-        .unwrap_or_default();
+    let kinds: Vec<ModelKind> = if names.is_empty() {
+        vec![fit.file.material.model.unwrap_or(ModelKind::Ggx)]
+    } else {
+        (names.iter())
+            .map(|n| {
+                ModelKind::from_name(n.trim()).ok_or_else(|| {
+                    anyhow!("--models {n}: unknown model; use {}", ModelKind::names())
+                })
+            })
+            .collect::<anyhow::Result<_>>()?
+    };
+    let offers = fit.file.offered();
     let mut cells = Vec::new();
-    let row = |model, cutoff| models::fit_material_toml(&abs, model, cutoff);
-    for n in names {
-        let Some(kind) = ModelKind::from_name(n.trim()) else {
-            // The model came from the file unless --models named it: say which.
-            if from_file {
-                bail!(
-                    "{}: [material].model = {n:?}: unknown model. Fix: set it to one of {} \
-                     (or pick models with --models)",
-                    path.display(),
-                    ModelKind::names()
-                );
-            }
-            bail!("--models {n}: unknown model; use {}", ModelKind::names());
-        };
-        if kind == ModelKind::TwoScale && mat.get("beta").is_none() {
-            if cutoffs.is_empty() {
-                bail!(
-                    "{}: two_scale needs a [two_scale.NAME] table (lustre fit writes them)",
-                    path.display()
-                );
-            }
-            for c in &cutoffs {
-                cells.push(Cell {
-                    label: format!("two-scale {c}"),
-                    file: format!("{name}_two_scale_{c}"),
-                    material: row(kind, Some(c.clone()))?,
-                    data: None,
-                });
-            }
-            continue;
+    for kind in kinds {
+        let of_kind: Vec<_> = offers.iter().filter(|o| o.model == Some(kind)).collect();
+        if kind == ModelKind::TwoScale && fit.file.material.beta.is_none() && of_kind.is_empty() {
+            bail!(
+                "{}: two_scale needs a [two_scale.NAME] table (lustre fit writes them)",
+                path.display()
+            );
         }
-        cells.push(Cell {
-            label: n.clone(),
-            file: format!("{name}_{n}"),
-            material: row(kind, None)?,
-            data: None,
-        });
+        if of_kind.is_empty() {
+            // A model the file does not offer: let the scene build say why.
+            cells.push(Cell {
+                label: kind.name().into(),
+                file: format!("{name}_{}", kind.name()),
+                material: models::desc_toml(&brdf::spec::MaterialDesc {
+                    include: Some(fit.abs.display().to_string()),
+                    model: Some(kind),
+                    ..Default::default()
+                })?,
+                data: None,
+            });
+        }
+        for o in of_kind {
+            let (label, file) = match &o.cutoff {
+                Some(c) => (format!("two-scale {c}"), format!("{name}_two_scale_{c}")),
+                None => (kind.name().to_string(), format!("{name}_{}", kind.name())),
+            };
+            cells.push(Cell {
+                label,
+                file,
+                material: fit.material_toml(o)?,
+                data: None,
+            });
+        }
     }
     Ok((name, cells))
 }

@@ -160,76 +160,45 @@ pub fn desc_toml(desc: &MaterialDesc) -> anyhow::Result<String> {
     Ok(toml::to_string(desc)?)
 }
 
-/// Width of the lobe in projected-direction (o⊥) units, for the albedo quadrature.
-pub fn lobe_rho(spec: &MaterialSpec, lambda_nm: f64) -> f64 {
-    let wave = |kc: &KcSpec| 1.0 / (brdf::paper::wavenumber(lambda_nm) * kc.lc_um);
-    let rho = match &spec.model {
-        ModelSpec::Ggx { alpha_x, alpha_y } | ModelSpec::Beckmann { alpha_x, alpha_y } => {
-            alpha_x.min(*alpha_y)
-        }
-        ModelSpec::TwoScale { beta, surface, .. } => beta.max(wave(surface)),
-        ModelSpec::GhsSsa { surface, .. } | ModelSpec::Ghs { surface, .. } => wave(surface),
-        ModelSpec::MeasuredPsd {
-            zeta_rad_per_um, ..
-        } => {
-            let z0 = zeta_rad_per_um.first().copied().unwrap_or(1.0);
-            z0 / brdf::paper::wavenumber(lambda_nm)
-        }
-        ModelSpec::Smooth => 1e-3,
-    };
-    if rho.is_finite() && rho > 0.0 {
-        rho.clamp(1e-6, 1.0)
-    } else {
-        1e-3
-    }
-}
-
 /// A `lustre fit` material file as `compare` and `preview` read it.
 pub struct FitFile {
-    /// The whole document (for its `[two_scale.*]` tables).
-    pub doc: toml::Table,
-    /// Its `[material]` table.
-    pub material: toml::Table,
+    /// The document.
+    pub file: brdf::spec::MaterialFile,
     /// The file's absolute path, for the `include` of generated scenes.
     pub abs: std::path::PathBuf,
 }
 
-/// The `[materials.*]` body that draws the fit file at `abs` (see [`FitFile::abs`]) as
-/// `model`; `cutoff` names the `[two_scale.*]` table a two-scale model uses.
-pub fn fit_material_toml(
-    abs: &std::path::Path,
-    model: brdf::spec::ModelKind,
-    cutoff: Option<String>,
-) -> anyhow::Result<String> {
-    desc_toml(&MaterialDesc {
-        include: Some(abs.display().to_string()),
-        model: Some(model),
-        cutoff,
-        ..MaterialDesc::default()
-    })
+impl FitFile {
+    /// The `[materials.*]` body that draws the file as `offer` does.
+    pub fn material_toml(&self, offer: &brdf::spec::file::Offer) -> anyhow::Result<String> {
+        desc_toml(&MaterialDesc {
+            include: Some(self.abs.display().to_string()),
+            ..offer.desc()
+        })
+    }
 }
 
-/// Reads a `lustre fit` material file; an error names the file and what is missing.
+/// Reads a `lustre fit` material file; an error names the file, line and what is wrong.
 pub fn read_fit_file(path: &std::path::Path) -> anyhow::Result<FitFile> {
     use anyhow::Context;
     let bytes = safe_io::read_input(path, "material file", render::scene::inputs::MAX_TOML_BYTES)?;
     let text = String::from_utf8(bytes)
         .map_err(|_| anyhow!("{}: the material file is not UTF-8 text", path.display()))?;
-    let doc: toml::Table =
-        toml::from_str(&text).with_context(|| format!("parsing {}", path.display()))?;
-    let material = doc
-        .get("material")
-        .and_then(toml::Value::as_table)
-        .cloned()
-        .ok_or_else(|| {
-            anyhow!(
-                "{}: no [material] table (expected a `lustre fit` material file)",
-                path.display()
-            )
-        })?;
+    let file: brdf::spec::MaterialFile = toml::from_str(&text).map_err(|e| {
+        let at = e.span().map(|s| {
+            let line = text[..s.start].matches('\n').count() + 1;
+            format!(":{line}")
+        });
+        anyhow!(
+            "{}{}: {} (expected a `lustre fit` material file)",
+            path.display(),
+            at.unwrap_or_default(),
+            e.message().trim()
+        )
+    })?;
     let abs =
         std::fs::canonicalize(path).with_context(|| format!("resolving {}", path.display()))?;
-    Ok(FitFile { doc, material, abs })
+    Ok(FitFile { file, abs })
 }
 
 #[cfg(test)]

@@ -13,6 +13,7 @@
 //! reference-table length `L = 2π·Lc`, where `Lc` is the Matérn range of physics.md §2.
 
 pub mod anisotropy;
+pub mod candidates;
 pub mod error;
 pub mod explicit_brdf;
 mod fft;
@@ -21,7 +22,7 @@ pub mod fill;
 pub mod io;
 pub mod kc;
 pub mod level;
-pub mod material;
+pub mod material_file;
 pub mod ndf;
 mod ordered_sum;
 pub mod pipeline;

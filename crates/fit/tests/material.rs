@@ -3,7 +3,7 @@
 //! two-scale tables come in order, stylus merging uses the stylus below the cutoff.
 
 use fit::io::{ReadOptions, read_path};
-use fit::material::{self, Provenance};
+use fit::material_file::{self as material, Provenance};
 use fit::pipeline::{Options, analyse};
 use fit::two_scale::BetaSource;
 use std::path::PathBuf;

@@ -9,7 +9,8 @@ use crate::scene::inputs::{Inputs, MAX_CSV_BYTES, MAX_TOML_BYTES};
 use crate::spectrum::parse_csv_rows;
 use brdf::Fresnel;
 pub use brdf::spec::DynBxdf;
-use brdf::spec::{FileLoader, FresnelSpec, MaterialDesc, MaterialSpec, ModelKind};
+use brdf::spec::file::WithOwnPsd;
+use brdf::spec::{FileLoader, FresnelSpec, MaterialDesc, MaterialFile, MaterialSpec, ModelKind};
 use std::path::Path;
 
 /// A built material.
@@ -36,15 +37,10 @@ pub struct FresnelOnly {
     pub unit: DynBxdf,
 }
 
-/// A PSD table `(ζ rad/µm, P µm⁴)` under the name `psd_csv` refers to it by.
-type NamedPsd = (String, (Vec<f64>, Vec<f64>));
-
-/// Reads `nk_csv` / `psd_csv` relative to the scene file through `inputs`;
-/// the included file's `[psd]` table answers for the name it was given.
+/// Reads `nk_csv` / `psd_csv` relative to the scene file through `inputs`.
 struct SceneFiles<'a> {
     base_dir: &'a Path,
     inputs: &'a mut Inputs,
-    inline_psd: Option<NamedPsd>,
 }
 
 impl FileLoader for SceneFiles<'_> {
@@ -56,11 +52,6 @@ impl FileLoader for SceneFiles<'_> {
     }
 
     fn psd_table(&mut self, path: &str) -> Result<(Vec<f64>, Vec<f64>), String> {
-        if let Some((name, table)) = &self.inline_psd
-            && name == path
-        {
-            return Ok(table.clone());
-        }
         let full = self.base_dir.join(path);
         let text = self.inputs.read_text(&full, "psd_csv", MAX_CSV_BYTES)?;
         let rows = parse_csv_rows(&text, 2).map_err(|e| format!("{}: {e}", full.display()))?;
@@ -70,12 +61,12 @@ impl FileLoader for SceneFiles<'_> {
 
 /// What an `include`d `lustre fit` file contributes.
 struct Included {
-    /// Its `[material]` (with the chosen `[two_scale.NAME]` over it for
-    /// `two_scale`), paths made relative to the scene file.
+    /// The file.
+    file: MaterialFile,
+    /// Its `[material]` as the scene's description builds on it (see
+    /// [`MaterialFile::base_for`]), paths made relative to the scene file.
     base: MaterialDesc,
-    /// Its `[psd]` table under the name `psd_csv` refers to it by.
-    psd: Option<NamedPsd>,
-    /// The file as read, and the table the two-scale keys came from, so that
+    /// The file as read, and the split the two-scale keys came from, so that
     /// an invalid value it supplied is reported at its own line.
     path: std::path::PathBuf,
     text: String,
@@ -118,72 +109,7 @@ impl Included {
     }
 }
 
-/// A `lustre fit` material file. `[material]` is a [`MaterialDesc`]; the
-/// parameters of `[two_scale.NAME]` and `[psd]` are read next to the
-/// provenance `lustre fit` writes there; the diagnostics tables are accepted
-/// whatever they hold. Every table refuses unknown keys, so a misspelt key in
-/// a hand-edited file is an error with its line and column.
-#[derive(serde::Deserialize)]
-#[serde(deny_unknown_fields)]
-struct FitFile {
-    material: Option<MaterialDesc>,
-    #[serde(default)]
-    two_scale: std::collections::BTreeMap<String, FitSplit>,
-    psd: Option<FitPsd>,
-    /// Diagnostics of `lustre fit` (not read).
-    #[serde(default, rename = "provenance")]
-    _provenance: Option<toml::Table>,
-    #[serde(default, rename = "fit")]
-    _fit: Option<toml::Table>,
-    #[serde(default, rename = "kc_2d")]
-    _kc_2d: Option<toml::Table>,
-    #[serde(default, rename = "reliability")]
-    _reliability: Option<toml::Table>,
-    #[serde(default, rename = "form")]
-    _form: Option<toml::Table>,
-    #[serde(default, rename = "anisotropy")]
-    _anisotropy: Option<toml::Table>,
-}
-
-/// `[two_scale.NAME]`: the split's parameters and `lustre fit`'s notes on it.
-#[derive(serde::Deserialize)]
-#[serde(deny_unknown_fields)]
-struct FitSplit {
-    beta: f64,
-    sigma_um: f64,
-    lc_um: f64,
-    gamma: f64,
-    #[serde(default, rename = "beta_source")]
-    _beta_source: Option<toml::Value>,
-    #[serde(default, rename = "cutoff_um")]
-    _cutoff_um: Option<toml::Value>,
-    #[serde(default, rename = "fit_f_range_per_m")]
-    _fit_f_range_per_m: Option<toml::Value>,
-    #[serde(default, rename = "kc_degenerate")]
-    _kc_degenerate: Option<toml::Value>,
-    #[serde(default, rename = "problem")]
-    _problem: Option<toml::Value>,
-}
-
-/// `[psd]`: the measured PSD and `lustre fit`'s notes on it.
-#[derive(serde::Deserialize)]
-#[serde(deny_unknown_fields)]
-struct FitPsd {
-    zeta_rad_per_um: Vec<f64>,
-    p_um4: Vec<f64>,
-    #[serde(default, rename = "source")]
-    _source: Option<toml::Value>,
-    #[serde(default, rename = "integral_um2")]
-    _integral_um2: Option<toml::Value>,
-    #[serde(default, rename = "usable")]
-    _usable: Option<toml::Value>,
-    #[serde(default, rename = "dropped_bins")]
-    _dropped_bins: Option<toml::Value>,
-}
-
-/// Reads an included fit file: its `[material]` under the scene's keys, the
-/// chosen `[two_scale.NAME]` over it for `two_scale`, its `[psd]` for
-/// `measured_psd`.
+/// Reads an included fit file and the `[material]` the scene's description builds on.
 fn read_include(
     desc: &MaterialDesc,
     inc: &str,
@@ -194,76 +120,27 @@ fn read_include(
     let text = inputs
         .read_text(&path, "material file", MAX_TOML_BYTES)
         .map_err(|e| format!("include = \"{inc}\": {e}"))?;
-    let file: FitFile = toml::from_str(&text).map_err(|e| {
+    let mut file: MaterialFile = toml::from_str(&text).map_err(|e| {
         let pos = e.span().map(|s| crate::error::line_column(&text, s.start));
         match pos {
             Some((l, c)) => format!("{}:{l}:{c}: {}", path.display(), e.message().trim()),
             None => format!("{}: {}", path.display(), e.message().trim()),
         }
     })?;
-    let Some(mut base) = file.material else {
-        return Err(format!(
-            "{}: a material file needs a [material] table (as written by `lustre fit`)",
-            path.display()
-        ));
-    };
-    if base.include.is_some() || base.cutoff.is_some() {
-        return Err(format!(
-            "{}: [material] cannot itself use `include` or `cutoff`",
-            path.display()
-        ));
-    }
     // The include's own relative paths are relative to the include.
     let inc_dir = Path::new(inc).parent().unwrap_or(Path::new(""));
-    for p in [&mut base.nk_csv, &mut base.psd_csv].into_iter().flatten() {
+    for p in [&mut file.material.nk_csv, &mut file.material.psd_csv]
+        .into_iter()
+        .flatten()
+    {
         *p = inc_dir.join(&*p).to_string_lossy().into_owned();
     }
-
-    let model = desc.model.or(base.model);
-    let mut split = None;
-    if model == Some(ModelKind::TwoScale) {
-        let names: Vec<&str> = file.two_scale.keys().map(String::as_str).collect();
-        let listed = if names.is_empty() {
-            "none".to_string()
-        } else {
-            names.join(", ")
-        };
-        let chosen = match (&desc.cutoff, names.as_slice()) {
-            (Some(c), _) => c.as_str(),
-            (None, [only]) => only,
-            (None, _) => {
-                return Err(format!(
-                    "{}: choose a two-scale split with `cutoff = \"NAME\"`; the file has: {listed}",
-                    path.display()
-                ));
-            }
-        };
-        let Some(t) = file.two_scale.get(chosen) else {
-            return Err(format!(
-                "{}: no [two_scale.{chosen}] table; the file has: {listed}",
-                path.display()
-            ));
-        };
-        // The split's micro scale replaces the whole-surface KC fit.
-        base.beta = Some(t.beta);
-        base.sigma_um = Some(t.sigma_um);
-        base.lc_um = Some(t.lc_um);
-        base.gamma = Some(t.gamma);
-        split = Some(chosen.to_string());
-    }
-    let psd = match file.psd {
-        Some(t) if model == Some(ModelKind::MeasuredPsd) => {
-            let name = format!("[psd] of {inc}");
-            if base.psd_csv.is_none() {
-                base.psd_csv = Some(name.clone());
-            }
-            Some((name, (t.zeta_rad_per_um, t.p_um4)))
-        }
-        _ => None,
-    };
+    let (base, split) = file
+        .base_for(desc)
+        .map_err(|e| format!("{}: {}", path.display(), e.message))?;
     Ok(Included {
+        file,
         base,
-        psd,
         path,
         text,
         split,
@@ -290,14 +167,22 @@ pub fn build_material(
             None
         }
     };
-    let (base, inline_psd) = match &included {
-        Some(inc) => (Some(&inc.base), inc.psd.clone()),
-        None => (None, None),
-    };
-    let mut files = SceneFiles {
-        base_dir,
-        inputs,
-        inline_psd,
+    let mut scene_files = SceneFiles { base_dir, inputs };
+    let (base, mut files) = match &included {
+        Some(inc) => (
+            Some(&inc.base),
+            WithOwnPsd {
+                psd: inc.file.psd.as_ref(),
+                files: &mut scene_files,
+            },
+        ),
+        None => (
+            None,
+            WithOwnPsd {
+                psd: None,
+                files: &mut scene_files,
+            },
+        ),
     };
     let spec = desc
         .resolve(base, &mut files)

@@ -4,41 +4,41 @@
 use brdf::{Bxdf, DVec3, Fresnel};
 use fit::explicit_brdf::{AngularWindow, Estimate, ExplicitBrdf, Validity};
 
-use super::LOG_FLOOR;
-use super::recipes::Candidate;
+use crate::LOG_FLOOR;
+use crate::recipes::Candidate;
 
 /// Which slice a direction belongs to.
 #[derive(Clone, Copy, PartialEq, Eq, Debug)]
-pub(super) enum SliceKind {
+pub(crate) enum SliceKind {
     InPlane,
     CrossPlane,
 }
 
 /// One evaluated direction.
-pub(super) struct Point {
-    pub(super) kind: SliceKind,
+pub(crate) struct Point {
+    pub(crate) kind: SliceKind,
     /// Signed θo [deg] (in-plane, > 0 on the specular side) or o_y (cross-plane).
-    pub(super) coord: f64,
-    pub(super) wo: [f64; 3],
-    pub(super) explicit: Estimate,
-    pub(super) surrogate: Option<f64>,
-    pub(super) validity: Validity,
+    pub(crate) coord: f64,
+    pub(crate) wo: [f64; 3],
+    pub(crate) explicit: Estimate,
+    pub(crate) surrogate: Option<f64>,
+    pub(crate) validity: Validity,
 }
 
 /// Everything computed for one (θi, λ).
-pub(super) struct AngleSet {
-    pub(super) theta_i: f64,
-    pub(super) lambda_nm: f64,
-    pub(super) wi: [f64; 3],
-    pub(super) window: AngularWindow,
-    pub(super) coherent: Estimate,
-    pub(super) points: Vec<Point>,
-    pub(super) floor: f64,
+pub(crate) struct AngleSet {
+    pub(crate) theta_i: f64,
+    pub(crate) lambda_nm: f64,
+    pub(crate) wi: [f64; 3],
+    pub(crate) window: AngularWindow,
+    pub(crate) coherent: Estimate,
+    pub(crate) points: Vec<Point>,
+    pub(crate) floor: f64,
 }
 
 /// In-plane exits: half uniform in signed θo over ±88°, half at geometric offsets from
 /// the mirror direction (resolution … 1 in direction cosine).
-pub(super) fn in_plane_dirs(theta_i: f64, n: usize, res: f64) -> Vec<(f64, [f64; 3])> {
+pub(crate) fn in_plane_dirs(theta_i: f64, n: usize, res: f64) -> Vec<(f64, [f64; 3])> {
     let s_max = 88f64.to_radians().sin();
     let mirror = -theta_i.to_radians().sin();
     let mut ox: Vec<f64> = Vec::new();
@@ -62,7 +62,7 @@ pub(super) fn in_plane_dirs(theta_i: f64, n: usize, res: f64) -> Vec<(f64, [f64;
 }
 
 /// Cross-plane exits through the mirror direction: o = (−sinθi, o_y, ·).
-pub(super) fn cross_plane_dirs(theta_i: f64, n: usize, res: f64) -> Vec<(f64, [f64; 3])> {
+pub(crate) fn cross_plane_dirs(theta_i: f64, n: usize, res: f64) -> Vec<(f64, [f64; 3])> {
     let sx = -theta_i.to_radians().sin();
     let y_max = (1.0 - sx * sx).sqrt() * 88f64.to_radians().sin();
     let mut oy: Vec<f64> = Vec::new();
@@ -85,20 +85,20 @@ pub(super) fn cross_plane_dirs(theta_i: f64, n: usize, res: f64) -> Vec<(f64, [f
 }
 
 /// cosθd = i·h = sqrt((1 + i·o)/2), the Fresnel angle of the scattered part.
-pub(super) fn cos_d(wi: [f64; 3], wo: [f64; 3]) -> f64 {
+pub(crate) fn cos_d(wi: [f64; 3], wo: [f64; 3]) -> f64 {
     (0.5 * (1.0 + wi[0] * wo[0] + wi[1] * wo[1] + wi[2] * wo[2]))
         .max(0.0)
         .sqrt()
 }
 
-pub(super) fn dvec(v: [f64; 3]) -> DVec3 {
+pub(crate) fn dvec(v: [f64; 3]) -> DVec3 {
     DVec3::new(v[0], v[1], v[2])
 }
 
 /// `f` integrated over the out-of-plane direction cosine at in-plane `ox` (profiles):
 /// 2∫₀^Y f do_y (isotropic models are even in o_y when i is in the x–z plane), on geometric
 /// panels from 1e−5·Y with 4-point Gauss–Legendre.
-pub(super) fn marginal(m: &dyn Bxdf, wi: DVec3, ox: f64, lambda_nm: f64) -> f64 {
+pub(crate) fn marginal(m: &dyn Bxdf, wi: DVec3, ox: f64, lambda_nm: f64) -> f64 {
     let y_max = (1.0 - ox * ox).max(0.0).sqrt();
     if y_max <= 0.0 {
         return 0.0;
@@ -129,7 +129,7 @@ pub(super) fn marginal(m: &dyn Bxdf, wi: DVec3, ox: f64, lambda_nm: f64) -> f64 
 
 /// A model value as the explicit estimate sees it: smoothed by the tile kernel (`nodes`, ξ in
 /// rad/m, k in rad/m), and for profiles integrated over o_y.
-pub(super) fn model_value(
+pub(crate) fn model_value(
     m: &dyn Bxdf,
     wi: [f64; 3],
     wo: [f64; 3],
@@ -158,7 +158,7 @@ pub(super) fn model_value(
 }
 
 /// The part of an rms log error not explained by `noise` (both rms, in quadrature).
-pub(super) fn excess(rms: f64, noise: f64) -> f64 {
+pub(crate) fn excess(rms: f64, noise: f64) -> f64 {
     if rms.is_finite() && noise.is_finite() {
         (rms * rms - noise * noise).max(0.0).sqrt()
     } else {
@@ -166,27 +166,27 @@ pub(super) fn excess(rms: f64, noise: f64) -> f64 {
     }
 }
 
-pub(super) fn ln10_floor(v: f64, floor: f64) -> f64 {
+pub(crate) fn ln10_floor(v: f64, floor: f64) -> f64 {
     v.max(floor).log10()
 }
 
 /// Log-space comparison of one model with the explicit reference over the valid points.
 #[derive(Clone, Debug, Default)]
-pub(super) struct Score {
+pub(crate) struct Score {
     sum2: f64,
-    pub(super) n: usize,
+    pub(crate) n: usize,
 }
 
 impl Score {
-    pub(super) fn add(&mut self, d: f64) {
+    pub(crate) fn add(&mut self, d: f64) {
         self.sum2 += d * d;
         self.n += 1;
     }
-    pub(super) fn merge(&mut self, o: &Score) {
+    pub(crate) fn merge(&mut self, o: &Score) {
         self.sum2 += o.sum2;
         self.n += o.n;
     }
-    pub(super) fn rms(&self) -> f64 {
+    pub(crate) fn rms(&self) -> f64 {
         if self.n == 0 {
             f64::NAN
         } else {
@@ -195,7 +195,7 @@ impl Score {
     }
 }
 
-pub(super) fn score_model(set: &AngleSet, values: &[f64]) -> Score {
+pub(crate) fn score_model(set: &AngleSet, values: &[f64]) -> Score {
     let mut s = Score::default();
     for (p, v) in set.points.iter().zip(values) {
         if p.validity == Validity::Valid {
@@ -206,7 +206,7 @@ pub(super) fn score_model(set: &AngleSet, values: &[f64]) -> Score {
 }
 
 /// Model values at every point of every angle set.
-pub(super) fn evaluate(
+pub(crate) fn evaluate(
     c: &Candidate,
     sets: &[AngleSet],
     nodes: &[(f64, f64, f64)],
@@ -234,14 +234,14 @@ pub(super) fn evaluate(
 }
 
 /// A judged model: the candidate, its values and its scores.
-pub(super) struct Judged {
-    pub(super) c: Candidate,
-    pub(super) values: Vec<Vec<f64>>,
-    pub(super) per_angle: Vec<Score>,
-    pub(super) overall: Score,
+pub(crate) struct Judged {
+    pub(crate) c: Candidate,
+    pub(crate) values: Vec<Vec<f64>>,
+    pub(crate) per_angle: Vec<Score>,
+    pub(crate) overall: Score,
 }
 
-pub(super) fn judge(
+pub(crate) fn judge(
     c: Candidate,
     sets: &[AngleSet],
     nodes: &[(f64, f64, f64)],
@@ -265,7 +265,7 @@ pub(super) fn judge(
     }
 }
 
-pub(super) fn angle_set(
+pub(crate) fn angle_set(
     e: &ExplicitBrdf,
     surrogate: Option<&ExplicitBrdf>,
     fresnel: &Fresnel,

@@ -2,35 +2,35 @@
 
 use std::path::Path;
 
-use anyhow::{anyhow, bail};
+use crate::{JudgeError, invalid};
 use fit::explicit_brdf::{ExplicitBrdf, Validity};
 
-use super::LOG_FLOOR;
-use super::compare::{Judged, Score, cos_d, dvec, ln10_floor};
+use crate::LOG_FLOOR;
+use crate::compare::{Judged, Score, cos_d, dvec, ln10_floor};
 use brdf::Fresnel;
 
 /// The comparison against a measured BRDF file.
-pub(super) struct ReferenceResult {
-    pub(super) file: String,
-    pub(super) rows: usize,
-    pub(super) skipped_rows: usize,
+pub(crate) struct ReferenceResult {
+    pub(crate) file: String,
+    pub(crate) rows: usize,
+    pub(crate) skipped_rows: usize,
     /// (key, label, score); the explicit BRDF of the scan as key "explicit".
-    pub(super) scores: Vec<(String, String, Score)>,
+    pub(crate) scores: Vec<(String, String, Score)>,
 }
 
-pub(super) fn judge_reference(
+pub(crate) fn judge_reference(
     path: &Path,
     judged: &[Judged],
     e: &ExplicitBrdf,
     fresnel: &Fresnel,
-) -> anyhow::Result<ReferenceResult> {
+) -> Result<ReferenceResult, JudgeError> {
     let rows = read_reference(path)?;
     let usable: Vec<&[f64; 5]> = rows.iter().filter(|r| r[4] > 0.0).collect();
     if usable.is_empty() {
-        bail!(
+        return Err(invalid!(
             "{}: no row with a positive brdf value to compare in log space",
             path.display()
-        );
+        ));
     }
     let mut scores: Vec<(String, String, Score)> = judged
         .iter()
@@ -78,11 +78,14 @@ pub(super) fn judge_reference(
     })
 }
 
+/// Largest reference CSV read (a goniometer's BRDF table is a few MB).
+const MAX_REFERENCE_BYTES: u64 = 64 << 20;
+
 /// Rows `[θi, θo, φo, λ, brdf]` of a reference CSV.
-pub(super) fn read_reference(path: &Path) -> anyhow::Result<Vec<[f64; 5]>> {
-    let bytes = safe_io::read_input(path, "reference BRDF", render::scene::inputs::MAX_CSV_BYTES)?;
+pub(crate) fn read_reference(path: &Path) -> Result<Vec<[f64; 5]>, JudgeError> {
+    let bytes = safe_io::read_input(path, "reference BRDF", MAX_REFERENCE_BYTES)?;
     let text = String::from_utf8(bytes)
-        .map_err(|_| anyhow!("{}: the reference is not UTF-8 text", path.display()))?;
+        .map_err(|_| invalid!("{}: the reference is not UTF-8 text", path.display()))?;
     let names = [
         "theta_i_deg",
         "theta_o_deg",
@@ -96,7 +99,7 @@ pub(super) fn read_reference(path: &Path) -> anyhow::Result<Vec<[f64; 5]>> {
         .filter(|(_, l)| !l.trim().is_empty() && !l.trim_start().starts_with('#'));
     let (hline, header) = lines
         .next()
-        .ok_or_else(|| anyhow!("{}: empty file", path.display()))?;
+        .ok_or_else(|| invalid!("{}: empty file", path.display()))?;
     let cols: Vec<String> = header
         .split(',')
         .map(|c| c.trim().trim_matches('"').to_ascii_lowercase())
@@ -104,7 +107,7 @@ pub(super) fn read_reference(path: &Path) -> anyhow::Result<Vec<[f64; 5]>> {
     let mut idx = [0usize; 5];
     for (i, n) in names.iter().enumerate() {
         idx[i] = cols.iter().position(|c| c == n).ok_or_else(|| {
-            anyhow!(
+            invalid!(
                 "{}:{}: header has no column `{n}` (need {}; got {})",
                 path.display(),
                 hline + 1,
@@ -125,7 +128,7 @@ pub(super) fn read_reference(path: &Path) -> anyhow::Result<Vec<[f64; 5]>> {
                 .ok()
                 .filter(|v| v.is_finite())
                 .ok_or_else(|| {
-                    anyhow!(
+                    invalid!(
                         "{}:{}: column `{}` = {s:?} is not a finite number",
                         path.display(),
                         ln + 1,
@@ -133,7 +136,7 @@ pub(super) fn read_reference(path: &Path) -> anyhow::Result<Vec<[f64; 5]>> {
                     )
                 })?;
         }
-        let bad = |what: &str| anyhow!("{}:{}: {what}", path.display(), ln + 1);
+        let bad = |what: &str| invalid!("{}:{}: {what}", path.display(), ln + 1);
         if !(0.0..90.0).contains(&r[0]) || !(0.0..90.0).contains(&r[1]) {
             return Err(bad("theta_i_deg and theta_o_deg must lie in [0, 90)"));
         }
@@ -146,7 +149,10 @@ pub(super) fn read_reference(path: &Path) -> anyhow::Result<Vec<[f64; 5]>> {
         rows.push(r);
     }
     if rows.is_empty() {
-        bail!("{}: no data rows after the header", path.display());
+        return Err(invalid!(
+            "{}: no data rows after the header",
+            path.display()
+        ));
     }
     Ok(rows)
 }

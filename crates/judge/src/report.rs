@@ -3,34 +3,35 @@
 use std::fmt::Write as _;
 use std::path::Path;
 
-use anyhow::bail;
 use fit::explicit_brdf::{ExplicitBrdf, Validity};
 use fit::pipeline::Analysis;
 use plot::{Axis, ImageGrid, Legend, LineStyle, Marker, Plot, Rgb, Series};
 use serde_json::{Map, Value, json};
 
-use super::JudgeArgs;
-use super::compare::{AngleSet, Judged, Point, Score, SliceKind, dvec, excess, ln10_floor};
-use super::reference::ReferenceResult;
+use crate::JudgeError;
+use crate::compare::{AngleSet, Judged, Point, Score, SliceKind, dvec, excess, ln10_floor};
+use crate::reference::ReferenceResult;
 
 /// Everything the outputs are made from.
-pub(super) struct Report<'a> {
-    pub(super) args: &'a JudgeArgs,
-    pub(super) analysis: &'a Analysis,
-    pub(super) explicit: &'a ExplicitBrdf,
-    pub(super) sets: &'a [AngleSet],
-    pub(super) judged: &'a [Judged],
-    pub(super) skipped: &'a [(String, String)],
-    pub(super) reference: Option<&'a ReferenceResult>,
-    pub(super) fresnel: &'a str,
+pub(crate) struct Report<'a> {
+    pub(crate) scan: &'a str,
+    pub(crate) crop: Option<usize>,
+    pub(crate) upsample: usize,
+    pub(crate) analysis: &'a Analysis,
+    pub(crate) explicit: &'a ExplicitBrdf,
+    pub(crate) sets: &'a [AngleSet],
+    pub(crate) judged: &'a [Judged],
+    pub(crate) skipped: &'a [(String, String)],
+    pub(crate) reference: Option<&'a ReferenceResult>,
+    pub(crate) fresnel: &'a str,
 }
 
-pub(super) fn num(x: f64) -> Value {
+pub(crate) fn num(x: f64) -> Value {
     if x.is_finite() { json!(x) } else { Value::Null }
 }
 
 impl Report<'_> {
-    pub(super) fn valid_counts(set: &AngleSet) -> Map<String, Value> {
+    pub(crate) fn valid_counts(set: &AngleSet) -> Map<String, Value> {
         let mut m = Map::new();
         for v in [
             Validity::Valid,
@@ -47,7 +48,7 @@ impl Report<'_> {
     }
 
     /// rms of the explicit estimate's own log10 standard error over the valid points.
-    pub(super) fn noise(&self) -> (f64, Vec<f64>) {
+    pub(crate) fn noise(&self) -> (f64, Vec<f64>) {
         let (mut all, mut n_all) = (0.0, 0usize);
         let per = self
             .sets
@@ -77,7 +78,7 @@ impl Report<'_> {
     }
 
     /// rms log10 distance of the Gaussian surrogate's explicit BRDF from the map's.
-    pub(super) fn surrogate_score(&self) -> Option<(Score, Vec<Score>)> {
+    pub(crate) fn surrogate_score(&self) -> Option<(Score, Vec<Score>)> {
         self.sets.first()?.points.first()?.surrogate?;
         let mut all = Score::default();
         let per = self
@@ -97,12 +98,12 @@ impl Report<'_> {
         Some((all, per))
     }
 
-    pub(super) fn find(&self, key: &str) -> Option<&Judged> {
+    pub(crate) fn find(&self, key: &str) -> Option<&Judged> {
         self.judged.iter().find(|j| j.c.key == key)
     }
 
     /// (assumption, from, to, Δ of the log10 error in excess of the reference's noise).
-    pub(super) fn costs(&self) -> Vec<(String, String, String, f64)> {
+    pub(crate) fn costs(&self) -> Vec<(String, String, String, f64)> {
         let mut out = Vec::new();
         let (noise, _) = self.noise();
         if let Some((s, _)) = self.surrogate_score() {
@@ -146,7 +147,7 @@ impl Report<'_> {
         out
     }
 
-    pub(super) fn json(&self) -> Value {
+    pub(crate) fn json(&self) -> Value {
         let e = self.explicit;
         let (noise, noise_per) = self.noise();
         let windows: Vec<Value> = self
@@ -220,12 +221,12 @@ impl Report<'_> {
         let (dx, dy) = e.pixel();
         let a = self.analysis;
         json!({
-            "scan": self.args.scan.display().to_string(),
+            "scan": self.scan.to_string(),
             "grid": [a.scan.nx, a.scan.ny],
             "fresnel": self.fresnel,
             "window": {
-                "crop_px": self.args.crop,
-                "upsample": self.args.upsample,
+                "crop_px": self.crop,
+                "upsample": self.upsample,
                 "pixel_um": [dx * 1e6, dy * 1e6],
                 "tile_px": [e.tile_pixels().0, e.tile_pixels().1],
                 "tile_um": [tx * 1e6, ty * 1e6],
@@ -251,7 +252,7 @@ impl Report<'_> {
         })
     }
 
-    pub(super) fn markdown(&self) -> String {
+    pub(crate) fn markdown(&self) -> String {
         let mut s = String::new();
         let e = self.explicit;
         let a = self.analysis;
@@ -260,7 +261,7 @@ impl Report<'_> {
             "# lustre judge: {}\n\n{} × {} points, pixel {:.4} µm, Sq {:.4} µm, rms slope {:.4}; \
              KC fit σ {:.4} µm, Lc {:.4} µm, γ {:.3}{}; Fresnel: {}.\n\
              Reference: explicit Kirchhoff BRDF of the map{}, {} tiles of {} × {} px (Hann, 50 % overlap).\n",
-            self.args.scan.display(),
+            self.scan,
             a.scan.nx,
             a.scan.ny,
             a.scan.dx * 1e6,
@@ -275,7 +276,7 @@ impl Report<'_> {
             } else {
                 self.fresnel
             },
-            match (self.args.crop, self.args.upsample) {
+            match (self.crop, self.upsample) {
                 (None, 1) => String::new(),
                 (c, u) => format!(
                     " ({}upsampled ×{u}, pixel {:.4} µm)",
@@ -395,7 +396,7 @@ impl Report<'_> {
         s
     }
 
-    pub(super) fn csv(&self) -> String {
+    pub(crate) fn csv(&self) -> String {
         let mut s = String::from(
             "theta_i_deg,lambda_nm,slice,coord,ox,oy,oz,validity,explicit,explicit_se,surrogate",
         );
@@ -432,7 +433,7 @@ impl Report<'_> {
         s
     }
 
-    pub(super) fn plots(&self, out: &Path) -> anyhow::Result<()> {
+    pub(crate) fn plots(&self, out: &Path) -> Result<(), JudgeError> {
         let thetas: Vec<f64> = dedup(self.sets.iter().map(|s| s.theta_i));
         let lambdas: Vec<f64> = dedup(self.sets.iter().map(|s| s.lambda_nm));
         let mut grid = ImageGrid::new(thetas.len(), lambdas.len());
@@ -452,13 +453,13 @@ impl Report<'_> {
         Ok(())
     }
 
-    pub(super) fn slice_plot(
+    pub(crate) fn slice_plot(
         &self,
         k: usize,
         set: &AngleSet,
         shown: &[usize],
         legend: bool,
-    ) -> anyhow::Result<plot::RgbImage> {
+    ) -> Result<plot::RgbImage, JudgeError> {
         let pts: Vec<(usize, &Point)> = set
             .points
             .iter()
@@ -484,11 +485,11 @@ impl Report<'_> {
             .filter(|v| v.is_finite())
             .fold(0.0, f64::max);
         if top <= 0.0 {
-            bail!(
+            return Err(crate::invalid!(
                 "θi {}° λ {} nm: the explicit BRDF is zero on the whole slice",
                 set.theta_i,
                 set.lambda_nm
-            );
+            ));
         }
         let bottom = pts
             .iter()
@@ -547,11 +548,10 @@ impl Report<'_> {
         Ok(img)
     }
 
-    pub(super) fn error_plot(&self, out: &Path, thetas: &[f64]) -> anyhow::Result<()> {
+    pub(crate) fn error_plot(&self, out: &Path, thetas: &[f64]) -> Result<(), JudgeError> {
         let mut p = Plot::new(format!(
             "{}: log10 rms error against the scan's explicit BRDF",
-            self.args
-                .scan
+            Path::new(self.scan)
                 .file_name()
                 .map(|f| f.to_string_lossy().into_owned())
                 .unwrap_or_default()
@@ -633,7 +633,7 @@ impl Report<'_> {
 }
 
 /// Adds `s` unless it has no point a log axis can show (the plot crate rejects such series).
-pub(super) fn add(p: Plot, s: Series) -> Plot {
+pub(crate) fn add(p: Plot, s: Series) -> Plot {
     if s.ys().iter().any(|y| y.is_finite() && *y > 0.0) {
         p.series(s)
     } else {
@@ -641,7 +641,7 @@ pub(super) fn add(p: Plot, s: Series) -> Plot {
     }
 }
 
-pub(super) fn dedup(it: impl Iterator<Item = f64>) -> Vec<f64> {
+pub(crate) fn dedup(it: impl Iterator<Item = f64>) -> Vec<f64> {
     let mut v: Vec<f64> = Vec::new();
     for x in it {
         if !v.contains(&x) {

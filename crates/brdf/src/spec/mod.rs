@@ -411,8 +411,67 @@ impl MaterialSpec {
     }
 }
 
+/// The directional albedo of a material at one incidence and wavelength.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Albedo {
+    /// ∫ f cosθo dωo over the hemisphere (the glossy part).
+    pub scattered: f64,
+    /// The delta lobe's weight.
+    pub specular: f64,
+}
+
+impl Albedo {
+    /// Scattered plus specular.
+    pub fn total(&self) -> f64 {
+        self.scattered + self.specular
+    }
+}
+
+impl MaterialSpec {
+    /// Width of the lobe in projected-direction (o⊥) units at `lambda_nm`: where the
+    /// albedo quadrature puts its nodes (microfacet α, the diffraction width 1/(kLc) of the
+    /// wave models, a two-scale model's β when wider).
+    pub fn lobe_rho(&self, lambda_nm: f64) -> f64 {
+        let k = crate::wave::wavenumber(lambda_nm);
+        let wave = |kc: &KcSpec| 1.0 / (k * kc.lc_um);
+        let rho = match &self.model {
+            ModelSpec::Ggx { alpha_x, alpha_y } | ModelSpec::Beckmann { alpha_x, alpha_y } => {
+                alpha_x.min(*alpha_y)
+            }
+            ModelSpec::TwoScale { beta, surface, .. } => beta.max(wave(surface)),
+            ModelSpec::GhsSsa { surface, .. } | ModelSpec::Ghs { surface, .. } => wave(surface),
+            ModelSpec::MeasuredPsd {
+                zeta_rad_per_um, ..
+            } => zeta_rad_per_um.first().copied().unwrap_or(1.0) / k,
+            ModelSpec::Smooth => 1e-3,
+        };
+        if rho.is_finite() && rho > 0.0 {
+            rho.clamp(1e-6, 1.0)
+        } else {
+            1e-3
+        }
+    }
+
+    /// The directional albedo of `model` (this material, built) at incidence `wi` (local
+    /// frame) and `lambda_nm`, by the adaptive hemispherical quadrature of
+    /// [`crate::wave::energy::hemispherical_integral`] about the mirror direction.
+    pub fn albedo(&self, model: &dyn Bxdf, wi: crate::DVec3, lambda_nm: f64) -> Albedo {
+        let rho = self.lobe_rho(lambda_nm);
+        Albedo {
+            scattered: crate::wave::energy::hemispherical_integral(wi, rho, |o| {
+                model.eval(wi, o, lambda_nm)
+            }),
+            specular: model.specular(wi, lambda_nm).weight,
+        }
+    }
+}
+
 #[cfg(feature = "serde")]
 pub use desc::{FileLoader, FresnelKind, MaterialDesc, NoFiles};
+#[cfg(feature = "serde")]
+pub mod file;
+#[cfg(feature = "serde")]
+pub use file::MaterialFile;
 
 #[cfg(feature = "serde")]
 mod desc {

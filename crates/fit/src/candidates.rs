@@ -1,0 +1,438 @@
+//! The one route from a scan's analysis to model parameters: every model the scan is fitted
+//! to, each a [`Candidate`] holding a material the renderer builds (parameters brought into
+//! its accepted range) and what about it is unreliable. `lustre fit`'s material file writes
+//! them, `lustre judge` ranks them, `compare --material` and `preview` render them, so the
+//! model a command shows is the model the others show.
+//!
+//! Units: the analysis is in metres; materials are in µm (physics.md §1–2).
+
+use crate::kc::KcParams;
+use crate::pipeline::Analysis;
+use crate::two_scale::BetaSource;
+use brdf::paper::{REFERENCE_LAMBDA_NM, short};
+use brdf::spec::{FresnelSpec, KcSpec, MaterialSpec, ModelSpec};
+use brdf::statistics::{TabulatedPsd, epd, kc};
+use brdf::wave::GhsOptions;
+use brdf::wave::two_scale::CoherentPart;
+use brdf::wave::wavenumber;
+
+const UM: f64 = 1e6;
+
+/// One model fitted from the scan.
+#[derive(Clone, Debug)]
+pub struct Candidate {
+    /// Unique key: the family, or `two_scale_<cutoff multiple>` for a two-scale split.
+    pub key: String,
+    /// The recipe: `ggx`, `beckmann`, `ggx_kc`, `ghs_ssa`, `ghs`, `measured_psd`, `two_scale`.
+    pub family: &'static str,
+    /// Row label for reports.
+    pub label: String,
+    /// What the model assumes about the surface (the report's "assumes" column).
+    pub assumes: &'static str,
+    /// The material, in the renderer's range; `None` when nothing can be built.
+    pub spec: Option<MaterialSpec>,
+    /// What is unreliable about it (a degenerate fit, a parameter brought into range, a β
+    /// not measured); empty when sound.
+    pub problems: Vec<String>,
+    /// The two-scale split this comes from: cutoff as a multiple of 550 nm and in µm.
+    pub cutoff: Option<(f64, f64)>,
+    /// How the measured-PSD table was made.
+    pub table: Option<TableInfo>,
+}
+
+impl Candidate {
+    /// Whether the candidate is sound (built, and nothing flagged).
+    pub fn sound(&self) -> bool {
+        self.spec.is_some() && self.problems.is_empty()
+    }
+
+    /// The problems in one sentence (`"ok"` when sound).
+    pub fn problem_text(&self) -> String {
+        if self.problems.is_empty() {
+            "ok".into()
+        } else {
+            self.problems.join("; ")
+        }
+    }
+}
+
+/// How the measured-PSD table of a candidate was made from the analysis' radial PSD.
+#[derive(Clone, Debug, PartialEq)]
+pub struct TableInfo {
+    /// Which PSD the table comes from (`radial 2D`, `from the line PSD`, …).
+    pub source: &'static str,
+    /// Points of the PSD before smoothing.
+    pub points: usize,
+    /// Exponent of the power-law tail the table ends in.
+    pub tail_exponent: f64,
+    /// Whether the fitted tail exponent was clamped into [−8, −2.5].
+    pub tail_clamped: bool,
+}
+
+/// The recipes, in report order: family, what it assumes.
+pub const RECIPES: [(&str, &str); 7] = [
+    (
+        "ggx",
+        "geometric optics, GGX slope distribution fitted to the measured NDF",
+    ),
+    (
+        "beckmann",
+        "geometric optics, Beckmann slope distribution fitted to the measured NDF",
+    ),
+    (
+        "ggx_kc",
+        "GGX with α from the KC fit by the GGX ≡ KC identity (α = 1/(2kLc), 550 nm)",
+    ),
+    (
+        "ghs_ssa",
+        "Gaussian heights, KC spectrum, smooth-surface (first-order) lobe",
+    ),
+    ("ghs", "Gaussian heights, KC spectrum, all orders"),
+    (
+        "measured_psd",
+        "Gaussian heights, measured isotropic PSD, all orders",
+    ),
+    (
+        "two_scale",
+        "exponential NDF above the cutoff period, KC diffraction below it",
+    ),
+];
+
+fn assumes(family: &str) -> &'static str {
+    RECIPES
+        .iter()
+        .find(|(f, _)| *f == family)
+        .map_or("", |(_, a)| a)
+}
+
+/// Every candidate of the analysis, in [`RECIPES`] order (one two-scale candidate per split
+/// of `a.two_scale`), with `fresnel` as their Fresnel term.
+pub fn candidates(a: &Analysis, fresnel: &FresnelSpec) -> Vec<Candidate> {
+    let mut out = vec![
+        microfacet(a, fresnel, false),
+        microfacet(a, fresnel, true),
+        ggx_kc(a, fresnel),
+        kc_model(a, fresnel, "ghs_ssa"),
+        kc_model(a, fresnel, "ghs"),
+        measured_psd(a, fresnel),
+    ];
+    out.extend(a.two_scale.iter().map(|t| two_scale(t, fresnel)));
+    out
+}
+
+fn blank(family: &'static str, label: String) -> Candidate {
+    Candidate {
+        key: family.to_string(),
+        family,
+        label,
+        assumes: assumes(family),
+        spec: None,
+        problems: Vec::new(),
+        cutoff: None,
+        table: None,
+    }
+}
+
+/// GGX (or Beckmann) with the roughness fitted to the measured NDF.
+fn microfacet(a: &Analysis, fresnel: &FresnelSpec, beckmann: bool) -> Candidate {
+    let (family, name, fitted) = if beckmann {
+        ("beckmann", "Beckmann", a.ndf.alpha_beckmann.0)
+    } else {
+        ("ggx", "GGX", a.ndf.alpha_ggx.0)
+    };
+    let (alpha, problem) = renderer_alpha(fitted);
+    let mut c = blank(family, format!("{name}, NDF fit (α {})", short(alpha)));
+    c.problems.extend(problem);
+    let model = if beckmann {
+        ModelSpec::Beckmann {
+            alpha_x: alpha,
+            alpha_y: alpha,
+        }
+    } else {
+        ModelSpec::Ggx {
+            alpha_x: alpha,
+            alpha_y: alpha,
+        }
+    };
+    c.spec = Some(MaterialSpec {
+        model,
+        fresnel: fresnel.clone(),
+    });
+    c
+}
+
+/// The K-correlation fit in µm, in the renderer's range, and its problems.
+fn kc_surface(a: &Analysis) -> (KcSpec, Vec<String>) {
+    let ((sigma_um, lc_um, gamma), range) = renderer_kc(&a.kc.params);
+    let mut problems = Vec::new();
+    if let Some(r) = a.kc.reason {
+        problems.push(format!(
+            "the K-correlation fit is degenerate ({}, γ {:.3})",
+            r.describe(),
+            a.kc.params.gamma
+        ));
+    }
+    problems.extend(range);
+    (
+        KcSpec {
+            sigma_um,
+            lc_um,
+            gamma,
+        },
+        problems,
+    )
+}
+
+/// GGX with α from the K-correlation fit by the GGX ≡ KC identity at 550 nm.
+fn ggx_kc(a: &Analysis, fresnel: &FresnelSpec) -> Candidate {
+    let (surface, problems) = kc_surface(a);
+    let mut c = blank("ggx_kc", "GGX ≡ KC identity".into());
+    c.problems = problems;
+    match brdf::wave::ggx_kc::ggx_alpha_from_kc_slope_space(
+        surface.lc_um,
+        wavenumber(REFERENCE_LAMBDA_NM),
+        1.0,
+    ) {
+        Ok(alpha) => {
+            let (alpha, problem) = renderer_alpha(alpha);
+            c.problems.extend(problem);
+            c.label = format!("GGX ≡ KC (α {} = 1/(2kLc))", short(alpha));
+            c.spec = Some(MaterialSpec {
+                model: ModelSpec::Ggx {
+                    alpha_x: alpha,
+                    alpha_y: alpha,
+                },
+                fresnel: fresnel.clone(),
+            });
+        }
+        Err(e) => c.problems.push(e.to_string()),
+    }
+    c
+}
+
+/// GHS SSA or full GHS with the K-correlation fit as it is.
+fn kc_model(a: &Analysis, fresnel: &FresnelSpec, family: &'static str) -> Candidate {
+    let (surface, problems) = kc_surface(a);
+    let name = if family == "ghs" {
+        "full GHS"
+    } else {
+        "GHS SSA"
+    };
+    let mut c = blank(family, format!("{name}, KC fit"));
+    c.problems = problems;
+    let options = GhsOptions::default();
+    let spec = MaterialSpec {
+        model: if family == "ghs" {
+            ModelSpec::Ghs { surface, options }
+        } else {
+            ModelSpec::GhsSsa { surface, options }
+        },
+        fresnel: fresnel.clone(),
+    };
+    // The full GHS needs γ ≥ 1.05 (its series spans more decades than f64 holds below).
+    match spec.validate() {
+        Ok(()) => c.spec = Some(spec),
+        Err(e) => c.problems.push(e.to_string()),
+    }
+    c
+}
+
+/// Full GHS with the measured PSD, as [`measured_table`] tabulates it.
+fn measured_psd(a: &Analysis, fresnel: &FresnelSpec) -> Candidate {
+    let mut c = blank("measured_psd", "full GHS, measured PSD".into());
+    match measured_table(a) {
+        Ok((zeta, p, info)) => {
+            c.table = Some(info);
+            c.spec = Some(MaterialSpec {
+                model: ModelSpec::MeasuredPsd {
+                    zeta_rad_per_um: zeta,
+                    psd_um4: p,
+                    options: GhsOptions::default(),
+                },
+                fresnel: fresnel.clone(),
+            });
+        }
+        Err(e) => c.problems.push(e),
+    }
+    c
+}
+
+/// Most log-spaced points of the measured-PSD table.
+pub const PSD_NODES: usize = 120;
+
+/// The analysis' tabulated PSD in µm units, denoised for `TabulatedPsd`: ln P averaged over
+/// ±0.05 decades of ζ and resampled to at most [`PSD_NODES`] log-spaced points (a
+/// periodogram's bins scatter by ±100 %, and a converted profile PSD has local slopes of
+/// ±1000, which the Hankel transform of the table does not survive), plus a power-law tail:
+/// `TabulatedPsd` extends a table by its last segment, so the exponent is set to the
+/// least-squares slope of the top third of the table, clamped to [−8, −2.5] (finite σ; no
+/// scan resolves a steeper tail), carried by one extra point at 1.5× the last frequency.
+pub fn measured_table(a: &Analysis) -> Result<(Vec<f64>, Vec<f64>, TableInfo), String> {
+    let pts: Vec<(f64, f64)> = (a.table.0.zeta.iter().zip(&a.table.0.p))
+        .filter(|(z, p)| z.is_finite() && **z > 0.0 && p.is_finite() && **p > 0.0)
+        .map(|(z, p)| ((z / UM).ln(), (p * UM.powi(4)).ln()))
+        .collect();
+    if pts.len() < 8 {
+        return Err(format!(
+            "the measured PSD has only {} usable points",
+            pts.len()
+        ));
+    }
+    let (lz, lp) = log_smoothed(&pts);
+    let n = lz.len();
+    if n < 8 {
+        return Err(format!(
+            "the measured PSD has only {n} distinct frequencies"
+        ));
+    }
+    let fitted = tail_slope(&lz[2 * n / 3..], &lp[2 * n / 3..]);
+    let slope = fitted.clamp(-8.0, -2.5);
+    let mut z: Vec<f64> = lz.iter().map(|v| v.exp()).collect();
+    let mut p: Vec<f64> = lp.iter().map(|v| v.exp()).collect();
+    let (zl, pl) = (z[n - 1], p[n - 1]);
+    z.push(1.5 * zl);
+    p.push(pl * 1.5f64.powf(slope));
+    TabulatedPsd::new(&z, &p).map_err(|e| format!("the measured PSD table: {e}"))?;
+    let info = TableInfo {
+        source: a.table.1,
+        points: a.table.0.zeta.len(),
+        tail_exponent: slope,
+        tail_clamped: slope != fitted,
+    };
+    Ok((z, p, info))
+}
+
+/// `(ln ζ, ln P)` averaged over ±0.05 decades at up to [`PSD_NODES`] log-spaced nodes.
+fn log_smoothed(pts: &[(f64, f64)]) -> (Vec<f64>, Vec<f64>) {
+    let (lo, hi) = (pts[0].0, pts[pts.len() - 1].0);
+    let half = 0.05 * std::f64::consts::LN_10;
+    let nodes = PSD_NODES.min(pts.len());
+    let mut lz = Vec::with_capacity(nodes);
+    let mut lp = Vec::with_capacity(nodes);
+    for j in 0..nodes {
+        let x = lo + (hi - lo) * j as f64 / (nodes - 1) as f64;
+        let (mut s, mut n, mut sx) = (0.0, 0usize, 0.0);
+        for &(zx, py) in pts.iter().filter(|(zx, _)| (zx - x).abs() <= half) {
+            s += py;
+            sx += zx;
+            n += 1;
+        }
+        if n > 0 && lz.last().is_none_or(|l: &f64| sx / (n as f64) > *l + 1e-9) {
+            lz.push(sx / n as f64);
+            lp.push(s / n as f64);
+        }
+    }
+    (lz, lp)
+}
+
+/// Least-squares slope of `ty` against `tx`.
+fn tail_slope(tx: &[f64], ty: &[f64]) -> f64 {
+    let mx = tx.iter().sum::<f64>() / tx.len() as f64;
+    let my = ty.iter().sum::<f64>() / ty.len() as f64;
+    let sxx: f64 = tx.iter().map(|x| (x - mx).powi(2)).sum();
+    let sxy: f64 = tx.iter().zip(ty).map(|(x, y)| (x - mx) * (y - my)).sum();
+    sxy / sxx
+}
+
+/// Largest Lc the two-scale model accepts [µm] (its micro scale is a `KcPsd`).
+const TWO_SCALE_LC_MAX_UM: f64 = kc::LC_MAX_UM;
+
+/// The two-scale model of one split: its β and residual K-correlation fit, in range.
+fn two_scale(t: &crate::two_scale::TwoScale, fresnel: &FresnelSpec) -> Candidate {
+    let m = t.multiple;
+    let mut c = blank("two_scale", String::new());
+    c.key = format!("two_scale_{m}");
+    c.cutoff = Some((m, t.cutoff * UM));
+    let ((sigma_um, lc_um, gamma), range) = renderer_kc(&t.kc.params);
+    if let Some(r) = t.kc.reason {
+        c.problems.push(format!(
+            "residual K-correlation fit degenerate: {}",
+            r.describe()
+        ));
+    }
+    c.problems.extend(range);
+    let lc_um = if lc_um > TWO_SCALE_LC_MAX_UM {
+        c.problems.push(format!(
+            "Lc {lc_um:.4e} µm clamped to the two-scale limit {TWO_SCALE_LC_MAX_UM:e} µm"
+        ));
+        TWO_SCALE_LC_MAX_UM
+    } else {
+        lc_um
+    };
+    let beta = if epd::ExponentialNdf::new(t.beta).is_ok() {
+        t.beta
+    } else {
+        let b = if t.beta.is_finite() {
+            t.beta.clamp(epd::BETA_MIN, epd::BETA_MAX)
+        } else {
+            epd::BETA_MIN
+        };
+        c.problems.push(format!(
+            "β {:.4e} {} set to {b}",
+            t.beta,
+            if t.beta_source == BetaSource::Unresolved {
+                "(not measured: the scan does not reach the cutoff period)"
+            } else {
+                "(outside 1e-4 … 10)"
+            }
+        ));
+        b
+    };
+    c.label = if c.problems.is_empty() {
+        format!("two-scale {m}λ (β {})", short(beta))
+    } else {
+        format!("two-scale {m}λ")
+    };
+    c.spec = Some(MaterialSpec {
+        model: ModelSpec::TwoScale {
+            beta,
+            surface: KcSpec {
+                sigma_um,
+                lc_um,
+                gamma,
+            },
+            coherent: CoherentPart::default(),
+        },
+        fresnel: fresnel.clone(),
+    });
+    c
+}
+
+/// K-correlation parameters in µm the renderer accepts; `Some(problem)` if they had to
+/// be brought into range.
+pub fn renderer_kc(k: &KcParams) -> ((f64, f64, f64), Option<String>) {
+    let (s, l, g) = (k.sigma * UM, k.lc * UM, k.gamma);
+    if brdf::statistics::KcPsd::new(s, l, g).is_ok() {
+        return ((s, l, g), None);
+    }
+    let fix = |v: f64, lo: f64, hi: f64| if v.is_finite() { v.clamp(lo, hi) } else { lo };
+    let out = (
+        fix(s, 0.0, kc::SIGMA_MAX_UM),
+        fix(l, kc::LC_MIN_UM, kc::LC_MAX_UM),
+        fix(g, kc::GAMMA_MIN, kc::GAMMA_MAX),
+    );
+    (
+        out,
+        Some(format!(
+            "σ {s:.4e} µm, Lc {l:.4e} µm, γ {g:.4} brought into the renderer's range"
+        )),
+    )
+}
+
+/// A microfacet α the renderer accepts (1e-4 … 1); `Some(problem)` if clamped.
+pub fn renderer_alpha(a: f64) -> (f64, Option<String>) {
+    if brdf::Distribution::ggx(a, a).is_ok() {
+        return (a, None);
+    }
+    let c = if a.is_finite() {
+        a.clamp(brdf::microfacet::ALPHA_MIN, brdf::microfacet::ALPHA_MAX)
+    } else {
+        brdf::microfacet::ALPHA_MIN
+    };
+    (
+        c,
+        Some(format!(
+            "α {a:.4e} clamped to {c} (the renderer accepts 1e-4 … 1)"
+        )),
+    )
+}
