@@ -480,7 +480,8 @@ pub fn renderer_psd(zeta: &[f64], p: &[f64]) -> (Vec<f64>, Vec<f64>, usize, Opti
     // steeper than the steepest KC tail (an instrument's roll-off is not surface).
     while z.len() > 2 && {
         let s = slope(&z, &q);
-        !(s < -2.02) || brdf::statistics::measured_psd::tail_too_steep(s)
+        s.partial_cmp(&-2.02) != Some(std::cmp::Ordering::Less)
+            || brdf::statistics::measured_psd::tail_too_steep(s)
     } {
         z.pop();
         q.pop();
