@@ -834,19 +834,32 @@ fn draw_piece<DB: plotters::prelude::DrawingBackend>(
         filled: false,
         stroke_width: stroke,
     };
-    // Segment by segment: plotters' joined outline of a thick polyline sends a spike across
-    // the image at a sharp reversal (noisy data), a segment's own outline cannot.
-    for w in ip.windows(2) {
-        root.draw(&PathElement::new(vec![w[0], w[1]], style))
-            .map_err(drawing)?;
-    }
-    // Round joins, where the gap between two thick segments would show.
-    if stroke >= 3 {
-        for &c in &ip[1..ip.len() - 1] {
-            dot(c, stroke / 2).map_err(drawing)?;
+    // Plotters outlines a thick polyline with mitred joins; at a turn sharper than 120° the
+    // inner offset lines meet far away and the outline spikes across the image (noisy data
+    // does this), so the line is cut there and the pieces meet in a round dot.
+    let mut start = 0;
+    for k in 1..ip.len() {
+        let sharp = k + 1 < ip.len() && sharp_turn(ip[k - 1], ip[k], ip[k + 1]);
+        if sharp || k + 1 == ip.len() {
+            root.draw(&PathElement::new(ip[start..=k].to_vec(), style))
+                .map_err(drawing)?;
+            if sharp && stroke >= 2 {
+                dot(ip[k], stroke / 2).map_err(drawing)?;
+            }
+            start = k;
         }
     }
     Ok(())
+}
+
+/// Whether the polyline a → b → c turns by more than 120° at b.
+fn sharp_turn(a: (i32, i32), b: (i32, i32), c: (i32, i32)) -> bool {
+    let (u, v) = (
+        (f64::from(b.0 - a.0), f64::from(b.1 - a.1)),
+        (f64::from(c.0 - b.0), f64::from(c.1 - b.1)),
+    );
+    let dot = u.0 * v.0 + u.1 * v.1;
+    dot < -0.5 * (u.0.hypot(u.1) * v.0.hypot(v.1))
 }
 
 /// The series' marker centred at pixel position `c`.

@@ -557,7 +557,7 @@ fn wild_f64() -> impl Strategy<Value = f64> {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig { cases: 48, failure_persistence: None, ..ProptestConfig::default() })]
+    #![proptest_config(ProptestConfig { cases: 400, failure_persistence: None, ..ProptestConfig::default() })]
     #[test]
     fn series_pixels_lie_on_the_data_polyline(
         // Zig-zags with sharp reversals, as in noisy data.
@@ -575,7 +575,9 @@ proptest! {
             .unwrap();
         let px: Vec<(f64, f64)> = pts.iter().map(|p| rep.to_px(p.0, p.1).unwrap()).collect();
         let f = rep.frame;
-        let reach = width.round().max(1.0) / 2.0 + 2.5;
+        // Joins are mitred up to turns of 120° (the mitre then reaches one width from the
+        // vertex), sharper turns are cut and rounded.
+        let reach = width.round().max(1.0) + 2.5;
         let mut drawn = 0;
         for y in 0..300u32 {
             for x in 0..400u32 {
@@ -590,9 +592,11 @@ proptest! {
                     px.windows(2).map(|w| seg_dist(c, w[0], w[1])).fold(f64::INFINITY, f64::min)
                 };
                 prop_assert!(near <= reach, "pixel ({x}, {y}) is {near:.1} px from the line");
-                // Clipped at the frame (the line may overhang it by half its width).
-                let (i, j) = (i64::from(x), i64::from(y));
-                prop_assert!(i >= f.x0 - 4 && i < f.x1 + 4 && j >= f.y0 - 4 && j < f.y1 + 4);
+                // Clipped at the frame (a mitre at a vertex on the edge may overhang it).
+                let (i, j) = (f64::from(x), f64::from(y));
+                let (x0, y0, x1, y1) = (f.x0 as f64, f.y0 as f64, f.x1 as f64, f.y1 as f64);
+                prop_assert!(i >= x0 - reach && i < x1 + reach && j >= y0 - reach && j < y1 + reach,
+                    "pixel ({x}, {y}) outside the frame {f:?}");
             }
         }
         // A visible piece of line leaves pixels: any data point inside the frame is drawn.
@@ -600,6 +604,10 @@ proptest! {
             prop_assert!(drawn > 0);
         }
     }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 48, failure_persistence: None, ..ProptestConfig::default() })]
 
     #[test]
     fn rendering_never_panics(
