@@ -695,12 +695,10 @@ impl Plot {
             .fold((0usize, 0.0f64), |(n, w), (_, s)| {
                 (n + 1, w.max(text::width(&s.label, sz.legend)))
             });
-        (n > 0).then(|| {
-            (
-                sz.pad * 2.6 + sz.legend * 2.4 + label_w,
-                sz.pad + LINE_PITCH * sz.legend * n as f64,
-            )
-        })
+        (n > 0).then_some((
+            sz.pad * 2.6 + sz.legend * 2.4 + label_w,
+            sz.pad + LINE_PITCH * sz.legend * n as f64,
+        ))
     }
 
     fn draw_legend<DB: plotters::prelude::DrawingBackend>(
@@ -923,16 +921,12 @@ fn draw_frame<DB: plotters::prelude::DrawingBackend>(
     f: &PxRect,
     w: i32,
 ) -> Result<(), PlotError> {
+    let style = ShapeStyle {
+        color: RGBColor(0, 0, 0).to_rgba(),
+        filled: false,
+        stroke_width: w.max(1) as u32,
+    };
     let (x0, y0, x1, y1) = (f.x0 as i32, f.y0 as i32, f.x1 as i32, f.y1 as i32);
-    let fill = rgb(Rgb::BLACK).filled();
-    // The bitmap backend fills a rectangle up to, not including, its second corner.
-    for c in [
-        [(x0 - w, y0 - w), (x1 + w, y0)],
-        [(x0 - w, y1), (x1 + w, y1 + w)],
-        [(x0 - w, y0), (x0, y1)],
-        [(x1, y0), (x1 + w, y1)],
-    ] {
-        root.draw(&Rectangle::new(c, fill)).map_err(drawing)?;
-    }
-    Ok(())
+    root.draw(&Rectangle::new([(x0 - 1, y0 - 1), (x1, y1)], style))
+        .map_err(drawing)
 }

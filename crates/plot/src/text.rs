@@ -279,7 +279,7 @@ mod tests {
                 draw_lines(&area, s, px, (10.0, 10.0), HAlign::Left, Rgb::BLACK).unwrap();
             }
             (0..400)
-                .filter(|x| (0..80).any(|y| buf[((y * 400 + x) * 3) as usize] < 128))
+                .filter(|x| (0..80).any(|y| buf[(y * 400 + x) * 3] < 128))
                 .collect::<Vec<usize>>()
         };
         let first_ink = |s: &str| ink_columns(s)[0] as f64;
