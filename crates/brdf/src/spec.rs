@@ -801,6 +801,7 @@ mod desc {
             let options = GhsOptions {
                 energy: self.energy.unwrap_or_default(),
                 fresnel_angle: self.fresnel_angle.unwrap_or_default(),
+                ..GhsOptions::default()
             };
             let spec = match model {
                 ModelKind::Ggx => {
@@ -1080,7 +1081,8 @@ mod tests {
                     },
                     options: GhsOptions {
                         energy: Energy::SigmaRel,
-                        fresnel_angle: FresnelAngle::Incident
+                        fresnel_angle: FresnelAngle::Incident,
+                        ..GhsOptions::default()
                     }
                 }
             );

@@ -8,6 +8,7 @@ use glam::DVec3;
 
 use crate::model::{WAVELENGTH_MAX_NM, WAVELENGTH_MIN_NM};
 use crate::numerics::quadrature::gauss_legendre;
+pub use crate::wave::polarization::{Polarization, PolarizationFactor};
 
 /// How the scattered part is normalised (physics.md §5).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -59,8 +60,14 @@ pub enum FresnelAngle {
 pub struct GhsOptions {
     /// Energy handling.
     pub energy: Energy,
-    /// Fresnel angle of the scattered part.
+    /// Fresnel angle of the scattered part (with [`PolarizationFactor::R`]).
     pub fresnel_angle: FresnelAngle,
+    /// Polarisation of the incident light (the specular lobe's reflectance
+    /// and the scattered part's factor are those of this polarisation).
+    pub polarization: Polarization,
+    /// The scattered part's reflectance factor: scalar R or the
+    /// Rayleigh–Rice Q.
+    pub polarization_factor: PolarizationFactor,
 }
 
 /// Nodes in θi of the energy tables (graded towards grazing, see

@@ -155,7 +155,9 @@ impl<P: TableSource> GhsFull<P> {
             |c, th, lam| {
                 let wi = frame::spherical(th, 0.0);
                 let kl = wavenumber(lam) * c.length;
-                hemispherical_integral(wi, 1.0 / kl, |o| model.raw_lobe(c, wi, o, lam))
+                hemispherical_integral(wi, 1.0 / kl, |o| {
+                    model.raw_lobe(c, wi, o, lam) * c.r_scatter(wi, o, lam)
+                })
             },
         );
         model.common = common;
