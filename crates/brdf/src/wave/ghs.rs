@@ -252,7 +252,7 @@ impl<P: TableSource> GhsFull<P> {
     /// Draws u from the glossy proposal with two uniforms (`v` selects the
     /// component and is reused).
     #[inline]
-    fn proposal_sample(&self, gs: f64, v: f64, xi: f64) -> f64 {
+    pub(crate) fn proposal_sample(&self, gs: f64, v: f64, xi: f64) -> f64 {
         if gs < G_MIN || v < DEFENSIVE_WEIGHT {
             return self.psd.sample_u(xi);
         }

@@ -7,6 +7,8 @@
 //!   Hankel transform ([`ghs_table`]), needs the `alloc` feature;
 //! * [`two_scale::TwoScale`]: the Holzschuch–Pacanowski two-scale model (its
 //!   D̃_eff table is built by the crate-internal `two_scale_table`), `alloc`;
+//! * [`GhsAnisotropic`]: SSA and full GHS of an anisotropic K-correlation
+//!   surface (`alloc`);
 //! * [`RayleighRice`]: first-order vector perturbation theory for a
 //!   conductor, with the polarisation factor Q of [`polarization`];
 //! * [`ggx_kc`]: the GGX ↔ K-correlation identity;
@@ -23,6 +25,8 @@ pub mod energy;
 pub mod ggx_kc;
 #[cfg(feature = "alloc")]
 pub mod ghs;
+#[cfg(feature = "alloc")]
+pub mod ghs_aniso;
 pub mod ghs_ssa;
 #[cfg(feature = "alloc")]
 pub mod ghs_table;
@@ -36,6 +40,8 @@ mod two_scale_table;
 pub use energy::{Energy, FresnelAngle, GhsOptions};
 #[cfg(feature = "alloc")]
 pub use ghs::{GhsFull, TableSource};
+#[cfg(feature = "alloc")]
+pub use ghs_aniso::GhsAnisotropic;
 pub use ghs_ssa::GhsSsa;
 pub use polarization::{Polarization, PolarizationFactor};
 pub use rayleigh_rice::RayleighRice;
