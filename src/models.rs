@@ -175,6 +175,17 @@ pub fn lobe_rho(spec: &MaterialSpec, lambda_nm: f64) -> f64 {
             let z0 = zeta_rad_per_um.first().copied().unwrap_or(1.0);
             z0 / brdf::paper::wavenumber(lambda_nm)
         }
+        ModelSpec::RayleighRice { surface, .. } => match surface {
+            brdf::spec::RrSurface::Kc(kc) => wave(kc),
+            brdf::spec::RrSurface::Measured {
+                zeta_rad_per_um, ..
+            } => {
+                zeta_rad_per_um.first().copied().unwrap_or(1.0) / brdf::paper::wavenumber(lambda_nm)
+            }
+        },
+        ModelSpec::GhsSsaAniso { surface, .. } | ModelSpec::GhsAniso { surface, .. } => {
+            1.0 / (brdf::paper::wavenumber(lambda_nm) * surface.lx_um.max(surface.ly_um))
+        }
         ModelSpec::Smooth => 1e-3,
     };
     if rho.is_finite() && rho > 0.0 {

@@ -156,6 +156,9 @@ pub struct ReliabilityTable {
     pub alpha: String,
     /// The `[psd]` table for `model = "measured_psd"`.
     pub psd: String,
+    /// What `model = "measured_psd"` assumes outside the band the `[psd]` table covers
+    /// (the renderer continues it there; see `brdf::statistics::TabulatedPsd`).
+    pub psd_extrapolation: String,
     /// The two-scale tables.
     pub two_scale: String,
     /// Form left in the residual after levelling.
@@ -494,6 +497,32 @@ pub fn renderer_psd(zeta: &[f64], p: &[f64]) -> (Vec<f64>, Vec<f64>, usize, Opti
     (z, q, dropped, problem)
 }
 
+/// `[reliability].psd_extrapolation`: the band the `[psd]` table measures and the tails
+/// `model = "measured_psd"` assumes beyond it (`brdf::statistics::TabulatedPsd`: a
+/// K-correlation roll-off below the band, matched to the first segment in value and slope,
+/// and the last segment's power law above it). The full GHS of a table held flat below the
+/// band disagreed with the direct transform of its own covariance by up to 26 %.
+pub fn psd_extrapolation(zeta: &[f64], p: &[f64]) -> String {
+    let Ok(t) = brdf::statistics::TabulatedPsd::new(zeta, p) else {
+        return "not used: the [psd] table is not usable (see psd)".into();
+    };
+    let (lo, hi) = t.band_rad_per_um();
+    let below = match t.low_rolloff() {
+        (zc, beta) if zc.is_finite() => format!(
+            "rolls off as (1 + (ζ/{zc:.4})²)^−{beta:.3} (K-correlation shape with the \
+             table's fitted tail exponent, matched to its first segment in value and slope)"
+        ),
+        _ => "is held at its first value (the lowest bins rise, or fall too steeply to \
+              roll off)"
+            .into(),
+    };
+    format!(
+        "assumed, not measured: the table covers {lo:.4}–{hi:.4} rad/µm; below it the PSD \
+         {below}; above it it falls as ζ^{:.3} (its last segment)",
+        t.high_slope()
+    )
+}
+
 /// Build the document.
 pub fn build(a: &Analysis, prov: &Provenance<'_>) -> MaterialFile {
     let ((sigma_um, lc_um, gamma), kc_range) = renderer_kc(&a.kc.params);
@@ -759,6 +788,7 @@ pub fn build(a: &Analysis, prov: &Provenance<'_>) -> MaterialFile {
             kc: kc_state,
             alpha: alpha_state,
             psd: psd_problem.clone().unwrap_or_else(|| "ok".into()),
+            psd_extrapolation: psd_extrapolation(&zeta, &p),
             two_scale: if split_problems.is_empty() {
                 "ok".into()
             } else {
