@@ -265,7 +265,7 @@ fn fit_never_writes_over_its_own_scan() {
         ]);
         assert_eq!(code, 1, "{scan}: {err}");
         assert!(
-            err.contains("over the input") && err.contains("Fix:"),
+            err.contains("is the input") && err.contains("Fix:"),
             "{scan}: {err}"
         );
         assert_eq!(

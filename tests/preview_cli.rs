@@ -192,7 +192,7 @@ fn preview_and_compare_never_write_over_the_material_file() {
         let err = String::from_utf8_lossy(&out.stderr);
         assert!(!out.status.success(), "{args:?} succeeded");
         assert!(
-            err.contains("over the input steel.toml") && err.contains("Fix:"),
+            err.contains("is the input") && err.contains("steel.toml") && err.contains("Fix:"),
             "{args:?}: {err}"
         );
         assert_eq!(

@@ -274,6 +274,7 @@ impl PaperModel {
         let raw = GhsOptions {
             energy: Energy::Raw,
             fresnel_angle: FresnelAngle::Halfway,
+            ..GhsOptions::default()
         };
         let lam = REFERENCE_LAMBDA_NM;
         let model = match *self {

@@ -6,9 +6,9 @@
 //! directions and wavelengths; and the models it excludes must really break
 //! the factorisation somewhere, or the predicate would hide a cheaper path.
 
-use brdf::spec::{FresnelSpec, KcSpec, MaterialSpec, ModelKind, ModelSpec};
-use brdf::wave::GhsOptions;
+use brdf::spec::{AnisoSpec, FresnelSpec, KcSpec, MaterialSpec, ModelKind, ModelSpec, RrSurface};
 use brdf::wave::two_scale::CoherentPart;
+use brdf::wave::{GhsOptions, Polarization};
 use brdf::{Bxdf, Metal, frame};
 use core::f64::consts::{FRAC_PI_2, TAU};
 
@@ -64,7 +64,30 @@ fn models() -> Vec<ModelSpec> {
             surface: kc(),
             coherent: CoherentPart::MacroNdf,
         },
+        ModelSpec::RayleighRice {
+            surface: RrSurface::Kc(kc()),
+            polarization: Polarization::Unpolarized,
+        },
+        ModelSpec::GhsSsaAniso {
+            surface: aniso(),
+            options: GhsOptions::default(),
+        },
+        ModelSpec::GhsAniso {
+            surface: aniso(),
+            options: GhsOptions::default(),
+        },
     ]
+}
+
+fn aniso() -> AnisoSpec {
+    let k = kc();
+    AnisoSpec {
+        sigma_um: k.sigma_um,
+        lx_um: k.lc_um,
+        ly_um: 3.0 * k.lc_um,
+        angle_deg: 20.0,
+        gamma: k.gamma,
+    }
 }
 
 fn fresnels() -> Vec<FresnelSpec> {

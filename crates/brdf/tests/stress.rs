@@ -180,6 +180,7 @@ fn energy() -> impl Strategy<Value = GhsOptions> {
         .prop_map(|(energy, fresnel_angle)| GhsOptions {
             energy,
             fresnel_angle,
+            ..GhsOptions::default()
         })
 }
 
@@ -188,6 +189,7 @@ fn raw_options() -> impl Strategy<Value = GhsOptions> {
         |fresnel_angle| GhsOptions {
             energy: Energy::Raw,
             fresnel_angle,
+            ..GhsOptions::default()
         },
     )
 }

@@ -486,3 +486,38 @@ fn a_map_flat_along_its_lay_has_no_inf_or_sentinel_in_its_material_file() {
     }
     assert_renderer_accepts(&doc, "grooves");
 }
+
+/// `[reliability].psd_extrapolation` says which band the `[psd]` table measures and what the
+/// measured-PSD model assumes outside it, with the numbers the renderer uses.
+#[test]
+fn the_psd_tails_the_renderer_assumes_are_stated() {
+    let truth = KcParams {
+        sigma: 5e-9,
+        lc: 20e-9,
+        gamma: 4.0,
+    };
+    let (n, dx) = (256, 10e-9);
+    let a = analyse(
+        synth::kc_surface(n, n, dx, truth, 3),
+        None,
+        &Options::default(),
+    )
+    .unwrap();
+    let doc = material::build(&a, &prov("kc", b"", &[]));
+    let e = &doc.reliability.psd_extrapolation;
+    println!("{e}");
+    assert!(doc.psd.usable);
+    let t = brdf::statistics::TabulatedPsd::new(&doc.psd.zeta_rad_per_um, &doc.psd.p_um4).unwrap();
+    let (lo, hi) = t.band_rad_per_um();
+    assert!(e.starts_with("assumed, not measured"), "{e}");
+    assert!(
+        e.contains(&format!("{lo:.4}–{hi:.4} rad/µm"))
+            && e.contains(&format!("ζ^{:.3}", t.high_slope())),
+        "{e}"
+    );
+    let text = material::to_toml(&doc).unwrap();
+    assert!(
+        text.lines().any(|l| l.starts_with("psd_extrapolation = ")),
+        "{text}"
+    );
+}

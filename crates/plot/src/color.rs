@@ -27,17 +27,4 @@ impl Rgb {
         ];
         P[i % P.len()]
     }
-
-    pub(crate) fn blend_over(self, dst: [u8; 3], alpha: f32) -> [u8; 3] {
-        let a = alpha.clamp(0.0, 1.0);
-        let mix = |s: u8, d: u8| -> u8 {
-            let v = f32::from(s) * a + f32::from(d) * (1.0 - a);
-            v.round().clamp(0.0, 255.0) as u8
-        };
-        [
-            mix(self.0, dst[0]),
-            mix(self.1, dst[1]),
-            mix(self.2, dst[2]),
-        ]
-    }
 }

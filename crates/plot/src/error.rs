@@ -117,6 +117,10 @@ pub enum PlotError {
         /// Underlying error.
         source: std::io::Error,
     },
+    /// The drawing library failed to draw an element (in practice only when the bundled font
+    /// cannot be used).
+    #[error("drawing the figure failed: {0}")]
+    Drawing(String),
     /// PNG encoding or decoding failed.
     #[error("PNG {action} '{path}': {source}")]
     Image {
@@ -127,4 +131,9 @@ pub enum PlotError {
         /// Underlying error.
         source: image::ImageError,
     },
+}
+
+/// Wraps an error of the drawing library.
+pub(crate) fn drawing(e: impl std::fmt::Display) -> PlotError {
+    PlotError::Drawing(e.to_string())
 }

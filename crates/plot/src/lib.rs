@@ -1,4 +1,4 @@
-//! Small, dependency-light PNG plotting for the lustre project.
+//! Small PNG plotting for the lustre project, drawn with `plotters`' bitmap backend.
 //!
 //! Two figure kinds:
 //! * [`Plot`] — publication-style 2-D line plots: linear or log axes with nice ticks, axis
@@ -8,6 +8,8 @@
 //! * [`ImageGrid`] — labelled image grids (rows × columns with row/column labels and
 //!   captions) for model-comparison figures.
 //!
+//! This crate lays the figure out (frame, wrapped title, labels, legend), chooses the ticks,
+//! maps and clips the data; plotters draws axes, grid, ticks, lines, markers and text.
 //! Text uses the bundled DejaVu Sans font (Bitstream Vera licence, `fonts/LICENSE-DejaVu.txt`).
 //! All files are written atomically (temporary file + rename). Bad data never panics: points
 //! that are NaN, infinite or non-positive on a log axis are skipped (and counted in the
@@ -28,14 +30,15 @@
 #![deny(missing_docs)]
 
 mod axis;
+mod backend;
 mod color;
 mod csv;
 mod error;
 mod grid;
 mod io;
 mod plot;
-mod raster;
 mod series;
+mod stroke;
 mod text;
 mod ticks;
 
@@ -46,7 +49,6 @@ pub use error::PlotError;
 pub use grid::{GridLayout, ImageGrid};
 pub use image::{Rgb as Rgb8, RgbImage};
 pub use io::{load_rgb, save_png, write_atomic};
-pub use plot::{Legend, Plot, PlotReport, Skipped};
-pub use raster::PxRect;
+pub use plot::{Legend, Plot, PlotReport, PxRect, Skipped};
 pub use series::{LineStyle, Marker, Series};
 pub use ticks::{Tick, linear_ticks, log_ticks};

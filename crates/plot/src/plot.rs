@@ -1,13 +1,48 @@
-//! The line-plot figure: layout, axes, series, legend, title.
+//! The line-plot figure. The layout (where frame, labels, title and legend go) and the tick
+//! choice are ours; plotters draws the axes, grid, tick marks and labels, series, markers and
+//! text into the bitmap.
 
 use crate::axis::{AxisMap, Scale, auto_range};
+use crate::backend::Canvas;
 use crate::color::Rgb;
-use crate::raster::{Mask, PxRect, fill_rect};
-use crate::text::{self, HAlign};
+use crate::stroke::{Pt, clip_polyline, dash_pattern, dash_polyline};
+use crate::text::{self, HAlign, LINE_PITCH};
 use crate::ticks::Tick;
-use crate::{Axis, LineStyle, Marker, PlotError, Series};
+use crate::{Axis, LineStyle, Marker, PlotError, Series, error::drawing};
 use image::RgbImage;
+use plotters::coord::Shift;
+use plotters::coord::ranged1d::{KeyPointHint, NoDefaultFormatting, Ranged, ValueFormatter};
+use plotters::prelude::{
+    BitMapBackend, ChartBuilder, Circle, Color, DrawingArea, IntoDrawingArea, PathElement, Polygon,
+    Rectangle,
+};
+use plotters::style::{RGBColor, ShapeStyle};
 use std::path::Path;
+
+/// A rectangle in pixel coordinates, `x0 <= x < x1`, `y0 <= y < y1`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PxRect {
+    /// Left edge (inclusive).
+    pub x0: i64,
+    /// Top edge (inclusive).
+    pub y0: i64,
+    /// Right edge (exclusive).
+    pub x1: i64,
+    /// Bottom edge (exclusive).
+    pub y1: i64,
+}
+
+impl PxRect {
+    pub(crate) fn width(&self) -> i64 {
+        self.x1 - self.x0
+    }
+    pub(crate) fn height(&self) -> i64 {
+        self.y1 - self.y0
+    }
+    fn contains(&self, x: i64, y: i64) -> bool {
+        x >= self.x0 && x < self.x1 && y >= self.y0 && y < self.y1
+    }
+}
 
 /// Largest image a plot or grid may produce (pixels), so bad sizes fail instead of
 /// exhausting memory.
@@ -71,6 +106,7 @@ impl PlotReport {
     }
 }
 
+/// Text sizes and spacings, all following the tick-label font size `tick`.
 struct Sizes {
     tick: f64,
     label: f64,
@@ -78,8 +114,101 @@ struct Sizes {
     legend: f64,
     pad: f64,
     frame_w: f64,
+    tick_len: f64,
 }
 
+impl Sizes {
+    fn new(base: f64) -> Sizes {
+        Sizes {
+            tick: base,
+            label: base * 1.1,
+            title: base * 1.3,
+            legend: base * 0.95,
+            pad: (base * 0.6).round(),
+            frame_w: (base / 14.0).max(1.0).round(),
+            tick_len: (base * 0.45).round(),
+        }
+    }
+
+    /// Distance from the frame to the top of a tick label's anchor (plotters puts labels
+    /// twice the tick length away from the axis).
+    fn label_dist(&self) -> f64 {
+        2.0 * self.tick_len
+    }
+}
+
+/// Where everything goes, decided before anything is drawn.
+struct Layout {
+    frame: PxRect,
+    xmap: AxisMap,
+    ymap: AxisMap,
+    xt: Vec<Tick>,
+    yt: Vec<Tick>,
+    title: Vec<String>,
+    /// Legend box size in px, if there is a legend.
+    legend: Option<(f64, f64)>,
+    /// Margins handed to plotters: (top, bottom, left, right, x label area, y label area).
+    margins: [u32; 6],
+}
+
+/// One axis as plotters' mesh sees it: our data → pixel mapping, our ticks and labels.
+struct TickAxis {
+    map: AxisMap,
+    major: Vec<(f64, String)>,
+    minor: Vec<f64>,
+}
+
+impl TickAxis {
+    fn new(map: AxisMap, ticks: &[Tick]) -> TickAxis {
+        let (mut major, mut minor) = (Vec::new(), Vec::new());
+        for t in ticks {
+            match &t.label {
+                Some(l) => major.push((t.value, l.clone())),
+                None => minor.push(t.value),
+            }
+        }
+        TickAxis { map, major, minor }
+    }
+}
+
+impl Ranged for TickAxis {
+    type FormatOption = NoDefaultFormatting;
+    type ValueType = f64;
+
+    /// The pixel holding the value, as for the series, so grid lines and data agree.
+    fn map(&self, v: &f64, limit: (i32, i32)) -> i32 {
+        let m = AxisMap {
+            px_lo: f64::from(limit.0),
+            px_hi: f64::from(limit.1),
+            ..self.map
+        };
+        m.to_px(*v).map_or(limit.0, |p| {
+            p.floor().clamp(f64::from(i32::MIN), f64::from(i32::MAX)) as i32
+        })
+    }
+
+    fn key_points<H: KeyPointHint>(&self, hint: H) -> Vec<f64> {
+        if hint.weight().allow_light_points() {
+            self.minor.clone()
+        } else {
+            self.major.iter().map(|t| t.0).collect()
+        }
+    }
+
+    fn range(&self) -> std::ops::Range<f64> {
+        self.map.lo..self.map.hi
+    }
+}
+
+impl ValueFormatter<f64> for TickAxis {
+    fn format_ext(&self, v: &f64) -> String {
+        self.major
+            .iter()
+            .find(|t| t.0 == *v)
+            .map(|t| t.1.clone())
+            .unwrap_or_default()
+    }
+}
 impl Plot {
     /// An empty plot with a title (may be empty) and linear axes labelled "x" and "y".
     pub fn new(title: impl Into<String>) -> Plot {
@@ -161,37 +290,8 @@ impl Plot {
             });
         }
         let (paths, skipped) = self.valid_paths()?;
-        let (xr, yr) = (
-            self.shown_range(&self.x, "x", &paths, 0)?,
-            self.shown_range(&self.y, "y", &paths, 1)?,
-        );
-
-        let base = self
-            .font_px
-            .filter(|p| p.is_finite() && *p > 0.0)
-            .unwrap_or_else(|| {
-                (f64::from(height) / 34.0)
-                    .min(f64::from(width) / 40.0)
-                    .clamp(12.0, 26.0)
-            });
-        let sz = Sizes {
-            tick: base,
-            label: base * 1.1,
-            title: base * 1.3,
-            legend: base * 0.95,
-            pad: (base * 0.6).round(),
-            frame_w: (base / 14.0).max(1.0).round(),
-        };
-        let min_w = (base * 14.0) as u32;
-        let min_h = (base * 11.0) as u32;
-        if width < min_w || height < min_h {
-            return Err(PlotError::TooSmall {
-                width,
-                height,
-                min_width: min_w,
-                min_height: min_h,
-            });
-        }
+        let xr = self.shown_range(&self.x, "x", &paths, 0)?;
+        let yr = self.shown_range(&self.y, "y", &paths, 1)?;
         if u64::from(width) * u64::from(height) > MAX_PIXELS {
             return Err(PlotError::TooLarge {
                 width,
@@ -199,166 +299,279 @@ impl Plot {
                 max_pixels: MAX_PIXELS,
             });
         }
+        text::ensure_font()?;
+        let (sz, lay) = match self.try_layout(width, height, xr, yr) {
+            Ok(v) => v,
+            Err(need) => return Err(self.too_small(width, height, need, xr, yr)),
+        };
+        let base = sz.tick;
+        let mut buf = vec![255u8; width as usize * height as usize * 3];
+        {
+            let root =
+                Canvas(BitMapBackend::with_buffer(&mut buf, (width, height))).into_drawing_area();
+            self.draw_axes(&root, &lay, &sz)?;
+            for (i, (s, runs)) in self.series.iter().zip(&paths).enumerate() {
+                draw_series(&root, &lay, s, i, runs, base)?;
+            }
+            draw_frame(&root, &lay.frame, sz.frame_w as i32)?;
+            self.draw_texts(&root, &lay, &sz, width)?;
+            if let Some(size) = lay.legend {
+                self.draw_legend(&root, &lay.frame, size, &sz, base, width)?;
+            }
+            root.present().map_err(drawing)?;
+        }
+        let img = RgbImage::from_raw(width, height, buf)
+            .ok_or_else(|| PlotError::Drawing("pixel buffer of the wrong size".into()))?;
+        let report = PlotReport {
+            frame: lay.frame,
+            x: lay.xmap,
+            y: lay.ymap,
+            skipped,
+        };
+        Ok((img, report))
+    }
 
+    /// Tick-label font size for a `width` × `height` image.
+    fn base_px(&self, width: u32, height: u32) -> f64 {
+        self.font_px
+            .filter(|p| p.is_finite() && *p > 0.0)
+            .unwrap_or_else(|| {
+                (f64::from(height) / 34.0)
+                    .min(f64::from(width) / 40.0)
+                    .clamp(12.0, 26.0)
+            })
+    }
+
+    /// The layout at this size, or (when the plot does not fit) a size it needs at least.
+    fn try_layout(
+        &self,
+        width: u32,
+        height: u32,
+        xr: (f64, f64),
+        yr: (f64, f64),
+    ) -> Result<(Sizes, Layout), (u32, u32)> {
+        let base = self.base_px(width, height);
+        let (min_w, min_h) = ((base * 14.0) as u32, (base * 11.0) as u32);
+        if width < min_w || height < min_h {
+            return Err((min_w.max(width), min_h.max(height)));
+        }
+        let sz = Sizes::new(base);
+        let lay = self.layout(width, height, xr, yr, &sz)?;
+        Ok((sz, lay))
+    }
+
+    /// The `TooSmall` error for a request, naming a size at which the plot does render (the
+    /// needs grow with the default font size, which follows the image size, so iterate).
+    fn too_small(
+        &self,
+        width: u32,
+        height: u32,
+        mut need: (u32, u32),
+        xr: (f64, f64),
+        yr: (f64, f64),
+    ) -> PlotError {
+        for _ in 0..32 {
+            match self.try_layout(need.0, need.1, xr, yr) {
+                Ok(_) => break,
+                Err(more) => {
+                    need = (
+                        more.0.max(need.0.saturating_add(1)),
+                        more.1.max(need.1.saturating_add(1)),
+                    )
+                }
+            }
+        }
+        PlotError::TooSmall {
+            width,
+            height,
+            min_width: need.0,
+            min_height: need.1,
+        }
+    }
+
+    /// Places frame, title, labels and legend for a `width` × `height` image; when the frame
+    /// would be too small, the size that would give it enough room.
+    fn layout(
+        &self,
+        width: u32,
+        height: u32,
+        xr: (f64, f64),
+        yr: (f64, f64),
+        sz: &Sizes,
+    ) -> Result<Layout, (u32, u32)> {
+        let (w, h) = (f64::from(width), f64::from(height));
         // Tick density follows the space roughly available before the exact layout is known.
         let xt = self.x.ticks(
             xr.0,
             xr.1,
-            ((f64::from(width) * 0.75) / (base * 6.0)).clamp(2.0, 10.0) as usize,
+            (w * 0.75 / (sz.tick * 6.0)).clamp(2.0, 10.0) as usize,
         );
         let yt = self.y.ticks(
             yr.0,
             yr.1,
-            ((f64::from(height) * 0.7) / (base * 3.2)).clamp(2.0, 10.0) as usize,
+            (h * 0.7 / (sz.tick * 3.2)).clamp(2.0, 10.0) as usize,
         );
-
-        let legend_box = self.legend_size(&sz);
-        let ytick_w = yt
-            .iter()
-            .filter_map(|t| t.label.as_deref())
-            .map(|l| text::measure(l, sz.tick).width)
-            .fold(0.0, f64::max);
-        let xtick_last_w = xt
-            .iter()
-            .rev()
-            .find_map(|t| t.label.as_deref())
-            .map_or(0.0, |l| text::measure(l, sz.tick).width);
-        let line_h = |px: f64| text::measure("Ag", px).height;
-        let tick_len = (base * 0.45).round();
-
-        let top = sz.pad
-            + if self.title.is_empty() {
-                line_h(sz.tick) * 0.5
-            } else {
-                line_h(sz.title) + sz.pad
-            };
-        let bottom = sz.pad
-            + line_h(sz.tick)
-            + tick_len * 0.5
-            + sz.pad * 0.5
-            + if self.x.label.is_empty() {
-                0.0
-            } else {
-                line_h(sz.label)
-            };
-        let left = sz.pad
-            + if self.y.label.is_empty() {
-                0.0
-            } else {
-                line_h(sz.label) + sz.pad * 0.5
-            }
-            + ytick_w
-            + sz.pad * 0.6;
-        let mut right = sz.pad + (xtick_last_w * 0.5).max(sz.pad);
-        if self.legend == Legend::Outside {
-            right = sz.pad + legend_box.0 + sz.pad;
-        }
-        let frame = PxRect {
-            x0: left.round() as i64,
-            y0: top.round() as i64,
-            x1: (f64::from(width) - right).round() as i64,
-            y1: (f64::from(height) - bottom).round() as i64,
+        let title = if self.title.is_empty() {
+            Vec::new()
+        } else {
+            text::wrap(&self.title, sz.title, w - 2.0 * sz.pad)
         };
-        if frame.width() < (base * 5.0) as i64 || frame.height() < (base * 4.0) as i64 {
-            let need_w = width as i64 + (base * 5.0) as i64 - frame.width();
-            let need_h = height as i64 + (base * 4.0) as i64 - frame.height();
-            return Err(PlotError::TooSmall {
-                width,
-                height,
-                min_width: need_w.max(0) as u32,
-                min_height: need_h.max(0) as u32,
-            });
+        let legend = self.legend_size(sz);
+        let label_w = |t: &[Tick]| -> Vec<f64> {
+            t.iter()
+                .filter_map(|t| t.label.as_deref())
+                .map(|l| text::width(l, sz.tick))
+                .collect()
+        };
+        let ytick_w = label_w(&yt).into_iter().fold(0.0, f64::max);
+        let xtick_last_w = label_w(&xt).last().copied().unwrap_or(0.0);
+        let axis_label_h = |l: &str| {
+            if l.is_empty() {
+                0.0
+            } else {
+                text::block_height(1, sz.label) + sz.pad * 0.5
+            }
+        };
+        let top = sz.pad
+            + if title.is_empty() {
+                0.5 * sz.tick
+            } else {
+                text::block_height(title.len(), sz.title) + sz.tick * 0.6
+            };
+        let x_area = sz.label_dist() + text::line_box(sz.tick) + axis_label_h(&self.x.label);
+        let y_area = sz.label_dist() + ytick_w + axis_label_h(&self.y.label);
+        let right = match (self.legend, legend) {
+            (Legend::Outside, Some((bw, _))) => 2.0 * sz.pad + bw,
+            _ => sz.pad + (xtick_last_w * 0.5).max(sz.pad),
+        };
+        let px = |v: f64| v.ceil().max(0.0) as u32;
+        let margins = [
+            px(top),
+            px(sz.pad),
+            px(sz.pad),
+            px(right),
+            px(x_area),
+            px(y_area),
+        ];
+        let frame = PxRect {
+            x0: i64::from(margins[2]) + i64::from(margins[5]),
+            y0: i64::from(margins[0]),
+            x1: i64::from(width) - i64::from(margins[3]),
+            y1: i64::from(height) - i64::from(margins[1]) - i64::from(margins[4]),
+        };
+        let (need_w, need_h) = ((sz.tick * 5.0) as i64, (sz.tick * 4.0) as i64);
+        if frame.width() < need_w || frame.height() < need_h {
+            let grow = |have: u32, short: i64| {
+                (i64::from(have) + short.max(0)).clamp(0, i64::from(u32::MAX)) as u32
+            };
+            return Err((
+                grow(width, need_w - frame.width()),
+                grow(height, need_h - frame.height()),
+            ));
         }
+        // The pixel range plotters maps the axis onto: first to last pixel of the frame.
         let xmap = AxisMap {
             scale: self.x.scale,
             lo: xr.0,
             hi: xr.1,
             px_lo: frame.x0 as f64,
-            px_hi: frame.x1 as f64,
+            px_hi: (frame.x1 - 1) as f64,
         };
         let ymap = AxisMap {
             scale: self.y.scale,
             lo: yr.0,
             hi: yr.1,
-            px_lo: frame.y1 as f64,
+            px_lo: (frame.y1 - 1) as f64,
             px_hi: frame.y0 as f64,
         };
+        Ok(Layout {
+            frame,
+            xmap,
+            ymap,
+            xt,
+            yt,
+            title,
+            legend,
+            margins,
+        })
+    }
 
-        let mut img = RgbImage::from_pixel(width, height, image::Rgb([255, 255, 255]));
-        if self.grid {
-            draw_grid(&mut img, &frame, &xt, &yt, &xmap, &ymap);
+    /// Grid lines, axis lines, tick marks and tick labels, through a plotters chart whose
+    /// coordinates are the axes' linear coordinates (log10 of the value on log axes).
+    fn draw_axes<DB: plotters::prelude::DrawingBackend>(
+        &self,
+        root: &DrawingArea<DB, Shift>,
+        lay: &Layout,
+        sz: &Sizes,
+    ) -> Result<(), PlotError> {
+        let [top, bottom, left, right, x_area, y_area] = lay.margins;
+        let mut chart = ChartBuilder::on(root)
+            .margin_top(top)
+            .margin_bottom(bottom)
+            .margin_left(left)
+            .margin_right(right)
+            .x_label_area_size(x_area)
+            .y_label_area_size(y_area)
+            .build_cartesian_2d(
+                TickAxis::new(lay.xmap, &lay.xt),
+                TickAxis::new(lay.ymap, &lay.yt),
+            )
+            .map_err(drawing)?;
+        let black = ShapeStyle {
+            color: RGBColor(0, 0, 0).to_rgba(),
+            filled: false,
+            stroke_width: sz.frame_w as u32,
+        };
+        let mut mesh = chart.configure_mesh();
+        mesh.label_style(text::style(sz.tick, Rgb::BLACK))
+            .axis_style(black)
+            .set_all_tick_mark_size(sz.tick_len as i32)
+            .bold_line_style(rgb(Rgb::GRID))
+            .light_line_style(rgb(Rgb(240, 240, 240)));
+        if !self.grid {
+            mesh.disable_mesh();
         }
-        for (i, (s, segs)) in self.series.iter().zip(&paths).enumerate() {
-            let color = s.color.unwrap_or_else(|| Rgb::palette(i));
-            let mut mask = Mask::new(frame);
-            let width_px = s.width.unwrap_or((base / 8.0).max(1.5));
-            let dash = dash_pattern(s.line, width_px, base);
-            for seg in segs {
-                let px: Vec<(f64, f64)> = seg
-                    .iter()
-                    .filter_map(|&(x, y)| Some((xmap.to_px(x)?, ymap.to_px(y)?)))
-                    .collect();
-                if s.line != LineStyle::None {
-                    mask.stroke_polyline(&px, width_px, &dash);
-                }
-            }
-            if s.marker != Marker::None {
-                let r = s.marker_size.unwrap_or(base * 0.28);
-                let pts = segs.iter().flatten().step_by(s.marker_every.max(1));
-                for &(x, y) in pts {
-                    if let (Some(px), Some(py)) = (xmap.to_px(x), ymap.to_px(y)) {
-                        mask.stamp_marker((px, py), r, s.marker, width_px);
-                    }
-                }
-            }
-            mask.composite(&mut img, color);
-        }
-        draw_frame_and_ticks(&mut img, &frame, &xt, &yt, &xmap, &ymap, &sz, tick_len);
+        mesh.draw().map_err(drawing)
+    }
 
-        // Axis labels and title.
-        let xl_y = frame.y1 as f64 + tick_len * 0.5 + line_h(sz.tick) + sz.pad * 0.5;
-        let fx_mid = (frame.x0 + frame.x1) as f64 * 0.5;
-        text::draw(
-            &mut img,
-            &self.x.label,
-            sz.label,
-            fx_mid,
-            xl_y,
-            HAlign::Center,
-            Rgb::BLACK,
-        );
-        let fy_mid = (frame.y0 + frame.y1) as f64 * 0.5;
-        text::draw_vertical(
-            &mut img,
-            &self.y.label,
-            sz.label,
-            sz.pad,
-            fy_mid,
-            Rgb::BLACK,
-        );
-        if !self.title.is_empty() {
-            text::draw(
-                &mut img,
-                &self.title,
-                sz.title,
-                fx_mid,
-                sz.pad,
+    /// Axis labels and the (wrapped) title.
+    fn draw_texts<DB: plotters::prelude::DrawingBackend>(
+        &self,
+        root: &DrawingArea<DB, Shift>,
+        lay: &Layout,
+        sz: &Sizes,
+        width: u32,
+    ) -> Result<(), PlotError> {
+        let f = &lay.frame;
+        let fx_mid = (f.x0 + f.x1) as f64 * 0.5;
+        let fy_mid = (f.y0 + f.y1) as f64 * 0.5;
+        if !self.x.label.is_empty() {
+            let y = f.y1 as f64 + sz.label_dist() + text::line_box(sz.tick) + sz.pad * 0.5;
+            let st = (fx_mid, y);
+            text::draw_lines(
+                root,
+                &self.x.label,
+                sz.label,
+                st,
                 HAlign::Center,
                 Rgb::BLACK,
-            );
+            )?;
         }
-        if self.legend != Legend::Hidden {
-            self.draw_legend(&mut img, &frame, legend_box, &sz, base, width);
+        if !self.y.label.is_empty() {
+            text::draw_vertical(root, &self.y.label, sz.label, (sz.pad, fy_mid), Rgb::BLACK)?;
         }
-        Ok((
-            img,
-            PlotReport {
-                frame,
-                x: xmap,
-                y: ymap,
-                skipped,
-            },
-        ))
+        if !lay.title.is_empty() {
+            let at = (f64::from(width) * 0.5, sz.pad);
+            text::draw_lines(
+                root,
+                &lay.title.join("\n"),
+                sz.title,
+                at,
+                HAlign::Center,
+                Rgb::BLACK,
+            )?;
+        }
+        Ok(())
     }
 
     /// Splits each series into runs of showable points; a bad point ends a run.
@@ -464,32 +677,39 @@ impl Plot {
         Ok(auto_range(axis.scale, lo, hi))
     }
 
-    fn legend_size(&self, sz: &Sizes) -> (f64, f64) {
-        if self.legend == Legend::Hidden {
-            return (0.0, 0.0);
-        }
-        let label_w = self
-            .series
+    /// Series shown in the legend: those with a label.
+    fn legend_entries(&self) -> impl Iterator<Item = (usize, &Series)> {
+        self.series
             .iter()
-            .map(|s| text::measure(&s.label, sz.legend).width)
-            .fold(0.0, f64::max);
-        let row = text::measure("Ag", sz.legend).height * 1.15;
-        let sample = sz.legend * 2.4;
-        (
-            sz.pad * 2.0 + sample + sz.pad * 0.6 + label_w,
-            sz.pad + row * self.series.len() as f64,
-        )
+            .enumerate()
+            .filter(|(_, s)| !s.label.is_empty())
     }
 
-    fn draw_legend(
+    /// Legend box size in px, or None when there is no legend to draw.
+    fn legend_size(&self, sz: &Sizes) -> Option<(f64, f64)> {
+        if self.legend == Legend::Hidden {
+            return None;
+        }
+        let (n, label_w) = self
+            .legend_entries()
+            .fold((0usize, 0.0f64), |(n, w), (_, s)| {
+                (n + 1, w.max(text::width(&s.label, sz.legend)))
+            });
+        (n > 0).then_some((
+            sz.pad * 2.6 + sz.legend * 2.4 + label_w,
+            sz.pad + LINE_PITCH * sz.legend * n as f64,
+        ))
+    }
+
+    fn draw_legend<DB: plotters::prelude::DrawingBackend>(
         &self,
-        img: &mut RgbImage,
+        root: &DrawingArea<DB, Shift>,
         frame: &PxRect,
         (bw, bh): (f64, f64),
         sz: &Sizes,
         base: f64,
         width: u32,
-    ) {
+    ) -> Result<(), PlotError> {
         let inset = sz.pad;
         let (x0, y0) = match self.legend {
             Legend::TopRight => (frame.x1 as f64 - inset - bw, frame.y0 as f64 + inset),
@@ -497,246 +717,216 @@ impl Plot {
             Legend::BottomRight => (frame.x1 as f64 - inset - bw, frame.y1 as f64 - inset - bh),
             Legend::BottomLeft => (frame.x0 as f64 + inset, frame.y1 as f64 - inset - bh),
             Legend::Outside => (f64::from(width) - sz.pad - bw, frame.y0 as f64),
-            Legend::Hidden => return,
+            Legend::Hidden => return Ok(()),
         };
-        let r = PxRect {
-            x0: x0.round() as i64,
-            y0: y0.round() as i64,
-            x1: (x0 + bw).round() as i64,
-            y1: (y0 + bh).round() as i64,
-        };
-        fill_rect(img, r, Rgb(150, 150, 150));
-        fill_rect(
-            img,
-            PxRect {
-                x0: r.x0 + 1,
-                y0: r.y0 + 1,
-                x1: r.x1 - 1,
-                y1: r.y1 - 1,
-            },
-            Rgb::WHITE,
-        );
-        let row = text::measure("Ag", sz.legend).height * 1.15;
+        let corners = [
+            (x0.round() as i32, y0.round() as i32),
+            ((x0 + bw).round() as i32, (y0 + bh).round() as i32),
+        ];
+        let draw = |e: &Rectangle<(i32, i32)>| root.draw(e).map_err(drawing);
+        draw(&Rectangle::new(corners, rgb(Rgb::WHITE).filled()))?;
+        draw(&Rectangle::new(corners, rgb(Rgb(150, 150, 150))))?;
+        let row = LINE_PITCH * sz.legend;
         let sample = sz.legend * 2.4;
-        for (i, s) in self.series.iter().enumerate() {
+        for (k, (i, s)) in self.legend_entries().enumerate() {
             let color = s.color.unwrap_or_else(|| Rgb::palette(i));
-            let top = y0 + sz.pad * 0.5 + row * i as f64;
-            let cy = top + row * 0.5;
+            let cy = y0 + sz.pad * 0.5 + row * (k as f64 + 0.5);
             let sx0 = x0 + sz.pad;
-            let mut mask = Mask::new(r);
-            let width_px = s.width.unwrap_or((base / 8.0).max(1.5));
+            let lw = line_width(s, base);
             if s.line != LineStyle::None {
-                mask.stroke_polyline(
-                    &[(sx0, cy), (sx0 + sample, cy)],
-                    width_px,
-                    &dash_pattern(s.line, width_px, base * 0.7),
-                );
+                let dash = dash_pattern(s.line, lw, base * 0.7);
+                for piece in dash_polyline(&[(sx0, cy), (sx0 + sample, cy)], &dash) {
+                    draw_piece(root, &piece, color, lw)?;
+                }
             }
-            if s.marker != Marker::None {
-                mask.stamp_marker(
-                    (sx0 + sample * 0.5, cy),
-                    s.marker_size.unwrap_or(base * 0.28),
-                    s.marker,
-                    width_px,
-                );
-            }
-            mask.composite(img, color);
-            let th = text::measure(&s.label, sz.legend).height;
-            text::draw(
-                img,
-                &s.label,
-                sz.legend,
+            draw_marker(root, s, (sx0 + sample * 0.5, cy), color, base)?;
+            let at = (
                 sx0 + sample + sz.pad * 0.6,
-                cy - th * 0.5,
-                HAlign::Left,
-                Rgb::BLACK,
+                cy - 0.5 * text::line_box(sz.legend),
             );
+            text::draw_lines(root, &s.label, sz.legend, at, HAlign::Left, Rgb::BLACK)?;
         }
+        Ok(())
     }
 }
 
-fn dash_pattern(style: LineStyle, w: f64, base: f64) -> Vec<f64> {
-    match style {
-        LineStyle::Solid | LineStyle::None => Vec::new(),
-        LineStyle::Dashed => vec![base * 0.7, base * 0.4],
-        LineStyle::Dotted => vec![w * 1.2, w * 1.8],
-        LineStyle::DashDot => vec![base * 0.7, base * 0.3, w * 1.2, base * 0.3],
-    }
+fn rgb(c: Rgb) -> RGBColor {
+    RGBColor(c.0, c.1, c.2)
 }
 
-fn draw_grid(img: &mut RgbImage, f: &PxRect, xt: &[Tick], yt: &[Tick], xm: &AxisMap, ym: &AxisMap) {
-    for t in xt.iter().filter(|t| t.label.is_some()) {
-        if let Some(px) = xm.to_px(t.value) {
-            let x = px.round() as i64;
-            if x > f.x0 && x < f.x1 - 1 {
-                fill_rect(
-                    img,
-                    PxRect {
-                        x0: x,
-                        y0: f.y0,
-                        x1: x + 1,
-                        y1: f.y1,
-                    },
-                    Rgb::GRID,
-                );
+/// Line width in px: as given (kept to 0.5…50 px), else following the font size.
+fn line_width(s: &Series, base: f64) -> f64 {
+    s.width
+        .filter(|w| w.is_finite())
+        .map_or((base / 8.0).max(1.5), |w| w.clamp(0.5, 50.0))
+}
+
+/// One series: its runs mapped to pixels, clipped to the frame, dashed, then its markers.
+fn draw_series<DB: plotters::prelude::DrawingBackend>(
+    root: &DrawingArea<DB, Shift>,
+    lay: &Layout,
+    s: &Series,
+    index: usize,
+    runs: &[Vec<(f64, f64)>],
+    base: f64,
+) -> Result<(), PlotError> {
+    let color = s.color.unwrap_or_else(|| Rgb::palette(index));
+    let to_px = |&(x, y): &(f64, f64)| Some((lay.xmap.to_px(x)?, lay.ymap.to_px(y)?));
+    let f = &lay.frame;
+    // Last pixel's far edge: a point mapped onto the last pixel is inside.
+    let bx = (
+        f.x0 as f64,
+        f.y0 as f64,
+        f.x1 as f64 - 1e-9,
+        f.y1 as f64 - 1e-9,
+    );
+    let lw = line_width(s, base);
+    if s.line != LineStyle::None {
+        let dash = dash_pattern(s.line, lw, base);
+        for run in runs {
+            let px: Vec<Pt> = run.iter().filter_map(to_px).collect();
+            for part in clip_polyline(&px, bx) {
+                for piece in dash_polyline(&part, &dash) {
+                    draw_piece(root, &piece, color, lw)?;
+                }
             }
         }
     }
-    for t in yt.iter().filter(|t| t.label.is_some()) {
-        if let Some(py) = ym.to_px(t.value) {
-            let y = py.round() as i64;
-            if y > f.y0 && y < f.y1 - 1 {
-                fill_rect(
-                    img,
-                    PxRect {
-                        x0: f.x0,
-                        y0: y,
-                        x1: f.x1,
-                        y1: y + 1,
-                    },
-                    Rgb::GRID,
-                );
+    if s.marker != Marker::None {
+        for p in runs
+            .iter()
+            .flatten()
+            .step_by(s.marker_every.max(1))
+            .filter_map(to_px)
+        {
+            if f.contains(p.0.floor() as i64, p.1.floor() as i64) {
+                draw_marker(root, s, p, color, base)?;
             }
         }
     }
+    Ok(())
 }
 
-#[allow(clippy::too_many_arguments)]
-fn draw_frame_and_ticks(
-    img: &mut RgbImage,
+/// Strokes a polyline given in pixels (each point stands for the pixel it falls in).
+fn draw_piece<DB: plotters::prelude::DrawingBackend>(
+    root: &DrawingArea<DB, Shift>,
+    pts: &[Pt],
+    color: Rgb,
+    width_px: f64,
+) -> Result<(), PlotError> {
+    let mut ip: Vec<(i32, i32)> = Vec::with_capacity(pts.len());
+    for p in pts {
+        let q = (p.0.floor() as i32, p.1.floor() as i32);
+        if ip.last() != Some(&q) {
+            ip.push(q);
+        }
+    }
+    let stroke = width_px.round().max(1.0) as u32;
+    let dot = |c: (i32, i32), r: u32| root.draw(&Circle::new(c, r, rgb(color).filled()));
+    if let [c] = ip[..] {
+        // A lone point (or a piece shorter than a pixel) is a dot as wide as the line.
+        return dot(c, stroke / 2).map_err(drawing);
+    }
+    let style = ShapeStyle {
+        color: rgb(color).to_rgba(),
+        filled: false,
+        stroke_width: stroke,
+    };
+    // Plotters outlines a thick polyline with mitred joins; at a turn sharper than 120° the
+    // inner offset lines meet far away and the outline spikes across the image (noisy data
+    // does this), so the line is cut there and the pieces meet in a round dot.
+    let mut start = 0;
+    for k in 1..ip.len() {
+        let sharp = k + 1 < ip.len() && sharp_turn(ip[k - 1], ip[k], ip[k + 1]);
+        if sharp || k + 1 == ip.len() {
+            root.draw(&PathElement::new(ip[start..=k].to_vec(), style))
+                .map_err(drawing)?;
+            if sharp && stroke >= 2 {
+                dot(ip[k], stroke / 2).map_err(drawing)?;
+            }
+            start = k;
+        }
+    }
+    Ok(())
+}
+
+/// Whether the polyline a → b → c turns by more than 120° at b.
+fn sharp_turn(a: (i32, i32), b: (i32, i32), c: (i32, i32)) -> bool {
+    let (u, v) = (
+        (f64::from(b.0 - a.0), f64::from(b.1 - a.1)),
+        (f64::from(c.0 - b.0), f64::from(c.1 - b.1)),
+    );
+    let dot = u.0 * v.0 + u.1 * v.1;
+    dot < -0.5 * (u.0.hypot(u.1) * v.0.hypot(v.1))
+}
+
+/// The series' marker centred at pixel position `c`.
+fn draw_marker<DB: plotters::prelude::DrawingBackend>(
+    root: &DrawingArea<DB, Shift>,
+    s: &Series,
+    c: Pt,
+    color: Rgb,
+    base: f64,
+) -> Result<(), PlotError> {
+    let r = s
+        .marker_size
+        .filter(|r| r.is_finite())
+        .map_or(base * 0.28, |r| r.clamp(1.0, 100.0));
+    let (cx, cy) = (c.0.floor(), c.1.floor());
+    let at = |dx: f64, dy: f64| ((cx + dx).round() as i32, (cy + dy).round() as i32);
+    let fill = rgb(color).filled();
+    let poly = |pts: Vec<(i32, i32)>| root.draw(&Polygon::new(pts, fill)).map_err(drawing);
+    let bar_w = (line_width(s, base) * 1.2).max(2.0);
+    let bars = |a: [Pt; 2], b: [Pt; 2]| -> Result<(), PlotError> {
+        for seg in [a, b] {
+            let pts = seg.map(|(dx, dy)| (cx + dx + 0.5, cy + dy + 0.5));
+            draw_piece(root, &pts, color, bar_w)?;
+        }
+        Ok(())
+    };
+    match s.marker {
+        Marker::None => Ok(()),
+        Marker::Circle => root
+            .draw(&Circle::new(at(0.0, 0.0), r.round() as u32, fill))
+            .map_err(drawing),
+        Marker::Square => {
+            // Filled rectangles end before their second corner.
+            let (h, (x1, y1)) = (r * 0.85, at(r * 0.85, r * 0.85));
+            root.draw(&Rectangle::new([at(-h, -h), (x1 + 1, y1 + 1)], fill))
+                .map_err(drawing)
+        }
+        Marker::Triangle => {
+            let (rr, s3) = (r * 1.15, 3f64.sqrt() * 0.5);
+            poly(vec![
+                at(0.0, -rr),
+                at(rr * s3, rr * 0.5),
+                at(-rr * s3, rr * 0.5),
+            ])
+        }
+        Marker::Diamond => {
+            let d = r * 1.13;
+            poly(vec![at(0.0, -d), at(d, 0.0), at(0.0, d), at(-d, 0.0)])
+        }
+        Marker::Cross => {
+            let k = r * std::f64::consts::FRAC_1_SQRT_2;
+            bars([(-k, -k), (k, k)], [(-k, k), (k, -k)])
+        }
+        Marker::Plus => bars([(-r, 0.0), (r, 0.0)], [(0.0, -r), (0.0, r)]),
+    }
+}
+
+/// Black frame `w` px wide just outside the plot area, on all four sides.
+fn draw_frame<DB: plotters::prelude::DrawingBackend>(
+    root: &DrawingArea<DB, Shift>,
     f: &PxRect,
-    xt: &[Tick],
-    yt: &[Tick],
-    xm: &AxisMap,
-    ym: &AxisMap,
-    sz: &Sizes,
-    tick_len: f64,
-) {
-    let w = sz.frame_w as i64;
-    let k = Rgb::BLACK;
-    fill_rect(
-        img,
-        PxRect {
-            x0: f.x0 - w,
-            y0: f.y0 - w,
-            x1: f.x1 + w,
-            y1: f.y0,
-        },
-        k,
-    );
-    fill_rect(
-        img,
-        PxRect {
-            x0: f.x0 - w,
-            y0: f.y1,
-            x1: f.x1 + w,
-            y1: f.y1 + w,
-        },
-        k,
-    );
-    fill_rect(
-        img,
-        PxRect {
-            x0: f.x0 - w,
-            y0: f.y0,
-            x1: f.x0,
-            y1: f.y1,
-        },
-        k,
-    );
-    fill_rect(
-        img,
-        PxRect {
-            x0: f.x1,
-            y0: f.y0,
-            x1: f.x1 + w,
-            y1: f.y1,
-        },
-        k,
-    );
-    let tl = tick_len as i64;
-    let line_h = text::measure("Ag", sz.tick).height;
-    // Ticks point inwards on all four sides, as in most physics journals.
-    for t in xt {
-        let Some(px) = xm.to_px(t.value) else {
-            continue;
-        };
-        let x = px.round() as i64;
-        if x < f.x0 - 1 || x > f.x1 + 1 {
-            continue;
-        }
-        let len = if t.label.is_some() { tl } else { tl / 2 };
-        fill_rect(
-            img,
-            PxRect {
-                x0: x - w / 2,
-                y0: f.y1 - len,
-                x1: x - w / 2 + w,
-                y1: f.y1,
-            },
-            k,
-        );
-        fill_rect(
-            img,
-            PxRect {
-                x0: x - w / 2,
-                y0: f.y0,
-                x1: x - w / 2 + w,
-                y1: f.y0 + len,
-            },
-            k,
-        );
-        if let Some(l) = &t.label {
-            text::draw(
-                img,
-                l,
-                sz.tick,
-                px,
-                f.y1 as f64 + w as f64 + tick_len * 0.3,
-                HAlign::Center,
-                k,
-            );
-        }
-    }
-    for t in yt {
-        let Some(py) = ym.to_px(t.value) else {
-            continue;
-        };
-        let y = py.round() as i64;
-        if y < f.y0 - 1 || y > f.y1 + 1 {
-            continue;
-        }
-        let len = if t.label.is_some() { tl } else { tl / 2 };
-        fill_rect(
-            img,
-            PxRect {
-                x0: f.x0,
-                y0: y - w / 2,
-                x1: f.x0 + len,
-                y1: y - w / 2 + w,
-            },
-            k,
-        );
-        fill_rect(
-            img,
-            PxRect {
-                x0: f.x1 - len,
-                y0: y - w / 2,
-                x1: f.x1,
-                y1: y - w / 2 + w,
-            },
-            k,
-        );
-        if let Some(l) = &t.label {
-            text::draw(
-                img,
-                l,
-                sz.tick,
-                f.x0 as f64 - w as f64 - sz.pad * 0.6,
-                py - line_h * 0.5,
-                HAlign::Right,
-                k,
-            );
-        }
-    }
+    w: i32,
+) -> Result<(), PlotError> {
+    let style = ShapeStyle {
+        color: RGBColor(0, 0, 0).to_rgba(),
+        filled: false,
+        stroke_width: w.max(1) as u32,
+    };
+    let (x0, y0, x1, y1) = (f.x0 as i32, f.y0 as i32, f.x1 as i32, f.y1 as i32);
+    root.draw(&Rectangle::new([(x0 - 1, y0 - 1), (x1, y1)], style))
+        .map_err(drawing)
 }

@@ -331,6 +331,217 @@ fn image_grid_rejects_bad_cells() {
     assert_eq!(img.dimensions(), (layout.width, layout.height));
 }
 
+/// Pixels of exactly colour `c` inside `r` (x0, y0, x1, y1), clipped to the image.
+fn count(img: &RgbImage, (x0, y0, x1, y1): (i64, i64, i64, i64), c: [u8; 3]) -> usize {
+    let (w, h) = (i64::from(img.width()), i64::from(img.height()));
+    (y0.max(0)..y1.min(h))
+        .flat_map(|y| (x0.max(0)..x1.min(w)).map(move |x| (x, y)))
+        .filter(|&(x, y)| img.get_pixel(x as u32, y as u32).0 == c)
+        .count()
+}
+
+fn dark(img: &RgbImage, r: (i64, i64, i64, i64)) -> usize {
+    let (w, h) = (i64::from(img.width()), i64::from(img.height()));
+    (r.1.max(0)..r.3.min(h))
+        .flat_map(|y| (r.0.max(0)..r.2.min(w)).map(move |x| (x, y)))
+        .filter(|&(x, y)| img.get_pixel(x as u32, y as u32).0.iter().all(|&v| v < 100))
+        .count()
+}
+
+#[test]
+fn log_axes_put_grid_ticks_and_labels_at_decades() {
+    // Five powers of ten: few enough to label each and draw minor lines at 2…9 × 10ⁿ.
+    let xs = [1e-2, 1e2];
+    let (img, rep) = Plot::new("")
+        .x_axis(Axis::log("x").range(1e-2, 1e2))
+        .y_axis(Axis::log("y").range(1e-2, 1e2))
+        .legend(plot::Legend::Hidden)
+        .series(Series::line("s", &xs, &[1e2, 1e2]).color(RED))
+        .render(800, 600)
+        .unwrap();
+    let f = rep.frame;
+    let grid = [222, 222, 222];
+    let minor = [240, 240, 240];
+    let mid_y = (f.y0 + f.y1) / 2;
+    for k in -1..=1 {
+        let x = rep.x.to_px(10f64.powi(k)).unwrap().floor() as i64;
+        // Grid line through the frame, an outward tick mark and a label under it.
+        assert_eq!(
+            img.get_pixel(x as u32, mid_y as u32).0,
+            grid,
+            "decade 1e{k}"
+        );
+        assert!(
+            count(&img, (x, f.y1 + 1, x + 1, f.y1 + 4), [0, 0, 0]) == 3,
+            "tick 1e{k}"
+        );
+        assert!(
+            dark(&img, (x - 15, f.y1 + 8, x + 15, f.y1 + 40)) > 10,
+            "label 1e{k}"
+        );
+        // Half-way between decades (≈ 3×10^k) there is a light minor line and no label.
+        let xm = rep.x.to_px(3.0 * 10f64.powi(k)).unwrap().floor() as i64;
+        assert_eq!(
+            img.get_pixel(xm as u32, mid_y as u32).0,
+            minor,
+            "minor 3e{k}"
+        );
+        assert_eq!(count(&img, (xm, f.y1 + 1, xm + 1, f.y1 + 4), [0, 0, 0]), 0);
+        let y = rep.y.to_px(10f64.powi(k)).unwrap().floor() as i64;
+        assert_eq!(img.get_pixel(((f.x0 + f.x1) / 2) as u32, y as u32).0, grid);
+        assert!(
+            dark(&img, (0, y - 10, f.x0 - 6, y + 10)) > 10,
+            "y label 1e{k}"
+        );
+    }
+    // The frame closes on all four sides.
+    for (x, y) in [
+        (f.x0 - 1, mid_y),
+        (f.x1, mid_y),
+        ((f.x0 + f.x1) / 2, f.y0 - 1),
+    ] {
+        assert_eq!(img.get_pixel(x as u32, y as u32).0, [0, 0, 0], "({x}, {y})");
+    }
+}
+
+#[test]
+fn legend_lists_labelled_series_only() {
+    let xs = [0.0, 10.0];
+    let (a, b, hidden) = (Rgb(250, 0, 250), Rgb(0, 200, 250), Rgb(120, 250, 0));
+    let build = |legend| {
+        Plot::new("")
+            .x_axis(Axis::linear("x").range(0.0, 10.0))
+            .y_axis(Axis::linear("y").range(0.0, 10.0))
+            .legend(legend)
+            .series(Series::line("first", &xs, &[1.0, 1.0]).color(a))
+            .series(
+                Series::line("second", &xs, &[2.0, 2.0])
+                    .color(b)
+                    .marker(Marker::Square),
+            )
+            .series(Series::line("", &xs, &[3.0, 3.0]).color(hidden))
+            .render(600, 400)
+            .unwrap()
+    };
+    let (img, rep) = build(plot::Legend::TopLeft);
+    let f = rep.frame;
+    // Top-left quarter of the frame holds no data: what is there is the legend.
+    let corner = (f.x0, f.y0, (f.x0 + f.x1) / 2, (f.y0 + f.y1) / 2);
+    assert!(count(&img, corner, [250, 0, 250]) > 20);
+    assert!(count(&img, corner, [0, 200, 250]) > 20);
+    assert_eq!(
+        count(&img, corner, [120, 250, 0]),
+        0,
+        "unlabelled series in the legend"
+    );
+    assert!(dark(&img, corner) > 50, "legend text missing");
+    let (img, _) = build(plot::Legend::Hidden);
+    assert_eq!(count(&img, corner, [250, 0, 250]), 0);
+    // Outside: the legend sits right of the frame, which shrinks to make room.
+    let (img, out) = build(plot::Legend::Outside);
+    assert!(out.frame.x1 < f.x1 - 60);
+    let right = (out.frame.x1 + 2, 0, 600, 400);
+    assert!(count(&img, right, [250, 0, 250]) > 20 && dark(&img, right) > 50);
+}
+
+#[test]
+fn long_titles_wrap_instead_of_being_cut() {
+    let title = "S280: brass, σ = 0.28 µm, Lc = 9.1 µm, γ = 2.3, with the GGX ≡ KC identity α, \
+                 in-plane BRDF at θi = 0° and 80°, λ = 550 nm";
+    let xs = [0.0, 1.0];
+    let render = |t: &str| {
+        Plot::new(t)
+            .series(Series::line("s", &xs, &xs))
+            .render(500, 400)
+            .unwrap()
+    };
+    let (img, rep) = render(title);
+    let (_, short) = render("short");
+    assert!(
+        rep.frame.y0 > short.frame.y0 + 15,
+        "{} vs {}",
+        rep.frame.y0,
+        short.frame.y0
+    );
+    // Title ink spans several lines and stays clear of the image edges.
+    let band = |x0, x1| dark(&img, (x0, 0, x1, rep.frame.y0 - 12));
+    assert!(band(0, 500) > 400);
+    assert_eq!(band(0, 4) + band(496, 500), 0, "title cut at an edge");
+    let rows: Vec<i64> = (0..rep.frame.y0 - 12)
+        .filter(|&y| dark(&img, (0, y, 500, y + 1)) > 0)
+        .collect();
+    assert!(
+        rows.last().unwrap() - rows[0] > 25,
+        "one line only: {rows:?}"
+    );
+}
+
+#[test]
+fn too_small_error_names_a_size_that_works() {
+    let xs = [1.0, 2.0];
+    let p = Plot::new("a title")
+        .x_axis(Axis::log("x [m]"))
+        .y_axis(Axis::linear("y [s]"))
+        .legend(plot::Legend::Outside)
+        .series(Series::line("a rather long legend entry", &xs, &xs));
+    for (w, h) in [(60, 40), (200, 140), (170, 400)] {
+        let Err(e) = p.render(w, h) else {
+            panic!("{w}x{h} rendered")
+        };
+        let PlotError::TooSmall {
+            min_width,
+            min_height,
+            ..
+        } = e
+        else {
+            panic!("{e}")
+        };
+        assert!(
+            e.to_string().contains(&format!("{min_width}x{min_height}")),
+            "{e}"
+        );
+        let (img, _) = p
+            .render(min_width.max(w), min_height.max(h))
+            .unwrap_or_else(|e| panic!("{w}x{h} → {min_width}x{min_height}: {e}"));
+        assert_eq!(img.width(), min_width.max(w));
+    }
+    // An absurd font size gives an error, not an overflow or a hang.
+    let Err(e) = p.clone().font_px(1e12).render(400, 300) else {
+        panic!("rendered at 1e12 px")
+    };
+    assert!(matches!(e, PlotError::TooSmall { .. }), "{e}");
+}
+
+#[test]
+fn image_grid_wraps_a_long_title() {
+    let mut g = ImageGrid::new(1, 2)
+        .title("Sample S280 (brass, σ 0.28 µm): every model side by side under a daylight sky");
+    g.set(0, 0, solid(100, 80, [0, 0, 200])).unwrap();
+    g.set(0, 1, solid(100, 80, [0, 200, 0])).unwrap();
+    let (img, layout) = g.render().unwrap();
+    let s = layout.slots[0];
+    let title_band = |x0, x1| dark(&img, (x0, 0, x1, s.y0));
+    assert!(title_band(0, i64::from(layout.width)) > 200);
+    let w = i64::from(layout.width);
+    assert_eq!(
+        title_band(0, 3) + title_band(w - 3, w),
+        0,
+        "title cut at an edge"
+    );
+}
+
+/// Distance from `p` to segment a→b.
+fn seg_dist(p: (f64, f64), a: (f64, f64), b: (f64, f64)) -> f64 {
+    let (dx, dy) = (b.0 - a.0, b.1 - a.1);
+    let l2 = dx * dx + dy * dy;
+    let t = if l2 > 0.0 {
+        (((p.0 - a.0) * dx + (p.1 - a.1) * dy) / l2).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    ((p.0 - a.0 - t * dx).powi(2) + (p.1 - a.1 - t * dy).powi(2)).sqrt()
+}
+
 fn wild_f64() -> impl Strategy<Value = f64> {
     prop_oneof![
         Just(f64::NAN),
@@ -346,7 +557,58 @@ fn wild_f64() -> impl Strategy<Value = f64> {
 }
 
 proptest! {
+    #![proptest_config(ProptestConfig { cases: 400, failure_persistence: None, ..ProptestConfig::default() })]
+    #[test]
+    fn series_pixels_lie_on_the_data_polyline(
+        // Zig-zags with sharp reversals, as in noisy data.
+        pts in prop::collection::vec((-20.0..120.0f64, -20.0..120.0f64), 1..25),
+        width in 1.0..7.0f64,
+    ) {
+        let (xs, ys): (Vec<f64>, Vec<f64>) = pts.iter().copied().unzip();
+        let (img, rep) = Plot::new("")
+            .x_axis(Axis::linear("").range(0.0, 100.0))
+            .y_axis(Axis::linear("").range(0.0, 100.0))
+            .legend(plot::Legend::Hidden)
+            .grid(false)
+            .series(Series::line("s", &xs, &ys).color(RED).width(width))
+            .render(400, 300)
+            .unwrap();
+        let px: Vec<(f64, f64)> = pts.iter().map(|p| rep.to_px(p.0, p.1).unwrap()).collect();
+        let f = rep.frame;
+        // Joins are mitred up to turns of 120° (the mitre then reaches one width from the
+        // vertex), sharper turns are cut and rounded.
+        let reach = width.round().max(1.0) + 2.5;
+        let mut drawn = 0;
+        for y in 0..300u32 {
+            for x in 0..400u32 {
+                if img.get_pixel(x, y).0 != [220, 20, 60] {
+                    continue;
+                }
+                drawn += 1;
+                let c = (f64::from(x) + 0.5, f64::from(y) + 0.5);
+                let near = if px.len() == 1 {
+                    seg_dist(c, px[0], px[0])
+                } else {
+                    px.windows(2).map(|w| seg_dist(c, w[0], w[1])).fold(f64::INFINITY, f64::min)
+                };
+                prop_assert!(near <= reach, "pixel ({x}, {y}) is {near:.1} px from the line");
+                // Clipped at the frame (a mitre at a vertex on the edge may overhang it).
+                let (i, j) = (f64::from(x), f64::from(y));
+                let (x0, y0, x1, y1) = (f.x0 as f64, f.y0 as f64, f.x1 as f64, f.y1 as f64);
+                prop_assert!(i >= x0 - reach && i < x1 + reach && j >= y0 - reach && j < y1 + reach,
+                    "pixel ({x}, {y}) outside the frame {f:?}");
+            }
+        }
+        // A visible piece of line leaves pixels: any data point inside the frame is drawn.
+        if pts.iter().any(|p| (1.0..99.0).contains(&p.0) && (1.0..99.0).contains(&p.1)) {
+            prop_assert!(drawn > 0);
+        }
+    }
+}
+
+proptest! {
     #![proptest_config(ProptestConfig { cases: 48, failure_persistence: None, ..ProptestConfig::default() })]
+
     #[test]
     fn rendering_never_panics(
         pts in prop::collection::vec((wild_f64(), wild_f64()), 0..30),

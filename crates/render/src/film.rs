@@ -891,7 +891,7 @@ mod tests {
     #[test]
     fn round_trip_and_range_bookkeeping() {
         let mut f = Film::new(3, 2, 42, 7, 0.5).unwrap();
-        f.p.sums[4] = [1, -2, i128::MAX / 3];
+        f.p.sums[4] = [1, 2, 3];
         f.add_range(0..4).unwrap();
         f.add_range(8..10).unwrap();
         f.add_range(4..8).unwrap();

@@ -40,8 +40,8 @@ fn target(path: &Path) -> Result<Target, WriteError> {
         return Err(refusal(
             path,
             format!(
-                "it is the input '{}' (this command read it); writing would destroy it: \
-                 choose another output name",
+                "it is the input '{}' (this command read it), and writing over the input \
+                 would destroy it. Fix: choose another output name",
                 input.display()
             ),
         ));

@@ -376,6 +376,9 @@ pub struct Reliability {
     pub alpha: String,
     /// The `[psd]` table for `model = "measured_psd"`.
     pub psd: String,
+    /// What `model = "measured_psd"` assumes outside the band the `[psd]` table covers
+    /// (the renderer continues it there; see `crate::statistics::TabulatedPsd`).
+    pub psd_extrapolation: String,
     /// The two-scale tables.
     pub two_scale: String,
     /// Form left in the residual after levelling.

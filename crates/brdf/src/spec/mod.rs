@@ -13,15 +13,18 @@
 //!
 //! | key | models | meaning |
 //! |---|---|---|
-//! | `model` | all | `ggx`, `beckmann`, `smooth`, `ghs_ssa`, `ghs`, `two_scale`, `measured_psd` |
+//! | `model` | all | `ggx`, `beckmann`, `smooth`, `ghs_ssa`, `ghs`, `two_scale`, `measured_psd`, `rayleigh_rice`, `ghs_ssa_aniso`, `ghs_aniso` |
 //! | `metal` / `nk` / `nk_csv` | all | built-in metal, constant `[n, k]`, or a CSV `wavelength_nm,n,k` |
 //! | `fresnel` | all | `conductor` (default) or `one` (R ≡ 1; alias `none`) |
 //! | `alpha`, or `alpha_x` + `alpha_y` | ggx, beckmann | roughness (x along the surface tangent) |
 //! | `alpha_beckmann` | beckmann | used in preference to `alpha` (a fit file serves both models) |
-//! | `sigma_um`, `lc_um`, `gamma` | ghs_ssa, ghs, two_scale | K-correlation σ (µm), Lc (µm), γ |
-//! | `energy` | ghs_ssa, ghs, measured_psd | `raw` (default), `krywonos`, `sigma_rel` |
-//! | `fresnel_angle` | ghs_ssa, ghs, measured_psd | `halfway` (default) or `incident` |
-//! | `psd_csv` | measured_psd | CSV `zeta_rad_per_um,p_um4` |
+//! | `sigma_um`, `lc_um`, `gamma` | ghs_ssa, ghs, two_scale, rayleigh_rice | K-correlation σ (µm), Lc (µm), γ |
+//! | `sigma_um`, `lx_um`, `ly_um`, `angle_deg`, `gamma` | ghs_ssa_aniso, ghs_aniso | anisotropic K-correlation: Lx along the axis at `angle_deg` (from the tangent x towards y; default 0), Ly across it |
+//! | `energy` | ghs_ssa, ghs, measured_psd (the `_aniso` models: `raw` only) | `raw` (default), `krywonos`, `sigma_rel` |
+//! | `fresnel_angle` | ghs_ssa, ghs, measured_psd, `_aniso` | `halfway` (default) or `incident` |
+//! | `polarization` | ghs_ssa, ghs, measured_psd, rayleigh_rice, `_aniso` | `unpolarized` (default), `s`, `p` (incident; both scattered polarisations summed) |
+//! | `polarization_factor` | ghs_ssa, ghs, measured_psd, `_aniso` | `r` (default: scalar Fresnel R) or `q` (Rayleigh–Rice Q, physics.md §13.2) |
+//! | `psd_csv` | measured_psd, rayleigh_rice | CSV `zeta_rad_per_um,p_um4` (rayleigh_rice: in place of the K-correlation keys, which must then not be set) |
 //! | `beta`, `coherent` | two_scale | macro NDF width β; `macro_ndf` (default) or `delta` |
 //! | `include`, `cutoff` | all | a `lustre fit` material file and its two-scale split (resolved by the caller) |
 //!
@@ -66,9 +69,10 @@ use alloc::string::{String, ToString};
 use alloc::vec::Vec;
 
 use crate::statistics::TabulatedPsd;
+use crate::statistics::anisotropic::AnisotropicKc;
 use crate::statistics::kc::KcPsd;
 use crate::wave::two_scale::{CoherentPart, TableResolution, TwoScale, TwoScaleParams};
-use crate::wave::{GhsFull, GhsOptions, GhsSsa};
+use crate::wave::{GhsAnisotropic, GhsFull, GhsOptions, GhsSsa, Polarization, RayleighRice};
 use crate::{
     BrdfError, Bxdf, Distribution, Fresnel, Ior, Metal, MicrofacetConductor, SmoothConductor,
 };
@@ -129,11 +133,17 @@ pub enum ModelKind {
     MeasuredPsd,
     /// Holzschuch–Pacanowski two-scale model.
     TwoScale,
+    /// Rayleigh–Rice (first-order vector perturbation theory), KC or measured PSD.
+    RayleighRice,
+    /// GHS smooth-surface approximation of an anisotropic K-correlation surface.
+    GhsSsaAniso,
+    /// Full GHS of an anisotropic K-correlation surface.
+    GhsAniso,
 }
 
 impl ModelKind {
     /// Every model, in the order the documentation lists them.
-    pub const ALL: [ModelKind; 7] = [
+    pub const ALL: [ModelKind; 10] = [
         ModelKind::Ggx,
         ModelKind::Beckmann,
         ModelKind::Smooth,
@@ -141,6 +151,9 @@ impl ModelKind {
         ModelKind::Ghs,
         ModelKind::TwoScale,
         ModelKind::MeasuredPsd,
+        ModelKind::RayleighRice,
+        ModelKind::GhsSsaAniso,
+        ModelKind::GhsAniso,
     ];
 
     /// The name used in files.
@@ -153,6 +166,9 @@ impl ModelKind {
             ModelKind::Ghs => "ghs",
             ModelKind::MeasuredPsd => "measured_psd",
             ModelKind::TwoScale => "two_scale",
+            ModelKind::RayleighRice => "rayleigh_rice",
+            ModelKind::GhsSsaAniso => "ghs_ssa_aniso",
+            ModelKind::GhsAniso => "ghs_aniso",
         }
     }
 
@@ -201,6 +217,50 @@ impl KcSpec {
     pub fn psd(&self) -> Result<KcPsd, BrdfError> {
         KcPsd::new(self.sigma_um, self.lc_um, self.gamma)
     }
+}
+
+/// Anisotropic K-correlation statistics (physics.md §15), validated as
+/// [`AnisotropicKc::new`]: σ ∈ [0, 10] µm, Lx, Ly ∈ [0.03, 1000] µm,
+/// γ ∈ [1.001, 100].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AnisoSpec {
+    /// rms height σ, µm.
+    pub sigma_um: f64,
+    /// Correlation length along the axis at `angle_deg`, µm.
+    pub lx_um: f64,
+    /// Correlation length across it, µm.
+    pub ly_um: f64,
+    /// Axis angle from the tangent x towards y, degrees.
+    pub angle_deg: f64,
+    /// Spectral exponent γ.
+    pub gamma: f64,
+}
+
+impl AnisoSpec {
+    /// The PSD, or the range error naming the parameter.
+    pub fn psd(&self) -> Result<AnisotropicKc, BrdfError> {
+        AnisotropicKc::new(
+            self.sigma_um,
+            self.lx_um,
+            self.ly_um,
+            self.angle_deg.to_radians(),
+            self.gamma,
+        )
+    }
+}
+
+/// The PSD of a Rayleigh–Rice material: K-correlation or tabulated.
+#[derive(Clone, Debug, PartialEq)]
+pub enum RrSurface {
+    /// K-correlation statistics.
+    Kc(KcSpec),
+    /// A tabulated (measured) PSD.
+    Measured {
+        /// Radial frequencies ζ, rad/µm, strictly increasing.
+        zeta_rad_per_um: Vec<f64>,
+        /// PSD values P(ζ), µm⁴.
+        psd_um4: Vec<f64>,
+    },
 }
 
 /// A model and its parameters.
@@ -254,6 +314,27 @@ pub enum ModelSpec {
         /// Where the coherent part goes.
         coherent: CoherentPart,
     },
+    /// Rayleigh–Rice for a conductor.
+    RayleighRice {
+        /// The surface PSD.
+        surface: RrSurface,
+        /// Incident polarisation.
+        polarization: Polarization,
+    },
+    /// GHS smooth-surface approximation, anisotropic K-correlation surface.
+    GhsSsaAniso {
+        /// The surface.
+        surface: AnisoSpec,
+        /// Options (energy `raw` only).
+        options: GhsOptions,
+    },
+    /// Full GHS, anisotropic K-correlation surface.
+    GhsAniso {
+        /// The surface.
+        surface: AnisoSpec,
+        /// Options (energy `raw` only).
+        options: GhsOptions,
+    },
 }
 
 impl ModelSpec {
@@ -267,6 +348,9 @@ impl ModelSpec {
             ModelSpec::Ghs { .. } => ModelKind::Ghs,
             ModelSpec::MeasuredPsd { .. } => ModelKind::MeasuredPsd,
             ModelSpec::TwoScale { .. } => ModelKind::TwoScale,
+            ModelSpec::RayleighRice { .. } => ModelKind::RayleighRice,
+            ModelSpec::GhsSsaAniso { .. } => ModelKind::GhsSsaAniso,
+            ModelSpec::GhsAniso { .. } => ModelKind::GhsAniso,
         }
     }
 
@@ -275,7 +359,11 @@ impl ModelSpec {
         match self {
             ModelSpec::GhsSsa { surface, .. }
             | ModelSpec::Ghs { surface, .. }
-            | ModelSpec::TwoScale { surface, .. } => Some(*surface),
+            | ModelSpec::TwoScale { surface, .. }
+            | ModelSpec::RayleighRice {
+                surface: RrSurface::Kc(surface),
+                ..
+            } => Some(*surface),
             _ => None,
         }
     }
@@ -361,6 +449,42 @@ impl MaterialSpec {
                 crate::statistics::epd::ExponentialNdf::new(*beta)?;
                 surface.psd()?;
             }
+            ModelSpec::RayleighRice { surface, .. } => match surface {
+                RrSurface::Kc(kc) => {
+                    kc.psd()?;
+                }
+                RrSurface::Measured {
+                    zeta_rad_per_um,
+                    psd_um4,
+                } => {
+                    TabulatedPsd::new(zeta_rad_per_um, psd_um4)
+                        .map_err(|e| SpecError::new("psd", e.to_string()))?;
+                }
+            },
+            ModelSpec::GhsSsaAniso { surface, options }
+            | ModelSpec::GhsAniso { surface, options } => {
+                let psd = surface.psd()?;
+                if options.energy != crate::wave::Energy::Raw {
+                    return Err(SpecError::new(
+                        "energy",
+                        "the anisotropic models take `energy = \"raw\"` only (the krywonos and \
+                         sigma_rel tables are over θi and λ; an anisotropic lobe also depends on \
+                         the incidence azimuth)",
+                    ));
+                }
+                if self.model.kind() == ModelKind::GhsAniso
+                    && psd.gamma() < crate::statistics::kc::GAMMA_MIN_FULL
+                {
+                    return Err(SpecError::new(
+                        "gamma",
+                        format!(
+                            "{} is below {} for the full GHS; use ghs_ssa_aniso",
+                            psd.gamma(),
+                            crate::statistics::kc::GAMMA_MIN_FULL
+                        ),
+                    ));
+                }
+            }
         }
         Ok(())
     }
@@ -407,6 +531,34 @@ impl MaterialSpec {
                 coherent: *coherent,
                 resolution: TableResolution::default(),
             })?),
+            ModelSpec::RayleighRice {
+                surface,
+                polarization,
+            } => match surface {
+                RrSurface::Kc(kc) => Box::new(RayleighRice::with_polarization(
+                    kc.psd()?,
+                    fresnel,
+                    *polarization,
+                )?),
+                RrSurface::Measured {
+                    zeta_rad_per_um,
+                    psd_um4,
+                } => {
+                    let table = TabulatedPsd::new(zeta_rad_per_um, psd_um4)
+                        .map_err(|e| SpecError::new("psd", e.to_string()))?;
+                    Box::new(RayleighRice::with_polarization(
+                        table,
+                        fresnel,
+                        *polarization,
+                    )?)
+                }
+            },
+            ModelSpec::GhsSsaAniso { surface, options } => {
+                Box::new(GhsAnisotropic::ssa(surface.psd()?, fresnel, *options)?)
+            }
+            ModelSpec::GhsAniso { surface, options } => {
+                Box::new(GhsAnisotropic::full(surface.psd()?, fresnel, *options)?)
+            }
         })
     }
 }
@@ -443,6 +595,15 @@ impl MaterialSpec {
             ModelSpec::MeasuredPsd {
                 zeta_rad_per_um, ..
             } => zeta_rad_per_um.first().copied().unwrap_or(1.0) / k,
+            ModelSpec::RayleighRice { surface, .. } => match surface {
+                RrSurface::Kc(kc) => wave(kc),
+                RrSurface::Measured {
+                    zeta_rad_per_um, ..
+                } => zeta_rad_per_um.first().copied().unwrap_or(1.0) / k,
+            },
+            ModelSpec::GhsSsaAniso { surface, .. } | ModelSpec::GhsAniso { surface, .. } => {
+                1.0 / (k * surface.lx_um.max(surface.ly_um))
+            }
             ModelSpec::Smooth => 1e-3,
         };
         if rho.is_finite() && rho > 0.0 {
@@ -476,7 +637,7 @@ pub use file::MaterialFile;
 #[cfg(feature = "serde")]
 mod desc {
     use super::*;
-    use crate::wave::{Energy, FresnelAngle};
+    use crate::wave::{Energy, FresnelAngle, PolarizationFactor};
 
     /// `fresnel = …`: a conductor (default) or R ≡ 1.
     #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
@@ -541,6 +702,21 @@ mod desc {
         /// GHS Fresnel angle.
         #[serde(skip_serializing_if = "Option::is_none")]
         pub fresnel_angle: Option<FresnelAngle>,
+        /// Incident polarisation (`unpolarized`, `s`, `p`).
+        #[serde(skip_serializing_if = "Option::is_none")]
+        pub polarization: Option<Polarization>,
+        /// GHS reflectance factor of the scattered part (`r` or `q`).
+        #[serde(skip_serializing_if = "Option::is_none")]
+        pub polarization_factor: Option<PolarizationFactor>,
+        /// Anisotropic KC correlation length along the axis, µm.
+        #[serde(skip_serializing_if = "Option::is_none")]
+        pub lx_um: Option<f64>,
+        /// Anisotropic KC correlation length across the axis, µm.
+        #[serde(skip_serializing_if = "Option::is_none")]
+        pub ly_um: Option<f64>,
+        /// Anisotropic KC axis angle from the tangent x towards y, degrees.
+        #[serde(skip_serializing_if = "Option::is_none")]
+        pub angle_deg: Option<f64>,
         /// A CSV `zeta_rad_per_um,p_um4` (resolved by the caller).
         #[serde(skip_serializing_if = "Option::is_none")]
         pub psd_csv: Option<String>,
@@ -645,7 +821,12 @@ mod desc {
                 fresnel_angle,
                 psd_csv,
                 beta,
-                coherent
+                coherent,
+                polarization,
+                polarization_factor,
+                lx_um,
+                ly_um,
+                angle_deg
             );
         }
 
@@ -689,7 +870,12 @@ mod desc {
                 fresnel_angle,
                 psd_csv,
                 beta,
-                coherent
+                coherent,
+                polarization,
+                polarization_factor,
+                lx_um,
+                ly_um,
+                angle_deg
             )
         }
 
@@ -762,7 +948,12 @@ mod desc {
                 fresnel_angle,
                 psd_csv,
                 beta,
-                coherent
+                coherent,
+                polarization,
+                polarization_factor,
+                lx_um,
+                ly_um,
+                angle_deg
             );
             k
         }
@@ -801,6 +992,24 @@ mod desc {
                 )
             })?;
             self.check_used(model)?;
+            if model == ModelKind::RayleighRice && merged.psd_csv.is_some() {
+                // The table is the whole PSD (σ included): K-correlation keys set here
+                // would be ignored (included ones are, as for measured_psd).
+                let kc = [
+                    ("sigma_um", self.sigma_um.is_some()),
+                    ("lc_um", self.lc_um.is_some()),
+                    ("gamma", self.gamma.is_some()),
+                ];
+                if let Some((key, _)) = kc.iter().find(|(_, set)| *set) {
+                    return Err(SpecError::new(
+                        key,
+                        format!(
+                            "`psd_csv` gives the whole PSD (σ included) and `{key}` would be \
+                             ignored; give the table or `sigma_um`, `lc_um`, `gamma`"
+                        ),
+                    ));
+                }
+            }
             if self.cutoff.is_some() && model != ModelKind::TwoScale {
                 return Err(SpecError::new(
                     "cutoff",
@@ -816,11 +1025,37 @@ mod desc {
                 ModelKind::Ggx => &["alpha", "alpha_x", "alpha_y"],
                 ModelKind::Beckmann => &["alpha", "alpha_x", "alpha_y", "alpha_beckmann"],
                 ModelKind::Smooth => &[],
-                ModelKind::GhsSsa | ModelKind::Ghs => {
-                    &["sigma_um", "lc_um", "gamma", "energy", "fresnel_angle"]
-                }
-                ModelKind::MeasuredPsd => &["psd_csv", "energy", "fresnel_angle"],
+                ModelKind::GhsSsa | ModelKind::Ghs => &[
+                    "sigma_um",
+                    "lc_um",
+                    "gamma",
+                    "energy",
+                    "fresnel_angle",
+                    "polarization",
+                    "polarization_factor",
+                ],
+                ModelKind::MeasuredPsd => &[
+                    "psd_csv",
+                    "energy",
+                    "fresnel_angle",
+                    "polarization",
+                    "polarization_factor",
+                ],
                 ModelKind::TwoScale => &["sigma_um", "lc_um", "gamma", "beta", "coherent"],
+                ModelKind::RayleighRice => {
+                    &["sigma_um", "lc_um", "gamma", "psd_csv", "polarization"]
+                }
+                ModelKind::GhsSsaAniso | ModelKind::GhsAniso => &[
+                    "sigma_um",
+                    "lx_um",
+                    "ly_um",
+                    "angle_deg",
+                    "gamma",
+                    "energy",
+                    "fresnel_angle",
+                    "polarization",
+                    "polarization_factor",
+                ],
             }
         }
 
@@ -860,6 +1095,17 @@ mod desc {
             let options = GhsOptions {
                 energy: self.energy.unwrap_or_default(),
                 fresnel_angle: self.fresnel_angle.unwrap_or_default(),
+                polarization: self.polarization.unwrap_or_default(),
+                polarization_factor: self.polarization_factor.unwrap_or_default(),
+            };
+            let aniso = |m| -> Result<AnisoSpec, SpecError> {
+                Ok(AnisoSpec {
+                    sigma_um: need(self.sigma_um, "sigma_um", m)?,
+                    lx_um: need(self.lx_um, "lx_um", m)?,
+                    ly_um: need(self.ly_um, "ly_um", m)?,
+                    angle_deg: self.angle_deg.unwrap_or(0.0),
+                    gamma: need(self.gamma, "gamma", m)?,
+                })
             };
             let spec = match model {
                 ModelKind::Ggx => {
@@ -901,6 +1147,32 @@ mod desc {
                     beta: need(self.beta, "beta", model)?,
                     surface: kc(model)?,
                     coherent: self.coherent.unwrap_or_default(),
+                },
+                ModelKind::RayleighRice => {
+                    let surface = match self.psd_csv.as_deref() {
+                        Some(path) => {
+                            let (zeta_rad_per_um, psd_um4) = files
+                                .psd_table(path)
+                                .map_err(|e| SpecError::new("psd_csv", e))?;
+                            RrSurface::Measured {
+                                zeta_rad_per_um,
+                                psd_um4,
+                            }
+                        }
+                        None => RrSurface::Kc(kc(model)?),
+                    };
+                    ModelSpec::RayleighRice {
+                        surface,
+                        polarization: options.polarization,
+                    }
+                }
+                ModelKind::GhsSsaAniso => ModelSpec::GhsSsaAniso {
+                    surface: aniso(model)?,
+                    options,
+                },
+                ModelKind::GhsAniso => ModelSpec::GhsAniso {
+                    surface: aniso(model)?,
+                    options,
                 },
             };
             let spec = MaterialSpec {
@@ -1002,6 +1274,8 @@ mod desc {
             let set_opts = |d: &mut MaterialDesc, o: &GhsOptions| {
                 d.energy = Some(o.energy);
                 d.fresnel_angle = Some(o.fresnel_angle);
+                d.polarization = Some(o.polarization);
+                d.polarization_factor = Some(o.polarization_factor);
             };
             match &self.model {
                 ModelSpec::Ggx { alpha_x, alpha_y } | ModelSpec::Beckmann { alpha_x, alpha_y } => {
@@ -1027,6 +1301,24 @@ mod desc {
                     set_kc(&mut d, surface);
                     d.coherent = Some(*coherent);
                 }
+                ModelSpec::RayleighRice {
+                    surface,
+                    polarization,
+                } => {
+                    if let RrSurface::Kc(kc) = surface {
+                        set_kc(&mut d, kc);
+                    }
+                    d.polarization = Some(*polarization);
+                }
+                ModelSpec::GhsSsaAniso { surface, options }
+                | ModelSpec::GhsAniso { surface, options } => {
+                    d.sigma_um = Some(surface.sigma_um);
+                    d.lx_um = Some(surface.lx_um);
+                    d.ly_um = Some(surface.ly_um);
+                    d.angle_deg = Some(surface.angle_deg);
+                    d.gamma = Some(surface.gamma);
+                    set_opts(&mut d, options);
+                }
             }
             d
         }
@@ -1049,6 +1341,13 @@ mod tests {
             .iter()
             .map(|z| 0.01 / libm::pow(1.0 + 4.0 * z * z, 2.0))
             .collect();
+        let aniso = AnisoSpec {
+            sigma_um: 0.1,
+            lx_um: 0.5,
+            ly_um: 4.0,
+            angle_deg: 30.0,
+            gamma: 2.5,
+        };
         let specs = [
             ModelSpec::Ggx {
                 alpha_x: 0.1,
@@ -1068,14 +1367,33 @@ mod tests {
                 options: GhsOptions::default(),
             },
             ModelSpec::MeasuredPsd {
-                zeta_rad_per_um: zeta,
-                psd_um4: p,
+                zeta_rad_per_um: zeta.clone(),
+                psd_um4: p.clone(),
                 options: GhsOptions::default(),
             },
             ModelSpec::TwoScale {
                 beta: 0.05,
                 surface: kc,
                 coherent: CoherentPart::MacroNdf,
+            },
+            ModelSpec::RayleighRice {
+                surface: RrSurface::Kc(kc),
+                polarization: Polarization::S,
+            },
+            ModelSpec::RayleighRice {
+                surface: RrSurface::Measured {
+                    zeta_rad_per_um: zeta.clone(),
+                    psd_um4: p.clone(),
+                },
+                polarization: Polarization::Unpolarized,
+            },
+            ModelSpec::GhsSsaAniso {
+                surface: aniso,
+                options: GhsOptions::default(),
+            },
+            ModelSpec::GhsAniso {
+                surface: aniso,
+                options: GhsOptions::default(),
             },
         ];
         for (spec, kind) in specs.into_iter().zip([
@@ -1086,6 +1404,10 @@ mod tests {
             ModelKind::Ghs,
             ModelKind::MeasuredPsd,
             ModelKind::TwoScale,
+            ModelKind::RayleighRice,
+            ModelKind::RayleighRice,
+            ModelKind::GhsSsaAniso,
+            ModelKind::GhsAniso,
         ]) {
             assert_eq!(spec.kind(), kind);
             let m = MaterialSpec {
@@ -1139,7 +1461,8 @@ mod tests {
                     },
                     options: GhsOptions {
                         energy: Energy::SigmaRel,
-                        fresnel_angle: FresnelAngle::Incident
+                        fresnel_angle: FresnelAngle::Incident,
+                        ..GhsOptions::default()
                     }
                 }
             );
@@ -1155,6 +1478,77 @@ mod tests {
                 d.into_spec(&mut Files).unwrap().fresnel,
                 FresnelSpec::Table(_)
             ));
+        }
+
+        #[test]
+        fn polarisation_and_anisotropy_keys_parse_and_round_trip() {
+            use crate::wave::{Polarization, PolarizationFactor};
+            let cases = [
+                r#"{"model": "rayleigh_rice", "metal": "au", "sigma_um": 0.01, "lc_um": 2,
+                    "gamma": 3, "polarization": "s"}"#,
+                r#"{"model": "ghs", "metal": "al", "sigma_um": 0.1, "lc_um": 2, "gamma": 2.5,
+                    "polarization": "p", "polarization_factor": "q"}"#,
+                r#"{"model": "ghs_ssa", "metal": "cu", "sigma_um": 0.1, "lc_um": 2,
+                    "gamma": 2.5, "polarization": "unpolarised"}"#,
+                r#"{"model": "ghs_aniso", "metal": "cu", "sigma_um": 0.05, "lx_um": 0.5,
+                    "ly_um": 5, "angle_deg": 30, "gamma": 2.5, "polarization_factor": "q"}"#,
+                r#"{"model": "ghs_ssa_aniso", "fresnel": "one", "sigma_um": 0.05,
+                    "lx_um": 0.5, "ly_um": 5, "gamma": 1.5}"#,
+            ];
+            for json in cases {
+                let s = desc(json).unwrap().into_spec(&mut NoFiles).unwrap();
+                assert_eq!(s.to_desc().into_spec(&mut NoFiles).unwrap(), s, "{json}");
+                let m = s.build().unwrap();
+                let wi = crate::frame::spherical(0.4, 0.0);
+                let wo = crate::frame::spherical(0.45, 3.0);
+                assert!(m.eval(wi, wo, 550.0) > 0.0, "{json}");
+            }
+            let s = desc(cases[1]).unwrap().into_spec(&mut NoFiles).unwrap();
+            let ModelSpec::Ghs { options, .. } = s.model else {
+                panic!("{:?}", s.model)
+            };
+            assert_eq!(options.polarization, Polarization::P);
+            assert_eq!(options.polarization_factor, PolarizationFactor::Q);
+        }
+
+        #[test]
+        fn polarisation_and_anisotropy_errors_name_the_key() {
+            for (json, field) in [
+                (
+                    r#"{"model": "ghs_aniso", "metal": "au", "sigma_um": 0.1, "lx_um": 1,
+                        "ly_um": 2, "gamma": 3, "energy": "krywonos"}"#,
+                    "energy",
+                ),
+                (
+                    r#"{"model": "ghs_aniso", "metal": "au", "sigma_um": 0.1, "ly_um": 2,
+                        "gamma": 3}"#,
+                    "lx_um",
+                ),
+                (
+                    r#"{"model": "ghs_aniso", "metal": "au", "sigma_um": 0.1, "lx_um": 1,
+                        "ly_um": 2, "gamma": 1.02}"#,
+                    "gamma",
+                ),
+                (
+                    r#"{"model": "rayleigh_rice", "metal": "au", "sigma_um": 0.1, "lc_um": 1,
+                        "gamma": 3, "polarization_factor": "q"}"#,
+                    "polarization_factor",
+                ),
+                (
+                    r#"{"model": "rayleigh_rice", "metal": "au", "psd_csv": "p.csv",
+                        "sigma_um": 0.1}"#,
+                    "sigma_um",
+                ),
+                (
+                    r#"{"model": "ggx", "metal": "au", "alpha": 0.1, "lx_um": 1}"#,
+                    "lx_um",
+                ),
+            ] {
+                let e = desc(json).unwrap().into_spec(&mut NoFiles).unwrap_err();
+                assert_eq!(e.field, field, "{json}: {e}");
+            }
+            let e = desc(r#"{"model": "ghs", "polarization": "circular"}"#).unwrap_err();
+            assert!(e.contains("unpolarized") && e.contains("circular"), "{e}");
         }
 
         #[test]

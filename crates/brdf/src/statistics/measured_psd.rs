@@ -1,10 +1,13 @@
 //! A measured, tabulated isotropic PSD (as `fit` produces) driving the GHS
 //! models in place of a K-correlation fit.
 //!
-//! P(ζ) is interpolated log-log between the samples, held flat below the
-//! first sample (the low-frequency roll-off of a finite surface) and
-//! extended beyond the last one by the power law of the last segment, which
-//! must fall faster than ζ⁻² so that σ² = ∫P d²ζ is finite. Radial sampling
+//! P(ζ) is interpolated log-log between the samples. Outside the band they
+//! cover it is continued, by assumption, with P and its log-log slope
+//! continuous: below the first sample by the K-correlation roll-off
+//! (1 + (ζ/ζ_c)²)^{−β} with the table's fitted tail exponent, matched to the
+//! first segment (see `low_rolloff`),
+//! beyond the last one by the power law of the last segment, which must fall
+//! faster than ζ⁻² so that σ² = ∫P d²ζ is finite. Radial sampling
 //! inverts the exact CDF of that piecewise power law. For the full GHS the
 //! covariance M(x) = C(r)/σ² is computed by an FFTLog Hankel transform of the
 //! table (see [`TabulatedCorrelation`]).
@@ -41,6 +44,10 @@ pub struct TabulatedPsd {
     ln_p: Vec<f64>,
     /// d ln P/d ln ζ beyond the last sample (< −2).
     slope_hi: f64,
+    /// The roll-off below the first sample ζ₀: P = P₀[(1 + t v)/(1 + t)]^{−β},
+    /// v = (ζ/ζ₀)², as (t, β); t = 0 is a flat continuation.
+    lo_t: f64,
+    lo_beta: f64,
     sigma2: f64,
     /// Normalised radial mass inside each ζ_j (index 0: the flat disk).
     cum: Vec<f64>,
@@ -98,9 +105,13 @@ impl TabulatedPsd {
                 row: Some(n - 1),
             });
         }
+        let (lo_t, lo_beta) = low_rolloff(
+            (ln_p[1] - ln_p[0]) / (ln_zeta[1] - ln_zeta[0]),
+            fitted_tail_slope(&ln_zeta, &ln_p, slope_hi),
+        );
         let mut cum = Vec::with_capacity(n + 1);
         let z0 = zeta_rad_per_um[0];
-        let mut acc = PI * z0 * z0 * psd_um4[0];
+        let mut acc = PI * z0 * z0 * psd_um4[0] * rolloff_mass(lo_t, lo_beta, 1.0);
         cum.push(acc);
         for j in 0..n - 1 {
             acc += seg_mass(ln_zeta[j], ln_p[j], ln_zeta[j + 1], ln_p[j + 1]);
@@ -123,6 +134,8 @@ impl TabulatedPsd {
             ln_zeta,
             ln_p,
             slope_hi,
+            lo_t,
+            lo_beta,
             sigma2,
             cum,
             length: 1.0,
@@ -147,12 +160,13 @@ impl TabulatedPsd {
     /// P(ζ), µm⁴.
     pub fn psd(&self, zeta: f64) -> f64 {
         if !(zeta > 0.0) {
-            return crate::numerics::math::exp(self.ln_p[0]);
+            return self.rolloff(0.0);
         }
         let lz = crate::numerics::math::ln(zeta);
         let n = self.ln_zeta.len();
         if lz <= self.ln_zeta[0] {
-            return crate::numerics::math::exp(self.ln_p[0]);
+            let z0 = crate::numerics::math::exp(self.ln_zeta[0]);
+            return self.rolloff((zeta / z0) * (zeta / z0));
         }
         if lz >= self.ln_zeta[n - 1] {
             return crate::numerics::math::exp(
@@ -192,7 +206,9 @@ impl TabulatedPsd {
         let lz = crate::numerics::math::ln(zeta);
         if lz <= self.ln_zeta[0] {
             let z0 = crate::numerics::math::exp(self.ln_zeta[0]);
-            return self.cum[0] * (zeta / z0) * (zeta / z0);
+            let v = (zeta / z0) * (zeta / z0);
+            return self.cum[0] * rolloff_mass(self.lo_t, self.lo_beta, v)
+                / rolloff_mass(self.lo_t, self.lo_beta, 1.0);
         }
         if lz >= self.ln_zeta[n - 1] {
             let zl = crate::numerics::math::exp(self.ln_zeta[n - 1]);
@@ -230,7 +246,9 @@ impl TabulatedPsd {
         }
         let n = self.ln_zeta.len();
         if xi < self.cum[0] {
-            return crate::numerics::math::exp(self.ln_zeta[0]) * libm::sqrt(xi / self.cum[0]);
+            let target = rolloff_mass(self.lo_t, self.lo_beta, 1.0) * xi / self.cum[0];
+            let v = rolloff_mass_inverse(self.lo_t, self.lo_beta, target).clamp(0.0, 1.0);
+            return crate::numerics::math::exp(self.ln_zeta[0]) * libm::sqrt(v);
         }
         if xi >= self.cum[n - 1] {
             let zl = crate::numerics::math::exp(self.ln_zeta[n - 1]);
@@ -270,6 +288,139 @@ impl TabulatedPsd {
     pub fn tail_nu(&self) -> f64 {
         0.5 * (-self.slope_hi - 2.0)
     }
+
+    /// The band the samples cover, (first ζ, last ζ) in rad/µm: outside it
+    /// P is the continuation of [`TabulatedPsd`]'s documentation, assumed
+    /// rather than measured.
+    pub fn band_rad_per_um(&self) -> (f64, f64) {
+        let n = self.ln_zeta.len();
+        (
+            crate::numerics::math::exp(self.ln_zeta[0]),
+            crate::numerics::math::exp(self.ln_zeta[n - 1]),
+        )
+    }
+
+    /// The continuation below the band: (ζ_c, β) of P ∝ (1 + (ζ/ζ_c)²)^{−β}
+    /// (ζ_c in rad/µm; +∞ when the table starts flat or rising and is
+    /// continued flat).
+    pub fn low_rolloff(&self) -> (f64, f64) {
+        let z0 = crate::numerics::math::exp(self.ln_zeta[0]);
+        if self.lo_t > 0.0 {
+            (z0 / libm::sqrt(self.lo_t), self.lo_beta)
+        } else {
+            (f64::INFINITY, self.lo_beta)
+        }
+    }
+
+    /// The log-log slope d ln P/d ln ζ of the continuation above the band.
+    pub fn high_slope(&self) -> f64 {
+        self.slope_hi
+    }
+
+    /// P at v = (ζ/ζ₀)² ≤ 1, below the first sample.
+    fn rolloff(&self, v: f64) -> f64 {
+        let p0 = crate::numerics::math::exp(self.ln_p[0]);
+        if !(self.lo_t > 0.0) {
+            return p0;
+        }
+        let t = self.lo_t;
+        p0 * crate::numerics::math::exp(-self.lo_beta * (libm::log1p(t * v) - libm::log1p(t)))
+    }
+}
+
+/// The least-squares log-log slope of the top third of a table (in ln ζ; at
+/// least its last two samples): its fitted high-frequency tail, less
+/// sensitive than the last segment to a noise floor trimmed at the end.
+/// `slope_hi` where the fit does not fall faster than ζ⁻² (then no
+/// K-correlation has that tail).
+fn fitted_tail_slope(ln_zeta: &[f64], ln_p: &[f64], slope_hi: f64) -> f64 {
+    let n = ln_zeta.len();
+    let from = ln_zeta[0] + (ln_zeta[n - 1] - ln_zeta[0]) * 2.0 / 3.0;
+    let first = ln_zeta
+        .iter()
+        .position(|&z| z >= from)
+        .unwrap_or(0)
+        .min(n - 2);
+    let (x, y) = (&ln_zeta[first..], &ln_p[first..]);
+    let m = x.len() as f64;
+    let (mx, my) = (x.iter().sum::<f64>() / m, y.iter().sum::<f64>() / m);
+    let (mut sxx, mut sxy) = (0.0, 0.0);
+    for (a, b) in x.iter().zip(y) {
+        sxx += (a - mx) * (a - mx);
+        sxy += (a - mx) * (b - my);
+    }
+    let s = sxy / sxx;
+    if s < -2.0 && s.is_finite() {
+        s
+    } else {
+        slope_hi
+    }
+}
+
+/// The roll-off below a table's first sample ζ₀, (t, β) of
+/// P = P₀[(1 + t(ζ/ζ₀)²)/(1 + t)]^{−β}: the K-correlation shape, flat at
+/// ζ → 0, with the exponent β = max(−s_t/2, −s₀) (the K-correlation whose
+/// tail s_t is the table's fitted one, [`fitted_tail_slope`], steepened if
+/// the first segment is steeper still) and t such that the log-slope at ζ₀, −2βt/(1 + t), is the
+/// first segment's s₀. P and d ln P/d ln ζ are continuous at ζ₀: a table
+/// held flat below ζ₀ has a kink there whose slowly decaying, oscillating
+/// covariance the transforms of the full GHS could not resolve (the table
+/// and the direct transform disagreed by 7–69 %). A first segment that is
+/// flat or rising is continued flat (t = 0), and so is one so steep that
+/// the roll-off would rise more than [`ROLLOFF_RISE_MAX`] above P₀ (a C¹
+/// continuation of a ζ^{s₀} segment to a plateau rises by 2^{−s₀} when
+/// β = −s₀): there the table's low end is not a spectrum flattening out,
+/// and inventing three decades of power below it would be worse than the
+/// kink.
+fn low_rolloff(s0: f64, tail_slope: f64) -> (f64, f64) {
+    let beta = (-0.5 * tail_slope).max(-s0);
+    if !(s0 < 0.0) || !(beta > 0.0) {
+        return (0.0, beta.max(1.0));
+    }
+    let t = -s0 / (2.0 * beta + s0);
+    if beta * libm::log1p(t) > crate::numerics::math::ln(ROLLOFF_RISE_MAX) {
+        return (0.0, beta);
+    }
+    (t, beta)
+}
+
+/// Largest factor by which the continuation below a table may rise above
+/// its first sample (reached for a first segment near ζ^{−10}).
+pub const ROLLOFF_RISE_MAX: f64 = 1e3;
+
+/// ∫₀^v [(1 + t v')/(1 + t)]^{−β} dv' (the roll-off's mass inside v =
+/// (ζ/ζ₀)², in units of πζ₀²P₀), without cancellation for small t.
+fn rolloff_mass(t: f64, beta: f64, v: f64) -> f64 {
+    if !(t > 0.0) {
+        return v;
+    }
+    let scale = crate::numerics::math::exp(beta * libm::log1p(t));
+    let x = t * v;
+    let l = libm::log1p(x);
+    let raw = if libm::fabs(beta - 1.0) < 1e-12 {
+        l / t
+    } else {
+        -libm::expm1((1.0 - beta) * l) / (t * (beta - 1.0))
+    };
+    scale * raw
+}
+
+/// v with [`rolloff_mass`](t, β, v) = m.
+fn rolloff_mass_inverse(t: f64, beta: f64, m: f64) -> f64 {
+    if !(t > 0.0) {
+        return m;
+    }
+    let raw = m / crate::numerics::math::exp(beta * libm::log1p(t));
+    let x = if libm::fabs(beta - 1.0) < 1e-12 {
+        libm::expm1(raw * t)
+    } else {
+        let arg = -raw * t * (beta - 1.0);
+        if !(arg > -1.0) {
+            return f64::INFINITY;
+        }
+        libm::expm1(libm::log1p(arg) / (1.0 - beta))
+    };
+    x / t
 }
 
 /// 2π ∫ P ζ dζ over a log-log-linear segment.

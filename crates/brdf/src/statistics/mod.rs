@@ -1,6 +1,6 @@
 //! Surface statistics the wave-optical models are driven by: the
 //! K-correlation PSD ([`KcPsd`], with its validated domain) and its Matérn
-//! correlation ([`matern`]), a measured, tabulated PSD ([`TabulatedPsd`],
+//! correlation ([`matern`]), its anisotropic stretch ([`AnisotropicKc`]), a measured, tabulated PSD ([`TabulatedPsd`],
 //! feature `alloc`), and the exponential NDF of the two-scale model's macro
 //! surface ([`epd`]). [`RadialPsd`] is what the GHS models need of a PSD,
 //! [`Correlation`](crate::numerics::hankel::Correlation) what the Hankel
@@ -10,12 +10,14 @@
 // the out-of-range values, which `x <= 0.0` would let through.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
+pub mod anisotropic;
 pub mod epd;
 pub mod kc;
 pub mod matern;
 #[cfg(feature = "alloc")]
 pub mod measured_psd;
 
+pub use anisotropic::AnisotropicKc;
 pub use kc::KcPsd;
 #[cfg(feature = "alloc")]
 pub use measured_psd::TabulatedPsd;

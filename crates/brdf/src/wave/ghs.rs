@@ -155,7 +155,9 @@ impl<P: TableSource> GhsFull<P> {
             |c, th, lam| {
                 let wi = frame::spherical(th, 0.0);
                 let kl = wavenumber(lam) * c.length;
-                hemispherical_integral(wi, 1.0 / kl, |o| model.raw_lobe(c, wi, o, lam))
+                hemispherical_integral(wi, 1.0 / kl, |o| {
+                    model.raw_lobe(c, wi, o, lam) * c.r_scatter(wi, o, lam)
+                })
             },
         );
         model.common = common;
@@ -250,7 +252,7 @@ impl<P: TableSource> GhsFull<P> {
     /// Draws u from the glossy proposal with two uniforms (`v` selects the
     /// component and is reused).
     #[inline]
-    fn proposal_sample(&self, gs: f64, v: f64, xi: f64) -> f64 {
+    pub(crate) fn proposal_sample(&self, gs: f64, v: f64, xi: f64) -> f64 {
         if gs < G_MIN || v < DEFENSIVE_WEIGHT {
             return self.psd.sample_u(xi);
         }

@@ -11,6 +11,7 @@
 use glam::DVec3;
 
 use super::energy::{Energy, EnergyTable, GhsOptions, hemispherical_integral, in_disk_fraction};
+use super::polarization::{Medium, Polarization, PolarizationFactor};
 use super::{Geometry, direction_from_u, wavenumber};
 use crate::fresnel::Fresnel;
 use crate::model::{Bxdf, BxdfSample, Specular, WAVELENGTH_MAX_NM, WAVELENGTH_MIN_NM};
@@ -42,9 +43,11 @@ pub(crate) enum LobeChoice {
 pub(crate) struct GhsCommon {
     pub fresnel: Fresnel,
     pub opts: GhsOptions,
-    /// Krywonos K(θi, λ) or the in-disk fraction σ_rel²/σ² (SigmaRel).
+    /// Krywonos: the raw scattered albedo a_s(θi, λ); SigmaRel: the
+    /// in-disk fraction σ_rel²/σ².
     pub energy_table: Option<EnergyTable>,
-    /// SigmaRel only: factor ≤ 1 that keeps A_s + scattered ≤ 1.
+    /// SigmaRel only: the scattered albedo with σ_rel, from which the factor
+    /// ≤ 1 that keeps A_s + scattered ≤ 1 is formed.
     pub cap_table: Option<EnergyTable>,
     pub sigma: f64,
     pub length: f64,
@@ -62,25 +65,68 @@ impl GhsCommon {
         }
     }
 
-    /// Multiplier of the scattered part (Krywonos K; 1 otherwise).
+    /// Multiplier of the scattered part: Krywonos K = (1 − A_s)/a_s, the
+    /// σ_rel cap min(1, (1 − A_s)/a_s), 1 otherwise.
+    ///
+    /// The tables hold the albedo a_s, and 1 − A_s is formed here exactly:
+    /// near grazing 1 − A_s → 0 as cos²θi while a_s stays finite, so their
+    /// ratio changes far faster than either, and interpolating the ratio
+    /// left the renormalised albedo 2.6 % above 1 at 89°.
     #[inline]
     pub fn scatter_factor(&self, ci: f64, lambda_nm: f64) -> f64 {
+        let loss = |sigma: f64| {
+            let t = 2.0 * wavenumber(lambda_nm) * sigma * ci;
+            -libm::expm1(-t * t)
+        };
         match (self.opts.energy, &self.energy_table, &self.cap_table) {
-            (Energy::Krywonos, Some(t), _) => t.at(ci, lambda_nm).max(0.0),
-            (Energy::SigmaRel, _, Some(c)) => c.at(ci, lambda_nm).clamp(0.0, 1.0),
+            (Energy::Krywonos, Some(t), _) => {
+                let (b, a) = (loss(self.sigma), t.at(ci, lambda_nm));
+                if a > 1e-6 * b { b / a } else { 0.0 }
+            }
+            (Energy::SigmaRel, _, Some(c)) => {
+                let (b, a) = (loss(self.sigma_eff(ci, lambda_nm)), c.at(ci, lambda_nm));
+                if a > b { b / a } else { 1.0 }
+            }
             _ => 1.0,
         }
     }
 
-    /// Fresnel factor of the scattered part.
+    /// Reflectance factor of the scattered part: R at the angle of
+    /// `fresnel_angle`, or the Rayleigh–Rice Q times the obliquity ratio
+    /// 4 cosθi cosθo/(cosθi + cosθo)² (physics.md §13.2), for the incident
+    /// polarisation.
     #[inline]
     pub fn r_scatter(&self, wi: DVec3, wo: DVec3, lambda_nm: f64) -> f64 {
-        match self.opts.fresnel_angle {
-            super::FresnelAngle::Halfway => {
-                let c = libm::sqrt((0.5 * (1.0 + wi.dot(wo))).clamp(0.0, 1.0));
-                self.fresnel.reflectance(c, lambda_nm)
+        let pol = self.opts.polarization;
+        match self.opts.polarization_factor {
+            PolarizationFactor::R => {
+                let c = match self.opts.fresnel_angle {
+                    super::FresnelAngle::Halfway => {
+                        libm::sqrt((0.5 * (1.0 + wi.dot(wo))).clamp(0.0, 1.0))
+                    }
+                    super::FresnelAngle::Incident => wi.z,
+                };
+                self.reflectance(c, lambda_nm)
             }
-            super::FresnelAngle::Incident => self.fresnel.reflectance(wi.z, lambda_nm),
+            PolarizationFactor::Q => {
+                let (ci, co) = (wi.z.max(0.0), wo.z.max(0.0));
+                let sum = ci + co;
+                if !(sum > 0.0) {
+                    return 0.0;
+                }
+                let q = Medium::of(&self.fresnel, lambda_nm).q_factor(wi, wo, pol);
+                q * (4.0 * ci * co / (sum * sum))
+            }
+        }
+    }
+
+    /// Fresnel reflectance of the incident polarisation at incidence cosine
+    /// `c` (the unpolarised one through [`Fresnel::reflectance`]).
+    #[inline]
+    pub fn reflectance(&self, c: f64, lambda_nm: f64) -> f64 {
+        match self.opts.polarization {
+            Polarization::Unpolarized => self.fresnel.reflectance(c, lambda_nm),
+            pol => Medium::of(&self.fresnel, lambda_nm).reflectance(c, pol),
         }
     }
 
@@ -153,7 +199,7 @@ impl GhsCommon {
                 gs,
             };
         }
-        let spec = self.fresnel.reflectance(wi.z.min(1.0), lambda_nm) * a_s;
+        let spec = self.reflectance(wi.z.min(1.0), lambda_nm) * a_s;
         LobeChoice::Delta((spec > 0.0).then(|| BxdfSample {
             wo: frame::reflect_z(wi),
             weight: spec / p_delta,
@@ -165,12 +211,14 @@ impl GhsCommon {
     /// (specular weight R_s A_s, delta probability, g_s).
     pub fn specular_and_choice(&self, ci: f64, lambda_nm: f64) -> (f64, f64, f64) {
         let (p, a_s, gs) = self.choice_coherent(ci, lambda_nm);
-        (self.fresnel.reflectance(ci, lambda_nm) * a_s, p, gs)
+        (self.reflectance(ci, lambda_nm) * a_s, p, gs)
     }
 
     /// Builds the energy tables for `opts.energy`. `raw_albedo(c, θi, λ)`
-    /// must return the scattered albedo of the model's raw lobe (R = 1, no
-    /// scatter factor) evaluated with the settings `c`.
+    /// must return the scattered albedo of the model's raw lobe evaluated
+    /// with the settings `c` (whose Fresnel term is R ≡ 1: times
+    /// `c.r_scatter`, which is 1 for the scalar factor and the perfect
+    /// conductor's Q for the Rayleigh–Rice one), without the scatter factor.
     pub fn build_table(
         &mut self,
         cdf_u: impl Fn(f64) -> f64,
@@ -180,6 +228,8 @@ impl GhsCommon {
             fresnel: Fresnel::One,
             opts: GhsOptions {
                 energy: self.opts.energy,
+                polarization: self.opts.polarization,
+                polarization_factor: self.opts.polarization_factor,
                 ..GhsOptions::default()
             },
             energy_table: None,
@@ -198,30 +248,21 @@ impl GhsCommon {
                     ..probe
                 };
                 // Cap: where σ_rel still leaves a total above 1 (the grazing
-                // gain of physics.md §5), scale the scattered part down to
-                // 1 − A_s; elsewhere leave it untouched.
-                let cap = EnergyTable::build(|th, lam| {
-                    let ci = libm::cos(th);
-                    let t = 2.0 * wavenumber(lam) * probe.sigma_eff(ci, lam) * ci;
-                    let b = -libm::expm1(-t * t);
-                    let a = raw_albedo(&probe, th, lam);
-                    if a > b { b / a } else { 1.0 }
-                });
+                // gain of physics.md §5), the scattered part is scaled down to
+                // 1 − A_s (see `scatter_factor`); elsewhere left untouched.
+                let cap = EnergyTable::build(|th, lam| raw_albedo(&probe, th, lam));
                 self.energy_table = Some(frac);
                 self.cap_table = Some(cap);
             }
             Energy::Krywonos => {
-                let sigma = self.sigma;
                 let probe = GhsCommon {
-                    opts: GhsOptions::default(),
+                    opts: GhsOptions {
+                        energy: Energy::Raw,
+                        ..probe.opts
+                    },
                     ..probe
                 };
-                self.energy_table = Some(EnergyTable::build(|th, lam| {
-                    let t = 2.0 * wavenumber(lam) * sigma * libm::cos(th);
-                    let b = -libm::expm1(-t * t);
-                    let a = raw_albedo(&probe, th, lam);
-                    if a > 1e-6 * b { b / a } else { 0.0 }
-                }));
+                self.energy_table = Some(EnergyTable::build(|th, lam| raw_albedo(&probe, th, lam)));
             }
         }
     }
@@ -253,7 +294,9 @@ impl<P: RadialPsd> GhsSsa<P> {
             |c, th, lam| {
                 let wi = frame::spherical(th, 0.0);
                 let kl = wavenumber(lam) * c.length;
-                hemispherical_integral(wi, 1.0 / kl, |o| raw_lobe(&model.psd, c, wi, o, lam))
+                hemispherical_integral(wi, 1.0 / kl, |o| {
+                    raw_lobe(&model.psd, c, wi, o, lam) * c.r_scatter(wi, o, lam)
+                })
             },
         );
         model.common = common;

@@ -7,8 +7,13 @@
 //!   Hankel transform ([`ghs_table`]), needs the `alloc` feature;
 //! * [`two_scale::TwoScale`]: the Holzschuch–Pacanowski two-scale model (its
 //!   D̃_eff table is built by the crate-internal `two_scale_table`), `alloc`;
+//! * [`GhsAnisotropic`]: SSA and full GHS of an anisotropic K-correlation
+//!   surface (`alloc`);
+//! * [`RayleighRice`]: first-order vector perturbation theory for a
+//!   conductor, with the polarisation factor Q of [`polarization`];
 //! * [`ggx_kc`]: the GGX ↔ K-correlation identity;
-//! * [`Energy`] and [`FresnelAngle`]: the switches of physics.md §5 and §3.2.
+//! * [`Energy`], [`FresnelAngle`], [`Polarization`] and
+//!   [`PolarizationFactor`]: the switches of physics.md §5, §3.2 and §13.
 
 // `!(x > 0.0)` is used on purpose throughout: it rejects NaN together with
 // the out-of-range values, which `x <= 0.0` would let through.
@@ -20,9 +25,13 @@ pub mod energy;
 pub mod ggx_kc;
 #[cfg(feature = "alloc")]
 pub mod ghs;
+#[cfg(feature = "alloc")]
+pub mod ghs_aniso;
 pub mod ghs_ssa;
 #[cfg(feature = "alloc")]
 pub mod ghs_table;
+pub mod polarization;
+pub mod rayleigh_rice;
 #[cfg(feature = "alloc")]
 pub mod two_scale;
 #[cfg(feature = "alloc")]
@@ -31,7 +40,11 @@ mod two_scale_table;
 pub use energy::{Energy, FresnelAngle, GhsOptions};
 #[cfg(feature = "alloc")]
 pub use ghs::{GhsFull, TableSource};
+#[cfg(feature = "alloc")]
+pub use ghs_aniso::GhsAnisotropic;
 pub use ghs_ssa::GhsSsa;
+pub use polarization::{Polarization, PolarizationFactor};
+pub use rayleigh_rice::RayleighRice;
 
 use glam::DVec3;
 
