@@ -17,6 +17,10 @@ fn data(name: &str) -> Vec<u8> {
     .unwrap()
 }
 
+fn formats(name: &str) -> Vec<u8> {
+    data(&format!("formats/{name}"))
+}
+
 fn corpus(name: &str) -> Vec<u8> {
     data(&format!("corpus/{name}"))
 }
@@ -279,6 +283,9 @@ fn signed_samples() -> Vec<(&'static str, String, Vec<u8>)> {
         ("wsxm", "stp-1.stp".into(), corpus("stp-1.stp")),
         ("frt", "frt-1.frt".into(), corpus("frt-1.frt")),
         ("tmd", "tmd-1.tmd".into(), corpus("tmd-1.tmd")),
+        ("opdx", "opdx-3.opdx".into(), formats("opdx-3.opdx")),
+        ("npy", "example-2d.npy".into(), formats("example-2d.npy")),
+        ("netcdf", "nc-1.nc".into(), formats("nc-1.nc")),
     ]
 }
 
@@ -302,7 +309,17 @@ fn a_file_whose_signature_is_overwritten_is_refused_naming_extension_and_format(
         );
     }
     for (format, name, bytes) in samples {
-        read_bytes(&name, &bytes, &o).unwrap_or_else(|e| panic!("{name} whole: {e}"));
+        // An array states neither unit nor pixel size.
+        let whole = if format == "npy" {
+            ReadOptions {
+                units: fit::io::Units::parse("um"),
+                pixel_size: Some((1e-6, 1e-6)),
+                ..ReadOptions::default()
+            }
+        } else {
+            o.clone()
+        };
+        read_bytes(&name, &bytes, &whole).unwrap_or_else(|e| panic!("{name} whole: {e}"));
         let mut b = bytes.clone();
         b[..16].fill(0);
         let ext = name.rsplit('.').next().unwrap();

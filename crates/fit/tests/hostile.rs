@@ -628,6 +628,7 @@ fn dektak_truncation_and_garbling_are_detected() {
 /// files written here otherwise).
 fn samples() -> Vec<(&'static str, String, Vec<u8>)> {
     let corpus = |f: &str| data(&format!("corpus/{f}"));
+    let formats = |f: &str| data(&format!("formats/{f}"));
     let vals: Vec<i16> = (0..15).map(|i| i * 100 - 700).collect();
     let gvals: Vec<f32> = (0..24).map(|i| i as f32).collect();
     let mut s: Vec<(&'static str, String, Vec<u8>)> = vec![
@@ -671,6 +672,11 @@ fn samples() -> Vec<(&'static str, String, Vec<u8>)> {
         ("xyz", "csv-2.csv".into(), corpus("csv-2.csv")),
         ("xyz", "xy-1.txt".into(), corpus("xy-1.txt")),
         ("xyz", "csv-1.csv".into(), corpus("csv-1.csv")),
+        ("xyz", "hfm-1.hfm".into(), formats("hfm-1.hfm")[..20_000].to_vec()),
+        ("opdx", "opdx-3.opdx".into(), formats("opdx-3.opdx")),
+        ("nms", "nms-1.nms".into(), formats("nms-1.nms")),
+        ("npy", "example-2d.npy".into(), formats("example-2d.npy")),
+        ("netcdf", "nc-1.nc".into(), formats("nc-1.nc")),
     ];
     // Every reader of the registry has a sample.
     for f in Format::all() {
