@@ -286,6 +286,7 @@ fn signed_samples() -> Vec<(&'static str, String, Vec<u8>)> {
         ("opdx", "opdx-3.opdx".into(), formats("opdx-3.opdx")),
         ("npy", "example-2d.npy".into(), formats("example-2d.npy")),
         ("netcdf", "nc-1.nc".into(), formats("nc-1.nc")),
+        ("gwy", "matrix-4-st.gwy".into(), formats("matrix-4-st.gwy")),
     ]
 }
 

@@ -510,11 +510,6 @@ fn known_but_unread_formats_are_named() {
             &["NetCDF-4", "NETCDF3"],
         ),
         (
-            "a.gwy",
-            b"GWYPGwyContainer\0",
-            &["Gwyddion native .gwy is not read yet", ".gsf"],
-        ),
-        (
             "a.jpk",
             b"II*\0\x08\0\0\0\0\0\0\0",
             &["JPK", "not read yet"],
@@ -534,4 +529,92 @@ fn known_but_unread_formats_are_named() {
             assert!(msg.contains(n), "{name}: `{msg}` lacks `{n}`");
         }
     }
+}
+
+/// A `.gwy` written by SurfaceTopography's `to_gwy` from matrix-4.txt holds the same map.
+#[test]
+fn gwy_written_by_surface_topography_reads_as_its_source() {
+    let g = open_path(&path("formats/matrix-4-st.gwy"), &ReadOptions::default()).unwrap();
+    let m = open_path(&path("formats/matrix-4.txt"), &ReadOptions::default()).unwrap();
+    assert_eq!(g.format.name(), "gwy");
+    assert_eq!(g.channels[0].name, "Topography");
+    let (a, b) = (g.topo, m.topo);
+    assert_eq!((a.nx, a.ny), (b.nx, b.ny));
+    assert!(rel(a.dx, b.dx) < 1e-12 && rel(a.dy, b.dy) < 1e-12);
+    assert_eq!(a.heights, b.heights);
+}
+
+/// A `.gwy` written here from Gwyddion's format description: two channels (a phase
+/// channel first, so the height channel is chosen), a mask, nm heights on µm axes.
+#[test]
+fn gwy_channels_units_and_masks() {
+    let field = |z_unit: &str, values: &[f64]| {
+        let mut c = Vec::new();
+        comp(&mut c, "xres", b'i', &3i32.to_le_bytes());
+        comp(&mut c, "yres", b'i', &2i32.to_le_bytes());
+        comp(&mut c, "xreal", b'd', &3.0f64.to_le_bytes());
+        comp(&mut c, "yreal", b'd', &4.0f64.to_le_bytes());
+        comp(&mut c, "si_unit_xy", b'o', &unit("µm"));
+        comp(&mut c, "si_unit_z", b'o', &unit(z_unit));
+        let mut d = (values.len() as u32).to_le_bytes().to_vec();
+        values.iter().for_each(|v| d.extend(v.to_le_bytes()));
+        comp(&mut c, "data", b'D', &d);
+        object("GwyDataField", &c)
+    };
+    let mut top = Vec::new();
+    comp(&mut top, "/0/data/title", b's', b"Phase\0");
+    comp(&mut top, "/0/data", b'o', &field("deg", &[0.0; 6]));
+    comp(&mut top, "/1/data/title", b's', b"Height\0");
+    comp(
+        &mut top,
+        "/1/data",
+        b'o',
+        &field("nm", &[1.0, 2.0, 3.0, 4.0, 5.0, 6.0]),
+    );
+    comp(
+        &mut top,
+        "/1/mask",
+        b'o',
+        &field("", &[0.0, 1.0, 0.0, 0.0, 0.0, 0.0]),
+    );
+    let mut b = b"GWYP".to_vec();
+    b.extend(object("GwyContainer", &top));
+    let s = open_bytes("two.gwy", &b, &ReadOptions::default()).unwrap();
+    assert_eq!(s.channel, 1);
+    assert!(!s.channels[0].is_height && s.channels[1].is_height);
+    let t = s.topo;
+    assert_eq!((t.nx, t.ny), (3, 2));
+    assert!(rel(t.dx, 1e-6) < 1e-12 && rel(t.dy, 2e-6) < 1e-12);
+    assert!(t.heights[1].is_nan());
+    assert!(rel(t.heights[5], 6e-9) < 1e-12);
+    // Cut anywhere, it is refused with one line, never a panic.
+    for cut in 0..b.len() {
+        let e = open_bytes("cut.gwy", &b[..cut], &ReadOptions::default());
+        if let Err(e) = e {
+            assert!(!e.to_string().contains('\n'));
+        }
+    }
+}
+
+fn comp(out: &mut Vec<u8>, name: &str, kind: u8, value: &[u8]) {
+    out.extend(name.as_bytes());
+    out.push(0);
+    out.push(kind);
+    out.extend(value);
+}
+
+fn object(name: &str, components: &[u8]) -> Vec<u8> {
+    let mut o = name.as_bytes().to_vec();
+    o.push(0);
+    o.extend((components.len() as u32).to_le_bytes());
+    o.extend(components);
+    o
+}
+
+fn unit(s: &str) -> Vec<u8> {
+    let mut c = Vec::new();
+    let mut v = s.as_bytes().to_vec();
+    v.push(0);
+    comp(&mut c, "unitstr", b's', &v);
+    object("GwySIUnit", &c)
 }

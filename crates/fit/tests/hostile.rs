@@ -677,6 +677,7 @@ fn samples() -> Vec<(&'static str, String, Vec<u8>)> {
         ("nms", "nms-1.nms".into(), formats("nms-1.nms")),
         ("npy", "example-2d.npy".into(), formats("example-2d.npy")),
         ("netcdf", "nc-1.nc".into(), formats("nc-1.nc")),
+        ("gwy", "matrix-4-st.gwy".into(), formats("matrix-4-st.gwy")),
     ];
     // Every reader of the registry has a sample.
     for f in Format::all() {

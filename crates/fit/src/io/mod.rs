@@ -13,6 +13,7 @@ pub mod binary;
 pub mod dektak;
 pub mod frt;
 pub mod gsf;
+pub mod gwy;
 pub mod ibw;
 pub mod matrix;
 pub mod md5;

@@ -114,8 +114,8 @@ impl Format {
 }
 
 use super::{
-    al3d, bcr, dektak, frt, gsf, ibw, matrix, metropro, mi, mnt, nanoscope, netcdf, nid, nms, npy,
-    opd, opdx, park, plu, sdf, sur, tmd, wsxm, x3p, xyz,
+    al3d, bcr, dektak, frt, gsf, gwy, ibw, matrix, metropro, mi, mnt, nanoscope, netcdf, nid, nms,
+    npy, opd, opdx, park, plu, sdf, sur, tmd, wsxm, x3p, xyz,
 };
 
 /// `Magic` when the file starts with any of `magics`: some formats have variants (ASCII
@@ -144,6 +144,7 @@ const TMD: &[&[u8]] = &[b"Binary TrueMap Data File"];
 // After OPD's 2-byte header, the directory's own descriptor names itself.
 const OPD: &[&[u8]] = &[b"Directory"];
 const NPY: &[&[u8]] = &[npy::MAGIC];
+const GWY: &[&[u8]] = &[gwy::MAGIC, b"GWYO"];
 const NETCDF: &[&[u8]] = &[b"CDF\x01", b"CDF\x02", b"CDF\x05"];
 const OPDX: &[&[u8]] = &[opdx::MAGIC];
 
@@ -358,6 +359,16 @@ pub static READERS: &[Reader] = &[
         signature: prefix!("`Binary TrueMap Data File`", TMD),
         sniff: |b| starts(b, TMD),
         read: tmd::read,
+    },
+    Reader {
+        name: "gwy",
+        aliases: &["gwyddion-native"],
+        description: "Gwyddion native .gwy (multi-channel, masks)",
+        extensions: &["gwy"],
+        binary: true,
+        signature: prefix!("`GWYP`", GWY),
+        sniff: |b| starts(b, GWY),
+        read: gwy::read,
     },
     Reader {
         name: "opdx",
