@@ -56,6 +56,41 @@ pub struct ScanArgs {
     pub level: Option<String>,
 }
 
+/// What to do with a scan that is mostly invalid or has spikes.
+#[derive(clap::Args, Clone)]
+pub struct CheckArgs {
+    /// A scan with more than half its points invalid: `refuse` it, analyse its largest
+    /// valid rectangle (`crop`), or `fill` it anyway (flagged in [reliability].invalid).
+    #[arg(long, default_value = "refuse", value_parser = ["refuse", "crop", "fill"])]
+    pub invalid: String,
+    /// Heights more than 12 robust σ from the median (spikes, corrupted values): `flag`
+    /// them in [reliability].outliers and on stderr, or `mask` them as invalid points.
+    #[arg(long, default_value = "flag", value_parser = ["flag", "mask"])]
+    pub outliers: String,
+}
+
+impl CheckArgs {
+    fn checks(&self, units: Option<Units>) -> pipeline::Checks {
+        pipeline::Checks {
+            invalid: fit::quality::InvalidPolicy::from_name(&self.invalid).unwrap_or_default(),
+            mask_outliers: self.outliers == "mask",
+            units,
+        }
+    }
+}
+
+/// Warnings for what the checks of a scan found.
+fn quality_warnings(q: &pipeline::Quality) -> Vec<String> {
+    [
+        ("invalid", &q.invalid),
+        ("outliers", &q.outliers),
+        ("units", &q.units),
+    ]
+    .into_iter()
+    .filter_map(|(k, v)| v.as_ref().map(|v| format!("{k}: {v}")))
+    .collect()
+}
+
 /// `lustre fit channels <scan>`.
 #[derive(clap::Args)]
 pub struct ChannelsArgs {
@@ -105,6 +140,8 @@ pub struct MaterialArgs {
     pub no_plots: bool,
     #[command(flatten)]
     pub read: ScanArgs,
+    #[command(flatten)]
+    pub checks: CheckArgs,
 }
 
 /// `lustre fit stats <scan> --json`.
@@ -117,6 +154,8 @@ pub struct StatsArgs {
     pub json: bool,
     #[command(flatten)]
     pub read: ScanArgs,
+    #[command(flatten)]
+    pub checks: CheckArgs,
 }
 
 pub fn run(args: FitArgs) -> anyhow::Result<()> {
@@ -248,7 +287,8 @@ pub(crate) fn level_of(a: &ScanArgs) -> Option<Level> {
 }
 
 fn stats(args: StatsArgs) -> anyhow::Result<()> {
-    let (_, scan) = load(&args.scan, &read_options(&args.read)?)?;
+    let ropts = read_options(&args.read)?;
+    let (_, scan) = load(&args.scan, &ropts)?;
     let fit::io::Scan {
         topo,
         format,
@@ -256,7 +296,8 @@ fn stats(args: StatsArgs) -> anyhow::Result<()> {
         channel,
         notes: read_notes,
     } = scan;
-    let s = pipeline::summarise(topo, level_of(&args.read))
+    let checks = args.checks.checks(ropts.units);
+    let s = pipeline::summarise_checked(topo, level_of(&args.read), &checks)
         .map_err(|e| in_file(e, &args.scan, None))?;
     let t = &s.prepared.scan;
     let form = &s.prepared.form;
@@ -288,6 +329,7 @@ fn stats(args: StatsArgs) -> anyhow::Result<()> {
     {
         warnings.push(w);
     }
+    warnings.extend(quality_warnings(&s.quality));
     for w in &warnings {
         eprintln!("warning: {}: {w}", args.scan.display());
     }
@@ -313,6 +355,12 @@ fn stats(args: StatsArgs) -> anyhow::Result<()> {
             "terms": form.terms.iter().map(|x| serde_json::json!({"x_pow": x.i, "y_pow": x.j, "coefficient_si": x.c})).collect::<Vec<_>>(),
             "residual_form_fraction": form.residual_form.map(|r| r.1),
             "residual_shows_form": form.warning().is_some(),
+        },
+        "quality": {
+            "invalid": s.quality.invalid,
+            "outliers": s.quality.outliers,
+            "outlier_points": s.quality.outlier_count,
+            "units": s.quality.units,
         },
         "sq_m": s.stats.sq,
         "rms_slope": s.stats.rms_slope(),
@@ -420,6 +468,7 @@ fn material(args: MaterialArgs) -> anyhow::Result<()> {
         merge_cutoff: args.merge_cutoff * 1e6,
         stylus_segments: args.stylus_segments,
         level: level_of(&args.read),
+        checks: args.checks.checks(ropts.units),
         ..Options::default()
     };
     let fit::io::Scan {
@@ -482,6 +531,9 @@ fn material(args: MaterialArgs) -> anyhow::Result<()> {
         ("form", &r.form),
         ("anisotropy", &r.anisotropy),
         ("variance", &r.variance),
+        ("invalid", &r.invalid),
+        ("outliers", &r.outliers),
+        ("units", &r.units),
     ] {
         if state != "ok" {
             eprintln!("warning: {part}: {state}");

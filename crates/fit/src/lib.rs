@@ -26,6 +26,7 @@ pub mod ndf;
 mod ordered_sum;
 pub mod pipeline;
 pub mod psd;
+pub mod quality;
 pub mod resample;
 pub mod rng;
 pub mod sampled_kc;

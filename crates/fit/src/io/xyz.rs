@@ -126,6 +126,7 @@ fn numeric_start(l: &str) -> bool {
 /// Read a column file.
 pub(crate) fn read(ctx: Ctx<'_>, bytes: &[u8], want: Want<'_>) -> Result<Decoded, ReadError> {
     let text = text::decode(bytes);
+    text::check_not_cut(ctx, &text)?;
     let d = text::Dialect::guess(text.lines().filter(|l| numeric_start(l)));
     let mut header: Vec<String> = Vec::new();
     let mut rows: Vec<Vec<f64>> = Vec::new();
