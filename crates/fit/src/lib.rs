@@ -13,6 +13,7 @@
 //! reference-table length `L = 2π·Lc`, where `Lc` is the Matérn range of physics.md §2.
 
 pub mod anisotropy;
+pub mod areal;
 pub mod error;
 pub mod explicit_brdf;
 mod fft;
