@@ -364,6 +364,7 @@ fn stats(args: StatsArgs) -> anyhow::Result<()> {
         },
         "sq_m": s.stats.sq,
         "rms_slope": s.stats.rms_slope(),
+        "iso25178": iso_json(t),
         "rq_lines_m": s.stats.rq_lines,
         "rdq_x": num(s.stats.rdq_x),
         "kc": {
@@ -402,6 +403,37 @@ fn stats(args: StatsArgs) -> anyhow::Result<()> {
     }
     println!("{}", serde_json::to_string(&json)?);
     Ok(())
+}
+
+/// The ISO 25178-2 height parameters, the ACF with its correlation length and the height
+/// histogram of a prepared scan, as `fit stats` prints them.
+fn iso_json(t: &fit::Topography) -> serde_json::Value {
+    use fit::areal;
+    let num = |v: f64| v.is_finite().then_some(v);
+    let p = areal::height_params(t);
+    let acf = areal::acf(t);
+    let hist = areal::histogram(t, 64);
+    serde_json::json!({
+        "sa_m": num(p.sa),
+        "sz_m": num(p.sz),
+        "ssk": num(p.ssk),
+        "sku": num(p.sku),
+        "acf": acf.as_ref().map(|a| serde_json::json!({
+            "r_m": a.r,
+            "rho": a.rho,
+            "correlation_length_m": a.length(areal::ACF_THRESHOLD),
+            "threshold": areal::ACF_THRESHOLD,
+        })),
+        "histogram": hist.map(|h| serde_json::json!({
+            "edges_m": h.edges,
+            "counts": h.counts,
+            "density_per_m": h.density,
+        })),
+        "conventions": "heights about their mean; Sz = max − min; Ssk, Sku over Sq³, Sq⁴; ACF \
+            ρ = 1 − A/Sq², A the non-periodic height-difference ACF over every direction, \
+            averaged radially in one-pixel bins to half the scan; correlation length where ρ \
+            first falls to the threshold (null: longer than half the scan)",
+    })
 }
 
 /// An analysis error prefixed with the file it concerns: the library knows the step that

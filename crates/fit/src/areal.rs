@@ -93,8 +93,12 @@ impl Acf {
     }
 }
 
+/// Largest padded FFT grid of [`acf`] (points; 16 bytes each, 1 GiB): a 6000 × 6000
+/// scan. Larger maps get no ACF rather than several GiB of scratch memory.
+pub const MAX_ACF_POINTS: u64 = 1 << 26;
+
 /// The ACF of a levelled, NaN-free map or profile (see the module docs); `None` for
-/// constant heights.
+/// constant heights and maps above [`MAX_ACF_POINTS`] once padded.
 pub fn acf(t: &Topography) -> Option<Acf> {
     let (nx, ny) = (t.nx, t.ny);
     let n = nx * ny;
@@ -107,8 +111,12 @@ pub fn acf(t: &Topography) -> Option<Acf> {
     if sq2 <= 0.0 || !sq2.is_finite() {
         return None;
     }
-    // Σ z(i, j) z(i + k, j + l) by a zero-padded FFT (no wrap-around for k < nx, l < ny).
-    let (px, py) = (2 * nx, if ny == 1 { 1 } else { 2 * ny });
+    // Σ z(i, j) z(i + k, j + l) by a zero-padded FFT: lags reach half the scan, so half
+    // a side of zeros keeps the circular correlation from wrapping onto them.
+    let (px, py) = (nx + nx / 2 + 1, if ny == 1 { 1 } else { ny + ny / 2 + 1 });
+    if (px * py) as u64 > MAX_ACF_POINTS {
+        return None;
+    }
     let mut buf = vec![Complex::new(0.0, 0.0); px * py];
     for y in 0..ny {
         for x in 0..nx {

@@ -192,7 +192,7 @@ fn prepare_unchecked_flat(
     if invalid < n && fraction > MAX_INVALID_FRACTION {
         let rect = match quality::largest_valid_rectangle(&t) {
             Some((_, _, w, h)) => format!(
-                " (its largest valid rectangle is {w} × {h} points, {:.1} % of the scan)",
+                " ({w} × {h} points, {:.1} % of the scan)",
                 100.0 * (w * h) as f64 / n as f64
             ),
             None => String::new(),

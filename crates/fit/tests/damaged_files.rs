@@ -287,6 +287,7 @@ fn signed_samples() -> Vec<(&'static str, String, Vec<u8>)> {
         ("npy", "example-2d.npy".into(), formats("example-2d.npy")),
         ("netcdf", "nc-1.nc".into(), formats("nc-1.nc")),
         ("gwy", "matrix-4-st.gwy".into(), formats("matrix-4-st.gwy")),
+        ("vk4", "a.vk4".into(), vk4_sample()),
     ]
 }
 
@@ -527,4 +528,36 @@ fn heights_beyond_any_scan_are_refused_naming_the_height_scale() {
         let max = t.heights.iter().fold(0.0f64, |m, h| m.max(h.abs()));
         assert!(max > 1.0 && max <= 1e3, "{f}: {max}");
     }
+}
+
+/// A 16 × 16 VK4 file written from the format description (as in tests/formats.rs).
+fn vk4_sample() -> Vec<u8> {
+    let mut b = b"VK4_".to_vec();
+    b.extend([1, 0, 0, 0, 0, 0, 0, 0]);
+    let (conditions, layer) = (84u32, 84 + 400);
+    for i in 0..17u32 {
+        let v = match i {
+            0 => conditions,
+            6 => layer,
+            _ => 0,
+        };
+        b.extend(v.to_le_bytes());
+    }
+    b.extend(0u32.to_le_bytes());
+    for i in 0..100u32 {
+        let v = match i {
+            42 | 43 => 250_000u32,
+            44 => 1000,
+            _ => 0,
+        };
+        b.extend(v.to_le_bytes());
+    }
+    for v in [16u32, 16, 16, 0, 512, 0, 0] {
+        b.extend(v.to_le_bytes());
+    }
+    b.extend([0u8; 768]);
+    for i in 0..256u16 {
+        b.extend((i * 13 % 97).to_le_bytes());
+    }
+    b
 }

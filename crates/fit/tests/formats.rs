@@ -490,11 +490,6 @@ fn known_but_unread_formats_are_named() {
             &["JPEG image, not a height map"],
         ),
         (
-            "a.vk4",
-            b"VK4_\0\0\0\0\0\0\0\0",
-            &["Keyence VK4 is not read yet"],
-        ),
-        (
             "a.zon",
             b"KPK0\0\0\0\0\0\0\0\0",
             &["Keyence ZON is not read yet"],
@@ -617,4 +612,69 @@ fn unit(s: &str) -> Vec<u8> {
     v.push(0);
     comp(&mut c, "unitstr", b's', &v);
     object("GwySIUnit", &c)
+}
+
+/// A VK4 file written from the format description (`fit::io::vk4`): 16-bit heights on a
+/// 0.25 µm × 0.5 µm grid, 2 nm per digit.
+pub fn vk4(w: u32, h: u32, bits: u32, values: &[u32]) -> Vec<u8> {
+    let mut b = b"VK4_".to_vec();
+    b.extend(1u32.to_le_bytes());
+    b.extend(0u32.to_le_bytes());
+    let conditions = 12 + 17 * 4 + 4;
+    let layer = conditions + 4 * 100;
+    let mut table = [0u32; 17];
+    table[0] = conditions as u32;
+    table[6] = layer as u32;
+    table.iter().for_each(|v| b.extend(v.to_le_bytes()));
+    b.extend(0u32.to_le_bytes());
+    let mut cond = [0u32; 100];
+    cond[0] = 400;
+    cond[42] = 250_000;
+    cond[43] = 500_000;
+    cond[44] = 2000;
+    cond.iter().for_each(|v| b.extend(v.to_le_bytes()));
+    let bytes = w * h * bits / 8;
+    for v in [w, h, bits, 0, bytes, 0, 0] {
+        b.extend(v.to_le_bytes());
+    }
+    b.extend([0u8; 768]);
+    for &v in values {
+        match bits {
+            8 => b.push(v as u8),
+            16 => b.extend((v as u16).to_le_bytes()),
+            _ => b.extend(v.to_le_bytes()),
+        }
+    }
+    b
+}
+
+#[test]
+fn vk4_and_its_vk6_wrapper_read_from_the_format_description() {
+    for bits in [8, 16, 32] {
+        let vals: Vec<u32> = (0..12).map(|i| i * 7 + 1).collect();
+        let b = vk4(4, 3, bits, &vals);
+        let t = read_bytes("a.vk4", &b, &ReadOptions::default()).unwrap();
+        assert_eq!((t.nx, t.ny), (4, 3));
+        assert!(rel(t.dx, 0.25e-6) < 1e-12 && rel(t.dy, 0.5e-6) < 1e-12);
+        assert!(rel(t.heights[5], 36.0 * 2e-9) < 1e-12, "{}", t.heights[5]);
+        // Cut anywhere: refused, one line, no panic.
+        for cut in 0..b.len() {
+            if let Err(e) = read_bytes("a.vk4", &b[..cut], &ReadOptions::default()) {
+                assert!(!e.to_string().contains('\n'));
+            } else {
+                panic!("read cut at {cut}");
+            }
+        }
+    }
+    // VK6: its magic, then a zip whose Vk4File entry is the VK4 file.
+    let inner = vk4(4, 3, 16, &[5; 12]);
+    let mut w = zip::ZipWriter::new(std::io::Cursor::new(Vec::new()));
+    w.start_file("Vk4File", zip::write::SimpleFileOptions::default())
+        .unwrap();
+    w.write_all(&inner).unwrap();
+    let zipped = w.finish().unwrap().into_inner();
+    let mut b = b"VK6_".to_vec();
+    b.extend(zipped);
+    let t = read_bytes("a.vk6", &b, &ReadOptions::default()).unwrap();
+    assert_eq!(t.heights, vec![10e-9; 12]);
 }

@@ -678,6 +678,7 @@ fn samples() -> Vec<(&'static str, String, Vec<u8>)> {
         ("npy", "example-2d.npy".into(), formats("example-2d.npy")),
         ("netcdf", "nc-1.nc".into(), formats("nc-1.nc")),
         ("gwy", "matrix-4-st.gwy".into(), formats("matrix-4-st.gwy")),
+        ("vk4", "a.vk4".into(), vk4_sample()),
     ];
     // Every reader of the registry has a sample.
     for f in Format::all() {
@@ -912,4 +913,32 @@ fn oversized_headers_of_the_new_formats_are_rejected() {
         .unwrap();
     b[p..p + 4].copy_from_slice(&[0xff; 4]);
     expect("big.frt", &b, "grid");
+}
+
+/// A 64 × 48 VK4 file written from the format description (as in tests/formats.rs).
+fn vk4_sample() -> Vec<u8> {
+    let (w, h) = (64u32, 48u32);
+    let mut b = b"VK4_".to_vec();
+    b.extend(1u32.to_le_bytes());
+    b.extend(0u32.to_le_bytes());
+    let conditions = 12 + 17 * 4 + 4;
+    let layer = conditions + 4 * 100;
+    let mut table = [0u32; 17];
+    table[0] = conditions as u32;
+    table[6] = layer as u32;
+    table.iter().for_each(|v| b.extend(v.to_le_bytes()));
+    b.extend(0u32.to_le_bytes());
+    let mut cond = [0u32; 100];
+    cond[42] = 250_000;
+    cond[43] = 250_000;
+    cond[44] = 1000;
+    cond.iter().for_each(|v| b.extend(v.to_le_bytes()));
+    for v in [w, h, 16, 0, w * h * 2, 0, 0] {
+        b.extend(v.to_le_bytes());
+    }
+    b.extend([0u8; 768]);
+    for i in 0..w * h {
+        b.extend((((i * 37) % 4001) as u16).to_le_bytes());
+    }
+    b
 }

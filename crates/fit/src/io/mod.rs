@@ -37,6 +37,7 @@ pub mod text;
 pub mod tiff;
 pub mod tmd;
 pub mod units;
+pub mod vk4;
 pub mod wsxm;
 pub mod x3p;
 pub mod xyz;

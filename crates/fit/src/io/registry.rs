@@ -115,7 +115,7 @@ impl Format {
 
 use super::{
     al3d, bcr, dektak, frt, gsf, gwy, ibw, matrix, metropro, mi, mnt, nanoscope, netcdf, nid, nms,
-    npy, opd, opdx, park, plu, sdf, sur, tmd, wsxm, x3p, xyz,
+    npy, opd, opdx, park, plu, sdf, sur, tmd, vk4, wsxm, x3p, xyz,
 };
 
 /// `Magic` when the file starts with any of `magics`: some formats have variants (ASCII
@@ -361,6 +361,16 @@ pub static READERS: &[Reader] = &[
         read: tmd::read,
     },
     Reader {
+        name: "vk4",
+        aliases: &["keyence", "vk3", "vk6", "vk7"],
+        description: "Keyence VK-X laser confocal .vk4/.vk3 (and .vk6/.vk7 wrapping one)",
+        extensions: &["vk4", "vk3", "vk6", "vk7"],
+        binary: true,
+        signature: prefix!("`VK4_`, `VK3_`, `VK6` or `VK7`", vk4::MAGICS),
+        sniff: |b| starts(b, vk4::MAGICS),
+        read: vk4::read,
+    },
+    Reader {
         name: "gwy",
         aliases: &["gwyddion-native"],
         description: "Gwyddion native .gwy (multi-channel, masks)",
@@ -488,16 +498,6 @@ pub fn unread_format(name: &str, bytes: &[u8]) -> Option<(String, String)> {
     }
     let signed: &[(&[u8], &str, &str)] = &[
         (
-            b"VK4_",
-            "Keyence VK4",
-            "export it from the VK Analyzer as CSV heights or X3P",
-        ),
-        (
-            b"VK3_",
-            "Keyence VK3",
-            "export it from the VK Analyzer as CSV heights or X3P",
-        ),
-        (
             b"KPK0",
             "Keyence ZON",
             "export it from the Keyence software as CSV heights or X3P",
@@ -506,16 +506,6 @@ pub fn unread_format(name: &str, bytes: &[u8]) -> Option<(String, String)> {
             b"KPK1",
             "Keyence ZON (zstd-compressed)",
             "export it from the Keyence software as CSV heights or X3P",
-        ),
-        (
-            b"GWYP",
-            "Gwyddion native .gwy",
-            "save the channel from Gwyddion as .gsf or export it as a text matrix (both read)",
-        ),
-        (
-            b"GWYO",
-            "Gwyddion 1 .gwy",
-            "save the channel from Gwyddion as .gsf or export it as a text matrix (both read)",
         ),
         (
             b"MATLAB 5.0 MAT-file",
@@ -529,10 +519,6 @@ pub fn unread_format(name: &str, bytes: &[u8]) -> Option<(String, String)> {
         return not_yet(what, fix);
     }
     match ext.as_str() {
-        "vk6" | "vk7" => not_yet(
-            "Keyence VK6/VK7",
-            "export it from the VK Analyzer as CSV heights or X3P",
-        ),
         "lext" | "poir" | "oir" => not_yet("Olympus LEXT/OIR", EXPORT),
         "jpk" => not_yet(
             "JPK image scan (.jpk TIFF)",
