@@ -288,6 +288,8 @@ fn signed_samples() -> Vec<(&'static str, String, Vec<u8>)> {
         ("netcdf", "nc-1.nc".into(), formats("nc-1.nc")),
         ("gwy", "matrix-4-st.gwy".into(), formats("matrix-4-st.gwy")),
         ("vk4", "a.vk4".into(), vk4_sample()),
+        ("zmg", "a.zmg".into(), zmg_sample()),
+        ("zon", "a.zon".into(), zon_sample()),
     ]
 }
 
@@ -559,5 +561,49 @@ fn vk4_sample() -> Vec<u8> {
     for i in 0..256u16 {
         b.extend((i * 13 % 97).to_le_bytes());
     }
+    b
+}
+
+/// A 32 × 24 KLA Zeta ZMG file written from the format description.
+fn zmg_sample() -> Vec<u8> {
+    let mut b = b"Zeta-Instruments".to_vec();
+    b.resize(85, 0);
+    b.extend(32u32.to_le_bytes());
+    b.extend(24u32.to_le_bytes());
+    b.extend([0u8; 4]);
+    for v in [0.5f32, 0.5, 0.01] {
+        b.extend(v.to_le_bytes());
+    }
+    b.extend([0u8; 8]);
+    b.extend(0u32.to_le_bytes());
+    b.resize(205, 0);
+    for i in 0..32 * 24i32 {
+        b.extend((((i * 71) % 301 - 150) as i16).to_le_bytes());
+    }
+    b
+}
+
+/// A 16 × 12 Keyence ZON (KPK0) file written from the format description.
+fn zon_sample() -> Vec<u8> {
+    use std::io::Write as _;
+    let mut zw = zip::ZipWriter::new(std::io::Cursor::new(Vec::new()));
+    let o =
+        zip::write::SimpleFileOptions::default().compression_method(zip::CompressionMethod::Stored);
+    zw.start_file("686613b8-27b5-4a29-8ffc-438c2780873e", o)
+        .unwrap();
+    zw.write_all(b"<C><XYCalibration><MeterPerPixel>1e-6</MeterPerPixel></XYCalibration><ZCalibration><MeterPerUnit>1e-9</MeterPerUnit></ZCalibration></C>").unwrap();
+    zw.start_file("4cdb0c75-5706-48cc-a9a1-adf395d609ae", o)
+        .unwrap();
+    for v in [16i32, 12, 4, 64] {
+        zw.write_all(&v.to_le_bytes()).unwrap();
+    }
+    for i in 0..16 * 12i32 {
+        zw.write_all(&((i * 37) % 1001 - 500).to_le_bytes())
+            .unwrap();
+    }
+    let mut b = b"KPK0".to_vec();
+    b.extend(4u32.to_le_bytes());
+    b.extend([0u8; 4]);
+    b.extend(zw.finish().unwrap().into_inner());
     b
 }

@@ -41,6 +41,8 @@ pub mod vk4;
 pub mod wsxm;
 pub mod x3p;
 pub mod xyz;
+pub mod zmg;
+pub mod zon;
 
 pub use registry::{Format, READERS, Sniff};
 

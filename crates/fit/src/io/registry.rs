@@ -115,7 +115,7 @@ impl Format {
 
 use super::{
     al3d, bcr, dektak, frt, gsf, gwy, ibw, matrix, metropro, mi, mnt, nanoscope, netcdf, nid, nms,
-    npy, opd, opdx, park, plu, sdf, sur, tmd, vk4, wsxm, x3p, xyz,
+    npy, opd, opdx, park, plu, sdf, sur, tmd, vk4, wsxm, x3p, xyz, zmg, zon,
 };
 
 /// `Magic` when the file starts with any of `magics`: some formats have variants (ASCII
@@ -371,6 +371,26 @@ pub static READERS: &[Reader] = &[
         read: vk4::read,
     },
     Reader {
+        name: "zon",
+        aliases: &["keyence-zon"],
+        description: "Keyence VR .zon (KPK0)",
+        extensions: &["zon"],
+        binary: true,
+        signature: prefix!("`KPK0` or `KPK1`", zon::MAGICS),
+        sniff: |b| starts(b, zon::MAGICS),
+        read: zon::read,
+    },
+    Reader {
+        name: "zmg",
+        aliases: &["zeta", "kla"],
+        description: "KLA Zeta .zmg (optical profiler)",
+        extensions: &["zmg"],
+        binary: true,
+        signature: prefix!("`Zeta-Instruments`", &[zmg::MAGIC]),
+        sniff: |b| starts(b, &[zmg::MAGIC]),
+        read: zmg::read,
+    },
+    Reader {
         name: "gwy",
         aliases: &["gwyddion-native"],
         description: "Gwyddion native .gwy (multi-channel, masks)",
@@ -498,21 +518,10 @@ pub fn unread_format(name: &str, bytes: &[u8]) -> Option<(String, String)> {
     }
     let signed: &[(&[u8], &str, &str)] = &[
         (
-            b"KPK0",
-            "Keyence ZON",
-            "export it from the Keyence software as CSV heights or X3P",
-        ),
-        (
-            b"KPK1",
-            "Keyence ZON (zstd-compressed)",
-            "export it from the Keyence software as CSV heights or X3P",
-        ),
-        (
             b"MATLAB 5.0 MAT-file",
             "a MATLAB .mat file",
             "save the heights with numpy.save (.npy) or as a text matrix",
         ),
-        (b"ZMG", "Zygo ZMG", EXPORT),
         (b"OS3D", "Olympus OS3D", EXPORT),
     ];
     if let Some((_, what, fix)) = signed.iter().find(|(m, _, _)| bytes.starts_with(m)) {
