@@ -505,11 +505,6 @@ fn known_but_unread_formats_are_named() {
             &["NetCDF-4", "NETCDF3"],
         ),
         (
-            "a.jpk",
-            b"II*\0\x08\0\0\0\0\0\0\0",
-            &["JPK", "not read yet"],
-        ),
-        (
             "a.lext",
             b"II*\0\x08\0\0\0\0\0\0\0",
             &["Olympus LEXT", "not read yet"],
@@ -754,6 +749,155 @@ fn zmg_and_zon_read_from_the_format_descriptions() {
     assert!(rel(t.heights[5], -2000e-9) < 1e-12, "{}", t.heights[5]);
     for cut in 0..b.len() {
         if let Err(e) = read_bytes("a.zon", &b[..cut], &ReadOptions::default()) {
+            assert!(!e.to_string().contains('\n'));
+        } else {
+            panic!("read cut at {cut}");
+        }
+    }
+}
+
+/// A TIFF directory entry: tag, type, count, value bytes.
+pub type TiffEntry = (u16, u16, u32, Vec<u8>);
+/// A TIFF page: its entries and its one strip.
+pub type TiffPage = (Vec<TiffEntry>, Vec<u8>);
+
+/// A little-endian TIFF from pages of `(tag, type, count, value bytes)` entries, each page's
+/// strip given as bytes (tag 273/279 are filled in): for JPK files written from its
+/// description.
+pub fn tiff(pages: &[TiffPage]) -> Vec<u8> {
+    let mut b = b"II*\0\x08\0\0\0".to_vec();
+    // Lay out: each page's IFD, then its out-of-line values and its strip.
+    for (k, (entries, strip)) in pages.iter().enumerate() {
+        let mut entries = entries.clone();
+        entries.push((273, 4, 1, vec![0; 4]));
+        entries.push((279, 4, 1, (strip.len() as u32).to_le_bytes().to_vec()));
+        entries.sort_by_key(|e| e.0);
+        let ifd = b.len();
+        let n = entries.len();
+        let extra_start = ifd + 2 + 12 * n + 4;
+        let mut extra: Vec<u8> = Vec::new();
+        let mut dir: Vec<u8> = (n as u16).to_le_bytes().to_vec();
+        let mut strip_slot = 0;
+        for (tag, kind, count, value) in &entries {
+            dir.extend(tag.to_le_bytes());
+            dir.extend(kind.to_le_bytes());
+            dir.extend(count.to_le_bytes());
+            if *tag == 273 {
+                strip_slot = dir.len();
+            }
+            if value.len() <= 4 {
+                let mut v = value.clone();
+                v.resize(4, 0);
+                dir.extend(v);
+            } else {
+                dir.extend(((extra_start + extra.len()) as u32).to_le_bytes());
+                extra.extend(value);
+                if extra.len() % 2 == 1 {
+                    extra.push(0);
+                }
+            }
+        }
+        let strip_at = extra_start + extra.len();
+        dir[strip_slot..strip_slot + 4].copy_from_slice(&(strip_at as u32).to_le_bytes());
+        let next = if k + 1 < pages.len() {
+            strip_at + strip.len()
+        } else {
+            0
+        };
+        dir.extend((next as u32).to_le_bytes());
+        b.extend(dir);
+        b.extend(extra);
+        b.extend(strip);
+    }
+    b
+}
+
+fn ascii(s: &str) -> (u16, u32, Vec<u8>) {
+    let mut v = s.as_bytes().to_vec();
+    v.push(0);
+    (2, v.len() as u32, v)
+}
+
+/// A JPK scan: a preview page with the scan size (3 µm × 2 µm), a height channel (int32,
+/// default slot "calibrated": 2 nm per count plus 1 µm) and an error-signal channel in V.
+pub fn jpk(nx: u32, ny: u32, counts: &[i32]) -> Vec<u8> {
+    let e = |tag: u16, (kind, count, v): (u16, u32, Vec<u8>)| (tag, kind, count, v);
+    let d = |v: f64| (12u16, 1u32, v.to_le_bytes().to_vec());
+    let u = |v: u32| (4u16, 1u32, v.to_le_bytes().to_vec());
+    let preview = vec![
+        e(256, u(1)),
+        e(257, u(1)),
+        e(258, u(8)),
+        e(0x8000, ascii("jpk 1.0")),
+        e(0x8042, d(3e-6)),
+        e(0x8043, d(2e-6)),
+    ];
+    let channel = |name: &str, unit: &str, bits: u32, format: u32| {
+        vec![
+            e(256, u(nx)),
+            e(257, u(ny)),
+            e(258, u(bits)),
+            e(339, u(format)),
+            e(0x8050, ascii(name)),
+            e(0x8052, ascii(&format!("{name} (measured)"))),
+            e(0x8081, ascii("calibrated")),
+            e(0x8090, ascii("nominal")),
+            e(0x80A2, ascii(unit)),
+            e(0x80A3, ascii("LinearScaling")),
+            e(0x80A4, d(1e-9)),
+            e(0x80C0, ascii("calibrated")),
+            e(0x80D2, ascii(unit)),
+            e(0x80D3, ascii("LinearScaling")),
+            e(0x80D4, d(2e-9)),
+            e(0x80D5, d(1e-6)),
+        ]
+    };
+    let strip: Vec<u8> = counts.iter().flat_map(|c| c.to_le_bytes()).collect();
+    let volts: Vec<u8> = counts
+        .iter()
+        .flat_map(|c| (*c as f32).to_le_bytes())
+        .collect();
+    tiff(&[
+        (preview, vec![0]),
+        (channel("vDeflection", "V", 32, 3), volts),
+        (channel("height", "m", 32, 2), strip),
+    ])
+}
+
+#[test]
+fn jpk_channels_slots_and_scaling_from_the_description() {
+    let counts: Vec<i32> = (0..12).map(|i| i * 5 - 20).collect();
+    let b = jpk(4, 3, &counts);
+    let s = open_bytes("scan.jpk", &b, &ReadOptions::default()).unwrap();
+    assert_eq!(s.format.name(), "jpk");
+    assert_eq!(s.channel, 1, "the height channel, not the deflection");
+    assert_eq!(s.channels[0].unit, "V");
+    assert!(!s.channels[0].is_height && s.channels[1].is_height);
+    assert_eq!(s.channels[1].name, "height (measured)");
+    let t = s.topo;
+    assert_eq!((t.nx, t.ny), (4, 3));
+    assert!(rel(t.dx, 0.75e-6) < 1e-12 && rel(t.dy, 2e-6 / 3.0) < 1e-12);
+    assert!(
+        rel(t.heights[11], 35.0 * 2e-9 + 1e-6) < 1e-12,
+        "{}",
+        t.heights[11]
+    );
+    // Named .tif it still reads by content; the Park reader, forced, points to jpk.
+    assert_eq!(
+        open_bytes("scan.tif", &b, &ReadOptions::default())
+            .unwrap()
+            .format
+            .name(),
+        "jpk"
+    );
+    let park = ReadOptions {
+        format: fit::io::Format::from_name("park"),
+        ..ReadOptions::default()
+    };
+    let e = open_bytes("scan.tif", &b, &park).unwrap_err().to_string();
+    assert!(e.contains("--format jpk"), "{e}");
+    for cut in 0..b.len() {
+        if let Err(e) = open_bytes("scan.jpk", &b[..cut], &ReadOptions::default()) {
             assert!(!e.to_string().contains('\n'));
         } else {
             panic!("read cut at {cut}");

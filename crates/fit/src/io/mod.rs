@@ -15,6 +15,7 @@ pub mod frt;
 pub mod gsf;
 pub mod gwy;
 pub mod ibw;
+pub mod jpk;
 pub mod matrix;
 pub mod md5;
 pub mod metropro;

@@ -145,7 +145,8 @@ fn dict_value(header: &str, key: &str) -> Option<String> {
 /// A NumPy type string (`<f8`, `>i2`, `|u1`) as a sample type and byte order.
 fn dtype(descr: &str) -> Option<(binary::Sample, bool)> {
     use binary::Sample::*;
-    let (order, code) = descr.split_at(descr.len().checked_sub(2)?);
+    let cut = descr.len().checked_sub(2)?;
+    let (order, code) = (descr.get(..cut)?, descr.get(cut..)?);
     let little = match order {
         "<" | "|" | "=" | "" => true,
         ">" => false,

@@ -46,9 +46,8 @@ pub(crate) fn read(ctx: Ctx<'_>, bytes: &[u8], want: Want<'_>) -> Result<Decoded
     if t.get(TAG_JPK_VERSION).is_some() {
         return Err(ctx.err(
             "tag 32768",
-            "this TIFF is a JPK image scan (JPK's private tags), which is not read yet",
-            "export the height channel from the JPK Data Processing software as .gsf or a \
-             text matrix (both read)",
+            "this TIFF is a JPK image scan (JPK's private tags), not a Park Systems file",
+            "read it with --format jpk (or give it the .jpk extension)",
         ));
     }
     if t.uint(TAG_MAGIC) != Some(MAGIC) {

@@ -114,8 +114,8 @@ impl Format {
 }
 
 use super::{
-    al3d, bcr, dektak, frt, gsf, gwy, ibw, matrix, metropro, mi, mnt, nanoscope, netcdf, nid, nms,
-    npy, opd, opdx, park, plu, sdf, sur, tmd, vk4, wsxm, x3p, xyz, zmg, zon,
+    al3d, bcr, dektak, frt, gsf, gwy, ibw, jpk, matrix, metropro, mi, mnt, nanoscope, netcdf, nid,
+    nms, npy, opd, opdx, park, plu, sdf, sur, tmd, vk4, wsxm, x3p, xyz, zmg, zon,
 };
 
 /// `Magic` when the file starts with any of `magics`: some formats have variants (ASCII
@@ -305,6 +305,30 @@ pub static READERS: &[Reader] = &[
         }),
         sniff: ibw::sniff,
         read: ibw::read,
+    },
+    Reader {
+        name: "jpk",
+        aliases: &["jpk-scan"],
+        description: "JPK (Bruker) image scan .jpk (TIFF with JPK's tags; multi-channel)",
+        extensions: &["jpk"],
+        binary: true,
+        signature: Some(Signature {
+            offset: 0,
+            describe: "a TIFF byte-order mark (`II*\\0` or `MM\\0*`)",
+            present: super::tiff::is_tiff,
+        }),
+        // Any TIFF could be one (its first directory may lie past the sniffed head): the
+        // .jpk extension then breaks the tie with Park's TIFF.
+        sniff: |b| {
+            if jpk::is_jpk(b) {
+                Sniff::Magic
+            } else if super::tiff::is_tiff(b) {
+                Sniff::Maybe
+            } else {
+                Sniff::No
+            }
+        },
+        read: jpk::read,
     },
     Reader {
         name: "park",
@@ -529,10 +553,6 @@ pub fn unread_format(name: &str, bytes: &[u8]) -> Option<(String, String)> {
     }
     match ext.as_str() {
         "lext" | "poir" | "oir" => not_yet("Olympus LEXT/OIR", EXPORT),
-        "jpk" => not_yet(
-            "JPK image scan (.jpk TIFF)",
-            "export the height channel from the JPK Data Processing software as .gsf or a text matrix",
-        ),
         "plux" => not_yet(
             "Sensofar .plux",
             "export it from SensoSCAN as .plu, X3P or SDF",
