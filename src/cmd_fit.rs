@@ -61,19 +61,39 @@ pub struct ScanArgs {
 pub struct CheckArgs {
     /// A scan with more than half its points invalid: `refuse` it, analyse its largest
     /// valid rectangle (`crop`), or `fill` it anyway (flagged in [reliability].invalid).
-    #[arg(long, default_value = "refuse", value_parser = ["refuse", "crop", "fill"])]
-    pub invalid: String,
+    #[arg(long, value_enum, default_value_t = InvalidArg::Refuse)]
+    pub invalid: InvalidArg,
     /// Heights more than 12 robust σ from the median (spikes, corrupted values): `flag`
     /// them in [reliability].outliers and on stderr, or `mask` them as invalid points.
-    #[arg(long, default_value = "flag", value_parser = ["flag", "mask"])]
-    pub outliers: String,
+    #[arg(long, value_enum, default_value_t = OutliersArg::Flag)]
+    pub outliers: OutliersArg,
+}
+
+/// `--invalid`.
+#[derive(clap::ValueEnum, Clone, Copy)]
+pub enum InvalidArg {
+    Refuse,
+    Crop,
+    Fill,
+}
+
+/// `--outliers`.
+#[derive(clap::ValueEnum, Clone, Copy, PartialEq, Eq)]
+pub enum OutliersArg {
+    Flag,
+    Mask,
 }
 
 impl CheckArgs {
     fn checks(&self, units: Option<Units>) -> pipeline::Checks {
+        use fit::quality::InvalidPolicy;
         pipeline::Checks {
-            invalid: fit::quality::InvalidPolicy::from_name(&self.invalid).unwrap_or_default(),
-            mask_outliers: self.outliers == "mask",
+            invalid: match self.invalid {
+                InvalidArg::Refuse => InvalidPolicy::Refuse,
+                InvalidArg::Crop => InvalidPolicy::Crop,
+                InvalidArg::Fill => InvalidPolicy::Fill,
+            },
+            mask_outliers: self.outliers == OutliersArg::Mask,
             units,
         }
     }
