@@ -169,6 +169,12 @@ pub struct ReliabilityTable {
     pub variance: String,
     /// Why `[material].model` is what it is.
     pub model: String,
+    /// A scan mostly invalid, cropped or filled on request (`--invalid`).
+    pub invalid: String,
+    /// Heights far outside the distribution (spikes, corrupted values), flagged or masked.
+    pub outliers: String,
+    /// An Sq or RMS slope implausible for a metal surface: a unit is probably wrong.
+    pub units: String,
     /// The parts flagged above, for scripts.
     pub unreliable: Vec<String>,
 }
@@ -708,6 +714,16 @@ pub fn build(a: &Analysis, prov: &Provenance<'_>) -> MaterialFile {
     if variance_warning.is_some() {
         unreliable.push("variance".into());
     }
+    let q = &a.quality;
+    for (name, flag) in [
+        ("invalid", &q.invalid),
+        ("outliers", &q.outliers),
+        ("units", &q.units),
+    ] {
+        if flag.is_some() {
+            unreliable.push(name.into());
+        }
+    }
     let uses_kc = matches!(model.as_str(), "ghs" | "ghs_ssa");
     let model_reason = if uses_kc && !kc_ok {
         format!("{model_reason}; WARNING: it uses the unreliable K-correlation parameters")
@@ -801,6 +817,9 @@ pub fn build(a: &Analysis, prov: &Provenance<'_>) -> MaterialFile {
                 .unwrap_or_else(|| "ok".into()),
             variance: variance_warning.unwrap_or_else(|| "ok".into()),
             model: model_reason,
+            invalid: q.invalid.clone().unwrap_or_else(|| "ok".into()),
+            outliers: q.outliers.clone().unwrap_or_else(|| "ok".into()),
+            units: q.units.clone().unwrap_or_else(|| "ok".into()),
             unreliable,
         },
         form: FormTable {
