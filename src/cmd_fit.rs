@@ -56,6 +56,61 @@ pub struct ScanArgs {
     pub level: Option<String>,
 }
 
+/// What to do with a scan that is mostly invalid or has spikes.
+#[derive(clap::Args, Clone)]
+pub struct CheckArgs {
+    /// A scan with more than half its points invalid: `refuse` it, analyse its largest
+    /// valid rectangle (`crop`), or `fill` it anyway (flagged in [reliability].invalid).
+    #[arg(long, value_enum, default_value_t = InvalidArg::Refuse)]
+    pub invalid: InvalidArg,
+    /// Heights more than 12 robust σ from the median (spikes, corrupted values): `flag`
+    /// them in [reliability].outliers and on stderr, or `mask` them as invalid points.
+    #[arg(long, value_enum, default_value_t = OutliersArg::Flag)]
+    pub outliers: OutliersArg,
+}
+
+/// `--invalid`.
+#[derive(clap::ValueEnum, Clone, Copy)]
+pub enum InvalidArg {
+    Refuse,
+    Crop,
+    Fill,
+}
+
+/// `--outliers`.
+#[derive(clap::ValueEnum, Clone, Copy, PartialEq, Eq)]
+pub enum OutliersArg {
+    Flag,
+    Mask,
+}
+
+impl CheckArgs {
+    fn checks(&self, units: Option<Units>) -> pipeline::Checks {
+        use fit::quality::InvalidPolicy;
+        pipeline::Checks {
+            invalid: match self.invalid {
+                InvalidArg::Refuse => InvalidPolicy::Refuse,
+                InvalidArg::Crop => InvalidPolicy::Crop,
+                InvalidArg::Fill => InvalidPolicy::Fill,
+            },
+            mask_outliers: self.outliers == OutliersArg::Mask,
+            units,
+        }
+    }
+}
+
+/// Warnings for what the checks of a scan found.
+fn quality_warnings(q: &pipeline::Quality) -> Vec<String> {
+    [
+        ("invalid", &q.invalid),
+        ("outliers", &q.outliers),
+        ("units", &q.units),
+    ]
+    .into_iter()
+    .filter_map(|(k, v)| v.as_ref().map(|v| format!("{k}: {v}")))
+    .collect()
+}
+
 /// `lustre fit channels <scan>`.
 #[derive(clap::Args)]
 pub struct ChannelsArgs {
@@ -105,6 +160,8 @@ pub struct MaterialArgs {
     pub no_plots: bool,
     #[command(flatten)]
     pub read: ScanArgs,
+    #[command(flatten)]
+    pub checks: CheckArgs,
 }
 
 /// `lustre fit stats <scan> --json`.
@@ -117,6 +174,8 @@ pub struct StatsArgs {
     pub json: bool,
     #[command(flatten)]
     pub read: ScanArgs,
+    #[command(flatten)]
+    pub checks: CheckArgs,
 }
 
 pub fn run(args: FitArgs) -> anyhow::Result<()> {
@@ -247,7 +306,8 @@ pub(crate) fn level_of(a: &ScanArgs) -> Option<Level> {
 }
 
 fn stats(args: StatsArgs) -> anyhow::Result<()> {
-    let (_, scan) = load(&args.scan, &read_options(&args.read)?)?;
+    let ropts = read_options(&args.read)?;
+    let (_, scan) = load(&args.scan, &ropts)?;
     let fit::io::Scan {
         topo,
         format,
@@ -255,7 +315,8 @@ fn stats(args: StatsArgs) -> anyhow::Result<()> {
         channel,
         notes: read_notes,
     } = scan;
-    let s = pipeline::summarise(topo, level_of(&args.read))
+    let checks = args.checks.checks(ropts.units);
+    let s = pipeline::summarise_checked(topo, level_of(&args.read), &checks)
         .map_err(|e| in_file(e, &args.scan, None))?;
     let t = &s.prepared.scan;
     let form = &s.prepared.form;
@@ -288,6 +349,7 @@ fn stats(args: StatsArgs) -> anyhow::Result<()> {
     {
         warnings.push(w);
     }
+    warnings.extend(quality_warnings(&s.quality));
     for w in &warnings {
         eprintln!("warning: {}: {w}", args.scan.display());
     }
@@ -314,8 +376,15 @@ fn stats(args: StatsArgs) -> anyhow::Result<()> {
             "residual_form_fraction": form.residual_form.map(|r| r.1),
             "residual_shows_form": form.warning().is_some(),
         },
+        "quality": {
+            "invalid": s.quality.invalid,
+            "outliers": s.quality.outliers,
+            "outlier_points": s.quality.outlier_count,
+            "units": s.quality.units,
+        },
         "sq_m": s.stats.sq,
         "rms_slope": s.stats.rms_slope(),
+        "iso25178": iso_json(t),
         "rq_lines_m": s.stats.rq_lines,
         "rdq_x": num(s.stats.rdq_x),
         "kc": {
@@ -354,6 +423,37 @@ fn stats(args: StatsArgs) -> anyhow::Result<()> {
     }
     println!("{}", serde_json::to_string(&json)?);
     Ok(())
+}
+
+/// The ISO 25178-2 height parameters, the ACF with its correlation length and the height
+/// histogram of a prepared scan, as `fit stats` prints them.
+fn iso_json(t: &fit::Topography) -> serde_json::Value {
+    use fit::areal;
+    let num = |v: f64| v.is_finite().then_some(v);
+    let p = areal::height_params(t);
+    let acf = areal::acf(t);
+    let hist = areal::histogram(t, 64);
+    serde_json::json!({
+        "sa_m": num(p.sa),
+        "sz_m": num(p.sz),
+        "ssk": num(p.ssk),
+        "sku": num(p.sku),
+        "acf": acf.as_ref().map(|a| serde_json::json!({
+            "r_m": a.r,
+            "rho": a.rho,
+            "correlation_length_m": a.length(areal::ACF_THRESHOLD),
+            "threshold": areal::ACF_THRESHOLD,
+        })),
+        "histogram": hist.map(|h| serde_json::json!({
+            "edges_m": h.edges,
+            "counts": h.counts,
+            "density_per_m": h.density,
+        })),
+        "conventions": "heights about their mean; Sz = max − min; Ssk, Sku over Sq³, Sq⁴; ACF \
+            ρ = 1 − A/Sq², A the non-periodic height-difference ACF over every direction, \
+            averaged radially in one-pixel bins to half the scan; correlation length where ρ \
+            first falls to the threshold (null: longer than half the scan)",
+    })
 }
 
 /// An analysis error prefixed with the file it concerns: the library knows the step that
@@ -411,6 +511,7 @@ fn material(args: MaterialArgs) -> anyhow::Result<()> {
         merge_cutoff: args.merge_cutoff * 1e6,
         stylus_segments: args.stylus_segments,
         level: level_of(&args.read),
+        checks: args.checks.checks(ropts.units),
         ..Options::default()
     };
     let fit::io::Scan {
@@ -474,6 +575,9 @@ fn material(args: MaterialArgs) -> anyhow::Result<()> {
         ("form", &r.form),
         ("anisotropy", &r.anisotropy),
         ("variance", &r.variance),
+        ("invalid", &r.invalid),
+        ("outliers", &r.outliers),
+        ("units", &r.units),
     ] {
         if state != "ok" {
             eprintln!("warning: {part}: {state}");

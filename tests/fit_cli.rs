@@ -323,3 +323,67 @@ fn fit_advice_can_be_followed() {
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// Issue 36 end to end: `fit stats` prints the ISO 25178-2 height parameters, the ACF and
+/// its correlation length, and the histogram (di-6.di against SurfaceTopography's values in
+/// data/surfaces/reference/statistics.json); a mostly invalid scan is refused naming
+/// `--invalid`, which then crops it; `lustre fit` writes the height image, histogram and
+/// ACF figures.
+#[test]
+fn fit_stats_reports_iso_parameters_and_the_checks_and_fit_draws_the_scan() {
+    let (code, out, err) = lustre(&["fit", "stats", "data/surfaces/di-6.di", "--json"]);
+    assert_eq!(code, 0, "{err}");
+    let v: serde_json::Value = serde_json::from_str(out.trim()).unwrap();
+    let iso = &v["iso25178"];
+    // SurfaceTopography 1.27.1 (nm): Sa 11.336278255714916, Sz 112.13149903448422,
+    // Ssk 0.5477277006157746, Sku 3.3885580059365004, ACF length 241.97362038226 nm.
+    let close = |a: f64, b: f64| (a / b - 1.0).abs() < 1e-6;
+    assert!(
+        close(iso["sa_m"].as_f64().unwrap(), 11.336278255714916e-9),
+        "{iso}"
+    );
+    assert!(close(iso["sz_m"].as_f64().unwrap(), 112.13149903448422e-9));
+    assert!(close(iso["ssk"].as_f64().unwrap(), 0.5477277006157746));
+    assert!(close(iso["sku"].as_f64().unwrap(), 3.3885580059365004));
+    let l = iso["acf"]["correlation_length_m"].as_f64().unwrap();
+    assert!(close(l, 241.97362038226e-9), "{l}");
+    assert_eq!(iso["histogram"]["counts"].as_array().unwrap().len(), 64);
+    assert!(v["quality"]["units"].is_null() && v["quality"]["invalid"].is_null());
+
+    let sur3 = "data/surfaces/formats/sur-3.sur";
+    let (code, _, err) = lustre(&["fit", "stats", sur3, "--json"]);
+    assert_eq!(code, 1, "{err}");
+    assert!(
+        err.contains("--invalid crop") && err.contains("--invalid fill"),
+        "{err}"
+    );
+    let (code, out, err) = lustre(&["fit", "stats", sur3, "--json", "--invalid", "crop"]);
+    assert_eq!(code, 0, "{err}");
+    assert!(
+        err.contains("warning:") && err.contains("invalid: 88.9 %"),
+        "{err}"
+    );
+    let v: serde_json::Value = serde_json::from_str(out.trim()).unwrap();
+    assert_eq!(v["grid"], serde_json::json!([189, 52]));
+
+    let dir = std::env::temp_dir().join(format!("lustre-fit-figures-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let out = dir.join("di6.toml");
+    let (code, _, err) = lustre(&["fit", "data/surfaces/di-6.di", "-o", out.to_str().unwrap()]);
+    assert_eq!(code, 0, "{err}");
+    for f in [
+        "di6_heights.png",
+        "di6_histogram.png",
+        "di6_acf.png",
+        "di6_acf.csv",
+    ] {
+        let b = std::fs::read(dir.join(f)).unwrap_or_else(|e| panic!("{f}: {e}"));
+        assert!(b.len() > 1000, "{f}");
+    }
+    let toml = std::fs::read_to_string(&out).unwrap();
+    assert!(
+        toml.contains("outliers = \"ok\"") && toml.contains("units = \"ok\""),
+        "{toml}"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -1,10 +1,13 @@
 //! PNG plots (and the same data as CSV) of a `lustre fit` analysis: the PSD with its fits on log-log
-//! axes and the NDF with its GGX/Beckmann fits. Files are written next to the material file
-//! as `<stem>_psd.png/.csv` and `<stem>_ndf.png/.csv`.
+//! axes, the NDF with its GGX/Beckmann fits, the levelled scan in false colour with a colour
+//! bar and a scale bar, its height histogram beside the Gaussian of the same Sq, and its
+//! ACF with the correlation length. Files are written next to the material file as
+//! `<stem>_psd.png/.csv`, `<stem>_ndf.png/.csv`, `<stem>_heights.png`,
+//! `<stem>_histogram.png/.csv` and `<stem>_acf.png/.csv`.
 
-use fit::ndf;
 use fit::pipeline::Analysis;
-use plot::{Axis, LineStyle, Marker, Plot, PlotError, Series};
+use fit::{Topography, areal, ndf};
+use plot::{Axis, Legend, LineStyle, Marker, Plot, PlotError, Rgb8, RgbImage, Series};
 use std::path::{Path, PathBuf};
 
 /// The plot file `<stem>_<suffix>` next to `material`.
@@ -22,10 +25,20 @@ fn plot_path(material: &Path, suffix: &str) -> PathBuf {
 
 /// Every file [`write`] may write next to `material` (PSD and NDF, PNG and CSV).
 pub fn paths(material: &Path) -> Vec<PathBuf> {
-    ["psd.png", "psd.csv", "ndf.png", "ndf.csv"]
-        .iter()
-        .map(|s| plot_path(material, s))
-        .collect()
+    [
+        "psd.png",
+        "psd.csv",
+        "ndf.png",
+        "ndf.csv",
+        "heights.png",
+        "histogram.png",
+        "histogram.csv",
+        "acf.png",
+        "acf.csv",
+    ]
+    .iter()
+    .map(|s| plot_path(material, s))
+    .collect()
 }
 
 /// Write the plots; returns the files written.
@@ -128,7 +141,231 @@ pub fn write(a: &Analysis, material: &Path) -> Result<Vec<PathBuf>, PlotError> {
         ndf_plot.save_csv(&csv)?;
         written.extend([png, csv]);
     }
+    written.extend(scan_figures(&a.scan, material)?);
     Ok(written)
+}
+
+/// The height image, the histogram and the ACF of the levelled scan.
+fn scan_figures(t: &Topography, material: &Path) -> Result<Vec<PathBuf>, PlotError> {
+    let mut written = Vec::new();
+    let p = areal::height_params(t);
+    let sq = fit::stats::compute(t).sq;
+    let (zs, zunit) = height_unit(t);
+    if !t.is_profile() {
+        let png = plot_path(material, "heights.png");
+        plot::save_png(&height_image(t, p)?, &png)?;
+        written.push(png);
+    }
+    if let Some(h) = areal::histogram(t, 64) {
+        let w = h.edges[1] - h.edges[0];
+        let z: Vec<f64> = (0..h.counts.len())
+            .map(|i| (h.edges[i] + w / 2.0) * zs)
+            .collect();
+        let d: Vec<f64> = h.density.iter().map(|d| d / zs).collect();
+        let gauss: Vec<f64> = z
+            .iter()
+            .map(|z| {
+                let s = sq * zs;
+                (-0.5 * (z / s).powi(2)).exp() / (s * (2.0 * std::f64::consts::PI).sqrt())
+            })
+            .collect();
+        let hist = Plot::new(format!(
+            "height histogram (Sa {:.4} {zunit}, Sz {:.4} {zunit}, Ssk {:.3}, Sku {:.3})",
+            p.sa * zs,
+            p.sz * zs,
+            p.ssk,
+            p.sku
+        ))
+        .x_axis(Axis::linear(format!("height about the mean [{zunit}]")))
+        .y_axis(Axis::linear(format!("probability density [1/{zunit}]")))
+        .series(Series::line("measured", &z, &d).width(2.0))
+        .series(
+            Series::line(format!("Gaussian, Sq {:.4} {zunit}", sq * zs), &z, &gauss)
+                .style(LineStyle::Dashed),
+        );
+        let png = plot_path(material, "histogram.png");
+        hist.save_png(&png, 900, 650)?;
+        let csv = plot_path(material, "histogram.csv");
+        hist.save_csv(&csv)?;
+        written.extend([png, csv]);
+    }
+    if let Some(acf) = areal::acf(t) {
+        let r: Vec<f64> = acf.r.iter().map(|r| r * 1e6).collect();
+        let len = acf.length(areal::ACF_THRESHOLD);
+        let title = match len {
+            Some(l) => format!(
+                "areal ACF, radially averaged: correlation length {:.4} µm (ρ = {})",
+                l * 1e6,
+                areal::ACF_THRESHOLD
+            ),
+            None => format!(
+                "areal ACF, radially averaged: ρ stays above {} to half the scan",
+                areal::ACF_THRESHOLD
+            ),
+        };
+        let rmax = r.last().copied().unwrap_or(1.0);
+        let mut acf_plot = Plot::new(title)
+            .x_axis(Axis::linear("lag r [µm]"))
+            .y_axis(Axis::linear("normalised ACF ρ = 1 − A(r)/Sq²"))
+            .series(Series::line("ACF", &r, &acf.rho).width(2.0))
+            .series(
+                Series::line(
+                    format!("ρ = {}", areal::ACF_THRESHOLD),
+                    &[0.0, rmax],
+                    &[areal::ACF_THRESHOLD; 2],
+                )
+                .style(LineStyle::Dotted),
+            );
+        if let Some(l) = len {
+            acf_plot = acf_plot.series(
+                Series::line("correlation length", &[l * 1e6; 2], &[0.0, 1.0])
+                    .style(LineStyle::Dashed),
+            );
+        }
+        let png = plot_path(material, "acf.png");
+        acf_plot.save_png(&png, 900, 650)?;
+        let csv = plot_path(material, "acf.csv");
+        acf_plot.save_csv(&csv)?;
+        written.extend([png, csv]);
+    }
+    Ok(written)
+}
+
+/// Heights shown in nm below 2 µm of range, in µm above: (metres → unit, its name).
+fn height_unit(t: &Topography) -> (f64, &'static str) {
+    let (lo, hi) = t
+        .heights
+        .iter()
+        .filter(|h| h.is_finite())
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), h| {
+            (a.min(*h), b.max(*h))
+        });
+    if hi - lo < 2e-6 {
+        (1e9, "nm")
+    } else {
+        (1e6, "µm")
+    }
+}
+
+/// A perceptually ordered colour map (dark violet → blue → green → yellow), linear between
+/// five stops.
+fn colour(v: f64) -> Rgb8<u8> {
+    const STOPS: [[f64; 3]; 5] = [
+        [68.0, 1.0, 84.0],
+        [59.0, 82.0, 139.0],
+        [33.0, 145.0, 140.0],
+        [94.0, 201.0, 98.0],
+        [253.0, 231.0, 37.0],
+    ];
+    let x = v.clamp(0.0, 1.0) * 4.0;
+    let i = (x.floor() as usize).min(3);
+    let f = x - i as f64;
+    let c = |k: usize| (STOPS[i][k] + f * (STOPS[i + 1][k] - STOPS[i][k])).round() as u8;
+    Rgb8([c(0), c(1), c(2)])
+}
+
+/// 1, 2 or 5 × 10ⁿ: the round length nearest below `x`.
+fn round_length(x: f64) -> f64 {
+    let e = 10f64.powf(x.log10().floor());
+    [5.0, 2.0, 1.0]
+        .into_iter()
+        .map(|m| m * e)
+        .find(|&v| v <= x)
+        .unwrap_or(e)
+}
+
+/// The levelled map in false colour (0.5 % to 99.5 % of the heights across the colour
+/// range, so a few spikes do not wash it out) on axes in µm, with a white scale bar and,
+/// to its right, the colour bar with its height axis.
+fn height_image(t: &Topography, p: areal::HeightParams) -> Result<RgbImage, PlotError> {
+    let (lx, ly) = (t.size_x() * 1e6, t.size_y() * 1e6);
+    let mut sorted: Vec<f64> = t
+        .heights
+        .iter()
+        .copied()
+        .filter(|h| h.is_finite())
+        .collect();
+    sorted.sort_by(f64::total_cmp);
+    let pick = |q: f64| sorted[((sorted.len() - 1) as f64 * q).round() as usize];
+    let (zs, zunit) = height_unit(t);
+    let (zlo, zhi) = (pick(0.005), pick(0.995));
+    let zhi = if zhi > zlo { zhi } else { zlo + 1e-12 };
+    let bar = round_length(lx / 5.0);
+    let map_plot = |h: u32| {
+        Plot::new(format!(
+            "levelled heights (Sa {:.4} {zunit}, Sz {:.4} {zunit}); scale bar {bar} µm",
+            p.sa * zs,
+            p.sz * zs
+        ))
+        .x_axis(Axis::linear("x [µm]").range(0.0, lx))
+        .y_axis(Axis::linear("y [µm]").range(0.0, ly))
+        .grid(false)
+        .legend(Legend::Hidden)
+        .series(Series::line("", &[0.0, lx], &[0.0, ly]).width(0.1))
+        .render(760, h)
+    };
+    // Size the frame to the scan's aspect ratio.
+    let (_, first) = map_plot(640)?;
+    let (fw, fh) = (
+        first.frame.x1 - first.frame.x0,
+        first.frame.y1 - first.frame.y0,
+    );
+    let want = (fw as f64 * ly / lx).clamp(80.0, 1400.0);
+    let h = (640.0 + want - fh as f64).round().max(200.0) as u32;
+    let (mut img, r) = map_plot(h)?;
+    let f = r.frame;
+    let (w, hh) = ((f.x1 - f.x0).max(1) as f64, (f.y1 - f.y0).max(1) as f64);
+    for py in f.y0..f.y1 {
+        for px in f.x0..f.x1 {
+            let x = (px - f.x0) as f64 + 0.5;
+            let y = (f.y1 - py) as f64 - 0.5;
+            let ix = ((x / w * t.nx as f64) as usize).min(t.nx - 1);
+            let iy = ((y / hh * t.ny as f64) as usize).min(t.ny - 1);
+            let z = t.heights[iy * t.nx + ix];
+            let c = if z.is_finite() {
+                colour((z - zlo) / (zhi - zlo))
+            } else {
+                Rgb8([128, 128, 128])
+            };
+            img.put_pixel(px as u32, py as u32, c);
+        }
+    }
+    // Scale bar: white with a black outline, bottom left inside the frame.
+    let bar_px = (bar / lx * w).round() as i64;
+    let (bx, by) = (f.x0 + 12, f.y1 - 18);
+    for py in by - 2..by + 6 {
+        for px in bx - 2..bx + bar_px + 2 {
+            let inner = (by..by + 4).contains(&py) && (bx..bx + bar_px).contains(&px);
+            img.put_pixel(
+                px as u32,
+                py as u32,
+                if inner { Rgb8([255; 3]) } else { Rgb8([0; 3]) },
+            );
+        }
+    }
+    let (cb, cr) = Plot::new("")
+        .x_axis(Axis::linear(" ").range(0.0, 1.0))
+        .y_axis(Axis::linear(format!("height [{zunit}]")).range(zlo * zs, zhi * zs))
+        .grid(false)
+        .legend(Legend::Hidden)
+        .series(Series::line("", &[0.0, 1.0], &[zlo * zs, zhi * zs]).width(0.1))
+        .render(200, img.height())?;
+    let mut cb = cb;
+    let g = cr.frame;
+    for py in g.y0..g.y1 {
+        let v = (g.y1 - py) as f64 / (g.y1 - g.y0).max(1) as f64;
+        for px in g.x0..g.x1 {
+            cb.put_pixel(px as u32, py as u32, colour(v));
+        }
+    }
+    let mut out = RgbImage::from_pixel(img.width() + cb.width(), img.height(), Rgb8([255; 3]));
+    for (x, y, c) in img.enumerate_pixels() {
+        out.put_pixel(x, y, *c);
+    }
+    for (x, y, c) in cb.enumerate_pixels() {
+        out.put_pixel(img.width() + x, y, *c);
+    }
+    Ok(out)
 }
 
 #[cfg(test)]
@@ -137,7 +374,8 @@ mod tests {
     use fit::pipeline::{Options, analyse};
     use std::path::PathBuf;
 
-    /// PNG and CSV for the PSD and the NDF, next to the material file.
+    /// PNG and CSV for the PSD, the NDF, the histogram and the ACF, and the height image,
+    /// next to the material file.
     #[test]
     fn plots_of_a_map_are_written_next_to_the_material_file() {
         let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("data/surfaces/di-6.di");
@@ -145,7 +383,8 @@ mod tests {
         let a = analyse(scan, None, &Options::default()).unwrap();
         let out = std::env::temp_dir().join(format!("fit-plots-{}.toml", std::process::id()));
         let files = super::write(&a, &out).unwrap();
-        assert_eq!(files.len(), 4);
+        assert_eq!(files.len(), 9);
+        assert_eq!(files, super::paths(&out));
         for f in &files {
             let b = std::fs::read(f).unwrap();
             if f.extension().is_some_and(|e| e == "png") {

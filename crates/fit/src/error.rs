@@ -42,6 +42,17 @@ pub enum ReadError {
         /// What stands there instead.
         found: String,
     },
+    /// The file is in a format recognised by its signature or container that is not read
+    /// (yet), or is no height map at all (an image, a spreadsheet).
+    #[error("{file}: {what}. Fix: {fix}")]
+    NotRead {
+        /// File name.
+        file: String,
+        /// What the file is.
+        what: String,
+        /// What the user can do about it.
+        fix: String,
+    },
     /// The format of the file could not be determined.
     #[error("{file}: unknown surface format. Fix: {fix}")]
     UnknownFormat {

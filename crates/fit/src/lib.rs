@@ -13,6 +13,7 @@
 //! reference-table length `L = 2π·Lc`, where `Lc` is the Matérn range of physics.md §2.
 
 pub mod anisotropy;
+pub mod areal;
 pub mod candidates;
 pub mod error;
 pub mod explicit_brdf;
@@ -27,6 +28,7 @@ pub mod ndf;
 mod ordered_sum;
 pub mod pipeline;
 pub mod psd;
+pub mod quality;
 pub mod resample;
 pub mod rng;
 pub mod sampled_kc;

@@ -132,6 +132,7 @@ pub fn build(a: &Analysis, prov: &Provenance<'_>) -> MaterialFile {
         anisotropy: aniso.as_ref().and_then(|t| t.warning.clone()),
         variance,
         split_problems,
+        quality: &a.quality,
     });
     reliability.psd_extrapolation = psd_extrapolation(psd_table.as_ref());
     MaterialFile {
@@ -239,6 +240,7 @@ struct Flags<'a> {
     anisotropy: Option<String>,
     variance: Option<String>,
     split_problems: Vec<String>,
+    quality: &'a crate::pipeline::Quality,
 }
 
 /// `[reliability]`: each part `"ok"` or its problem, the model's reason, and the list of
@@ -257,6 +259,7 @@ fn reliability(f: &Flags<'_>) -> Reliability {
     let psd = problems(&["measured_psd"]);
     let two_scale = (!f.split_problems.is_empty())
         .then(|| format!("see problem in {}", f.split_problems.join(", ")));
+    let q = f.quality;
     let parts = [
         ("kc", &kc),
         ("alpha", &alpha),
@@ -265,6 +268,9 @@ fn reliability(f: &Flags<'_>) -> Reliability {
         ("form", &f.form),
         ("anisotropy", &f.anisotropy),
         ("variance", &f.variance),
+        ("invalid", &q.invalid),
+        ("outliers", &q.outliers),
+        ("units", &q.units),
     ];
     let unreliable = (parts.iter())
         .filter(|(_, p)| p.is_some())
@@ -297,6 +303,9 @@ fn reliability(f: &Flags<'_>) -> Reliability {
         anisotropy: ok(&f.anisotropy),
         variance: ok(&f.variance),
         model,
+        invalid: ok(&q.invalid),
+        outliers: ok(&q.outliers),
+        units: ok(&q.units),
         unreliable,
     }
 }

@@ -8,10 +8,12 @@
 //! computed are skipped with a note.
 
 use crate::anisotropy::{self, Anisotropy};
+use crate::io::Units;
 use crate::kc::{self, KcFit};
 use crate::level::{self, Form, Level};
 use crate::ndf::{self, Ndf};
 use crate::psd::{self, Psd1d, RadialPsd, WelchOptions};
+use crate::quality::{self, InvalidPolicy};
 use crate::stats::{self, Stats};
 use crate::two_scale::{self, TwoScale};
 use crate::{FitError, Topography, fill};
@@ -37,6 +39,32 @@ pub struct Options {
     pub ndf_smooth_bins: f64,
     /// Levelling; `None`: a plane for maps, a line for profiles.
     pub level: Option<Level>,
+    /// Invalid points, outliers and units: what to check and do before the analysis.
+    pub checks: Checks,
+}
+
+/// What is checked in a scan before its numbers are trusted (see [`crate::quality`]).
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Checks {
+    /// A scan with more than [`MAX_INVALID_FRACTION`] invalid points: refuse, crop or fill.
+    pub invalid: InvalidPolicy,
+    /// Treat outliers (see [`quality::outliers`]) as invalid points instead of flagging them.
+    pub mask_outliers: bool,
+    /// The `--units` the scan was read with, for the fix an implausible Sq or slope names.
+    pub units: Option<Units>,
+}
+
+/// What the checks found: each `Some` is flagged in `[reliability]` and on stderr.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Quality {
+    /// The scan was cropped to its valid part, or filled past the limit.
+    pub invalid: Option<String>,
+    /// Outliers found (flagged or masked).
+    pub outliers: Option<String>,
+    /// Outlying points found.
+    pub outlier_count: usize,
+    /// Sq or the RMS slope is implausible for a metal surface.
+    pub units: Option<String>,
 }
 
 impl Default for Options {
@@ -50,6 +78,7 @@ impl Default for Options {
             ndf_bins: 90,
             ndf_smooth_bins: 1.0,
             level: None,
+            checks: Checks::default(),
         }
     }
 }
@@ -100,6 +129,8 @@ pub struct Analysis {
     pub anisotropy: Option<Anisotropy>,
     /// Parts skipped or degraded, in words.
     pub notes: Vec<String>,
+    /// What the checks of the scan found.
+    pub quality: Quality,
 }
 
 /// A scan ready for analysis.
@@ -159,12 +190,21 @@ fn prepare_unchecked_flat(
     let invalid = t.invalid_count();
     let fraction = invalid as f64 / n as f64;
     if invalid < n && fraction > MAX_INVALID_FRACTION {
+        let rect = match quality::largest_valid_rectangle(&t) {
+            Some((_, _, w, h)) => format!(
+                " ({w} × {h} points, {:.1} % of the scan)",
+                100.0 * (w * h) as f64 / n as f64
+            ),
+            None => String::new(),
+        };
         return Err(FitError::data(
             "invalid points",
             format!(
                 "{:.1} % of the {n} points ({invalid}) are invalid (NaN/masked); filling more \
                  than {:.0} % would invent most of the surface and bias Sq and the PSD low. \
-                 Fix: crop the scan to its valid region, or re-measure with fewer dropouts",
+                 Fix: pass --invalid crop to analyse the largest valid rectangle{rect}, or \
+                 --invalid fill to fill anyway (flagged in [reliability].invalid); or crop the \
+                 scan to its valid region, or re-measure with fewer dropouts",
                 100.0 * fraction,
                 100.0 * MAX_INVALID_FRACTION
             ),
@@ -205,6 +245,77 @@ fn prepare_unchecked_flat(
         },
         flat,
     ))
+}
+
+/// [`prepare_unchecked_flat`] after the [`Checks`]: a scan mostly invalid is cropped or
+/// filled when asked (else refused), and outliers are found on the prepared scan and
+/// masked (then the scan is prepared again) when asked, flagged otherwise.
+fn prepare_checked(
+    t: Topography,
+    level: Option<Level>,
+    checks: &Checks,
+) -> Result<(Prepared, Option<String>, Quality), FitError> {
+    let mut t = t.column_as_profile();
+    let mut q = Quality::default();
+    let n = t.heights.len();
+    let invalid = t.invalid_count();
+    let fraction = invalid as f64 / n.max(1) as f64;
+    if invalid < n && fraction > MAX_INVALID_FRACTION {
+        match checks.invalid {
+            InvalidPolicy::Refuse => {}
+            InvalidPolicy::Crop => {
+                let (x0, y0, w, h) = quality::largest_valid_rectangle(&t)
+                    .filter(|&(_, _, w, h)| w * h >= 2)
+                    .ok_or_else(|| {
+                        FitError::data(
+                            "invalid points",
+                            "no two neighbouring points are valid: nothing to crop to",
+                        )
+                    })?;
+                q.invalid = Some(format!(
+                    "{:.1} % of the points were invalid: analysed the largest valid rectangle \
+                     (--invalid crop), {w} × {h} points from (x, y) = ({x0}, {y0}), {:.1} % of \
+                     the scan; statistics of the rest are unknown",
+                    100.0 * fraction,
+                    100.0 * (w * h) as f64 / n as f64
+                ));
+                t = quality::crop(&t, (x0, y0, w, h));
+            }
+            InvalidPolicy::Fill => {
+                q.invalid = Some(format!(
+                    "{:.1} % of the points were invalid and filled anyway (--invalid fill): \
+                     most of the map is smooth interpolation, so Sq, the slopes and the PSD \
+                     describe the filling as much as the surface",
+                    100.0 * fraction
+                ));
+                // Past the refusal in prepare_unchecked_flat: fill here.
+                fill::harmonic(&mut t)?;
+            }
+        }
+    }
+    let original = checks.mask_outliers.then(|| t.clone());
+    let (mut prepared, mut flat) = prepare_unchecked_flat(t, level)?;
+    if let Some(o) = quality::outliers(&prepared.scan) {
+        let sq = stats::compute(&prepared.scan).sq;
+        let text = o.describe(&prepared.scan, sq);
+        q.outlier_count = o.indices.len();
+        match original {
+            Some(mut t) if t.nx * t.ny == prepared.scan.heights.len() => {
+                for &i in &o.indices {
+                    t.heights[i] = f64::NAN;
+                }
+                (prepared, flat) = prepare_unchecked_flat(t, level)?;
+                q.outliers = Some(format!("masked (--outliers mask) and filled: {text}"));
+            }
+            _ => q.outliers = Some(text),
+        }
+    }
+    Ok((prepared, flat, q))
+}
+
+/// Flag an implausible Sq or slope in `q`.
+fn check_units(q: &mut Quality, stats: &Stats, t: &Topography, checks: &Checks) {
+    q.units = quality::implausible_units(stats.sq, stats.rms_slope(), t.dx, checks.units);
 }
 
 /// The note for a scan with more than [`NOTE_INVALID_FRACTION`] of its points filled.
@@ -252,12 +363,17 @@ pub fn analyse(
     stylus: Option<Topography>,
     opts: &Options,
 ) -> Result<Analysis, FitError> {
-    let Prepared { scan, filled, form } = prepare_with(scan, opts.level)?;
+    let (prepared, flat, mut quality) = prepare_checked(scan, opts.level, &opts.checks)?;
+    if let Some(problem) = flat {
+        return Err(FitError::data("constant heights", problem));
+    }
+    let Prepared { scan, filled, form } = prepared;
     let mut notes = Vec::new();
     if let Some(n) = filled_note(&scan, filled) {
         notes.push(n);
     }
     let stats = stats::compute(&scan);
+    check_units(&mut quality, &stats, &scan, &opts.checks);
     let line_psd = psd::welch(&scan, &opts.welch)?;
     let nseg = line_psd.f.len().saturating_sub(1) * 2;
     let k_hi = (nseg / 4).max(4);
@@ -435,6 +551,7 @@ pub fn analyse(
         two_scale: splits,
         anisotropy,
         notes,
+        quality,
     })
 }
 
@@ -458,13 +575,25 @@ pub struct Summary {
     /// (Sq ≈ 0, as reference tools report it) but the K-correlation fit is of rounding
     /// noise, so [`analyse`] refuses such a scan.
     pub flat: Option<String>,
+    /// What the checks of the scan found.
+    pub quality: Quality,
 }
 
 /// The `fit stats` analysis of one scan.
 pub fn summarise(scan: Topography, level: Option<Level>) -> Result<Summary, FitError> {
-    let (prepared, flat) = prepare_unchecked_flat(scan, level)?;
+    summarise_checked(scan, level, &Checks::default())
+}
+
+/// [`summarise`] with the [`Checks`] the user chose.
+pub fn summarise_checked(
+    scan: Topography,
+    level: Option<Level>,
+    checks: &Checks,
+) -> Result<Summary, FitError> {
+    let (prepared, flat, mut quality) = prepare_checked(scan, level, checks)?;
     let t = &prepared.scan;
     let stats = stats::compute(t);
+    check_units(&mut quality, &stats, t, checks);
     let line_psd = psd::welch(t, &WelchOptions::default())?;
     let kc = kc_of(t, &stats, &line_psd);
     let mut notes = Vec::new();
@@ -496,5 +625,6 @@ pub fn summarise(scan: Topography, level: Option<Level>) -> Result<Summary, FitE
         anisotropy,
         notes,
         flat,
+        quality,
     })
 }

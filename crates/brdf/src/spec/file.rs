@@ -389,6 +389,12 @@ pub struct Reliability {
     pub variance: String,
     /// Why `[material].model` is what it is.
     pub model: String,
+    /// A scan mostly invalid, cropped or filled on request (`--invalid`).
+    pub invalid: String,
+    /// Heights far outside the distribution (spikes, corrupted values), flagged or masked.
+    pub outliers: String,
+    /// An Sq or RMS slope implausible for a metal surface: a unit is probably wrong.
+    pub units: String,
     /// The parts flagged above, for scripts.
     pub unreliable: Vec<String>,
 }

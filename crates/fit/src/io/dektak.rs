@@ -23,6 +23,7 @@ pub(crate) fn sniff(bytes: &[u8]) -> Sniff {
 /// Read a Dektak CSV profile.
 pub(crate) fn read(ctx: Ctx<'_>, bytes: &[u8], want: Want<'_>) -> Result<Decoded, ReadError> {
     let text = text::decode(bytes);
+    text::check_not_cut(ctx, &text)?;
     let mut lines = text.lines().enumerate();
     let mut length = None;
     let mut resolution = None;

@@ -138,6 +138,7 @@ fn header_length(ctx: Ctx<'_>, field: &str, v: &str) -> Result<(f64, Option<f64>
 /// Read a text matrix.
 pub(crate) fn read(ctx: Ctx<'_>, bytes: &[u8], want: Want<'_>) -> Result<Decoded, ReadError> {
     let text = text::decode(bytes);
+    text::check_not_cut(ctx, &text)?;
     let dialect = text::Dialect::guess(text.lines().filter(|l| looks_numeric(l)));
     let mut size_x = None;
     let mut size_y = None;

@@ -13,16 +13,22 @@ pub mod binary;
 pub mod dektak;
 pub mod frt;
 pub mod gsf;
+pub mod gwy;
 pub mod ibw;
+pub mod jpk;
 pub mod matrix;
 pub mod md5;
 pub mod metropro;
 pub mod mi;
 pub mod mnt;
 pub mod nanoscope;
+pub mod netcdf;
 pub mod nid;
+pub mod nms;
+pub mod npy;
 pub mod ole;
 pub mod opd;
+pub mod opdx;
 pub mod park;
 pub mod plu;
 pub mod registry;
@@ -32,9 +38,12 @@ pub mod text;
 pub mod tiff;
 pub mod tmd;
 pub mod units;
+pub mod vk4;
 pub mod wsxm;
 pub mod x3p;
 pub mod xyz;
+pub mod zmg;
+pub mod zon;
 
 pub use registry::{Format, READERS, Sniff};
 
@@ -673,6 +682,15 @@ fn format_of(name: &str, bytes: &[u8], opts: &ReadOptions) -> Result<(Format, bo
     let found = registry::sniffed(name, bytes);
     if let Some((f, Sniff::Magic)) = found {
         return Ok((f, false));
+    }
+    // A format known by its signature or extension that no reader reads (a JPK TIFF that
+    // the Park reader would half-recognise, an image) is named for what it is.
+    if let Some((what, fix)) = registry::unread_format(name, bytes) {
+        return Err(ReadError::NotRead {
+            file: name.to_string(),
+            what,
+            fix,
+        });
     }
     // Checked before the weaker content matches: a NanoScope header whose first bytes
     // were overwritten is still text with numbers, and would be read as a matrix.

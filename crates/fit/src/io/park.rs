@@ -15,6 +15,8 @@ const TAG_MAGIC: u16 = 50432;
 const TAG_VERSION: u16 = 50433;
 const TAG_DATA: u16 = 50434;
 const TAG_HEADER: u16 = 50435;
+/// JPK's `FileFormatVersion`, the first of the private tags JPK image scans carry.
+const TAG_JPK_VERSION: u16 = 0x8000;
 
 /// Content check: a TIFF carrying the Park magic tag (a plain TIFF is only "maybe", so
 /// it gets this reader's explanation rather than "unknown format").
@@ -41,6 +43,13 @@ fn utf16(b: &[u8]) -> String {
 pub(crate) fn read(ctx: Ctx<'_>, bytes: &[u8], want: Want<'_>) -> Result<Decoded, ReadError> {
     let t = tiff::Tiff::parse(bytes)
         .map_err(|e| ctx.err("TIFF", e, "the file is truncated or not a TIFF"))?;
+    if t.get(TAG_JPK_VERSION).is_some() {
+        return Err(ctx.err(
+            "tag 32768",
+            "this TIFF is a JPK image scan (JPK's private tags), not a Park Systems file",
+            "read it with --format jpk (or give it the .jpk extension)",
+        ));
+    }
     if t.uint(TAG_MAGIC) != Some(MAGIC) {
         return Err(ctx.err(
             "tag 50432",

@@ -114,8 +114,8 @@ impl Format {
 }
 
 use super::{
-    al3d, bcr, dektak, frt, gsf, ibw, matrix, metropro, mi, mnt, nanoscope, nid, opd, park, plu,
-    sdf, sur, tmd, wsxm, x3p, xyz,
+    al3d, bcr, dektak, frt, gsf, gwy, ibw, jpk, matrix, metropro, mi, mnt, nanoscope, netcdf, nid,
+    nms, npy, opd, opdx, park, plu, sdf, sur, tmd, vk4, wsxm, x3p, xyz, zmg, zon,
 };
 
 /// `Magic` when the file starts with any of `magics`: some formats have variants (ASCII
@@ -143,6 +143,10 @@ const FRT: &[&[u8]] = &[b"FRTM_GLIDERV"];
 const TMD: &[&[u8]] = &[b"Binary TrueMap Data File"];
 // After OPD's 2-byte header, the directory's own descriptor names itself.
 const OPD: &[&[u8]] = &[b"Directory"];
+const NPY: &[&[u8]] = &[npy::MAGIC];
+const GWY: &[&[u8]] = &[gwy::MAGIC, b"GWYO"];
+const NETCDF: &[&[u8]] = &[b"CDF\x01", b"CDF\x02", b"CDF\x05"];
+const OPDX: &[&[u8]] = &[opdx::MAGIC];
 
 /// `Magic` when any of `magics` stands at byte `offset`.
 fn magic_at(bytes: &[u8], offset: usize, magics: &[&[u8]]) -> Sniff {
@@ -303,6 +307,30 @@ pub static READERS: &[Reader] = &[
         read: ibw::read,
     },
     Reader {
+        name: "jpk",
+        aliases: &["jpk-scan"],
+        description: "JPK (Bruker) image scan .jpk (TIFF with JPK's tags; multi-channel)",
+        extensions: &["jpk"],
+        binary: true,
+        signature: Some(Signature {
+            offset: 0,
+            describe: "a TIFF byte-order mark (`II*\\0` or `MM\\0*`)",
+            present: super::tiff::is_tiff,
+        }),
+        // Any TIFF could be one (its first directory may lie past the sniffed head): the
+        // .jpk extension then breaks the tie with Park's TIFF.
+        sniff: |b| {
+            if jpk::is_jpk(b) {
+                Sniff::Magic
+            } else if super::tiff::is_tiff(b) {
+                Sniff::Maybe
+            } else {
+                Sniff::No
+            }
+        },
+        read: jpk::read,
+    },
+    Reader {
         name: "park",
         aliases: &["psia", "tiff", "tif"],
         description: "Park Systems TIFF (private tags 50432–50435)",
@@ -357,6 +385,86 @@ pub static READERS: &[Reader] = &[
         read: tmd::read,
     },
     Reader {
+        name: "vk4",
+        aliases: &["keyence", "vk3", "vk6", "vk7"],
+        description: "Keyence VK-X laser confocal .vk4/.vk3 (and .vk6/.vk7 wrapping one)",
+        extensions: &["vk4", "vk3", "vk6", "vk7"],
+        binary: true,
+        signature: prefix!("`VK4_`, `VK3_`, `VK6` or `VK7`", vk4::MAGICS),
+        sniff: |b| starts(b, vk4::MAGICS),
+        read: vk4::read,
+    },
+    Reader {
+        name: "zon",
+        aliases: &["keyence-zon"],
+        description: "Keyence VR .zon (KPK0)",
+        extensions: &["zon"],
+        binary: true,
+        signature: prefix!("`KPK0` or `KPK1`", zon::MAGICS),
+        sniff: |b| starts(b, zon::MAGICS),
+        read: zon::read,
+    },
+    Reader {
+        name: "zmg",
+        aliases: &["zeta", "kla"],
+        description: "KLA Zeta .zmg (optical profiler)",
+        extensions: &["zmg"],
+        binary: true,
+        signature: prefix!("`Zeta-Instruments`", &[zmg::MAGIC]),
+        sniff: |b| starts(b, &[zmg::MAGIC]),
+        read: zmg::read,
+    },
+    Reader {
+        name: "gwy",
+        aliases: &["gwyddion-native"],
+        description: "Gwyddion native .gwy (multi-channel, masks)",
+        extensions: &["gwy"],
+        binary: true,
+        signature: prefix!("`GWYP`", GWY),
+        sniff: |b| starts(b, GWY),
+        read: gwy::read,
+    },
+    Reader {
+        name: "opdx",
+        aliases: &["vision64"],
+        description: "Bruker Dektak XT .opdx (Vision64; profiles and maps)",
+        extensions: &["opdx"],
+        binary: true,
+        signature: prefix!("`VCA DATA`", OPDX),
+        sniff: |b| starts(b, OPDX),
+        read: opdx::read,
+    },
+    Reader {
+        name: "nms",
+        aliases: &["nanofocus"],
+        description: "NanoFocus µsurf .nms (confocal)",
+        extensions: &["nms"],
+        binary: true,
+        signature: None,
+        sniff: nms::sniff,
+        read: nms::read,
+    },
+    Reader {
+        name: "npy",
+        aliases: &["numpy"],
+        description: "NumPy array .npy (needs --units and --pixel-size)",
+        extensions: &["npy"],
+        binary: true,
+        signature: prefix!("`\\x93NUMPY`", NPY),
+        sniff: |b| starts(b, NPY),
+        read: npy::read,
+    },
+    Reader {
+        name: "netcdf",
+        aliases: &["nc"],
+        description: "NetCDF classic .nc (SurfaceTopography's container)",
+        extensions: &["nc"],
+        binary: true,
+        signature: prefix!("`CDF\\x01` or `CDF\\x02` (NetCDF classic)", NETCDF),
+        sniff: |b| starts(b, NETCDF),
+        read: netcdf::read,
+    },
+    Reader {
         name: "dektak",
         aliases: &[],
         description: "Bruker Dektak CSV profile",
@@ -380,13 +488,86 @@ pub static READERS: &[Reader] = &[
         name: "xyz",
         aliases: &["csv", "columns"],
         description: "column text: x z profiles or x y z maps (CSV/TSV, unit headers, UTF-16)",
-        extensions: &["xyz", "csv", "txt", "asc", "dat", "prf"],
+        extensions: &["xyz", "csv", "txt", "asc", "dat", "prf", "hfm"],
         binary: false,
         signature: None,
         sniff: xyz::sniff,
         read: xyz::read,
     },
 ];
+
+/// Formats recognised by their signature (or, for containers shared by several formats,
+/// their extension) that no reader reads: the file is named for what it is instead of
+/// "unknown surface format". `(what it is, the fix)`.
+pub fn unread_format(name: &str, bytes: &[u8]) -> Option<(String, String)> {
+    let ext = extension(name);
+    let not_yet =
+        |what: &str, fix: &str| Some((format!("{what} is not read yet"), fix.to_string()));
+    const EXPORT: &str = "export the scan from the instrument software as X3P, SDF or a \
+                          text matrix (all read here)";
+    if bytes.starts_with(b"\x89HDF\r\n\x1a\n") {
+        return match ext.as_str() {
+            "datx" => not_yet(
+                "Zygo DATX (an HDF5 container)",
+                "export it from Mx as MetroPro .dat, X3P or SDF",
+            ),
+            "nc" => not_yet(
+                "NetCDF-4 (an HDF5 container)",
+                "write it as NetCDF classic (format NETCDF3_64BIT_OFFSET), which is read",
+            ),
+            _ => not_yet("an HDF5 file", EXPORT),
+        };
+    }
+    let images: &[(&[u8], &str)] = &[
+        (b"\x89PNG\r\n\x1a\n", "a PNG image"),
+        (b"\xFF\xD8\xFF", "a JPEG image"),
+        (b"GIF87a", "a GIF image"),
+        (b"GIF89a", "a GIF image"),
+        (b"%PDF", "a PDF document"),
+    ];
+    if let Some((_, what)) = images.iter().find(|(m, _)| bytes.starts_with(m)) {
+        return Some((
+            format!(
+                "this is {what}, not a height map: its pixels are colours with no height scale"
+            ),
+            "read the instrument's own file or export the heights (X3P, SDF, text matrix)".into(),
+        ));
+    }
+    if bytes.starts_with(b"BM") && ext == "bmp" {
+        return Some((
+            "this is a BMP image, not a height map: its pixels are colours with no height scale"
+                .into(),
+            "read the instrument's own file or export the heights (X3P, SDF, text matrix)".into(),
+        ));
+    }
+    let signed: &[(&[u8], &str, &str)] = &[
+        (
+            b"MATLAB 5.0 MAT-file",
+            "a MATLAB .mat file",
+            "save the heights with numpy.save (.npy) or as a text matrix",
+        ),
+        (b"OS3D", "Olympus OS3D", EXPORT),
+    ];
+    if let Some((_, what, fix)) = signed.iter().find(|(m, _, _)| bytes.starts_with(m)) {
+        return not_yet(what, fix);
+    }
+    match ext.as_str() {
+        "lext" | "poir" | "oir" => not_yet("Olympus LEXT/OIR", EXPORT),
+        "plux" => not_yet(
+            "Sensofar .plux",
+            "export it from SensoSCAN as .plu, X3P or SDF",
+        ),
+        "sflz" => not_yet(
+            "surfalize .sflz",
+            "save the surface from surfalize as X3P or SDF",
+        ),
+        "xlsx" | "xls" => Some((
+            "this is a spreadsheet, not a height map".into(),
+            "save the sheet's height columns as CSV (x z or x y z)".into(),
+        )),
+        _ => None,
+    }
+}
 
 /// `x3p, sdf, …` for error messages.
 pub fn supported_list() -> String {

@@ -261,3 +261,28 @@ pub fn key_value(line: &str) -> Option<(String, String)> {
     }
     Some((k.to_string(), v.to_string()))
 }
+
+/// The refusal of a text export whose last number was cut short: a file that does not end
+/// with a line break and whose last field ends where no number can (`16.`, `1.5e`, `-`),
+/// as a copy or export interrupted inside `16.58112` leaves it. A number cut after a digit
+/// cannot be told from a whole one; this catches the cuts that can.
+pub(crate) fn check_not_cut(ctx: super::Ctx<'_>, text: &str) -> Result<(), crate::ReadError> {
+    let t = text.trim_end_matches(['\0', ' ', '\t']);
+    if t.is_empty() || t.ends_with(['\n', '\r']) {
+        return Ok(());
+    }
+    let line = t.lines().count();
+    let last = t
+        .rsplit(|c: char| c.is_whitespace() || matches!(c, ',' | ';'))
+        .next()
+        .unwrap_or("");
+    let cut = last.ends_with(['.', 'e', 'E', '+', '-']) && last.bytes().any(|b| b.is_ascii_digit());
+    if cut {
+        return Err(ctx.err(
+            &format!("line {line}"),
+            format!("the file ends inside a number (`{last}`): it was cut short"),
+            "the export or copy was interrupted; re-export or re-copy the file",
+        ));
+    }
+    Ok(())
+}

@@ -1,5 +1,5 @@
 //! The parts of TIFF (baseline, 6.0) that instrument formats hide their data in: the
-//! header, the first image file directory and its entries' values. Every offset is
+//! header, the image file directories (pages) and their entries' values. Every offset is
 //! checked against the file; a corrupt directory is an error, never a panic.
 
 /// One directory entry with its raw value bytes.
@@ -44,6 +44,12 @@ pub fn is_tiff(b: &[u8]) -> bool {
 impl<'a> Tiff<'a> {
     /// Parse the header and the first directory.
     pub fn parse(b: &'a [u8]) -> Result<Tiff<'a>, String> {
+        Tiff::parse_at(b, None).map(|(t, _)| t)
+    }
+
+    /// Parse the directory at byte `ifd` (the first one for `None`), with the offset of the
+    /// next directory (0 at the last).
+    pub fn parse_at(b: &'a [u8], ifd: Option<usize>) -> Result<(Tiff<'a>, usize), String> {
         if !is_tiff(b) {
             return Err("not a TIFF file".into());
         }
@@ -64,7 +70,10 @@ impl<'a> Tiff<'a> {
                 u32::from_be_bytes(c)
             })
         };
-        let ifd = u32_at(4).ok_or("header truncated")? as usize;
+        let ifd = match ifd {
+            Some(o) => o,
+            None => u32_at(4).ok_or("header truncated")? as usize,
+        };
         let n = u16_at(ifd).ok_or("the first directory lies beyond the end")? as usize;
         let mut entries = Vec::with_capacity(n);
         for i in 0..n {
@@ -98,11 +107,76 @@ impl<'a> Tiff<'a> {
             });
         }
         let next = u32_at(ifd + 2 + 12 * n).unwrap_or(0);
-        Ok(Tiff {
-            little,
-            entries,
-            more_pages: next != 0,
-        })
+        Ok((
+            Tiff {
+                little,
+                entries,
+                more_pages: next != 0,
+            },
+            next as usize,
+        ))
+    }
+
+    /// The first value of a DOUBLE (or FLOAT) entry.
+    pub fn double(&self, tag: u16) -> Option<f64> {
+        let e = self.get(tag)?;
+        match e.kind {
+            12 => {
+                let c: [u8; 8] = e.value.get(..8)?.try_into().ok()?;
+                Some(if self.little {
+                    f64::from_le_bytes(c)
+                } else {
+                    f64::from_be_bytes(c)
+                })
+            }
+            11 => {
+                let c: [u8; 4] = e.value.get(..4)?.try_into().ok()?;
+                Some(f64::from(if self.little {
+                    f32::from_le_bytes(c)
+                } else {
+                    f32::from_be_bytes(c)
+                }))
+            }
+            _ => None,
+        }
+    }
+
+    /// An ASCII entry as text (up to its first NUL).
+    pub fn text(&self, tag: u16) -> Option<String> {
+        let e = self.get(tag).filter(|e| e.kind == 2)?;
+        let end = e
+            .value
+            .iter()
+            .position(|&c| c == 0)
+            .unwrap_or(e.value.len());
+        Some(String::from_utf8_lossy(&e.value[..end]).trim().to_string())
+    }
+
+    /// Every value of a SHORT or LONG entry (strip offsets and byte counts).
+    pub fn uints(&self, tag: u16) -> Option<Vec<u64>> {
+        let e = self.get(tag)?;
+        let size = match e.kind {
+            3 => 2,
+            4 => 4,
+            _ => return None,
+        };
+        Some(
+            e.value
+                .chunks_exact(size)
+                .map(|c| {
+                    let mut v = 0u64;
+                    for (i, &x) in c.iter().enumerate() {
+                        let shift = if self.little {
+                            8 * i
+                        } else {
+                            8 * (size - 1 - i)
+                        };
+                        v |= u64::from(x) << shift;
+                    }
+                    v
+                })
+                .collect(),
+        )
     }
 
     /// The entry with this tag.

@@ -1,7 +1,11 @@
 //! ISO 25178-72 X3P: a zip holding `main.xml` (axes, sizes, data link) and the point data
 //! (`bindata/data.bin`, x fastest) or an inline `<DataList>`. Data types D/F/L/I; integer
-//! data are scaled by the Z increment. Non-finite values and points flagged in the optional
-//! valid-points bit map become NaN.
+//! data are scaled by the Z increment. Non-finite values, points flagged in the optional
+//! valid-points bit map and empty `<Datum/>` entries (ISO 5436-2's invalid point) become NaN.
+//! `main.xml` may sit in a folder of the archive (a scan zipped from inside its folder,
+//! beside macOS's `__MACOSX/` copies); the paths it links are then read in that folder.
+//! A zip without `main.xml` is refused naming what it looks like (an Office document, a
+//! SurfaceTopography container) and what it holds.
 //!
 //! Integrity: every entry read is checked against its zip CRC-32, the point data against
 //! `Record3/DataLink/MD5ChecksumPointData` and `main.xml` against the checksum file
@@ -32,8 +36,9 @@ fn parse(ctx: Ctx<'_>, bytes: &[u8]) -> Result<Raw, ReadError> {
             "the X3P file is truncated or corrupt",
         )
     })?;
-    let xml = read_entry(ctx, &mut zip, "main.xml", MAX_XML)?;
-    check_header_md5(ctx, &mut zip, &xml)?;
+    let dir = main_xml_folder(ctx, &zip)?;
+    let xml = read_entry(ctx, &mut zip, &format!("{dir}main.xml"), MAX_XML)?;
+    check_header_md5(ctx, &mut zip, &dir, &xml)?;
     let xml = String::from_utf8(xml)
         .map_err(|_| ctx.err("main.xml", "not UTF-8", "the X3P file is corrupt"))?;
     let doc = parse_xml(ctx, &xml)?;
@@ -141,7 +146,7 @@ fn parse(ctx: Ctx<'_>, bytes: &[u8]) -> Result<Raw, ReadError> {
     };
 
     let mut heights = if let Some(link) = get("Record3/DataLink/PointDataLink") {
-        let link = link.trim().replace('\\', "/");
+        let link = format!("{dir}{}", link.trim().replace('\\', "/"));
         let size = entry_size(ctx, &mut zip, &link)?;
         let n = checked_grid(
             ctx,
@@ -176,14 +181,17 @@ fn parse(ctx: Ctx<'_>, bytes: &[u8]) -> Result<Raw, ReadError> {
         binary::decode(&data, kind, true, n)
             .ok_or_else(|| ctx.short(&link, (n * kind.size()) as u64, data.len() as u64))?
     } else if !doc.data_list.is_empty() {
-        let n = checked_grid(
-            ctx,
-            "Record3/MatrixDimension",
-            nx,
-            ny,
-            1,
-            doc.data_list.len() as u64,
-        )?;
+        let n = checked_grid(ctx, "Record3/MatrixDimension", nx, ny, 0, 0)?;
+        if doc.data_list.len() < n {
+            return Err(ctx.err(
+                "Record3/DataList",
+                format!(
+                    "the header implies {n} points ({nx} × {ny}) but the data list holds only {}",
+                    doc.data_list.len()
+                ),
+                "the file is truncated or its header is corrupt; re-export it",
+            ));
+        }
         doc.data_list[..n]
             .iter()
             .map(|d| {
@@ -214,7 +222,7 @@ fn parse(ctx: Ctx<'_>, bytes: &[u8]) -> Result<Raw, ReadError> {
         *h = if h.is_finite() { *h * zscale } else { f64::NAN };
     }
     if let Some(valid) = get("Record3/DataLink/ValidPointsLink") {
-        let valid = valid.trim().replace('\\', "/");
+        let valid = format!("{dir}{}", valid.trim().replace('\\', "/"));
         let n = heights.len();
         let size = entry_size(ctx, &mut zip, &valid)?;
         let need_bytes = n.div_ceil(8) as u64;
@@ -234,6 +242,73 @@ fn parse(ctx: Ctx<'_>, bytes: &[u8]) -> Result<Raw, ReadError> {
     let channel = get("Record2/Comment").unwrap_or("x3p").trim();
     Ok(Raw::si(nx as usize, ny as usize, dx, dy, heights, channel)
         .spacing_from("Record1/Axes/CX/Increment", "Record1/Axes/CY/Increment"))
+}
+
+/// The folder of the archive that holds `main.xml` (`""` at the root, `scan/` for one
+/// zipped from inside a folder), ignoring the `__MACOSX/` resource-fork copies macOS adds.
+/// An archive without `main.xml` is named for what it is instead.
+fn main_xml_folder<R: Read + std::io::Seek>(
+    ctx: Ctx<'_>,
+    zip: &zip::ZipArchive<R>,
+) -> Result<String, ReadError> {
+    if zip.index_for_name("main.xml").is_some() {
+        return Ok(String::new());
+    }
+    let names: Vec<String> = zip
+        .file_names()
+        .filter_map(Result::ok)
+        .map(|n| n.into_owned())
+        .collect();
+    let mut found: Vec<&String> = names
+        .iter()
+        .filter(|n| {
+            let debris = n.starts_with("__MACOSX/")
+                || n.rsplit('/').next().is_some_and(|f| f.starts_with("._"));
+            n.ends_with("/main.xml") && !debris
+        })
+        .collect();
+    found.sort_by_key(|n| n.matches('/').count());
+    match found.first() {
+        Some(n) => Ok(n[..n.len() - "main.xml".len()].to_string()),
+        None => Err(not_x3p(ctx, &names)),
+    }
+}
+
+/// The refusal of a zip archive that holds no `main.xml`: what it looks like instead.
+fn not_x3p(ctx: Ctx<'_>, names: &[String]) -> ReadError {
+    let has = |n: &str| names.iter().any(|e| e.eq_ignore_ascii_case(n));
+    let what = if has("[Content_Types].xml") {
+        let kind = if names.iter().any(|n| n.starts_with("xl/")) {
+            "an Excel workbook (.xlsx)"
+        } else if names.iter().any(|n| n.starts_with("word/")) {
+            "a Word document (.docx)"
+        } else {
+            "an Office Open XML document"
+        };
+        format!("{kind}, not a height map")
+    } else if has("meta.yml") {
+        "a SurfaceTopography container (meta.yml and the files it lists), not an X3P file"
+            .to_string()
+    } else if has("mimetype") {
+        "an OpenDocument file, not a height map".to_string()
+    } else {
+        "a zip archive that is not an X3P file (no main.xml)".to_string()
+    };
+    let shown: Vec<&str> = names.iter().map(String::as_str).take(6).collect();
+    let more = if names.len() > shown.len() {
+        ", …"
+    } else {
+        ""
+    };
+    ctx.err(
+        "zip container",
+        format!(
+            "{what}; it holds {} entries: {}{more}",
+            names.len(),
+            shown.join(", ")
+        ),
+        "unzip it and read the height file inside, or export the scan as X3P",
+    )
 }
 
 fn entry<'z, R: Read + std::io::Seek>(
@@ -332,12 +407,14 @@ fn read_entry<R: Read + std::io::Seek>(
 fn check_header_md5<R: Read + std::io::Seek>(
     ctx: Ctx<'_>,
     zip: &mut zip::ZipArchive<R>,
+    dir: &str,
     xml: &[u8],
 ) -> Result<(), ReadError> {
-    if zip.index_for_name("md5checksum.hex").is_none() {
+    let name = format!("{dir}md5checksum.hex");
+    if zip.index_for_name(&name).is_none() {
         return Ok(());
     }
-    let text = read_entry(ctx, zip, "md5checksum.hex", 4096)?;
+    let text = read_entry(ctx, zip, &name, 4096)?;
     let text = String::from_utf8_lossy(&text);
     let Some(want) = text.split_whitespace().next() else {
         return Ok(());
@@ -372,8 +449,19 @@ fn parse_xml(ctx: Ctx<'_>, xml: &str) -> Result<Doc, ReadError> {
             )
         })?;
         match ev {
+            // `<Datum/>` is ISO 5436-2's invalid point.
+            Event::Empty(e)
+                if stack.len() == 3
+                    && stack[1..] == ["Record3", "DataList"]
+                    && AsRef::<str>::as_ref(&e.local_name()) == "Datum" =>
+            {
+                data_list.push(String::new());
+            }
             Event::Start(e) => {
                 stack.push(AsRef::<str>::as_ref(&e.local_name()).to_string());
+                if stack.len() == 4 && stack[1..] == ["Record3", "DataList", "Datum"] {
+                    data_list.push(String::new());
+                }
                 if stack.len() > 64 {
                     return Err(ctx.err(
                         "main.xml",
@@ -395,7 +483,9 @@ fn parse_xml(ctx: Ctx<'_>, xml: &str) -> Result<Doc, ReadError> {
                 }
                 let path = stack[1..].join("/");
                 if path == "Record3/DataList/Datum" {
-                    data_list.push(text);
+                    if let Some(last) = data_list.last_mut() {
+                        *last = text;
+                    }
                 } else {
                     fields.entry(path).or_insert(text);
                 }

@@ -3,8 +3,11 @@
 //! whitespace, UTF-8 or UTF-16 with or without a BOM.
 //!
 //! Column titles may carry units (`X_(microns)`, `x in µm`, `z [nm]`, `Height (um)`), a
-//! row of units may follow the titles (`µm;µm;nm`), an `index` column is dropped and a
-//! `valid`/`mask` column marks invalid points. A profile whose x is not uniformly spaced
+//! row of units may follow the titles (`µm;µm;nm`, or `[mm];[mm];[1/0]` over a validity
+//! column as in the `.hfm` profile export `X;Y;valid`, where Y is the height), an `index`
+//! column is dropped and a `valid`/`mask` column marks invalid points. A lone integer
+//! between a units line and the rows is a point count (a note says when it disagrees
+//! with the rows that follow). A profile whose x is not uniformly spaced
 //! is resampled by linear interpolation onto the same number of points, and the notes
 //! say so. Units the file does not state come from `--units`.
 
@@ -42,6 +45,16 @@ fn unit_in_title(title: &str) -> Option<f64> {
         .filter(|w| !w.is_empty())
         .find_map(units::length_factor)
         .filter(|_| t.split(|c: char| c.is_whitespace() || c == '_').count() > 1)
+}
+
+/// A field of a units row: a length unit, or what exporters write over a validity column
+/// (`[1/0]`, `[0/1]`, `[-]`, `[]`).
+fn unit_field(f: &str) -> bool {
+    let inner = f
+        .trim()
+        .trim_matches(|c| matches!(c, '[' | ']' | '(' | ')'))
+        .trim();
+    units::length_factor(f).is_some() || matches!(inner, "" | "1/0" | "0/1" | "-" | "1")
 }
 
 fn role_of(title: &str) -> Role {
@@ -113,12 +126,14 @@ fn numeric_start(l: &str) -> bool {
 /// Read a column file.
 pub(crate) fn read(ctx: Ctx<'_>, bytes: &[u8], want: Want<'_>) -> Result<Decoded, ReadError> {
     let text = text::decode(bytes);
+    text::check_not_cut(ctx, &text)?;
     let d = text::Dialect::guess(text.lines().filter(|l| numeric_start(l)));
     let mut header: Vec<String> = Vec::new();
     let mut rows: Vec<Vec<f64>> = Vec::new();
     let mut first_line = 0;
     let mut ncol = 0;
     let mut kv_units: (Option<f64>, Option<f64>) = (None, None);
+    let mut point_count: Option<(usize, f64)> = None;
     for (i, line) in text.lines().enumerate() {
         let t = line.trim();
         if t.is_empty() {
@@ -140,6 +155,18 @@ pub(crate) fn read(ctx: Ctx<'_>, bytes: &[u8], want: Want<'_>) -> Result<Decoded
         }
         match d.row(t) {
             Some(r) => {
+                // A lone integer before rows of x z: the point count some exporters
+                // write after the units line.
+                let count_line = ncol == 1
+                    && rows.len() == 1
+                    && r.len() >= 2
+                    && rows[0][0] >= 0.0
+                    && rows[0][0].fract() == 0.0;
+                if count_line {
+                    point_count = Some((first_line, rows[0][0]));
+                    rows.clear();
+                    ncol = 0;
+                }
                 if ncol == 0 {
                     ncol = r.len();
                     first_line = i + 1;
@@ -187,16 +214,23 @@ pub(crate) fn read(ctx: Ctx<'_>, bytes: &[u8], want: Want<'_>) -> Result<Decoded
             .map(|s| s.trim().trim_matches('"').to_string())
             .collect()
     };
+    // A header line may be split by spaces where the rows use commas (`µm µm` over
+    // `1.3e+01, 1.7e+01`).
     let fitting: Vec<Vec<String>> = header
         .iter()
-        .map(|l| split(l))
+        .map(|l| {
+            let f = split(l);
+            if f.len() == ncol {
+                f
+            } else {
+                l.split_whitespace().map(str::to_string).collect()
+            }
+        })
         .filter(|f| f.len() == ncol)
         .collect();
     if let Some(last) = fitting.last() {
-        let unit_row = last
-            .iter()
-            .all(|f| f.is_empty() || units::length_factor(f).is_some())
-            && last.iter().any(|f| !f.is_empty());
+        let unit_row = last.iter().all(|f| f.is_empty() || unit_field(f))
+            && last.iter().any(|f| units::length_factor(f).is_some());
         let titles = if unit_row && fitting.len() >= 2 {
             &fitting[fitting.len() - 2]
         } else {
@@ -235,6 +269,14 @@ pub(crate) fn read(ctx: Ctx<'_>, bytes: &[u8], want: Want<'_>) -> Result<Decoded
         notes.push(format!(
             "column `{}` marks invalid points",
             columns[v].title
+        ));
+    }
+    if let Some((line, n)) = point_count
+        && n != rows.len() as f64
+    {
+        notes.push(format!(
+            "line {line} gives a point count of {n}, but {} data lines follow: all are read",
+            rows.len()
         ));
     }
     let is_valid = |r: &[f64]| valid.is_none_or(|v| r[v].is_finite() && r[v] != 0.0);
