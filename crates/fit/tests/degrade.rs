@@ -506,8 +506,9 @@ fn the_psd_tails_the_renderer_assumes_are_stated() {
     let doc = material::build(&a, &prov("kc", b"", &[]));
     let e = &doc.reliability.psd_extrapolation;
     println!("{e}");
-    assert!(doc.psd.usable);
-    let t = brdf::statistics::TabulatedPsd::new(&doc.psd.zeta_rad_per_um, &doc.psd.p_um4).unwrap();
+    let psd = doc.psd.as_ref().unwrap();
+    assert!(psd.usable);
+    let t = brdf::statistics::TabulatedPsd::new(&psd.zeta_rad_per_um, &psd.p_um4).unwrap();
     let (lo, hi) = t.band_rad_per_um();
     assert!(e.starts_with("assumed, not measured"), "{e}");
     assert!(

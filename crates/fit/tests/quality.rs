@@ -90,13 +90,13 @@ fn a_mostly_invalid_scan_is_refused_with_the_overrides_named() {
         ..Options::default()
     };
     let a = analyse(read("formats/sur-3.sur"), None, &opts).unwrap();
-    let doc = fit::material::build(&a, &provenance());
+    let doc = fit::material_file::build(&a, &provenance());
     assert!(doc.reliability.invalid.contains("filled anyway"));
     assert!(doc.reliability.unreliable.contains(&"invalid".to_string()));
 }
 
-fn provenance() -> fit::material::Provenance<'static> {
-    fit::material::Provenance {
+fn provenance() -> fit::material_file::Provenance<'static> {
+    fit::material_file::Provenance {
         file: "scan",
         bytes: b"",
         stylus: None,
@@ -211,7 +211,7 @@ fn corrupted_values_are_found_located_and_maskable() {
     );
     assert!(m.quality.outliers.unwrap().starts_with("masked"));
     let a = analyse(t_bad, None, &Options::default()).unwrap();
-    let doc = fit::material::build(&a, &provenance());
+    let doc = fit::material_file::build(&a, &provenance());
     assert!(doc.reliability.outliers.contains("robust σ"));
     assert!(doc.reliability.unreliable.contains(&"outliers".to_string()));
 }
