@@ -88,14 +88,35 @@ impl JudgeArgs {
             level: crate::cmd_fit::level_of(&self.read),
             reference: self.reference.clone(),
         };
-        // The library names its options; here they are flags.
-        opts.check().map_err(|e| {
-            let msg = e.to_string();
-            let (name, rest) = msg.split_once(' ').unwrap_or((&msg, ""));
-            anyhow!("--{} {rest}", name.replace('_', "-"))
-        })?;
+        opts.check().map_err(as_flags)?;
         Ok(opts)
     }
+}
+
+/// The library's message with its option names as this command's flags.
+fn as_flags(e: judge::JudgeError) -> anyhow::Error {
+    const NAMES: [(&str, &str); 8] = [
+        ("theta_i", "--theta-i"),
+        ("lambda", "--lambda"),
+        ("cutoff", "--cutoff"),
+        ("angles", "--angles"),
+        ("tile", "--tile"),
+        ("crop", "--crop"),
+        ("upsample", "--upsample"),
+        ("reference", "--reference"),
+    ];
+    let msg = e.to_string();
+    let mut out = String::with_capacity(msg.len() + 16);
+    for (i, word) in msg.split(' ').enumerate() {
+        if i > 0 {
+            out.push(' ');
+        }
+        match NAMES.iter().find(|(n, _)| *n == word) {
+            Some((_, flag)) => out.push_str(flag),
+            None => out.push_str(word),
+        }
+    }
+    anyhow!(out)
 }
 
 /// Runs `lustre judge`.
@@ -113,6 +134,9 @@ pub fn run(args: JudgeArgs) -> anyhow::Result<()> {
     crate::outputs::check(&outputs)?;
     let name = args.scan.display().to_string();
     let topo = fit::io::read_bytes(&name, &bytes, &crate::cmd_fit::read_options(&args.read)?)?;
+    // Before the minute of analysis: a crop or upsampling the scan cannot take.
+    judge::check_explicit_size(&opts, topo.nx, topo.ny, topo.is_profile())
+        .map_err(|e| as_flags(e).context(name.clone()))?;
     let j = judge::judge(&name, topo, &opts, &mut |line| eprintln!("{line}"))?;
     j.write(&args.out, !args.no_plots)?;
     if args.json {

@@ -187,10 +187,11 @@ pub fn read_fit_file(path: &std::path::Path) -> anyhow::Result<FitFile> {
     let file: brdf::spec::MaterialFile = toml::from_str(&text).map_err(|e| {
         let at = e.span().map(|s| {
             let line = text[..s.start].matches('\n').count() + 1;
-            format!(":{line}")
+            let shown = text.lines().nth(line - 1).unwrap_or("").trim();
+            format!(":{line}: `{shown}`")
         });
         anyhow!(
-            "{}{}: {} (expected a `lustre fit` material file)",
+            "{}{}: {}. Fix: correct it, or write the file again with `lustre fit`",
             path.display(),
             at.unwrap_or_default(),
             e.message().trim()

@@ -244,7 +244,7 @@ fn an_unknown_model_in_the_material_file_is_blamed_on_the_file() {
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(!out.status.success());
     assert!(
-        err.contains("steel.toml: [material].model = \"phong\"")
+        err.contains("steel.toml:2: `model = \"phong\"`")
             && err.contains("Fix:")
             && !err.contains("--models phong"),
         "{err}"

@@ -167,7 +167,7 @@ fn kc_surface(a: &Analysis) -> (KcSpec, Vec<String>) {
     let mut problems = Vec::new();
     if let Some(r) = a.kc.reason {
         problems.push(format!(
-            "the K-correlation fit is degenerate ({}, γ {:.3})",
+            "degenerate K-correlation fit: {} (γ {:.3})",
             r.describe(),
             a.kc.params.gamma
         ));

@@ -1274,8 +1274,13 @@ mod desc {
             let set_opts = |d: &mut MaterialDesc, o: &GhsOptions| {
                 d.energy = Some(o.energy);
                 d.fresnel_angle = Some(o.fresnel_angle);
-                d.polarization = Some(o.polarization);
-                d.polarization_factor = Some(o.polarization_factor);
+                // The scalar theory's defaults are left implicit, as files written
+                // before the polarisation options have them.
+                let defaults = GhsOptions::default();
+                d.polarization =
+                    (o.polarization != defaults.polarization).then_some(o.polarization);
+                d.polarization_factor = (o.polarization_factor != defaults.polarization_factor)
+                    .then_some(o.polarization_factor);
             };
             match &self.model {
                 ModelSpec::Ggx { alpha_x, alpha_y } | ModelSpec::Beckmann { alpha_x, alpha_y } => {
