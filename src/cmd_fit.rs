@@ -148,9 +148,7 @@ pub struct MaterialArgs {
     pub metal: String,
     /// Model written to [material].model; `auto` picks GHS when the K-correlation fit is
     /// sound, else the measured PSD, else GGX.
-    #[arg(long, default_value = "auto", value_parser = [
-        "auto", "ghs", "ghs_ssa", "measured_psd", "two_scale", "ggx", "beckmann", "smooth",
-    ])]
+    #[arg(long, default_value = "auto", value_parser = model_names())]
     pub model: String,
     /// Output material file.
     #[arg(short, long, default_value = "material.toml")]
@@ -162,6 +160,17 @@ pub struct MaterialArgs {
     pub read: ScanArgs,
     #[command(flatten)]
     pub checks: CheckArgs,
+}
+
+/// `auto` and every model a fit file can draw (the anisotropic GHS needs correlation
+/// lengths along two axes, which the fit does not measure), for `--model`.
+fn model_names() -> clap::builder::PossibleValuesParser {
+    use brdf::spec::ModelKind;
+    let drawable = (ModelKind::ALL.iter())
+        .filter(|m| !matches!(m, ModelKind::GhsSsaAniso | ModelKind::GhsAniso))
+        .map(|m| m.name());
+    let names = std::iter::once("auto").chain(drawable);
+    clap::builder::PossibleValuesParser::new(names.collect::<Vec<_>>())
 }
 
 /// `lustre fit stats <scan> --json`.

@@ -25,7 +25,7 @@ use alloc::vec::Vec;
 use core::f64::consts::PI;
 
 use crate::Metal;
-use crate::spec::{FresnelSpec, KcSpec, MaterialSpec, ModelSpec};
+use crate::spec::{FresnelSpec, KcSpec, MaterialSpec, ModelKind, ModelSpec};
 use crate::wave::two_scale::CoherentPart;
 use crate::wave::{Energy, FresnelAngle, GhsOptions};
 
@@ -224,41 +224,56 @@ impl PaperModel {
         PaperModel::TwoScale(100.0),
     ];
 
+    /// The models with a name of their own (every two-scale cutoff but 100λ is
+    /// `two_scale_N`).
+    const NAMED: [PaperModel; 8] = [
+        PaperModel::Ggx(AlphaRule::Slope),
+        PaperModel::Ggx(AlphaRule::Identity),
+        PaperModel::Beckmann(AlphaRule::Slope),
+        PaperModel::Beckmann(AlphaRule::Identity),
+        PaperModel::GhsSsa,
+        PaperModel::Ghs,
+        PaperModel::TwoScale(100.0),
+        PaperModel::MeasuredPsd,
+    ];
+
+    /// The reflection model.
+    pub fn kind(&self) -> ModelKind {
+        match self {
+            PaperModel::Ggx(_) => ModelKind::Ggx,
+            PaperModel::Beckmann(_) => ModelKind::Beckmann,
+            PaperModel::GhsSsa => ModelKind::GhsSsa,
+            PaperModel::Ghs => ModelKind::Ghs,
+            PaperModel::TwoScale(_) => ModelKind::TwoScale,
+            PaperModel::MeasuredPsd => ModelKind::MeasuredPsd,
+        }
+    }
+
     /// Parses `ggx` (slope α), `ggx_identity`, `beckmann`,
     /// `beckmann_identity`, `ghs_ssa`, `ghs`, `two_scale` (100λ),
     /// `two_scale_50` …, `measured_psd`.
     pub fn from_name(name: &str) -> Option<PaperModel> {
-        Some(match name {
-            "ggx" => PaperModel::Ggx(AlphaRule::Slope),
-            "ggx_identity" => PaperModel::Ggx(AlphaRule::Identity),
-            "beckmann" => PaperModel::Beckmann(AlphaRule::Slope),
-            "beckmann_identity" => PaperModel::Beckmann(AlphaRule::Identity),
-            "ghs_ssa" => PaperModel::GhsSsa,
-            "ghs" => PaperModel::Ghs,
-            "two_scale" => PaperModel::TwoScale(100.0),
-            "measured_psd" => PaperModel::MeasuredPsd,
-            other => {
-                let m: f64 = other.strip_prefix("two_scale_")?.parse().ok()?;
-                if !(m.is_finite() && m > 0.0) {
-                    return None;
-                }
-                PaperModel::TwoScale(m)
-            }
-        })
+        if let Some(m) = PaperModel::NAMED.into_iter().find(|m| m.name() == name) {
+            return Some(m);
+        }
+        let m: f64 = name
+            .strip_prefix(ModelKind::TwoScale.name())?
+            .strip_prefix('_')?
+            .parse()
+            .ok()?;
+        (m.is_finite() && m > 0.0).then_some(PaperModel::TwoScale(m))
     }
 
-    /// The name [`PaperModel::from_name`] reads.
+    /// The name [`PaperModel::from_name`] reads: the model's, with `_identity` for the
+    /// GGX ≡ KC α and `_N` for a two-scale cutoff other than 100λ.
     pub fn name(&self) -> String {
+        let base = self.kind().name();
         match self {
-            PaperModel::Ggx(AlphaRule::Slope) => "ggx".into(),
-            PaperModel::Ggx(AlphaRule::Identity) => "ggx_identity".into(),
-            PaperModel::Beckmann(AlphaRule::Slope) => "beckmann".into(),
-            PaperModel::Beckmann(AlphaRule::Identity) => "beckmann_identity".into(),
-            PaperModel::GhsSsa => "ghs_ssa".into(),
-            PaperModel::Ghs => "ghs".into(),
-            PaperModel::TwoScale(m) if *m == 100.0 => "two_scale".into(),
-            PaperModel::TwoScale(m) => format!("two_scale_{m}"),
-            PaperModel::MeasuredPsd => "measured_psd".into(),
+            PaperModel::Ggx(AlphaRule::Identity) | PaperModel::Beckmann(AlphaRule::Identity) => {
+                format!("{base}_identity")
+            }
+            PaperModel::TwoScale(m) if *m != 100.0 => format!("{base}_{m}"),
+            _ => base.into(),
         }
     }
 

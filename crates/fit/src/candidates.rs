@@ -10,7 +10,7 @@ use crate::kc::KcParams;
 use crate::pipeline::Analysis;
 use crate::two_scale::BetaSource;
 use brdf::paper::{REFERENCE_LAMBDA_NM, short};
-use brdf::spec::{FresnelSpec, KcSpec, MaterialSpec, ModelSpec};
+use brdf::spec::{FresnelSpec, KcSpec, MaterialSpec, ModelKind, ModelSpec};
 use brdf::statistics::{TabulatedPsd, epd, kc};
 use brdf::wave::GhsOptions;
 use brdf::wave::two_scale::CoherentPart;
@@ -23,8 +23,8 @@ const UM: f64 = 1e6;
 pub struct Candidate {
     /// Unique key: the family, or `two_scale_<cutoff multiple>` for a two-scale split.
     pub key: String,
-    /// The recipe: `ggx`, `beckmann`, `ggx_kc`, `ghs_ssa`, `ghs`, `measured_psd`, `two_scale`.
-    pub family: &'static str,
+    /// The recipe.
+    pub family: Family,
     /// Row label for reports.
     pub label: String,
     /// What the model assumes about the surface (the report's "assumes" column).
@@ -69,63 +69,96 @@ pub struct TableInfo {
     pub tail_clamped: bool,
 }
 
-/// The recipes, in report order: family, what it assumes.
-pub const RECIPES: [(&str, &str); 7] = [
-    (
-        "ggx",
-        "geometric optics, GGX slope distribution fitted to the measured NDF",
-    ),
-    (
-        "beckmann",
-        "geometric optics, Beckmann slope distribution fitted to the measured NDF",
-    ),
-    (
-        "ggx_kc",
-        "GGX with α from the KC fit by the GGX ≡ KC identity (α = 1/(2kLc), 550 nm)",
-    ),
-    (
-        "ghs_ssa",
-        "Gaussian heights, KC spectrum, smooth-surface (first-order) lobe",
-    ),
-    ("ghs", "Gaussian heights, KC spectrum, all orders"),
-    (
-        "measured_psd",
-        "Gaussian heights, measured isotropic PSD, all orders",
-    ),
-    (
-        "two_scale",
-        "exponential NDF above the cutoff period, KC diffraction below it",
-    ),
-];
-
-fn assumes(family: &str) -> &'static str {
-    RECIPES
-        .iter()
-        .find(|(f, _)| *f == family)
-        .map_or("", |(_, a)| a)
+/// The recipes: which model a candidate is and how its parameters come from the scan.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Family {
+    /// GGX with α fitted to the measured NDF.
+    Ggx,
+    /// Beckmann with α fitted to the measured NDF.
+    Beckmann,
+    /// GGX with α from the K-correlation fit by the GGX ≡ KC identity.
+    GgxKc,
+    /// GHS smooth-surface approximation of the K-correlation fit.
+    GhsSsa,
+    /// Full GHS of the K-correlation fit.
+    Ghs,
+    /// Full GHS of the measured PSD.
+    MeasuredPsd,
+    /// Two-scale at one split of the surface.
+    TwoScale,
 }
 
-/// Every candidate of the analysis, in [`RECIPES`] order (one two-scale candidate per split
+impl Family {
+    /// Every recipe, in report order.
+    pub const ALL: [Family; 7] = [
+        Family::Ggx,
+        Family::Beckmann,
+        Family::GgxKc,
+        Family::GhsSsa,
+        Family::Ghs,
+        Family::MeasuredPsd,
+        Family::TwoScale,
+    ];
+
+    /// The key of the recipe: its model's name, `ggx_kc` for the identity.
+    pub fn name(self) -> &'static str {
+        match self {
+            Family::GgxKc => "ggx_kc",
+            f => f.model().name(),
+        }
+    }
+
+    /// The reflection model the recipe builds.
+    pub fn model(self) -> ModelKind {
+        match self {
+            Family::Ggx | Family::GgxKc => ModelKind::Ggx,
+            Family::Beckmann => ModelKind::Beckmann,
+            Family::GhsSsa => ModelKind::GhsSsa,
+            Family::Ghs => ModelKind::Ghs,
+            Family::MeasuredPsd => ModelKind::MeasuredPsd,
+            Family::TwoScale => ModelKind::TwoScale,
+        }
+    }
+
+    /// What the model assumes about the surface (the report's "assumes" column).
+    pub fn assumes(self) -> &'static str {
+        match self {
+            Family::Ggx => "geometric optics, GGX slope distribution fitted to the measured NDF",
+            Family::Beckmann => {
+                "geometric optics, Beckmann slope distribution fitted to the measured NDF"
+            }
+            Family::GgxKc => {
+                "GGX with α from the KC fit by the GGX ≡ KC identity (α = 1/(2kLc), 550 nm)"
+            }
+            Family::GhsSsa => "Gaussian heights, KC spectrum, smooth-surface (first-order) lobe",
+            Family::Ghs => "Gaussian heights, KC spectrum, all orders",
+            Family::MeasuredPsd => "Gaussian heights, measured isotropic PSD, all orders",
+            Family::TwoScale => "exponential NDF above the cutoff period, KC diffraction below it",
+        }
+    }
+}
+
+/// Every candidate of the analysis, in [`Family::ALL`] order (one two-scale candidate per split
 /// of `a.two_scale`), with `fresnel` as their Fresnel term.
 pub fn candidates(a: &Analysis, fresnel: &FresnelSpec) -> Vec<Candidate> {
     let mut out = vec![
         microfacet(a, fresnel, false),
         microfacet(a, fresnel, true),
         ggx_kc(a, fresnel),
-        kc_model(a, fresnel, "ghs_ssa"),
-        kc_model(a, fresnel, "ghs"),
+        kc_model(a, fresnel, Family::GhsSsa),
+        kc_model(a, fresnel, Family::Ghs),
         measured_psd(a, fresnel),
     ];
     out.extend(a.two_scale.iter().map(|t| two_scale(t, fresnel)));
     out
 }
 
-fn blank(family: &'static str, label: String) -> Candidate {
+fn blank(family: Family, label: String) -> Candidate {
     Candidate {
-        key: family.to_string(),
+        key: family.name().to_string(),
         family,
         label,
-        assumes: assumes(family),
+        assumes: family.assumes(),
         spec: None,
         problems: Vec::new(),
         cutoff: None,
@@ -136,9 +169,9 @@ fn blank(family: &'static str, label: String) -> Candidate {
 /// GGX (or Beckmann) with the roughness fitted to the measured NDF.
 fn microfacet(a: &Analysis, fresnel: &FresnelSpec, beckmann: bool) -> Candidate {
     let (family, name, fitted) = if beckmann {
-        ("beckmann", "Beckmann", a.ndf.alpha_beckmann.0)
+        (Family::Beckmann, "Beckmann", a.ndf.alpha_beckmann.0)
     } else {
-        ("ggx", "GGX", a.ndf.alpha_ggx.0)
+        (Family::Ggx, "GGX", a.ndf.alpha_ggx.0)
     };
     let (alpha, problem) = renderer_alpha(fitted);
     let mut c = blank(family, format!("{name}, NDF fit (α {})", short(alpha)));
@@ -186,7 +219,7 @@ fn kc_surface(a: &Analysis) -> (KcSpec, Vec<String>) {
 /// GGX with α from the K-correlation fit by the GGX ≡ KC identity at 550 nm.
 fn ggx_kc(a: &Analysis, fresnel: &FresnelSpec) -> Candidate {
     let (surface, problems) = kc_surface(a);
-    let mut c = blank("ggx_kc", "GGX ≡ KC identity".into());
+    let mut c = blank(Family::GgxKc, "GGX ≡ KC identity".into());
     c.problems = problems;
     match brdf::wave::ggx_kc::ggx_alpha_from_kc_slope_space(
         surface.lc_um,
@@ -211,9 +244,9 @@ fn ggx_kc(a: &Analysis, fresnel: &FresnelSpec) -> Candidate {
 }
 
 /// GHS SSA or full GHS with the K-correlation fit as it is.
-fn kc_model(a: &Analysis, fresnel: &FresnelSpec, family: &'static str) -> Candidate {
+fn kc_model(a: &Analysis, fresnel: &FresnelSpec, family: Family) -> Candidate {
     let (surface, problems) = kc_surface(a);
-    let name = if family == "ghs" {
+    let name = if family == Family::Ghs {
         "full GHS"
     } else {
         "GHS SSA"
@@ -222,7 +255,7 @@ fn kc_model(a: &Analysis, fresnel: &FresnelSpec, family: &'static str) -> Candid
     c.problems = problems;
     let options = GhsOptions::default();
     let spec = MaterialSpec {
-        model: if family == "ghs" {
+        model: if family == Family::Ghs {
             ModelSpec::Ghs { surface, options }
         } else {
             ModelSpec::GhsSsa { surface, options }
@@ -239,7 +272,7 @@ fn kc_model(a: &Analysis, fresnel: &FresnelSpec, family: &'static str) -> Candid
 
 /// Full GHS with the measured PSD, as [`measured_table`] tabulates it.
 fn measured_psd(a: &Analysis, fresnel: &FresnelSpec) -> Candidate {
-    let mut c = blank("measured_psd", "full GHS, measured PSD".into());
+    let mut c = blank(Family::MeasuredPsd, "full GHS, measured PSD".into());
     match measured_table(a) {
         Ok((zeta, p, info)) => {
             c.table = Some(info);
@@ -340,8 +373,8 @@ const TWO_SCALE_LC_MAX_UM: f64 = kc::LC_MAX_UM;
 /// The two-scale model of one split: its β and residual K-correlation fit, in range.
 fn two_scale(t: &crate::two_scale::TwoScale, fresnel: &FresnelSpec) -> Candidate {
     let m = t.multiple;
-    let mut c = blank("two_scale", String::new());
-    c.key = format!("two_scale_{m}");
+    let mut c = blank(Family::TwoScale, String::new());
+    c.key = format!("{}_{m}", Family::TwoScale.name());
     c.cutoff = Some((m, t.cutoff * UM));
     let ((sigma_um, lc_um, gamma), range) = renderer_kc(&t.kc.params);
     if let Some(r) = t.kc.reason {

@@ -13,7 +13,7 @@
 //! form left in the residual, anisotropy the isotropic models ignore — is listed in
 //! `[reliability]`, and the model defaults to one whose inputs are reliable.
 
-use crate::candidates::{Candidate, candidates};
+use crate::candidates::{Candidate, Family, candidates};
 use crate::pipeline::Analysis;
 use crate::two_scale::BetaSource;
 use crate::{FitError, sha256};
@@ -111,10 +111,10 @@ pub fn variance_mismatch(
 pub fn build(a: &Analysis, prov: &Provenance<'_>) -> MaterialFile {
     let fresnel = Metal::from_name(prov.metal).map_or(FresnelSpec::One, FresnelSpec::Metal);
     let cands = candidates(a, &fresnel);
-    let find = |key: &str| cands.iter().find(|c| c.key == key);
-    let kc = find("ghs_ssa").expect("the GHS SSA candidate");
-    let psd = find("measured_psd").expect("the measured-PSD candidate");
-    let aniso = anisotropy(a, find("ggx").and_then(alpha_of).unwrap_or(f64::NAN));
+    let find = |f: Family| cands.iter().find(|c| c.family == f);
+    let kc = find(Family::GhsSsa).expect("the GHS SSA candidate");
+    let psd = find(Family::MeasuredPsd).expect("the measured-PSD candidate");
+    let aniso = anisotropy(a, find(Family::Ggx).and_then(alpha_of).unwrap_or(f64::NAN));
     let (two_scale, split_problems) = splits(a, &cands);
     let mut material = material_desc(prov.metal, &cands, aniso.as_ref());
     let kc_ok = kc.problems.is_empty();
@@ -159,8 +159,8 @@ fn alpha_of(c: &Candidate) -> Option<f64> {
 /// `[material]`: the metal, the K-correlation parameters, the NDF roughness (and its two
 /// axes on an anisotropic surface).
 fn material_desc(metal: &str, cands: &[Candidate], aniso: Option<&Anisotropy>) -> MaterialDesc {
-    let find = |key: &str| cands.iter().find(|c| c.key == key);
-    let surface = find("ghs_ssa")
+    let find = |f: Family| cands.iter().find(|c| c.family == f);
+    let surface = find(Family::GhsSsa)
         .and_then(|c| c.spec.as_ref())
         .and_then(|s| s.model.surface());
     let axes = aniso.filter(|t| t.anisotropic).map(|t| t.alpha_ggx);
@@ -169,8 +169,8 @@ fn material_desc(metal: &str, cands: &[Candidate], aniso: Option<&Anisotropy>) -
         sigma_um: surface.map(|s| s.sigma_um),
         lc_um: surface.map(|s| s.lc_um),
         gamma: surface.map(|s| s.gamma),
-        alpha: find("ggx").and_then(alpha_of),
-        alpha_beckmann: find("beckmann").and_then(alpha_of),
+        alpha: find(Family::Ggx).and_then(alpha_of),
+        alpha_beckmann: find(Family::Beckmann).and_then(alpha_of),
         alpha_x: axes.map(|a| a[0]),
         alpha_y: axes.map(|a| a[1]),
         ..MaterialDesc::default()
@@ -246,17 +246,17 @@ struct Flags<'a> {
 /// `[reliability]`: each part `"ok"` or its problem, the model's reason, and the list of
 /// parts flagged.
 fn reliability(f: &Flags<'_>) -> Reliability {
-    let problems = |keys: &[&str]| -> Option<String> {
+    let problems = |families: &[Family]| -> Option<String> {
         let all: Vec<String> = (f.cands.iter())
-            .filter(|c| keys.contains(&c.key.as_str()))
+            .filter(|c| families.contains(&c.family))
             .flat_map(|c| c.problems.iter().cloned())
             .collect();
         (!all.is_empty()).then(|| all.join("; "))
     };
-    let kc =
-        problems(&["ghs_ssa"]).map(|p| format!("{p}; [material] holds the bounded best estimate"));
-    let alpha = problems(&["ggx", "beckmann"]);
-    let psd = problems(&["measured_psd"]);
+    let kc = problems(&[Family::GhsSsa])
+        .map(|p| format!("{p}; [material] holds the bounded best estimate"));
+    let alpha = problems(&[Family::Ggx, Family::Beckmann]);
+    let psd = problems(&[Family::MeasuredPsd]);
     let two_scale = (!f.split_problems.is_empty())
         .then(|| format!("see problem in {}", f.split_problems.join(", ")));
     let q = f.quality;
@@ -318,7 +318,7 @@ fn splits(a: &Analysis, cands: &[Candidate]) -> (Named<Split>, Vec<String>) {
     for (t, c) in a
         .two_scale
         .iter()
-        .zip(cands.iter().filter(|c| c.family == "two_scale"))
+        .zip(cands.iter().filter(|c| c.family == Family::TwoScale))
     {
         let Some(ModelSpec::TwoScale { beta, surface, .. }) = c.spec.as_ref().map(|s| &s.model)
         else {

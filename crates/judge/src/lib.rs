@@ -7,7 +7,7 @@
 //! reference can be trusted. Each model is smoothed with the tile window's spectral kernel
 //! before the comparison, so both sides have the same angular resolution.
 //!
-//! The candidates form one table (`fit::candidates::RECIPES`); each row says what it
+//! The candidates form one table (`fit::candidates::Family`); each row says what it
 //! assumes, so the differences between rows price the assumptions: Gaussian heights (the
 //! explicit BRDF of a Gaussian surrogate with the map's own spectrum, `fit::surrogate`),
 //! the K-correlation shape (full GHS with the KC fit against full GHS with the measured
@@ -418,7 +418,9 @@ fn rank(
     for c in all.iter().filter(asked) {
         match built(c) {
             Ok(b) => judged.push(compare::judge(b, sets, &nodes, profile)),
-            Err((label, reason)) => skipped.push((format!("{label} [{}]", c.family), reason)),
+            Err((label, reason)) => {
+                skipped.push((format!("{label} [{}]", c.family.name()), reason))
+            }
         }
     }
     let mut best: Option<Judged> = None;
@@ -443,7 +445,7 @@ fn rank(
                     .unwrap_or(f64::NAN)
             };
             let (m, beta) = (get("cutoff_multiple"), get("beta"));
-            b.c.key = "two_scale_best".into();
+            b.c.key = format!("{}_best", fit::candidates::Family::TwoScale.name());
             b.c.label = format!(
                 "two-scale, best cutoff {m}λ (β {})",
                 brdf::paper::short(beta)

@@ -56,7 +56,7 @@ pub(crate) fn build(c: &fit::candidates::Candidate, geometry: &[(f64, f64)]) -> 
         },
     };
     Ok(Candidate {
-        model: c.family.into(),
+        model: c.family.name().into(),
         key: c.key.clone(),
         label,
         assumes: c.assumes,

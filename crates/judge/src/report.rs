@@ -116,23 +116,29 @@ impl Report<'_> {
                 excess(s.rms(), std::f64::consts::SQRT_2 * noise),
             ));
         }
+        use fit::candidates::Family;
+        let best = format!("{}_best", Family::TwoScale.name());
         let pairs = [
             (
                 "K-correlation shape instead of the measured PSD",
-                "measured_psd",
-                "ghs",
+                Family::MeasuredPsd.name(),
+                Family::Ghs.name(),
             ),
             (
                 "first-order (SSA) lobe instead of all orders",
-                "ghs",
-                "ghs_ssa",
+                Family::Ghs.name(),
+                Family::GhsSsa.name(),
             ),
             (
                 "two-scale split (best cutoff) instead of one KC spectrum",
-                "ghs",
-                "two_scale_best",
+                Family::Ghs.name(),
+                best.as_str(),
             ),
-            ("microfacet GGX (NDF fit) instead of full GHS", "ghs", "ggx"),
+            (
+                "microfacet GGX (NDF fit) instead of full GHS",
+                Family::Ghs.name(),
+                Family::Ggx.name(),
+            ),
         ];
         for (what, a, b) in pairs {
             if let (Some(x), Some(y)) = (self.find(a), self.find(b)) {

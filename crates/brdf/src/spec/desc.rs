@@ -1,0 +1,626 @@
+use super::*;
+use crate::wave::{Energy, FresnelAngle, PolarizationFactor};
+
+/// `fresnel = …`: a conductor (default) or R ≡ 1.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum FresnelKind {
+    /// The measured or given n + ik (default).
+    Conductor,
+    /// R ≡ 1.
+    #[serde(alias = "none")]
+    One,
+}
+
+/// How a key is taken from an included file ([`MaterialDesc::inherit`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Group {
+    /// On its own, when not set here.
+    Own,
+    /// With the roughness keys, only when none of them is set here.
+    Roughness,
+    /// With the index keys (metal, n,k), only when the index is not set here.
+    Index,
+    /// Never (`include` and `cutoff` name the file and its split).
+    NotInherited,
+}
+
+/// Every key of the flat schema, listed once: its type and documentation, how it is
+/// inherited from an included file, and which models read it (`[]`: every model, or
+/// none but the resolution of the include). The struct, the key lists and the per-key
+/// accessors are all made from this one table.
+macro_rules! material_keys {
+    ($( $(#[$attr:meta])* $key:ident : $ty:ty, $group:ident, [$($model:ident),*]; )*) => {
+        /// The flat key/value form of a material, as scene files, `brdf eval`
+        /// queries and `lustre fit` material files write it (keys in the module
+        /// documentation). Unknown keys are refused when deserialised.
+        #[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+        #[serde(deny_unknown_fields)]
+        pub struct MaterialDesc {
+            $(
+                $(#[$attr])*
+                #[serde(default, skip_serializing_if = "Option::is_none")]
+                pub $key: Option<$ty>,
+            )*
+        }
+
+        impl MaterialDesc {
+            /// Every key with its group and the models that read it (model parameters
+            /// only: a key with no model is read by every model, or by none).
+            const KEYS: &'static [(&'static str, Group, &'static [ModelKind])] = &[
+                $( (stringify!($key), Group::$group, &[$(ModelKind::$model),*]), )*
+            ];
+
+            /// Whether `key` (as written in a scene) is set.
+            fn is_set(&self, key: &str) -> bool {
+                match key {
+                    $( stringify!($key) => self.$key.is_some(), )*
+                    _ => false,
+                }
+            }
+
+            /// Takes every key of `group` not set here from `base`.
+            fn take(&mut self, base: &MaterialDesc, group: Group) {
+                $(
+                    if Group::$group == group && self.$key.is_none() {
+                        self.$key = base.$key.clone();
+                    }
+                )*
+            }
+        }
+    };
+}
+
+material_keys! {
+    /// The reflection model.
+    model: ModelKind, Own, [];
+    /// A built-in metal by name (aliases as [`Metal::from_name`]).
+    metal: String, Index, [];
+    /// A CSV `wavelength_nm,n,k` (resolved by the caller).
+    nk_csv: String, Index, [];
+    /// A constant `[n, k]` (exactly two numbers).
+    #[serde(deserialize_with = "exact_nk")]
+    nk: [f64; 2], Index, [];
+    /// `conductor` (default) or `one`.
+    fresnel: FresnelKind, Index, [];
+    /// Isotropic microfacet roughness.
+    alpha: f64, Roughness, [Ggx, Beckmann];
+    /// Roughness along the surface tangent.
+    alpha_x: f64, Roughness, [Ggx, Beckmann];
+    /// Roughness along the bitangent.
+    alpha_y: f64, Roughness, [Ggx, Beckmann];
+    /// Beckmann roughness, used in preference to `alpha` by `beckmann`.
+    alpha_beckmann: f64, Roughness, [Beckmann];
+    /// KC rms height σ, µm.
+    sigma_um: f64, Own, [GhsSsa, Ghs, TwoScale, RayleighRice, GhsSsaAniso, GhsAniso];
+    /// KC correlation length Lc, µm.
+    lc_um: f64, Own, [GhsSsa, Ghs, TwoScale, RayleighRice];
+    /// KC exponent γ.
+    gamma: f64, Own, [GhsSsa, Ghs, TwoScale, RayleighRice, GhsSsaAniso, GhsAniso];
+    /// GHS energy handling.
+    energy: Energy, Own, [GhsSsa, Ghs, MeasuredPsd, GhsSsaAniso, GhsAniso];
+    /// GHS Fresnel angle.
+    fresnel_angle: FresnelAngle, Own, [GhsSsa, Ghs, MeasuredPsd, GhsSsaAniso, GhsAniso];
+    /// Incident polarisation (`unpolarized`, `s`, `p`).
+    polarization: Polarization, Own,
+        [GhsSsa, Ghs, MeasuredPsd, RayleighRice, GhsSsaAniso, GhsAniso];
+    /// GHS reflectance factor of the scattered part (`r` or `q`).
+    polarization_factor: PolarizationFactor, Own,
+        [GhsSsa, Ghs, MeasuredPsd, GhsSsaAniso, GhsAniso];
+    /// Anisotropic KC correlation length along the axis, µm.
+    lx_um: f64, Own, [GhsSsaAniso, GhsAniso];
+    /// Anisotropic KC correlation length across the axis, µm.
+    ly_um: f64, Own, [GhsSsaAniso, GhsAniso];
+    /// Anisotropic KC axis angle from the tangent x towards y, degrees.
+    angle_deg: f64, Own, [GhsSsaAniso, GhsAniso];
+    /// A CSV `zeta_rad_per_um,p_um4` (resolved by the caller).
+    psd_csv: String, Own, [MeasuredPsd, RayleighRice];
+    /// Two-scale macro NDF width β.
+    beta: f64, Own, [TwoScale];
+    /// Two-scale coherent part.
+    coherent: CoherentPart, Own, [TwoScale];
+    /// A `lustre fit` material file (resolved by the caller).
+    include: String, NotInherited, [];
+    /// Which two-scale split of the included file.
+    cutoff: String, NotInherited, [];
+}
+
+/// `nk = [n, k]` from exactly two numbers: serde's array impl stops after
+/// two and formats such as TOML do not complain about the rest, so
+/// `nk = [0.2, 3.5, 9]` would otherwise pass as `[0.2, 3.5]`.
+fn exact_nk<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Option<[f64; 2]>, D::Error> {
+    use serde::de::{Error, IgnoredAny, SeqAccess, Visitor};
+    struct Nk;
+    impl<'de> Visitor<'de> for Nk {
+        type Value = [f64; 2];
+        fn expecting(&self, f: &mut core::fmt::Formatter) -> core::fmt::Result {
+            f.write_str("an array of exactly two numbers [n, k]")
+        }
+        fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> Result<[f64; 2], A::Error> {
+            let n = seq
+                .next_element()?
+                .ok_or_else(|| A::Error::invalid_length(0, &self))?;
+            let k = seq
+                .next_element()?
+                .ok_or_else(|| A::Error::invalid_length(1, &self))?;
+            let mut len = 2;
+            while seq.next_element::<IgnoredAny>()?.is_some() {
+                len += 1;
+            }
+            if len != 2 {
+                return Err(A::Error::invalid_length(len, &self));
+            }
+            Ok([n, k])
+        }
+    }
+    d.deserialize_seq(Nk).map(Some)
+}
+
+/// Reads the files a description refers to (this crate does no I/O).
+pub trait FileLoader {
+    /// Rows `(λ nm, n, κ)` of an `nk_csv` file.
+    fn nk_table(&mut self, path: &str) -> Result<Vec<[f64; 3]>, String>;
+    /// `(ζ rad/µm, P µm⁴)` samples of a `psd_csv` file.
+    fn psd_table(&mut self, path: &str) -> Result<(Vec<f64>, Vec<f64>), String>;
+}
+
+/// A loader for descriptions that must not refer to files.
+pub struct NoFiles;
+
+impl FileLoader for NoFiles {
+    fn nk_table(&mut self, path: &str) -> Result<Vec<[f64; 3]>, String> {
+        Err(format!(
+            "cannot read {path:?} here: give `metal` or `nk` instead"
+        ))
+    }
+    fn psd_table(&mut self, path: &str) -> Result<(Vec<f64>, Vec<f64>), String> {
+        Err(format!("cannot read {path:?} here"))
+    }
+}
+
+fn need(v: Option<f64>, key: &'static str, model: ModelKind) -> Result<f64, SpecError> {
+    v.ok_or_else(|| SpecError::new(key, format!("model `{}` needs `{key}`", model.name())))
+}
+
+impl MaterialDesc {
+    /// Fills every key this description leaves unset from `base` (an
+    /// included file): keys set here win.
+    ///
+    /// Keys that together describe one quantity are inherited as a group,
+    /// and only when none of them is set here: the roughness (`alpha`,
+    /// `alpha_x`, `alpha_y`, `alpha_beckmann`) and the index (`metal`,
+    /// `nk`, `nk_csv`, `fresnel`; an explicit `fresnel = "conductor"` here
+    /// still takes the index from `base`). Key by key, a fit file's `alpha_x`
+    /// and `alpha_y` (or `alpha_beckmann`) would silently beat an `alpha`
+    /// set here, and its `metal` would clash with an `nk` set here.
+    pub fn inherit(&mut self, base: &MaterialDesc) {
+        if !self.roughness_here() {
+            self.take(base, Group::Roughness);
+        }
+        if !self.index_here() {
+            self.take(base, Group::Index);
+        }
+        self.take(base, Group::Own);
+    }
+
+    /// Whether a roughness key is set here ([`inherit`](Self::inherit)
+    /// then takes none of the base's).
+    fn roughness_here(&self) -> bool {
+        Self::group(Group::Roughness).any(|k| self.is_set(k))
+    }
+
+    /// The keys of `group`.
+    fn group(group: Group) -> impl Iterator<Item = &'static str> {
+        (Self::KEYS.iter())
+            .filter(move |(_, g, _)| *g == group)
+            .map(|(k, _, _)| *k)
+    }
+
+    /// Whether the index is set here ([`inherit`](Self::inherit) then
+    /// takes none of the base's index keys).
+    fn index_here(&self) -> bool {
+        self.metal.is_some()
+            || self.nk.is_some()
+            || self.nk_csv.is_some()
+            || self.fresnel == Some(FresnelKind::One)
+    }
+
+    /// Whether [`inherit`](Self::inherit) from `base` takes the value of
+    /// `key` from `base`: `base` sets it, and this description neither
+    /// sets it nor replaces its group (roughness, index). A caller that
+    /// reports an invalid merged value uses it to name the file the value
+    /// came from.
+    pub fn inherits(&self, base: &MaterialDesc, key: &str) -> bool {
+        let group = (Self::KEYS.iter())
+            .find(|(k, _, _)| *k == key)
+            .map(|(_, g, _)| *g);
+        let replaced = match group {
+            Some(Group::Roughness) => self.roughness_here(),
+            Some(Group::Index) => self.index_here() || self.is_set(key),
+            _ => self.is_set(key),
+        };
+        base.is_set(key) && !replaced
+    }
+
+    /// Keys set together here of which one would silently override the
+    /// other (keys inherited from an included file cannot clash with
+    /// these: [`MaterialDesc::inherit`] takes each group whole).
+    fn check_conflicts(&self) -> Result<(), SpecError> {
+        if self.alpha.is_some() && (self.alpha_x.is_some() || self.alpha_y.is_some()) {
+            let other = if self.alpha_x.is_some() {
+                "alpha_x"
+            } else {
+                "alpha_y"
+            };
+            return Err(SpecError::new(
+                "alpha",
+                format!(
+                    "`alpha` and `{other}` are both set, and `alpha_x`/`alpha_y` would win; \
+                     give `alpha` (isotropic) or `alpha_x` and `alpha_y` (anisotropic), not both"
+                ),
+            ));
+        }
+        if self.fresnel == Some(FresnelKind::One) {
+            let given = [
+                ("metal", self.metal.is_some()),
+                ("nk", self.nk.is_some()),
+                ("nk_csv", self.nk_csv.is_some()),
+            ];
+            if let Some((key, _)) = given.iter().find(|(_, set)| *set) {
+                return Err(SpecError::new(
+                    "fresnel",
+                    format!(
+                        "`fresnel = \"one\"` (R ≡ 1) and `{key}` are both set, and `{key}` \
+                         would be ignored; remove one of them"
+                    ),
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    /// The model parameters that are set, by name.
+    fn set_keys(&self) -> Vec<&'static str> {
+        (Self::KEYS.iter())
+            .filter(|(k, _, models)| !models.is_empty() && self.is_set(k))
+            .map(|(k, _, _)| *k)
+            .collect()
+    }
+
+    /// The typed material of a description with nothing to inherit:
+    /// [`MaterialDesc::resolve`] with no base.
+    pub fn into_spec(&self, files: &mut dyn FileLoader) -> Result<MaterialSpec, SpecError> {
+        self.resolve(None, files)
+    }
+
+    /// The typed material of this description over `base` (the
+    /// `[material]` of an included `lustre fit` file, already chosen and
+    /// read by the caller; keys set here win). `files` reads `nk_csv`
+    /// and `psd_csv`.
+    ///
+    /// Every key set *here* must be one the model uses: a misspelt,
+    /// misplaced or leftover key is an error naming it. Keys inherited
+    /// from `base` are not checked that way, since a fit file carries α
+    /// and the KC statistics for whichever model a scene picks.
+    pub fn resolve(
+        &self,
+        base: Option<&MaterialDesc>,
+        files: &mut dyn FileLoader,
+    ) -> Result<MaterialSpec, SpecError> {
+        self.check_conflicts()?;
+        let mut merged = self.clone();
+        if let Some(b) = base {
+            merged.inherit(b);
+        }
+        merged.include = None;
+        merged.cutoff = None;
+        let model = merged.model.ok_or_else(|| {
+            SpecError::new(
+                "model",
+                format!("missing `model`; one of {}", ModelKind::names()),
+            )
+        })?;
+        self.check_used(model)?;
+        if model == ModelKind::RayleighRice && merged.psd_csv.is_some() {
+            // The table is the whole PSD (σ included): K-correlation keys set here
+            // would be ignored (included ones are, as for measured_psd).
+            let kc = [
+                ("sigma_um", self.sigma_um.is_some()),
+                ("lc_um", self.lc_um.is_some()),
+                ("gamma", self.gamma.is_some()),
+            ];
+            if let Some((key, _)) = kc.iter().find(|(_, set)| *set) {
+                return Err(SpecError::new(
+                    key,
+                    format!(
+                        "`psd_csv` gives the whole PSD (σ included) and `{key}` would be \
+                         ignored; give the table or `sigma_um`, `lc_um`, `gamma`"
+                    ),
+                ));
+            }
+        }
+        if self.cutoff.is_some() && model != ModelKind::TwoScale {
+            return Err(SpecError::new(
+                "cutoff",
+                "`cutoff` picks the split of a two_scale material's included file",
+            ));
+        }
+        merged.build_spec(model, files)
+    }
+
+    /// The keys `model` reads (its parameters; the index keys every model reads).
+    pub fn keys_of(model: ModelKind) -> Vec<&'static str> {
+        (Self::KEYS.iter())
+            .filter(|(_, _, models)| models.contains(&model))
+            .map(|(k, _, _)| *k)
+            .collect()
+    }
+
+    /// Refuses a key set here that `model` does not read.
+    pub fn check_used(&self, model: ModelKind) -> Result<(), SpecError> {
+        let used = Self::keys_of(model);
+        match self.set_keys().into_iter().find(|k| !used.contains(k)) {
+            None => Ok(()),
+            Some(extra) => Err(SpecError::new(
+                extra,
+                format!(
+                    "model `{}` does not use `{extra}`; its parameters are: {}",
+                    model.name(),
+                    if used.is_empty() {
+                        "none".to_string()
+                    } else {
+                        used.join(", ")
+                    }
+                ),
+            )),
+        }
+    }
+
+    fn build_spec(
+        &self,
+        model: ModelKind,
+        files: &mut dyn FileLoader,
+    ) -> Result<MaterialSpec, SpecError> {
+        let fresnel = self.fresnel_spec(files)?;
+        let kc = |m| -> Result<KcSpec, SpecError> {
+            Ok(KcSpec {
+                sigma_um: need(self.sigma_um, "sigma_um", m)?,
+                lc_um: need(self.lc_um, "lc_um", m)?,
+                gamma: need(self.gamma, "gamma", m)?,
+            })
+        };
+        let options = GhsOptions {
+            energy: self.energy.unwrap_or_default(),
+            fresnel_angle: self.fresnel_angle.unwrap_or_default(),
+            polarization: self.polarization.unwrap_or_default(),
+            polarization_factor: self.polarization_factor.unwrap_or_default(),
+        };
+        let aniso = |m| -> Result<AnisoSpec, SpecError> {
+            Ok(AnisoSpec {
+                sigma_um: need(self.sigma_um, "sigma_um", m)?,
+                lx_um: need(self.lx_um, "lx_um", m)?,
+                ly_um: need(self.ly_um, "ly_um", m)?,
+                angle_deg: self.angle_deg.unwrap_or(0.0),
+                gamma: need(self.gamma, "gamma", m)?,
+            })
+        };
+        let spec = match model {
+            ModelKind::Ggx => {
+                let (alpha_x, alpha_y) = self.roughness(model, self.alpha)?;
+                ModelSpec::Ggx { alpha_x, alpha_y }
+            }
+            ModelKind::Beckmann => {
+                let (alpha_x, alpha_y) =
+                    self.roughness(model, self.alpha_beckmann.or(self.alpha))?;
+                ModelSpec::Beckmann { alpha_x, alpha_y }
+            }
+            ModelKind::Smooth => ModelSpec::Smooth,
+            ModelKind::GhsSsa => ModelSpec::GhsSsa {
+                surface: kc(model)?,
+                options,
+            },
+            ModelKind::Ghs => ModelSpec::Ghs {
+                surface: kc(model)?,
+                options,
+            },
+            ModelKind::MeasuredPsd => {
+                let path = self.psd_csv.as_deref().ok_or_else(|| {
+                    SpecError::new(
+                        "psd_csv",
+                        "model `measured_psd` needs `psd_csv = \"file.csv\"` \
+                         (zeta_rad_per_um,p_um4) or an included fit file with a [psd] table",
+                    )
+                })?;
+                let (zeta_rad_per_um, psd_um4) = files
+                    .psd_table(path)
+                    .map_err(|e| SpecError::new("psd_csv", e))?;
+                ModelSpec::MeasuredPsd {
+                    zeta_rad_per_um,
+                    psd_um4,
+                    options,
+                }
+            }
+            ModelKind::TwoScale => ModelSpec::TwoScale {
+                beta: need(self.beta, "beta", model)?,
+                surface: kc(model)?,
+                coherent: self.coherent.unwrap_or_default(),
+            },
+            ModelKind::RayleighRice => {
+                let surface = match self.psd_csv.as_deref() {
+                    Some(path) => {
+                        let (zeta_rad_per_um, psd_um4) = files
+                            .psd_table(path)
+                            .map_err(|e| SpecError::new("psd_csv", e))?;
+                        RrSurface::Measured {
+                            zeta_rad_per_um,
+                            psd_um4,
+                        }
+                    }
+                    None => RrSurface::Kc(kc(model)?),
+                };
+                ModelSpec::RayleighRice {
+                    surface,
+                    polarization: options.polarization,
+                }
+            }
+            ModelKind::GhsSsaAniso => ModelSpec::GhsSsaAniso {
+                surface: aniso(model)?,
+                options,
+            },
+            ModelKind::GhsAniso => ModelSpec::GhsAniso {
+                surface: aniso(model)?,
+                options,
+            },
+        };
+        let spec = MaterialSpec {
+            model: spec,
+            fresnel,
+        };
+        spec.validate()?;
+        Ok(spec)
+    }
+
+    fn roughness(&self, model: ModelKind, iso: Option<f64>) -> Result<(f64, f64), SpecError> {
+        match (self.alpha_x, self.alpha_y, iso) {
+            (Some(x), Some(y), _) => Ok((x, y)),
+            (None, None, Some(a)) => Ok((a, a)),
+            (Some(_), None, _) => Err(SpecError::new(
+                "alpha_y",
+                "give both `alpha_x` and `alpha_y`",
+            )),
+            (None, Some(_), _) => Err(SpecError::new(
+                "alpha_x",
+                "give both `alpha_x` and `alpha_y`",
+            )),
+            (None, None, None) => Err(SpecError::new(
+                "alpha",
+                format!(
+                    "model `{}` needs `alpha` (or `alpha_x` and `alpha_y`)",
+                    model.name()
+                ),
+            )),
+        }
+    }
+
+    fn fresnel_spec(&self, files: &mut dyn FileLoader) -> Result<FresnelSpec, SpecError> {
+        if self.fresnel == Some(FresnelKind::One) {
+            return Ok(FresnelSpec::One);
+        }
+        let given = [
+            self.metal.is_some(),
+            self.nk_csv.is_some(),
+            self.nk.is_some(),
+        ];
+        match given.iter().filter(|&&g| g).count() {
+            0 => Err(SpecError::new(
+                "metal",
+                "needs one of `metal = \"NAME\"`, `nk_csv = \"file.csv\"`, `nk = [n, k]` \
+                 (or `fresnel = \"one\"` for R ≡ 1)",
+            )),
+            1 => {
+                if let Some(name) = &self.metal {
+                    let m = Metal::from_name(name).ok_or_else(|| {
+                        let names: Vec<&str> = Metal::ALL.iter().map(|m| m.name()).collect();
+                        SpecError::new(
+                            "metal",
+                            format!("unknown metal `{name}`; valid: {}", names.join(", ")),
+                        )
+                    })?;
+                    Ok(FresnelSpec::Metal(m))
+                } else if let Some(path) = &self.nk_csv {
+                    let rows = files
+                        .nk_table(path)
+                        .map_err(|e| SpecError::new("nk_csv", e))?;
+                    Ior::table(rows.clone())
+                        .map_err(|e| SpecError::new("nk_csv", e.to_string()))?;
+                    Ok(FresnelSpec::Table(rows))
+                } else {
+                    let [n, k] = self.nk.unwrap_or_default();
+                    Ior::constant(n, k).map_err(|e| SpecError::new("nk", e.to_string()))?;
+                    Ok(FresnelSpec::Constant { n, k })
+                }
+            }
+            _ => Err(SpecError::new(
+                "metal",
+                "give only one of `metal`, `nk_csv`, `nk`",
+            )),
+        }
+    }
+}
+
+impl MaterialSpec {
+    /// The flat form. Tabulated data (a measured PSD, an n,k table) is
+    /// not representable as keys: `psd_csv` / `nk_csv` are left unset
+    /// and the caller writes the data next to the description.
+    pub fn to_desc(&self) -> MaterialDesc {
+        let mut d = MaterialDesc {
+            model: Some(self.model.kind()),
+            ..MaterialDesc::default()
+        };
+        match &self.fresnel {
+            FresnelSpec::One => d.fresnel = Some(FresnelKind::One),
+            FresnelSpec::Metal(m) => d.metal = Some(m.name().to_string()),
+            FresnelSpec::Constant { n, k } => d.nk = Some([*n, *k]),
+            FresnelSpec::Table(_) => {}
+        }
+        let set_kc = |d: &mut MaterialDesc, s: &KcSpec| {
+            d.sigma_um = Some(s.sigma_um);
+            d.lc_um = Some(s.lc_um);
+            d.gamma = Some(s.gamma);
+        };
+        let set_opts = |d: &mut MaterialDesc, o: &GhsOptions| {
+            d.energy = Some(o.energy);
+            d.fresnel_angle = Some(o.fresnel_angle);
+            // The scalar theory's defaults are left implicit, as files written
+            // before the polarisation options have them.
+            let defaults = GhsOptions::default();
+            d.polarization = (o.polarization != defaults.polarization).then_some(o.polarization);
+            d.polarization_factor = (o.polarization_factor != defaults.polarization_factor)
+                .then_some(o.polarization_factor);
+        };
+        match &self.model {
+            ModelSpec::Ggx { alpha_x, alpha_y } | ModelSpec::Beckmann { alpha_x, alpha_y } => {
+                if alpha_x == alpha_y {
+                    d.alpha = Some(*alpha_x);
+                } else {
+                    d.alpha_x = Some(*alpha_x);
+                    d.alpha_y = Some(*alpha_y);
+                }
+            }
+            ModelSpec::Smooth => {}
+            ModelSpec::GhsSsa { surface, options } | ModelSpec::Ghs { surface, options } => {
+                set_kc(&mut d, surface);
+                set_opts(&mut d, options);
+            }
+            ModelSpec::MeasuredPsd { options, .. } => set_opts(&mut d, options),
+            ModelSpec::TwoScale {
+                beta,
+                surface,
+                coherent,
+            } => {
+                d.beta = Some(*beta);
+                set_kc(&mut d, surface);
+                d.coherent = Some(*coherent);
+            }
+            ModelSpec::RayleighRice {
+                surface,
+                polarization,
+            } => {
+                if let RrSurface::Kc(kc) = surface {
+                    set_kc(&mut d, kc);
+                }
+                d.polarization = Some(*polarization);
+            }
+            ModelSpec::GhsSsaAniso { surface, options }
+            | ModelSpec::GhsAniso { surface, options } => {
+                d.sigma_um = Some(surface.sigma_um);
+                d.lx_um = Some(surface.lx_um);
+                d.ly_um = Some(surface.ly_um);
+                d.angle_deg = Some(surface.angle_deg);
+                d.gamma = Some(surface.gamma);
+                set_opts(&mut d, options);
+            }
+        }
+        d
+    }
+}
