@@ -222,7 +222,7 @@ pub fn run(args: CompareArgs) -> anyhow::Result<()> {
         threads,
         ..RenderOptions::default()
     };
-    let pool = render::render::thread_pool(threads)?;
+    let pool = render::thread_pool(threads)?;
     let mut grid = ImageGrid::new(rows.len(), args.views.len())
         .title(format!("{title}\n{w}×{h} px, {} spp per cell", args.spp))
         .row_labels(rows.iter().map(|r| r.label.clone()))

@@ -450,7 +450,7 @@ pub fn run(args: PreviewArgs) -> anyhow::Result<()> {
     }
 
     let stop = render::interrupt::ctrlc_flag().map_err(anyhow::Error::msg)?;
-    let pool = render::render::thread_pool(threads)?;
+    let pool = render::thread_pool(threads)?;
     let cols = if cells.len() <= 3 {
         cells.len()
     } else {

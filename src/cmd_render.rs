@@ -275,7 +275,7 @@ pub fn render(args: RenderArgs) -> anyhow::Result<()> {
     let threads = crate::flags::thread_count(args.threads, args.quiet)?;
     render::memory::check_fits(scene.camera.width, scene.camera.height)
         .map_err(|m| anyhow::anyhow!("{}: {m}", scene_path.display()))?;
-    let mut film = Film::for_scene(&scene).map_err(anyhow::Error::msg)?;
+    let mut film = scene.film().map_err(anyhow::Error::msg)?;
     let mut todo = target.clone();
     if args.resume {
         if film_path.exists() {
@@ -542,7 +542,7 @@ mod tests {
         assert!(crate::flags::thread_count(Some(0), true).is_err());
         assert_eq!(
             crate::flags::thread_count(Some(10_000), true).unwrap(),
-            Some(render::render::max_threads())
+            Some(render::max_threads())
         );
         assert_eq!(crate::flags::thread_count(Some(1), true).unwrap(), Some(1));
         assert_eq!(

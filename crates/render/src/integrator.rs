@@ -22,14 +22,14 @@
 //! symmetric in which wavelength was the hero, which makes hero sampling
 //! unbiased.
 
-use crate::film::{BadSample, MAX_SAMPLE_XYZ};
+use crate::film::{BadSample, CameraSample, SampleRadiance, sample_xyz};
 use crate::geometry::Ray;
 use crate::light::{Emission, LightSample, Lights};
 use crate::sampler::{Reserved2d, Sampler};
 use crate::scene::desc::MisHeuristic;
-use crate::scene::{Hit, Scene, Surface};
+use crate::scene::Scene;
+use crate::shapes::{Hit, Surface};
 use crate::spectral_table::SpectralTables;
-use crate::spectrum::Cie;
 use crate::wavelength::{MAX_WAVELENGTHS, SampledWavelengths};
 use brdf::Bxdf;
 use brdf::frame::orthonormal_basis;
@@ -171,31 +171,16 @@ struct Pending {
     pdf: f64,
 }
 
-/// One camera sample: its wavelengths and spectral radiance estimates.
-#[derive(Clone, Copy, Debug)]
-pub struct CameraSample {
-    /// The wavelengths carried ([`Settings::wavelengths_per_path`](crate::scene::Settings::wavelengths_per_path))
-    /// and their pdfs.
-    pub wavelengths: SampledWavelengths,
-    /// Radiance estimates at each wavelength, wavelength pdf included; the
-    /// first `wavelengths.len()` are used.
-    pub radiance: [f64; N],
-    /// XYZ (before the film's 1/∫ȳ normalisation) of the contributions
-    /// integrated over λ exactly ([`crate::spectral_table`]); a path that
-    /// needs no sampled wavelength carries none.
-    pub xyz: [f64; 3],
-}
-
 /// Traces camera sample `sample` of pixel (`x`, `y`).
 pub fn camera_sample(scene: &Scene, x: u32, y: u32, sample: u64) -> CameraSample {
     match traced(scene, x, y, sample) {
-        Traced::Spectral(cs) => cs,
-        Traced::Exact(xyz) => CameraSample {
+        SampleRadiance::Spectral(cs) => cs,
+        SampleRadiance::Xyz(xyz) => CameraSample {
             wavelengths: SampledWavelengths::none(),
             radiance: [0.0; N],
             xyz,
         },
-        Traced::Miss => {
+        SampleRadiance::Zero => {
             // Zero at the wavelengths its draws give.
             let (sampler, _, u_lambda) = camera_draws(scene, x, y, sample);
             CameraSample {
@@ -229,29 +214,16 @@ fn draw_wavelengths(scene: &Scene, sampler: &Sampler, u_lambda: Reserved2d) -> S
     )
 }
 
-/// What a traced camera sample produced.
-// Not boxed: the enum is returned through the caller's slot, so a small
-// variant writes its 24 bytes only, and a box would allocate per sample.
-#[allow(clippy::large_enum_variant)]
-enum Traced {
-    /// The ray escaped into no environment (most of the misses around an
-    /// object or a plate): zero at every wavelength, returned before the
-    /// wavelengths are drawn (their draw is reserved, so every later draw is
-    /// the same).
-    Miss,
-    /// Every contribution was integrated over λ exactly: their XYZ.
-    Exact([f64; 3]),
-    /// Sampled wavelengths were needed.
-    Spectral(CameraSample),
-}
-
-/// Traces a camera sample.
+/// Traces a camera sample: the radiance the film turns into colour.
 #[inline(always)]
-fn traced(scene: &Scene, x: u32, y: u32, sample: u64) -> Traced {
+fn traced(scene: &Scene, x: u32, y: u32, sample: u64) -> SampleRadiance {
     let (mut sampler, ray, u_lambda) = camera_draws(scene, x, y, sample);
     let first = scene.shapes.intersect(&ray, f64::INFINITY);
+    // Most of the misses around an object or a plate: returned before the
+    // wavelengths are drawn (their draw is reserved, so every later draw is
+    // the same).
     if first.is_none() && !scene.lights.has_environment() {
-        return Traced::Miss;
+        return SampleRadiance::Zero;
     }
     if let Some(tables) = &scene.spectral {
         return trace_exact(scene, tables, ray, first, &mut sampler, u_lambda);
@@ -259,7 +231,7 @@ fn traced(scene: &Scene, x: u32, y: u32, sample: u64) -> Traced {
     let wavelengths = draw_wavelengths(scene, &sampler, u_lambda);
     let start = Throughput::camera(&wavelengths);
     let radiance = trace(scene, ray, first, &wavelengths, &mut sampler, start, 0);
-    Traced::Spectral(CameraSample {
+    SampleRadiance::Spectral(CameraSample {
         wavelengths,
         radiance,
         xyz: [0.0; 3],
@@ -272,12 +244,8 @@ pub fn sample_pixel(scene: &Scene, x: u32, y: u32, sample: u64) -> [f64; 3] {
     sample_pixel_checked(scene, x, y, sample).unwrap_or([0.0; 3])
 }
 
-/// XYZ estimate of one camera sample, or why it cannot be averaged: a
-/// wavelength's radiance estimate is NaN, infinite, or negative in a scene
-/// whose emission spectra are all non-negative (see
-/// [`Scene::signed_radiance`](crate::Scene)). Either means a model
-/// misbehaved; the render loop counts and reports such samples instead of
-/// averaging them (one branch, never taken in a sound render).
+/// The XYZ the film adds for one camera sample, or why it cannot be
+/// averaged ([`sample_xyz`]).
 #[inline]
 pub fn sample_pixel_checked(
     scene: &Scene,
@@ -285,55 +253,7 @@ pub fn sample_pixel_checked(
     y: u32,
     sample: u64,
 ) -> Result<[f64; 3], BadSample> {
-    let cs = match traced(scene, x, y, sample) {
-        Traced::Miss => return Ok([0.0; 3]),
-        Traced::Exact(xyz) => {
-            // The checks below with no sampled wavelength, returned from here:
-            // folding this case into them (an empty radiance slice) made the
-            // caller hold the whole `Traced` and cost +5.7 % instructions on
-            // the wide-light plate. See below for why Y decides the sign.
-            let finite = xyz.iter().all(|v| in_film_range(*v));
-            return match (finite, scene.signed_radiance || xyz[1] >= 0.0) {
-                (false, _) => Err(BadSample::NonFinite),
-                (true, false) => Err(BadSample::Negative),
-                (true, true) => Ok(xyz),
-            };
-        }
-        Traced::Spectral(cs) => cs,
-    };
-    let n = cs.wavelengths.len();
-    let r = &cs.radiance[..n];
-    if !r.iter().all(|v| v.is_finite()) || !cs.xyz.iter().all(|v| v.is_finite()) {
-        return Err(BadSample::NonFinite);
-    }
-    // The exactly integrated part is a non-negative spectrum's XYZ, whose Y
-    // (unlike X and Z of a narrow band, within the table's tolerance of 0)
-    // is clearly positive: a negative Y is a model's negative value.
-    let non_negative = r.iter().all(|v| *v >= 0.0) && cs.xyz[1] >= 0.0;
-    if !scene.signed_radiance && !non_negative {
-        return Err(BadSample::Negative);
-    }
-    let cie = Cie::get();
-    let mut xyz = cs.xyz;
-    for (j, &lambda) in cs.wavelengths.lambdas().iter().enumerate() {
-        let c = cie.xyz(lambda);
-        for k in 0..3 {
-            xyz[k] += cs.radiance[j] * c[k];
-        }
-    }
-    // Finite radiances can still overflow in the sum, or leave the film's range.
-    if xyz.iter().all(|v| in_film_range(*v)) {
-        Ok(xyz)
-    } else {
-        Err(BadSample::NonFinite)
-    }
-}
-
-/// Whether a sample's XYZ component can be added to the film: finite and
-/// within [`MAX_SAMPLE_XYZ`] (false for NaN).
-#[inline(always)]
-fn in_film_range(v: f64) -> bool {
-    v.abs() <= MAX_SAMPLE_XYZ
+    sample_xyz(traced(scene, x, y, sample), scene.signed_radiance)
 }
 
 /// A path vertex on a reflecting surface, seen from the ray that reached it.
@@ -567,12 +487,12 @@ fn trace_exact(
     first: Option<Hit>,
     sampler: &mut Sampler,
     u_lambda: Reserved2d,
-) -> Traced {
+) -> SampleRadiance {
     let lights = &scene.lights;
     let settings = &scene.settings;
     // Only the XYZ of the exactly integrated part until a path needs
-    // sampled wavelengths: a whole `CameraSample` (416 bytes) built and
-    // moved per sample cost ~135 instructions in memset and memcpy.
+    // sampled wavelengths: a whole `CameraSample` would be built and moved
+    // (memset and memcpy of 416 bytes) for every sample.
     let mut xyz = [0.0; 3];
     let add = |xyz: &mut [f64; 3], e: [f64; 3], w: f64| {
         for c in 0..3 {
@@ -589,7 +509,7 @@ fn trace_exact(
         // Emission seen directly: the only strategy, weight 1.
         let (em, _) = emission_at(lights, &ray, first.as_ref());
         add(&mut xyz, tables.direct(&em), 1.0);
-        return Traced::Exact(xyz);
+        return SampleRadiance::Xyz(xyz);
     };
     let (Some(table), Some(split)) = (
         tables.material(m),
@@ -598,7 +518,7 @@ fn trace_exact(
         let wavelengths = draw_wavelengths(scene, sampler, u_lambda);
         let start = Throughput::camera(&wavelengths);
         let radiance = trace(scene, ray, Some(hit), &wavelengths, sampler, start, 0);
-        return Traced::Spectral(CameraSample {
+        return SampleRadiance::Spectral(CameraSample {
             wavelengths,
             radiance,
             xyz,
@@ -606,7 +526,7 @@ fn trace_exact(
     };
     let unit = &split.unit;
     let Some(v) = Vertex::new(&hit, &ray) else {
-        return Traced::Exact(xyz);
+        return SampleRadiance::Xyz(xyz);
     };
     let (mis, fixed) = (settings.mis, settings.mis_light_weight);
     let peak = lobe_peak(fixed, unit, v.wi);
@@ -631,10 +551,10 @@ fn trace_exact(
 
     // BSDF sampling.
     let Some(s) = unit.sample(v.wi, UNIT_LAMBDA, u_bsdf) else {
-        return Traced::Exact(xyz);
+        return SampleRadiance::Xyz(xyz);
     };
     if s.pdf.is_nan() || s.pdf <= 0.0 || s.wo.z <= 0.0 {
-        return Traced::Exact(xyz);
+        return SampleRadiance::Xyz(xyz);
     }
     // cos²θd as a ratio: the mirror's θi, or |wi + wo|²/4.
     let (num, den) = if s.is_delta {
@@ -646,7 +566,7 @@ fn trace_exact(
     // this edge reaches (no light sample can produce a delta direction).
     let l_mis = if s.is_delta { 0.0 } else { 1.0 / s.pdf };
     let Some(ray) = v.ray(s.wo) else {
-        return Traced::Exact(xyz);
+        return SampleRadiance::Xyz(xyz);
     };
     let next = scene.shapes.intersect(&ray, f64::INFINITY);
     let (em, pdf_l) = emission_at(lights, &ray, next.as_ref());
@@ -662,10 +582,10 @@ fn trace_exact(
         }
     }
     let Some(next) = next.filter(|h| matches!(h.surface, Surface::Material(_))) else {
-        return Traced::Exact(xyz);
+        return SampleRadiance::Xyz(xyz);
     };
     if settings.max_depth == 1 {
-        return Traced::Exact(xyz);
+        return SampleRadiance::Xyz(xyz);
     }
 
     // The path goes on: its wavelengths now, each carrying the first
@@ -684,14 +604,14 @@ fn trace_exact(
         *l = l_mis;
     }
     if 1 >= settings.rr_depth && !survives(&mut th, n, m0, sampler) {
-        return Traced::Spectral(CameraSample {
+        return SampleRadiance::Spectral(CameraSample {
             wavelengths,
             radiance: [0.0; N],
             xyz,
         });
     }
     let radiance = trace(scene, ray, Some(next), &wavelengths, sampler, th, 1);
-    Traced::Spectral(CameraSample {
+    SampleRadiance::Spectral(CameraSample {
         wavelengths,
         radiance,
         xyz,

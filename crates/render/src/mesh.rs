@@ -6,7 +6,7 @@
 //! (`vn`), the hit also carries the shading normal interpolated from them
 //! with f64 barycentrics; otherwise triangles are shaded flat.
 
-use crate::geometry::{HitGeometry, Ray, Transform};
+use crate::geometry::{SurfacePoint, Ray, Transform};
 use glam::{DVec3, Vec3A};
 use obvhs::cwbvh::CwBvh;
 use obvhs::ray::{Ray as BvhRay, RayHit};
@@ -229,7 +229,7 @@ impl MeshAccel {
         ray: &Ray,
         t_min: f64,
         t_max: f64,
-    ) -> Option<(HitGeometry, u32, Option<DVec3>)> {
+    ) -> Option<(SurfacePoint, u32, Option<DVec3>)> {
         let mut hit = RayHit::none();
         let r = Self::bvh_ray(ray, t_min, t_max);
         if !self
@@ -264,7 +264,7 @@ impl MeshAccel {
             let w0 = 1.0 - w1 - w2;
             (w0 * na + w1 * nb + w2 * nc).try_normalize()
         });
-        Some((HitGeometry { t, p, n, tangent }, self.surface[id], shading))
+        Some((SurfacePoint { t, p, n, tangent }, self.surface[id], shading))
     }
 
     /// Whether anything blocks the segment `(t_min, t_max)` of `ray`.

@@ -7,10 +7,10 @@ use super::desc::{
     LightDesc, MaterialDesc, ModelKind, SamplerKind, SceneDesc, ShapeDesc, SpectralIntegration,
     TransformDesc, WavelengthMode,
 };
-use super::inputs::{self, Inputs};
-use super::shapes::Shapes;
+use crate::inputs::{self, Inputs};
+use crate::shapes::{Shapes, Surface};
 use super::tables;
-use super::{ESTIMATOR, Scene, Settings, Surface};
+use super::{ESTIMATOR, Scene, Settings};
 use crate::camera::Camera;
 use crate::error::SceneError;
 use crate::geometry::{Planar, Sphere, Transform};
