@@ -27,7 +27,7 @@ use crate::geometry::Ray;
 use crate::light::{Emission, LightSample, Lights};
 use crate::sampler::{Reserved2d, Sampler};
 use crate::scene::desc::MisHeuristic;
-use crate::scene::Scene;
+use crate::scene::{Scene, Settings};
 use crate::shapes::{Hit, Surface};
 use crate::spectral_table::SpectralTables;
 use crate::wavelength::{MAX_WAVELENGTHS, SampledWavelengths};
@@ -160,6 +160,46 @@ fn lobe_peak(fixed: Option<f64>, bxdf: &(impl Bxdf + ?Sized), wi: DVec3) -> Opti
         bxdf.lobe_peak_pdf(wi)
     } else {
         None
+    }
+}
+
+/// How one vertex weighs light sampling against BSDF sampling: the
+/// scene's heuristic and fixed light-density count, and the vertex's lobe
+/// size ([`light_weight`]). Both strategies' weights come from here.
+#[derive(Clone, Copy)]
+struct VertexMis {
+    heuristic: MisHeuristic,
+    fixed: Option<f64>,
+    peak: Option<f64>,
+}
+
+impl VertexMis {
+    #[inline]
+    fn new(settings: &Settings, peak: Option<f64>) -> VertexMis {
+        VertexMis {
+            heuristic: settings.mis,
+            fixed: settings.mis_light_weight,
+            peak,
+        }
+    }
+
+    /// Weight / density of a light sample of solid-angle density `p_light`
+    /// on a path whose BSDF densities sum to `q_sum` over the hero choices
+    /// (1 with one wavelength), against the BSDF strategy's density
+    /// `p_bsdf` toward it.
+    #[inline]
+    fn light(&self, p_light: f64, q_sum: f64, p_bsdf: f64) -> f64 {
+        let c = light_weight(self.fixed, self.peak, p_light);
+        light_weight_over_pdf(self.heuristic, c, q_sum * p_light, p_bsdf)
+    }
+
+    /// Weight / density of emission reached by a BSDF sample of relative
+    /// density `own`, whose light strategy's density relative to it is
+    /// `l_sum · p_light` (`l_sum` the sum of the edge's `L_k`).
+    #[inline]
+    fn bsdf(&self, p_light: f64, own: f64, l_sum: f64) -> f64 {
+        let c = light_weight(self.fixed, self.peak, p_light);
+        bsdf_weight_over_pdf(self.heuristic, c, own, l_sum * p_light)
     }
 }
 
@@ -406,6 +446,41 @@ fn delta_emission(
     true
 }
 
+/// Next-event estimation at vertex `v`: one light sample drawn with
+/// `u_light`, weighted against BSDF sampling by `mis`. `bsdf(wo, is_delta)`
+/// evaluates the BSDF toward the sampled point: `None` where it is zero at
+/// every wavelength, otherwise the sum of the path's `Q_k`, the BSDF
+/// strategy's density toward it (0 for a delta light, which BSDF sampling
+/// cannot reach) and what `add` needs of the evaluation; `add(light sample,
+/// wo, weight / density, evaluation)` counts the contribution of a light
+/// that nothing blocks.
+#[inline(always)]
+fn next_event<'s, E>(
+    scene: &'s Scene,
+    v: &Vertex,
+    u_light: [f64; 3],
+    mis: VertexMis,
+    bsdf: impl FnOnce(DVec3, bool) -> Option<(f64, f64, E)>,
+    add: impl FnOnce(&LightSample<'s>, DVec3, f64, E),
+) {
+    let Some(ls) = scene.lights.sample(v.p, u_light) else {
+        return;
+    };
+    let Some(wo) = v.light_direction(&ls) else {
+        return;
+    };
+    let Some((q_sum, p_bsdf, eval)) = bsdf(wo, ls.is_delta) else {
+        return;
+    };
+    if !unoccluded(scene, v.p, &ls) {
+        return;
+    }
+    let w = mis.light(ls.pdf, q_sum, p_bsdf);
+    if w > 0.0 {
+        add(&ls, wo, w, eval);
+    }
+}
+
 /// Whether nothing blocks the segment from `p` to a light sample.
 #[inline]
 fn unoccluded(scene: &Scene, p: DVec3, ls: &LightSample) -> bool {
@@ -427,6 +502,9 @@ struct Throughput {
     l_mis: [f64; N],
     /// The last vertex's lobe size ([`light_weight`]).
     peak: Option<f64>,
+    /// The glossy sample of the last vertex, until its other wavelengths'
+    /// BSDF value and pdf are applied ([`Throughput::resolve`]).
+    pending: Option<Pending>,
 }
 
 impl Throughput {
@@ -441,6 +519,26 @@ impl Throughput {
             q: [1.0; N],
             l_mis: [0.0; N],
             peak: None,
+            pending: None,
+        }
+    }
+
+    /// Applies the pending glossy sample's factors at the wavelengths other
+    /// than the hero. They are needed only if the path goes on to another
+    /// vertex or reaches emission; a path that ends (it escapes into no
+    /// environment, or hits a surface at the last depth) skips them, and at
+    /// the last bounce of a direct-lighting render that is most paths.
+    #[inline]
+    fn resolve(&mut self, scene: &Scene, lambdas: &[f64; N], n: usize) {
+        if let Some(p) = self.pending.take() {
+            let bxdf = &scene.materials[p.material as usize].bxdf;
+            let mut fp = [(0.0, 0.0); N];
+            bxdf.eval_pdf_many(p.wi, p.wo, &lambdas[1..n], &mut fp[1..n]);
+            let pairs = self.t[1..n].iter_mut().zip(&mut self.q[1..n]);
+            for ((t, q), &(f, pdf)) in pairs.zip(&fp[1..n]) {
+                *t *= f * p.wo.z / p.pdf;
+                *q *= pdf / p.pdf;
+            }
         }
     }
 }
@@ -528,26 +626,23 @@ fn trace_exact(
     let Some(v) = Vertex::new(&hit, &ray) else {
         return SampleRadiance::Xyz(xyz);
     };
-    let (mis, fixed) = (settings.mis, settings.mis_light_weight);
-    let peak = lobe_peak(fixed, unit, v.wi);
+    let mis = VertexMis::new(settings, lobe_peak(settings.mis_light_weight, unit, v.wi));
     let (u_light, u_bsdf) = vertex_draws(sampler, lights, unit);
 
-    // Next-event estimation.
-    if let Some(ls) = lights.sample(v.p, u_light)
-        && let Some(wo) = v.light_direction(&ls)
-    {
-        let (f, pdf) = unit.eval_pdf(v.wi, wo, UNIT_LAMBDA);
-        // A delta light cannot be reached by BSDF sampling.
-        let pdf = if ls.is_delta { 0.0 } else { pdf };
-        if f > 0.0 && unoccluded(scene, v.p, &ls) {
-            let c = light_weight(fixed, peak, ls.pdf);
-            let w = light_weight_over_pdf(mis, c, ls.pdf, pdf);
-            if w > 0.0 {
-                let e = tables.reflected(table, (v.wi + wo).length_squared(), 4.0, &ls.emission);
-                add(&mut xyz, e, f * wo.z * w);
-            }
-        }
-    }
+    next_event(
+        scene,
+        &v,
+        u_light,
+        mis,
+        |wo, is_delta| {
+            let (f, pdf) = unit.eval_pdf(v.wi, wo, UNIT_LAMBDA);
+            (f > 0.0).then_some((1.0, if is_delta { 0.0 } else { pdf }, f))
+        },
+        |ls, wo, w, f| {
+            let e = tables.reflected(table, (v.wi + wo).length_squared(), 4.0, &ls.emission);
+            add(&mut xyz, e, f * wo.z * w);
+        },
+    );
 
     // BSDF sampling.
     let Some(s) = unit.sample(v.wi, UNIT_LAMBDA, u_bsdf) else {
@@ -571,8 +666,7 @@ fn trace_exact(
     let next = scene.shapes.intersect(&ray, f64::INFINITY);
     let (em, pdf_l) = emission_at(lights, &ray, next.as_ref());
     if !matches!(em, Emission::None) {
-        let c = light_weight(fixed, peak, pdf_l);
-        let w = bsdf_weight_over_pdf(mis, c, 1.0, l_mis * pdf_l);
+        let w = mis.bsdf(pdf_l, 1.0, l_mis);
         if w > 0.0 {
             add(
                 &mut xyz,
@@ -636,27 +730,7 @@ fn trace(
     let settings = &scene.settings;
     let mut th = start;
     let m0 = roulette_scale(wavelengths);
-    let (mis, fixed) = (settings.mis, settings.mis_light_weight);
     let mut out = [0.0; N];
-
-    // The other wavelengths' BSDF value and pdf for the direction just
-    // sampled at the hero wavelength are needed only if the path goes on to
-    // another vertex or reaches emission; a path that ends (it escapes into
-    // no environment, or hits a surface at the last depth) skips them. At the
-    // last bounce of a direct-lighting render that is most paths.
-    let mut pending: Option<Pending> = None;
-    let resolve = |pending: &mut Option<Pending>, th: &mut Throughput| {
-        if let Some(p) = pending.take() {
-            let bxdf = &scene.materials[p.material as usize].bxdf;
-            let mut fp = [(0.0, 0.0); N];
-            bxdf.eval_pdf_many(p.wi, p.wo, &lambdas[1..n], &mut fp[1..n]);
-            let pairs = th.t[1..n].iter_mut().zip(&mut th.q[1..n]);
-            for ((t, q), &(f, pdf)) in pairs.zip(&fp[1..n]) {
-                *t *= f * p.wo.z / p.pdf;
-                *q *= pdf / p.pdf;
-            }
-        }
-    };
 
     // The last edge is a delta direction whose emission `delta_emission`
     // has already counted.
@@ -674,20 +748,8 @@ fn trace(
             },
         ) = hit
         else {
-            let (em, pdf_l) = emission_at(lights, &ray, hit.as_ref());
-            if !emission_counted && !matches!(em, Emission::None) {
-                resolve(&mut pending, &mut th);
-                let own: f64 = th.q[..n].iter().sum();
-                let other: f64 = th.l_mis[..n].iter().sum::<f64>() * pdf_l;
-                let c = light_weight(fixed, th.peak, pdf_l);
-                let w = bsdf_weight_over_pdf(mis, c, own, other);
-                if w > 0.0 {
-                    let mut e = [0.0; N];
-                    em.eval_many(&lambdas[..n], &mut e[..n]);
-                    for j in 0..n {
-                        out[j] += th.t[j] * e[j] * w;
-                    }
-                }
+            if !emission_counted {
+                reached_emission(scene, &ray, hit.as_ref(), &mut th, lambdas, n, &mut out);
             }
             break;
         };
@@ -699,39 +761,46 @@ fn trace(
             break;
         };
         let wi = v.wi;
-        resolve(&mut pending, &mut th);
-        th.peak = lobe_peak(fixed, bxdf, wi);
-        let peak = th.peak;
-        let Throughput { t, q, l_mis, .. } = &mut th;
+        th.resolve(scene, lambdas, n);
+        th.peak = lobe_peak(settings.mis_light_weight, bxdf, wi);
+        let mis = VertexMis::new(settings, th.peak);
+        let Throughput {
+            t,
+            q,
+            l_mis,
+            pending,
+            ..
+        } = &mut th;
         let (u_light, u_bsdf) = vertex_draws(sampler, lights, bxdf);
 
-        // Next-event estimation.
-        if let Some(ls) = lights.sample(v.p, u_light)
-            && let Some(wo) = v.light_direction(&ls)
-        {
-            // A delta light cannot be reached by BSDF sampling: its MIS
-            // denominator has no BSDF term, so the pdf is not needed.
-            let mut fp = [(0.0, 0.0); N];
-            bxdf.eval_pdf_many(wi, wo, &lambdas[..n], &mut fp[..n]);
-            if ls.is_delta {
-                for v in &mut fp[..n] {
-                    v.1 = 0.0;
-                }
-            }
-            if fp[..n].iter().any(|v| v.0 > 0.0) && unoccluded(scene, v.p, &ls) {
-                let own: f64 = q[..n].iter().sum::<f64>() * ls.pdf;
-                let other: f64 = (0..n).map(|k| q[k] * fp[k].1).sum();
-                let c = light_weight(fixed, peak, ls.pdf);
-                let w = light_weight_over_pdf(mis, c, own, other);
-                if w > 0.0 {
-                    let mut e = [0.0; N];
-                    ls.emission.eval_many(&lambdas[..n], &mut e[..n]);
-                    for j in 0..n {
-                        out[j] += t[j] * fp[j].0 * wo.z * e[j] * w;
+        next_event(
+            scene,
+            &v,
+            u_light,
+            mis,
+            |wo, is_delta| {
+                let mut fp = [(0.0, 0.0); N];
+                bxdf.eval_pdf_many(wi, wo, &lambdas[..n], &mut fp[..n]);
+                if is_delta {
+                    for v in &mut fp[..n] {
+                        v.1 = 0.0;
                     }
                 }
-            }
-        }
+                if !fp[..n].iter().any(|v| v.0 > 0.0) {
+                    return None;
+                }
+                let q_sum: f64 = q[..n].iter().sum();
+                let p_bsdf: f64 = (0..n).map(|k| q[k] * fp[k].1).sum();
+                Some((q_sum, p_bsdf, fp))
+            },
+            |ls, wo, w, fp| {
+                let mut e = [0.0; N];
+                ls.emission.eval_many(&lambdas[..n], &mut e[..n]);
+                for j in 0..n {
+                    out[j] += t[j] * fp[j].0 * wo.z * e[j] * w;
+                }
+            },
+        );
 
         // The emission a delta lobe mixed with others reflects, traced
         // deterministically (see `delta_emission`); a delta direction the
@@ -746,7 +815,7 @@ fn trace(
                 |j, e| {
                     out[j] += t[j] * e;
                 },
-                bsdf_weight_over_pdf(mis, 1.0, q[..n].iter().sum(), 0.0),
+                bsdf_weight_over_pdf(mis.heuristic, 1.0, q[..n].iter().sum(), 0.0),
             );
 
         // BSDF sampling at the hero wavelength.
@@ -770,7 +839,7 @@ fn trace(
             for k in 0..n {
                 l_mis[k] = q[k] / s.pdf;
             }
-            pending = Some(Pending {
+            *pending = Some(Pending {
                 material: m,
                 wi,
                 wo: s.wo,
@@ -779,7 +848,7 @@ fn trace(
         }
 
         if depth + 1 >= settings.rr_depth {
-            resolve(&mut pending, &mut th);
+            th.resolve(scene, lambdas, n);
             if !survives(&mut th, n, m0, sampler) {
                 break;
             }
@@ -790,6 +859,36 @@ fn trace(
         ray = next;
     }
     out
+}
+
+/// Adds the emission a BSDF-sampled edge of a path reaches along `ray` (at
+/// `hit`, an emitter, or the environment as it escapes), weighted against
+/// light sampling by the MIS of the vertex it left.
+#[inline]
+fn reached_emission(
+    scene: &Scene,
+    ray: &Ray,
+    hit: Option<&Hit>,
+    th: &mut Throughput,
+    lambdas: &[f64; N],
+    n: usize,
+    out: &mut [f64; N],
+) {
+    let (em, pdf_l) = emission_at(&scene.lights, ray, hit);
+    if matches!(em, Emission::None) {
+        return;
+    }
+    th.resolve(scene, lambdas, n);
+    let own: f64 = th.q[..n].iter().sum();
+    let l_sum: f64 = th.l_mis[..n].iter().sum();
+    let w = VertexMis::new(&scene.settings, th.peak).bsdf(pdf_l, own, l_sum);
+    if w > 0.0 {
+        let mut e = [0.0; N];
+        em.eval_many(&lambdas[..n], &mut e[..n]);
+        for j in 0..n {
+            out[j] += th.t[j] * e[j] * w;
+        }
+    }
 }
 
 #[cfg(test)]
