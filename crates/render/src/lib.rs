@@ -40,10 +40,10 @@ pub mod spectral_table;
 pub mod spectrum;
 pub mod wavelength;
 
-pub use error::{RenderError, SceneError};
-pub use film::Film;
 pub use driver::{
     Progress, ProgressEvent, RenderOptions, RenderOutcome, ThreadPool, max_threads, render_range,
     render_range_in, thread_pool,
 };
+pub use error::{RenderError, SceneError};
+pub use film::Film;
 pub use scene::{Scene, load as load_scene, load_str};

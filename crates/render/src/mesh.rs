@@ -6,7 +6,7 @@
 //! (`vn`), the hit also carries the shading normal interpolated from them
 //! with f64 barycentrics; otherwise triangles are shaded flat.
 
-use crate::geometry::{SurfacePoint, Ray, Transform};
+use crate::geometry::{Ray, SurfacePoint, Transform};
 use glam::{DVec3, Vec3A};
 use obvhs::cwbvh::CwBvh;
 use obvhs::ray::{Ray as BvhRay, RayHit};

@@ -41,7 +41,6 @@ impl Hit {
     }
 }
 
-
 /// Everything a ray can hit: analytic shapes tested one by one (a scene
 /// has a handful) and, only when the scene has meshes, one BVH over all
 /// their triangles.

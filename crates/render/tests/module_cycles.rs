@@ -76,9 +76,7 @@ fn strip_comments_and_literals(s: &str) -> String {
                 }
                 out.push(' ');
             }
-            'r' if matches!(c.get(i + 1), Some('"' | '#'))
-                && (i == 0 || !is_ident(c[i - 1])) =>
-            {
+            'r' if matches!(c.get(i + 1), Some('"' | '#')) && (i == 0 || !is_ident(c[i - 1])) => {
                 // Raw string r"…", r#"…"#.
                 let mut j = i + 1;
                 let mut hashes = 0;
@@ -576,7 +574,12 @@ fn no_module_uses_itself_through_others() {
     let g = module_graph();
     println!("modules:\n{}", show(&g));
     let c = cycles(&g);
-    assert!(c.is_empty(), "{} group(s) of modules on cycles:\n{}", c.len(), c.join("\n"));
+    assert!(
+        c.is_empty(),
+        "{} group(s) of modules on cycles:\n{}",
+        c.len(),
+        c.join("\n")
+    );
 }
 
 #[test]
@@ -621,8 +624,14 @@ fn the_reader_finds_uses_of_every_kind() {
         expand_use_tree("crate::x::{self, y::{Z as W, V}}"),
         vec![
             (vec!["crate".into(), "x".into()], "x".into()),
-            (vec!["crate".into(), "x".into(), "y".into(), "Z".into()], "W".into()),
-            (vec!["crate".into(), "x".into(), "y".into(), "V".into()], "V".into()),
+            (
+                vec!["crate".into(), "x".into(), "y".into(), "Z".into()],
+                "W".into()
+            ),
+            (
+                vec!["crate".into(), "x".into(), "y".into(), "V".into()],
+                "V".into()
+            ),
         ]
     );
     let code = strip_test_items(&strip_comments_and_literals(

@@ -482,7 +482,6 @@ impl Film {
         self.p.dropped = checkpoint.p.dropped;
         Ok(todo)
     }
-
 }
 
 /// `ranges` (sorted, disjoint) with `r` added and adjacent ranges joined;

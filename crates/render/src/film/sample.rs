@@ -187,8 +187,7 @@ impl TileSums {
             && self.y0 <= self.y1
             && self.x1 <= width
             && self.y1 <= height
-            && self.sums.len() as u64
-                == (self.x1 - self.x0) as u64 * (self.y1 - self.y0) as u64
+            && self.sums.len() as u64 == (self.x1 - self.x0) as u64 * (self.y1 - self.y0) as u64
     }
 }
 
@@ -362,4 +361,3 @@ mod tests {
         }
     }
 }
-

@@ -7,16 +7,16 @@ use super::desc::{
     LightDesc, MaterialDesc, ModelKind, SamplerKind, SceneDesc, ShapeDesc, SpectralIntegration,
     TransformDesc, WavelengthMode,
 };
-use crate::inputs::{self, Inputs};
-use crate::shapes::{Shapes, Surface};
 use super::tables;
 use super::{ESTIMATOR, Scene, Settings};
 use crate::camera::Camera;
 use crate::error::SceneError;
 use crate::geometry::{Planar, Sphere, Transform};
+use crate::inputs::{self, Inputs};
 use crate::light::{EnvMap, Environment, LightKind, Lights};
 use crate::material::{Material, build_material};
 use crate::mesh::{MeshAccel, MeshSource, obj_from_bytes};
+use crate::shapes::{Shapes, Surface};
 use crate::sky::{Sky, SkyParams};
 use crate::spectral_table::SpectralTables;
 use crate::spectrum::{LAMBDA_MAX, LAMBDA_MIN, Spectrum, parse_spectrum_with};
