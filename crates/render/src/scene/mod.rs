@@ -1,6 +1,7 @@
 //! Scenes: the TOML description ([`desc`]), reading and parsing it
-//! ([`load`]), building it in stages ([`build`]) and the runtime scene the
-//! integrator traces ([`Scene`]).
+//! ([`load`]), writing it ([`write`]), the scenes lustre makes itself
+//! ([`presets`]), building it in stages ([`build`]) and the runtime scene
+//! the integrator traces ([`Scene`]).
 //!
 //! The files a build reads are recorded by [`crate::inputs`], also reachable
 //! as `scene::inputs`.
@@ -8,7 +9,9 @@
 mod build;
 pub mod desc;
 mod load;
+pub mod presets;
 mod tables;
+pub mod write;
 
 use crate::camera::Camera;
 use crate::film::Film;
