@@ -266,7 +266,79 @@ pub fn bundled_scenes() -> anyhow::Result<Vec<(String, String)>> {
         .collect()
 }
 
-/// Runs `lustre preview`.
+/// Writes the preview's assets into `dir/assets` (creating both), each
+/// only when it differs from what is there, so that the fingerprint of a
+/// scene reading them stays put between runs.
+fn write_assets(dir: &Path) -> anyhow::Result<()> {
+    std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    let assets_dir = dir.join("assets");
+    std::fs::create_dir_all(&assets_dir)
+        .with_context(|| format!("creating {}", assets_dir.display()))?;
+    for (file, text) in preview_assets() {
+        let p = assets_dir.join(file);
+        let old = safe_io::read_regular(&p, "preview asset", render::inputs::MAX_CSV_BYTES);
+        if old.ok().as_deref() != Some(text.as_bytes()) {
+            plot::write_atomic(&p, text.as_bytes())?;
+        }
+    }
+    Ok(())
+}
+
+/// The scene of one preview image, written as `dir/<stem>.toml` (with the
+/// data file its material reads) and loaded.
+fn cell_scene(
+    args: &PreviewArgs,
+    cell: &Cell,
+    stem: &str,
+    (width, height): (u32, u32),
+    title: &str,
+    dir: &Path,
+) -> anyhow::Result<render::Scene> {
+    let scene = PreviewScene {
+        width,
+        height,
+        spp: args.spp,
+        material: Default::default(),
+        light: args.light.into(),
+        sun_elevation_deg: args.sun_elevation,
+        // One turn is all that matters.
+        sun_azimuth_deg: args.sun_azimuth.rem_euclid(360.0),
+        turbidity: args.turbidity,
+        exposure: args.exposure,
+        assets: "assets".into(),
+        outputs: Some((format!("{stem}.exr").into(), format!("{stem}.png").into())),
+    };
+    let header = format!(
+        "lustre preview: {} ({}); render again with `lustre render` from this directory.",
+        cell.label.replace('\n', ", "),
+        title.replace('\n', " ")
+    );
+    let text = scene_text(scene, &cell.material, header)?;
+    if let Some((file, text)) = &cell.data {
+        plot::write_atomic(&dir.join(file), text.as_bytes())?;
+    }
+    let scene_path = dir.join(format!("{stem}.toml"));
+    plot::write_atomic(&scene_path, text.as_bytes())?;
+    render::load_str(&scene_path, &text)
+        .map_err(|e| anyhow!("{}: {e}", cell.label.replace('\n', ", ")))
+}
+
+/// The grid of `n` images (up to three in a row, else two rows) titled
+/// with `title`, the lighting and the image size; and its column count.
+fn image_grid(n: usize, title: &str, light: Lighting, (w, h): (u32, u32)) -> (ImageGrid, usize) {
+    let cols = if n <= 3 { n } else { n.div_ceil(2) };
+    let rows = n.div_ceil(cols);
+    let grid = ImageGrid::new(rows, cols).title(format!(
+        "{title}\n{} lighting, {w}×{h} px",
+        match light {
+            Lighting::Sky => "sky",
+            Lighting::Studio => "studio",
+            Lighting::Both => "sky + studio",
+        }
+    ));
+    (grid, cols)
+}
+
 /// The sky's parameters, checked as the flags they came from: the scene
 /// built from them would otherwise report them at a line of a generated file.
 fn check_sky_flags(args: &PreviewArgs) -> anyhow::Result<()> {
@@ -290,6 +362,7 @@ fn check_sky_flags(args: &PreviewArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// Runs `lustre preview`.
 pub fn run(args: PreviewArgs) -> anyhow::Result<()> {
     crate::flags::check_spp(args.spp, crate::flags::MAX_FIGURE_SPP)?;
     crate::flags::check_exposure(args.exposure)?;
@@ -356,66 +429,16 @@ pub fn run(args: PreviewArgs) -> anyhow::Result<()> {
         safe_io::register_input(material);
         crate::outputs::check(&outputs)?;
     }
-    std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
-    let assets_dir = dir.join("assets");
-    std::fs::create_dir_all(&assets_dir)
-        .with_context(|| format!("creating {}", assets_dir.display()))?;
-    for (file, text) in preview_assets() {
-        let p = assets_dir.join(file);
-        // Rewrite only when different, so a scene's fingerprint stays put between runs.
-        let old = safe_io::read_regular(&p, "preview asset", render::scene::inputs::MAX_CSV_BYTES);
-        if old.ok().as_deref() != Some(text.as_bytes()) {
-            plot::write_atomic(&p, text.as_bytes())?;
-        }
-    }
+    write_assets(&dir)?;
 
     let stop = render::interrupt::ctrlc_flag().map_err(anyhow::Error::msg)?;
     let pool = render::thread_pool(threads)?;
-    let cols = if cells.len() <= 3 {
-        cells.len()
-    } else {
-        cells.len().div_ceil(2)
-    };
-    let rows = cells.len().div_ceil(cols);
-    let mut image_grid = ImageGrid::new(rows, cols).title(format!(
-        "{title}\n{} lighting, {w}×{h} px",
-        match args.light {
-            Lighting::Sky => "sky",
-            Lighting::Studio => "studio",
-            Lighting::Both => "sky + studio",
-        }
-    ));
+    let (mut image_grid, cols) = image_grid(cells.len(), &title, args.light, (w, h));
     let start = Instant::now();
     let mut single_rgb = None;
     for (i, cell) in cells.iter().enumerate() {
         let stem = stem_of(cell);
-        let scene = PreviewScene {
-            width: w,
-            height: h,
-            spp: args.spp,
-            material: Default::default(),
-            light: args.light.into(),
-            sun_elevation_deg: args.sun_elevation,
-            // One turn is all that matters.
-            sun_azimuth_deg: args.sun_azimuth.rem_euclid(360.0),
-            turbidity: args.turbidity,
-            exposure: args.exposure,
-            assets: "assets".into(),
-            outputs: Some((format!("{stem}.exr").into(), format!("{stem}.png").into())),
-        };
-        let header = format!(
-            "lustre preview: {} ({}); render again with `lustre render` from this directory.",
-            cell.label.replace('\n', ", "),
-            title.replace('\n', " ")
-        );
-        let text = scene_text(scene, &cell.material, header)?;
-        if let Some((file, text)) = &cell.data {
-            plot::write_atomic(&dir.join(file), text.as_bytes())?;
-        }
-        let scene_path = dir.join(format!("{stem}.toml"));
-        plot::write_atomic(&scene_path, text.as_bytes())?;
-        let scene = render::load_str(&scene_path, &text)
-            .map_err(|e| anyhow!("{}: {e}", cell.label.replace('\n', ", ")))?;
+        let scene = cell_scene(&args, cell, &stem, (w, h), &title, &dir)?;
         // Each remaining image gets an equal share of what is left of the budget.
         let left = budget.saturating_sub(start.elapsed());
         let share = left / (cells.len() - i) as u32;
