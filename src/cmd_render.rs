@@ -577,7 +577,7 @@ mod tests {
         assert_eq!(parse_duration("2h").unwrap(), Duration::from_secs(7200));
         assert!(parse_duration("5 parsecs").is_err());
         assert!(parse_duration("-1").is_err());
-        // These panicked (Duration overflow) before.
+        // Past u64 seconds `Duration` overflows (a panic unless refused).
         for bad in ["inf", "infs", "1e30", "1e300h", "nan", "-inf", "0"] {
             let e = parse_duration(bad).unwrap_err().to_string();
             assert!(e.starts_with("--time-limit"), "{bad}: {e}");

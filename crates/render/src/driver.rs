@@ -157,8 +157,8 @@ fn render_tile(
 }
 
 /// Most worker threads a render starts: four per core. More only add
-/// start-up and scheduling cost (`--threads 10000` turned a 0.05 s render
-/// into 60 s).
+/// start-up and scheduling cost (ten thousand threads make a 0.05 s render
+/// take a minute).
 pub fn max_threads() -> usize {
     std::thread::available_parallelism().map_or(1, |n| n.get()) * 4
 }

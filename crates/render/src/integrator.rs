@@ -312,8 +312,8 @@ struct Vertex {
 
 impl Vertex {
     /// `None` if the viewer is below the shading frame's horizon.
-    // Inlined: returned from a call, the 152-byte option was copied out by
-    // a memcpy call (29 instructions per plate hit).
+    // Inlined: returned from a call, the 152-byte option would be copied
+    // out by a memcpy call at every hit.
     #[inline(always)]
     fn new(hit: &Hit, ray: &Ray) -> Option<Vertex> {
         let ng = if hit.geo.n.dot(ray.d) > 0.0 {
@@ -410,8 +410,8 @@ fn vertex_draws(
 /// fraction A = e^{−g} coherently, and its sampler picks the delta lobe with
 /// probability p = max(A, 0.05). Where the mirror direction meets a small,
 /// bright light, that lobe is most of the pixel, so the pick is a rare event
-/// of weight 1/p: it left the s138 full-GHS plates with a relative RMSE of
-/// 5.9 at 1 spp and 0.14 at 256 (hero), falling slower than spp^−½. One
+/// of weight 1/p: left to it, the s138 full-GHS plates have a relative RMSE
+/// of 5.9 at 1 spp and 0.14 at 256 (hero), falling slower than spp^−½. One
 /// more ray per such vertex makes the term exact; the sampled delta
 /// direction still carries the path on, but counts no emission.
 #[inline]

@@ -536,7 +536,8 @@ mod tests {
 
     #[test]
     fn exposure_is_bounded_as_in_a_scene() {
-        // `lustre merge --exposure 200` wrote infinite pixels.
+        // Beyond ±60 stops a sane pixel leaves f32's range (an exposure of
+        // 200 would write infinite pixels).
         let mut f = Film::new(1, 1, 1, 0, 0.0).unwrap();
         for bad in [61.0, -200.0, f64::INFINITY, f64::NAN] {
             assert!(f.set_exposure(bad).is_err(), "{bad}");

@@ -610,8 +610,8 @@ impl<'a> Builder<'a> {
         // lift of a map's colours, and the CIE daylight basis S0 + M1 S1 +
         // M2 S2 at the reddish chromaticities of a sun a few degrees above
         // the horizon, whose M1 makes the blue end negative. Dropping those
-        // samples darkened such skies (up to 40 % of samples at 0.5°); kept,
-        // they average to the sky's own XYZ.
+        // samples would darken such skies (up to 40 % of samples at 0.5°);
+        // kept, they average to the sky's own XYZ.
         let signed_radiance = environment.is_some_and(|i| {
             matches!(
                 lights[i],

@@ -18,8 +18,8 @@ use toml::Spanned;
 
 /// `[T; N]` read from an array of exactly `N` elements. serde's array impl
 /// stops after `N` elements and the TOML deserializer does not complain
-/// about the rest, so without this `resolution = [320, 240, 7, …]` passed
-/// as `[320, 240]`. The surplus is counted (without storing it) for the
+/// about the rest, so without this `resolution = [320, 240, 7, …]` would
+/// pass as `[320, 240]`. The surplus is counted (without storing it) for the
 /// message.
 struct Exact<T, const N: usize>([T; N]);
 
