@@ -9,7 +9,7 @@ use std::path::Path;
 
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
-    if args.is_empty() || args.len() % 2 != 0 {
+    if args.is_empty() || !args.len().is_multiple_of(2) {
         eprintln!("usage: exr_equal A.exr B.exr [A2.exr B2.exr …]");
         std::process::exit(2);
     }

@@ -329,7 +329,13 @@ fn from_parts_checks_what_a_film_file_is_checked_for() {
     refuse(&|p| p.dropped.first = None, "disagree");
     refuse(&|p| p.exposure = 1000.0, "exposure");
     refuse(&|p| p.ranges.clear(), "no sample range");
-    refuse(&|p| p.ranges = vec![0..u64::MAX], "ends beyond");
+    refuse(
+        &|p| {
+            p.ranges.clear();
+            p.ranges.push(0..u64::MAX);
+        },
+        "ends beyond",
+    );
     refuse(&|p| p.sums[3][1] = -5, "pixel (3, 0)");
     refuse(&|p| p.sums[14][2] = i128::MAX, "pixel (4, 2)");
     refuse(&|p| p.dropped.negative = u64::MAX, "dropped samples");

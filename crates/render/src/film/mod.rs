@@ -293,8 +293,8 @@ impl Film {
             for y in t.y0..t.y1 {
                 for x in t.x0..t.x1 {
                     let px = &mut self.p.sums[(y * w + x) as usize];
-                    for c in 0..3 {
-                        px[c] = px[c].saturating_add(t.sums()[k][c]);
+                    for (p, v) in px.iter_mut().zip(&t.sums()[k]) {
+                        *p = p.saturating_add(*v);
                     }
                     k += 1;
                 }
