@@ -154,6 +154,14 @@ impl TileSums {
         y: u32,
         samples: impl Iterator<Item = (u64, Result<[f64; 3], BadSample>)>,
     ) {
+        debug_assert_eq!(
+            (x, y),
+            {
+                let (w, i) = ((self.x1 - self.x0) as usize, self.sums.len());
+                (self.x0 + (i % w) as u32, self.y0 + (i / w) as u32)
+            },
+            "pixels are added in row-major order"
+        );
         let mut acc = [0i128; 3];
         for (s, value) in samples {
             match value {
