@@ -10,7 +10,7 @@ use glam::DVec3;
 pub enum Surface {
     /// A reflecting surface with this material index.
     Material(u32),
-    /// An emitting shape: index into [`Lights::lights`].
+    /// An emitting shape: index into [`Lights::lights`](crate::light::Lights::lights).
     Emitter(u32),
 }
 

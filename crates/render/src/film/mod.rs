@@ -7,7 +7,7 @@
 //! colour: the CIE matching of each sampled wavelength and the fixed point
 //! of one sample ([`sample`]), the sums of a tile and of a pass
 //! ([`TileSums`], [`Film::add_pass`]), and the mean XYZ and linear sRGB of a
-//! pixel ([`Film::xyz`], [`Film::rgb`]). Its `.film` file is [`file`]'s.
+//! pixel ([`Film::xyz`], [`Film::rgb`]). Its `.film` file is [`mod@file`]'s.
 //!
 //! A film knows nothing of scenes: it is made from plain values (resolution,
 //! the fingerprint of the inputs, seed, exposure, the input records).

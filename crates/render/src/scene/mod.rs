@@ -1,6 +1,6 @@
 //! Scenes: the TOML description ([`desc`]), reading and parsing it
-//! ([`load`]), writing it ([`write`]), the scenes lustre makes itself
-//! ([`presets`]), building it in stages ([`build`]) and the runtime scene
+//! ([`load`]), writing it ([`mod@write`]), the scenes lustre makes itself
+//! ([`presets`]), building it in stages (`build`) and the runtime scene
 //! the integrator traces ([`Scene`]).
 //!
 //! The files a build reads are recorded by [`crate::inputs`], also reachable
