@@ -183,13 +183,13 @@ impl SceneSpec {
 
 /// A single-thread pool; its worker's CPU clock times the renders.
 struct Worker {
-    pool: render::render::ThreadPool,
+    pool: render::ThreadPool,
 }
 
 impl Worker {
     fn new() -> Worker {
         Worker {
-            pool: render::render::thread_pool(Some(1)).expect("thread pool"),
+            pool: render::thread_pool(Some(1)).expect("thread pool"),
         }
     }
 
@@ -266,7 +266,7 @@ fn reference(spec: &SceneSpec, s: &Settings, worker: &Worker, cache: Option<&Pat
         "{}\nref_spp={} seed={REF_SEED}+chunk mode=hero chunks={REF_CHUNKS} v2",
         spec.text, s.ref_spp
     );
-    let hash = render::scene::fnv1a(key.as_bytes(), 0xcbf2_9ce4_8422_2325);
+    let hash = render::inputs::fnv1a(key.as_bytes(), render::inputs::FNV_OFFSET);
     let file = cache.map(|c| c.join(format!("{}_{hash:016x}.ref", spec.name)));
     let pixels = spec_pixels(spec);
     if let Some(f) = &file

@@ -39,7 +39,7 @@ fn scene_path(rel: &str) -> PathBuf {
 
 const SPP: u64 = 2;
 
-fn render_spp(pool: &render::render::ThreadPool, scene: &Scene) -> Film {
+fn render_spp(pool: &render::ThreadPool, scene: &Scene) -> Film {
     let mut film = Film::new(
         scene.camera.width,
         scene.camera.height,
@@ -63,7 +63,7 @@ fn throughput<M: Measurement + 'static>(c: &mut Criterion<M>, group: &str) {
     g.sample_size(10).measurement_time(Duration::from_secs(15));
     g.throughput(Throughput::Elements(samples));
     for threads in [1usize, 2] {
-        let pool = render::render::thread_pool(Some(threads)).expect("pool");
+        let pool = render::thread_pool(Some(threads)).expect("pool");
         g.bench_function(format!("default_scene_{threads}_threads"), |b| {
             b.iter(|| black_box(render_spp(&pool, &scene)))
         });
@@ -78,7 +78,7 @@ fn throughput<M: Measurement + 'static>(c: &mut Criterion<M>, group: &str) {
 fn plates<M: Measurement + 'static>(c: &mut Criterion<M>, group: &str) {
     let mut g = c.benchmark_group(group);
     g.sample_size(10).measurement_time(Duration::from_secs(10));
-    let pool = render::render::thread_pool(Some(1)).expect("pool");
+    let pool = render::thread_pool(Some(1)).expect("pool");
     for plate in ["ggx_cu_45deg", "beckmann_cu_45deg"] {
         let path = scene_path(&format!("benches/peer/lustre/{plate}.toml"));
         let text = std::fs::read_to_string(&path).expect("plate scene");

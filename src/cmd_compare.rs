@@ -21,6 +21,7 @@ use std::time::Instant;
 
 use anyhow::{Context, anyhow, bail};
 use plot::ImageGrid;
+use render::scene::presets::PlateScene;
 use render::{Film, RenderOptions};
 
 use crate::cmd_brdf_plot::parse_size;
@@ -148,20 +149,25 @@ fn material_rows(path: &Path) -> anyhow::Result<(String, Vec<Row>)> {
     Ok((name, rows))
 }
 
-/// The scene of one cell: the bundled sample scenes' plate, camera and lights.
-pub fn scene_text(view_deg: f64, width: u32, height: u32, spp: u64, material: &str) -> String {
-    let (cam, light, up) = crate::cmd_scenes::plate_view(view_deg);
-    let v = |p: [f64; 3]| format!("[{:.9}, {:.9}, {:.9}]", p[0], p[1], p[2]);
-    format!(
-        "[camera]\nlook_from = {}\nlook_at = [0.0, 0.0, 0.0]\nup = {up}\nfov_deg = 14.0\nresolution = [{width}, {height}]\n\n\
-         [film]\nspp = {spp}\nseed = 1\n\n[integrator]\nmax_depth = 3\nwavelengths = \"hero\"\n\n\
-         [materials.plate]\n{material}\n\
-         [[shapes]]\ntype = \"rectangle\"\nsize = [0.2, 0.2]\nmaterial = \"plate\"\ntransform = {{ rotate_deg = [-90.0, 0.0, 0.0] }}\n\n\
-         [[lights]]\ntype = \"sphere\"\ncenter = {}\nradius = 0.018\nradiance = 200.0\nspectrum = \"d65\"\n\n\
-         [[lights]]\ntype = \"environment\"\nradiance = 0.02\nspectrum = \"d65\"\n",
-        v(cam),
-        v(light)
-    )
+/// The scene of one cell: the plate scene of the bundled sample scenes
+/// ([`PlateScene`]) with the row's `[materials.plate]` body.
+pub fn scene_text(
+    view_deg: f64,
+    width: u32,
+    height: u32,
+    spp: u64,
+    material: &str,
+) -> anyhow::Result<String> {
+    let material = toml::from_str(material).context("the cell's material")?;
+    let plate = PlateScene {
+        view_deg,
+        width,
+        height,
+        spp,
+        material,
+        outputs: None,
+    };
+    Ok(plate.file().to_toml()?)
 }
 
 /// Runs `lustre compare`.
@@ -219,7 +225,7 @@ pub fn run(args: CompareArgs) -> anyhow::Result<()> {
         threads,
         ..RenderOptions::default()
     };
-    let pool = render::render::thread_pool(threads)?;
+    let pool = render::thread_pool(threads)?;
     let mut grid = ImageGrid::new(rows.len(), args.views.len())
         .title(format!("{title}\n{w}×{h} px, {} spp per cell", args.spp))
         .row_labels(rows.iter().map(|r| r.label.clone()))
@@ -232,7 +238,7 @@ pub fn run(args: CompareArgs) -> anyhow::Result<()> {
     let start = Instant::now();
     for (r, row) in rows.iter().enumerate() {
         for (c, &view) in args.views.iter().enumerate() {
-            let text = scene_text(view, w, h, args.spp, &row.material);
+            let text = scene_text(view, w, h, args.spp, &row.material)?;
             let scene = render::load_str(&scene_path, &text)
                 .map_err(|e| anyhow!("{} at {view}°: {e}", row.label.replace('\n', ", ")))?;
             let mut film = Film::new(

@@ -3,10 +3,11 @@
 //! rectangle lights), the way renderer users judge a material; one image per
 //! model, side by side in a labelled grid when there are several.
 //!
-//! The object, floor and sky are made here (`render::preview_mesh`,
-//! `render::sky`); `lustre scenes` writes the committed copies under
-//! `scenes/assets/` and the bundled scenes `scenes/preview/<sample>.toml`
-//! (one per paper sample of `brdf::paper`). A preview run writes, next to
+//! The scene (object, floor, sky or studio lights) is
+//! `render::scene::presets::PreviewScene`; `lustre scenes` writes the
+//! committed copies of its assets under `scenes/assets/` and the bundled
+//! scenes `scenes/preview/<sample>.toml` (one per paper sample of
+//! `brdf::paper`). A preview run writes, next to
 //! its PNG, the scene file of every image (and the assets they use), so any
 //! image can be re-rendered longer with `lustre render`.
 
@@ -15,7 +16,7 @@ use std::time::{Duration, Instant};
 
 use anyhow::{Context, anyhow, bail};
 use plot::ImageGrid;
-use render::preview_mesh::{PreviewObject, checker_floor_obj};
+use render::scene::presets::{PreviewLight, PreviewScene, preview_assets};
 use render::{Film, RenderOptions};
 
 use crate::cmd_brdf_plot::parse_size;
@@ -96,107 +97,23 @@ pub const DEFAULT_SUN_ELEVATION: f64 = 35.0;
 /// Default sun azimuth, degrees: in front of the object, to the camera's left.
 pub const DEFAULT_SUN_AZIMUTH: f64 = 220.0;
 
-/// Asset file names (written beside each other).
-pub const OBJECT_OBJ: &str = "preview_object.obj";
-/// Light squares of the floor.
-pub const FLOOR_A_OBJ: &str = "preview_floor_a.obj";
-/// Dark squares of the floor.
-pub const FLOOR_B_OBJ: &str = "preview_floor_b.obj";
-/// Floor squares per side and their size.
-const FLOOR_N: usize = 28;
-const FLOOR_SQUARE: f64 = 0.5;
-
-/// The asset files and their text, generated.
-pub fn assets() -> [(&'static str, String); 3] {
-    [
-        (OBJECT_OBJ, PreviewObject::new().obj()),
-        (FLOOR_A_OBJ, checker_floor_obj(FLOOR_N, FLOOR_SQUARE, 0)),
-        (FLOOR_B_OBJ, checker_floor_obj(FLOOR_N, FLOOR_SQUARE, 1)),
-    ]
-}
-
-/// Everything one preview scene needs.
-#[derive(Clone, Debug)]
-pub struct SceneSpec {
-    /// Image size.
-    pub width: u32,
-    /// Image size.
-    pub height: u32,
-    /// Samples per pixel.
-    pub spp: u64,
-    /// Body of `[materials.object]`.
-    pub material: String,
-    /// Lighting.
-    pub light: Lighting,
-    /// Sun elevation, degrees.
-    pub sun_elevation: f64,
-    /// Sun azimuth, degrees.
-    pub sun_azimuth: f64,
-    /// Sky turbidity.
-    pub turbidity: f64,
-    /// Exposure, stops.
-    pub exposure: f64,
-    /// Directory of the OBJ files relative to the scene file.
-    pub assets: String,
-    /// `exr`/`png` output names, if any.
-    pub outputs: Option<(String, String)>,
-    /// Comment lines at the top.
-    pub header: String,
-}
-
-fn toml_str(s: &str) -> String {
-    toml::Value::String(s.to_string()).to_string()
-}
-
-/// The scene text of a preview.
-pub fn scene_text(s: &SceneSpec) -> String {
-    let mut t = s.header.clone();
-    let outputs = s.outputs.as_ref().map_or_else(String::new, |(exr, png)| {
-        format!("exr = {}\npng = {}\n", toml_str(exr), toml_str(png))
-    });
-    let asset = |f: &str| toml_str(&format!("{}/{f}", s.assets));
-    t += &format!(
-        "\n[camera]\nlook_from = [0.0, 1.75, 3.2]\nlook_at = [0.0, 0.45, 0.0]\nfov_deg = 24.0\nresolution = [{}, {}]\n\n\
-         [film]\nspp = {}\nseed = 1\n{outputs}exposure = {}\n\n\
-         [integrator]\nmax_depth = 8\nwavelengths = \"hero\"\n\n\
-         [materials.object]\n{}\n\n\
-         # The floor: a checkerboard of rough aluminium and a dark glossy dielectric-like\n\
-         # conductor (n = 1.5, k = 0: 4 % Fresnel reflection, no diffuse part).\n\
-         [materials.floor_light]\nmodel = \"ggx\"\nmetal = \"al\"\nalpha = 0.6\n\n\
-         [materials.floor_dark]\nmodel = \"ggx\"\nnk = [1.5, 0.0]\nalpha = 0.25\n\n\
-         [[shapes]]\ntype = \"mesh\"\nfile = {}\nmaterial = \"object\"\n\n\
-         [[shapes]]\ntype = \"mesh\"\nfile = {}\nmaterial = \"floor_light\"\n\n\
-         [[shapes]]\ntype = \"mesh\"\nfile = {}\nmaterial = \"floor_dark\"\n",
-        s.width,
-        s.height,
-        s.spp,
-        s.exposure,
-        s.material.trim_end(),
-        asset(OBJECT_OBJ),
-        asset(FLOOR_A_OBJ),
-        asset(FLOOR_B_OBJ),
-    );
-    if matches!(s.light, Lighting::Sky | Lighting::Both) {
-        t += &format!(
-            "\n# Daylight: Preetham sky, its sun and a 20 % ground; scale 5e-5 maps 20 kcd/m² to 1.\n\
-             [[lights]]\ntype = \"sky\"\nsun_elevation_deg = {}\nsun_azimuth_deg = {}\nturbidity = {}\nscale = 5e-5\n",
-            s.sun_elevation, s.sun_azimuth, s.turbidity
-        );
-    }
-    if matches!(s.light, Lighting::Studio | Lighting::Both) {
-        t += "\n# Studio: a large key light to the front left, a fill to the right and a rim light\n\
-              # behind, all facing the object.\n\
-              [[lights]]\ntype = \"rectangle\"\nsize = [1.2, 0.8]\nradiance = 6.0\nspectrum = \"d65\"\n\
-              transform = { translate = [-1.6, 1.9, 1.6], rotate_deg = [-40.0, -45.0, 0.0] }\n\n\
-              [[lights]]\ntype = \"rectangle\"\nsize = [1.0, 1.0]\nradiance = 1.5\nspectrum = \"d65\"\n\
-              transform = { translate = [2.0, 1.0, 1.2], rotate_deg = [-15.0, 60.0, 0.0] }\n\n\
-              [[lights]]\ntype = \"rectangle\"\nsize = [1.6, 0.4]\nradiance = 8.0\nspectrum = \"d65\"\n\
-              transform = { translate = [0.0, 2.0, -2.2], rotate_deg = [-140.0, 0.0, 0.0] }\n";
-        if s.light == Lighting::Studio {
-            t += "\n[[lights]]\ntype = \"environment\"\nradiance = 0.05\nspectrum = \"d65\"\n";
+impl From<Lighting> for PreviewLight {
+    fn from(l: Lighting) -> PreviewLight {
+        match l {
+            Lighting::Sky => PreviewLight::Sky,
+            Lighting::Studio => PreviewLight::Studio,
+            Lighting::Both => PreviewLight::Both,
         }
     }
-    t
+}
+
+/// The scene text of a preview ([`PreviewScene`]) whose object has the
+/// `[materials.object]` body `material`, with `header` as its first comment.
+pub fn scene_text(scene: PreviewScene, material: &str, header: String) -> anyhow::Result<String> {
+    let material = toml::from_str(material).context("the preview's material")?;
+    let mut file = PreviewScene { material, ..scene }.file();
+    file.comments.header = header;
+    Ok(file.to_toml()?)
 }
 
 /// One image of a preview: its label, the `[materials.object]` body, and a
@@ -316,32 +233,107 @@ pub fn bundled_scenes() -> anyhow::Result<Vec<(String, String)>> {
             let l = s.material(PaperModel::Ghs);
             let stem = s.name.to_lowercase();
             let header = format!(
-                "# Material preview: paper sample {} ({}), full GHS,\n\
-                 # on the preview object over a checkered floor under a Preetham sky with its sun.\n\
-                 # Written by `lustre scenes` (src/cmd_preview.rs); assets in ../assets.\n",
+                "Material preview: paper sample {} ({}), full GHS,\n\
+                 on the preview object over a checkered floor under a Preetham sky with its sun.\n\
+                 Written by `lustre scenes` (src/cmd_preview.rs); assets in ../assets.",
                 s.name,
                 s.describe()
             );
-            let text = scene_text(&SceneSpec {
+            let scene = PreviewScene {
                 width: 400,
                 height: 300,
                 spp: 64,
-                material: models::material_toml(&l.spec, None)?,
-                light: Lighting::Sky,
-                sun_elevation: DEFAULT_SUN_ELEVATION,
-                sun_azimuth: DEFAULT_SUN_AZIMUTH,
+                material: Default::default(),
+                light: PreviewLight::Sky,
+                sun_elevation_deg: DEFAULT_SUN_ELEVATION,
+                sun_azimuth_deg: DEFAULT_SUN_AZIMUTH,
                 turbidity: 2.5,
                 exposure: 0.0,
                 assets: "../assets".into(),
-                outputs: Some((format!("preview_{stem}.exr"), format!("preview_{stem}.png"))),
-                header,
-            });
+                outputs: Some((
+                    format!("preview_{stem}.exr").into(),
+                    format!("preview_{stem}.png").into(),
+                )),
+            };
+            let text = scene_text(scene, &models::material_toml(&l.spec, None)?, header)?;
             Ok((format!("{stem}.toml"), text))
         })
         .collect()
 }
 
-/// Runs `lustre preview`.
+/// Writes the preview's assets into `dir/assets` (creating both), each
+/// only when it differs from what is there, so that the fingerprint of a
+/// scene reading them stays put between runs.
+fn write_assets(dir: &Path) -> anyhow::Result<()> {
+    std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    let assets_dir = dir.join("assets");
+    std::fs::create_dir_all(&assets_dir)
+        .with_context(|| format!("creating {}", assets_dir.display()))?;
+    for (file, text) in preview_assets() {
+        let p = assets_dir.join(file);
+        let old = safe_io::read_regular(&p, "preview asset", render::inputs::MAX_CSV_BYTES);
+        if old.ok().as_deref() != Some(text.as_bytes()) {
+            plot::write_atomic(&p, text.as_bytes())?;
+        }
+    }
+    Ok(())
+}
+
+/// The scene of one preview image, written as `dir/<stem>.toml` (with the
+/// data file its material reads) and loaded.
+fn cell_scene(
+    args: &PreviewArgs,
+    cell: &Cell,
+    stem: &str,
+    (width, height): (u32, u32),
+    title: &str,
+    dir: &Path,
+) -> anyhow::Result<render::Scene> {
+    let scene = PreviewScene {
+        width,
+        height,
+        spp: args.spp,
+        material: Default::default(),
+        light: args.light.into(),
+        sun_elevation_deg: args.sun_elevation,
+        // One turn is all that matters.
+        sun_azimuth_deg: args.sun_azimuth.rem_euclid(360.0),
+        turbidity: args.turbidity,
+        exposure: args.exposure,
+        assets: "assets".into(),
+        outputs: Some((format!("{stem}.exr").into(), format!("{stem}.png").into())),
+    };
+    let header = format!(
+        "lustre preview: {} ({}); render again with `lustre render` from this directory.",
+        cell.label.replace('\n', ", "),
+        title.replace('\n', " ")
+    );
+    let text = scene_text(scene, &cell.material, header)?;
+    if let Some((file, text)) = &cell.data {
+        plot::write_atomic(&dir.join(file), text.as_bytes())?;
+    }
+    let scene_path = dir.join(format!("{stem}.toml"));
+    plot::write_atomic(&scene_path, text.as_bytes())?;
+    render::load_str(&scene_path, &text)
+        .map_err(|e| anyhow!("{}: {e}", cell.label.replace('\n', ", ")))
+}
+
+/// The grid of `n` images (up to three in a row, else two rows) titled
+/// with `title`, the lighting and the image size; and its column count.
+fn image_grid(n: usize, title: &str, light: Lighting, (w, h): (u32, u32)) -> (ImageGrid, usize) {
+    let cols = if n <= 3 { n } else { n.div_ceil(2) };
+    let rows = n.div_ceil(cols);
+    let grid = ImageGrid::new(rows, cols).title(format!(
+        "{title}\n{} lighting, {w}×{h} px",
+        match light {
+            Lighting::Sky => "sky",
+            Lighting::Studio => "studio",
+            Lighting::Both => "sky + studio",
+        }
+    ));
+    (grid, cols)
+}
+
 /// The sky's parameters, checked as the flags they came from: the scene
 /// built from them would otherwise report them at a line of a generated file.
 fn check_sky_flags(args: &PreviewArgs) -> anyhow::Result<()> {
@@ -365,6 +357,7 @@ fn check_sky_flags(args: &PreviewArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// Runs `lustre preview`.
 pub fn run(args: PreviewArgs) -> anyhow::Result<()> {
     crate::flags::check_spp(args.spp, crate::flags::MAX_FIGURE_SPP)?;
     crate::flags::check_exposure(args.exposure)?;
@@ -431,65 +424,16 @@ pub fn run(args: PreviewArgs) -> anyhow::Result<()> {
         safe_io::register_input(material);
         crate::outputs::check(&outputs)?;
     }
-    std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
-    let assets_dir = dir.join("assets");
-    std::fs::create_dir_all(&assets_dir)
-        .with_context(|| format!("creating {}", assets_dir.display()))?;
-    for (file, text) in assets() {
-        let p = assets_dir.join(file);
-        // Rewrite only when different, so a scene's fingerprint stays put between runs.
-        let old = safe_io::read_regular(&p, "preview asset", render::scene::inputs::MAX_CSV_BYTES);
-        if old.ok().as_deref() != Some(text.as_bytes()) {
-            plot::write_atomic(&p, text.as_bytes())?;
-        }
-    }
+    write_assets(&dir)?;
 
     let stop = render::interrupt::ctrlc_flag().map_err(anyhow::Error::msg)?;
-    let pool = render::render::thread_pool(threads)?;
-    let cols = if cells.len() <= 3 {
-        cells.len()
-    } else {
-        cells.len().div_ceil(2)
-    };
-    let rows = cells.len().div_ceil(cols);
-    let mut image_grid = ImageGrid::new(rows, cols).title(format!(
-        "{title}\n{} lighting, {w}×{h} px",
-        match args.light {
-            Lighting::Sky => "sky",
-            Lighting::Studio => "studio",
-            Lighting::Both => "sky + studio",
-        }
-    ));
+    let pool = render::thread_pool(threads)?;
+    let (mut image_grid, cols) = image_grid(cells.len(), &title, args.light, (w, h));
     let start = Instant::now();
     let mut single_rgb = None;
     for (i, cell) in cells.iter().enumerate() {
         let stem = stem_of(cell);
-        let text = scene_text(&SceneSpec {
-            width: w,
-            height: h,
-            spp: args.spp,
-            material: cell.material.clone(),
-            light: args.light,
-            sun_elevation: args.sun_elevation,
-            // Written into the scene as a plain decimal: one turn is all that matters.
-            sun_azimuth: args.sun_azimuth.rem_euclid(360.0),
-            turbidity: args.turbidity,
-            exposure: args.exposure,
-            assets: "assets".into(),
-            outputs: Some((format!("{stem}.exr"), format!("{stem}.png"))),
-            header: format!(
-                "# lustre preview: {} ({}); render again with `lustre render` from this directory.\n",
-                cell.label.replace('\n', ", "),
-                title.replace('\n', " ")
-            ),
-        });
-        if let Some((file, text)) = &cell.data {
-            plot::write_atomic(&dir.join(file), text.as_bytes())?;
-        }
-        let scene_path = dir.join(format!("{stem}.toml"));
-        plot::write_atomic(&scene_path, text.as_bytes())?;
-        let scene = render::load_str(&scene_path, &text)
-            .map_err(|e| anyhow!("{}: {e}", cell.label.replace('\n', ", ")))?;
+        let scene = cell_scene(&args, cell, &stem, (w, h), &title, &dir)?;
         // Each remaining image gets an equal share of what is left of the budget.
         let left = budget.saturating_sub(start.elapsed());
         let share = left / (cells.len() - i) as u32;

@@ -208,6 +208,106 @@ fn write_images(
     Ok(())
 }
 
+/// Where a render's samples and images go: the sample range, the image
+/// names (the scene's, or the flags') and the film.
+struct Outputs {
+    target: Range<u64>,
+    exr: Option<PathBuf>,
+    png: Option<PathBuf>,
+    film: PathBuf,
+}
+
+impl Outputs {
+    /// The outputs of rendering `spp` samples (or the `--spp-range` shard)
+    /// of the scene at `scene_path`, whose own image names are `settings`'.
+    fn new(
+        args: &RenderArgs,
+        settings: &render::scene::Settings,
+        scene_path: &Path,
+        spp: u64,
+    ) -> anyhow::Result<Outputs> {
+        let shard = args.spp_range.as_deref().map(parse_range).transpose()?;
+        let target = shard.clone().unwrap_or(0..spp);
+        // Shards get their own output names unless given explicitly.
+        let suffix = shard.as_ref().map(|r| format!(".spp{}-{}", r.start, r.end));
+        let name = |cli: &Option<PathBuf>, scene_value: &Option<PathBuf>| -> Option<PathBuf> {
+            cli.clone().or_else(|| {
+                scene_value.as_ref().map(|p| {
+                    suffix
+                        .as_deref()
+                        .map_or_else(|| p.clone(), |s| with_suffix(p, s))
+                })
+            })
+        };
+        let exr = name(&args.exr, &settings.exr);
+        let png = name(&args.png, &settings.png);
+        let film = args.film.clone().unwrap_or_else(|| {
+            let base = exr.clone().or_else(|| png.clone()).unwrap_or_else(|| {
+                let stem = scene_path
+                    .file_stem()
+                    .map_or_else(|| "render".into(), |s| s.to_string_lossy().into_owned());
+                let p = PathBuf::from(format!("{stem}.film"));
+                suffix
+                    .as_deref()
+                    .map_or_else(|| p.clone(), |s| with_suffix(&p, s))
+            });
+            let film = base.with_extension("film");
+            // A shard's film is named after its range even when the image name was given, so
+            // two shards written with the same --exr never overwrite each other's samples.
+            match (&suffix, args.exr.is_some() || args.png.is_some()) {
+                (Some(s), true) => with_suffix(&film, s),
+                _ => film,
+            }
+        });
+        Ok(Outputs {
+            target,
+            exr,
+            png,
+            film,
+        })
+    }
+}
+
+/// With `--resume`: adopts the checkpoint at `path` into `film` when there
+/// is one, and returns the samples of `target` still to render.
+fn resume(
+    film: &mut Film,
+    path: &Path,
+    target: Range<u64>,
+    quiet: bool,
+) -> anyhow::Result<Range<u64>> {
+    if !path.exists() {
+        if !quiet {
+            eprintln!(
+                "note: no checkpoint at {}; starting from sample {}",
+                path.display(),
+                target.start
+            );
+        }
+        return Ok(target);
+    }
+    let old = Film::load_checkpoint(path)?;
+    let todo = match film.resume(old, target) {
+        Ok(todo) => todo,
+        Err(e @ ResumeError::Incompatible(_)) => bail!(
+            "{}: {e}; remove it or choose another --film",
+            path.display()
+        ),
+        Err(e @ ResumeError::NotAPrefix { .. }) => {
+            bail!("{}: {e}; use `lustre merge` for shards", path.display())
+        }
+    };
+    if !quiet {
+        eprintln!(
+            "resuming from {}: {} spp done, {} to go",
+            path.display(),
+            film.spp(),
+            todo.end.saturating_sub(todo.start)
+        );
+    }
+    Ok(todo)
+}
+
 /// Renders a scene file.
 pub fn render(args: RenderArgs) -> anyhow::Result<()> {
     let scene_path = args.scene.clone().unwrap_or_else(default_scene);
@@ -222,39 +322,8 @@ pub fn render(args: RenderArgs) -> anyhow::Result<()> {
     if spp == 0 || spp > render::scene::MAX_SPP {
         bail!("--spp {spp}: expected 1..={}", render::scene::MAX_SPP);
     }
-    let shard = args.spp_range.as_deref().map(parse_range).transpose()?;
-    let target = shard.clone().unwrap_or(0..spp);
-    // Shards get their own output names unless given explicitly.
-    let suffix = shard.as_ref().map(|r| format!(".spp{}-{}", r.start, r.end));
-    let name = |cli: &Option<PathBuf>, scene_value: &Option<PathBuf>| -> Option<PathBuf> {
-        cli.clone().or_else(|| {
-            scene_value.as_ref().map(|p| {
-                suffix
-                    .as_deref()
-                    .map_or_else(|| p.clone(), |s| with_suffix(p, s))
-            })
-        })
-    };
-    let exr = name(&args.exr, &scene.settings.exr);
-    let png = name(&args.png, &scene.settings.png);
-    let film_path = args.film.clone().unwrap_or_else(|| {
-        let base = exr.clone().or_else(|| png.clone()).unwrap_or_else(|| {
-            let stem = scene_path
-                .file_stem()
-                .map_or_else(|| "render".into(), |s| s.to_string_lossy().into_owned());
-            let p = PathBuf::from(format!("{stem}.film"));
-            suffix
-                .as_deref()
-                .map_or_else(|| p.clone(), |s| with_suffix(&p, s))
-        });
-        let film = base.with_extension("film");
-        // A shard's film is named after its range even when the image name was given, so
-        // two shards written with the same --exr never overwrite each other's samples.
-        match (&suffix, args.exr.is_some() || args.png.is_some()) {
-            (Some(s), true) => with_suffix(&film, s),
-            _ => film,
-        }
-    });
+    let out = Outputs::new(&args, &scene.settings, &scene_path, spp)?;
+    let (exr, png, film_path) = (out.exr.as_deref(), out.png.as_deref(), &out.film);
     if args.no_film && exr.is_none() && png.is_none() {
         bail!(
             "--no-film: the scene names no `exr` or `png` output and none was given; nothing would be written"
@@ -262,7 +331,7 @@ pub fn render(args: RenderArgs) -> anyhow::Result<()> {
     }
     // The scene build recorded every file it read, so these checks refuse all of them.
     let film_out = (!args.no_film).then_some(film_path.as_path());
-    check_outputs(exr.as_deref(), png.as_deref(), film_out)?;
+    check_outputs(exr, png, film_out)?;
     if exr.is_none() && png.is_none() && !args.quiet {
         eprintln!(
             "note: the scene names no `exr` or `png` output; only the film {} is written",
@@ -275,38 +344,12 @@ pub fn render(args: RenderArgs) -> anyhow::Result<()> {
     let threads = crate::flags::thread_count(args.threads, args.quiet)?;
     render::memory::check_fits(scene.camera.width, scene.camera.height)
         .map_err(|m| anyhow::anyhow!("{}: {m}", scene_path.display()))?;
-    let mut film = Film::for_scene(&scene).map_err(anyhow::Error::msg)?;
-    let mut todo = target.clone();
-    if args.resume {
-        if film_path.exists() {
-            let old = Film::load_checkpoint(&film_path)?;
-            todo = match film.resume(old, target.clone()) {
-                Ok(todo) => todo,
-                Err(e @ ResumeError::Incompatible(_)) => bail!(
-                    "{}: {e}; remove it or choose another --film",
-                    film_path.display()
-                ),
-                Err(e @ ResumeError::NotAPrefix { .. }) => bail!(
-                    "{}: {e}; use `lustre merge` for shards",
-                    film_path.display()
-                ),
-            };
-            if !args.quiet {
-                eprintln!(
-                    "resuming from {}: {} spp done, {} to go",
-                    film_path.display(),
-                    film.spp(),
-                    todo.end.saturating_sub(todo.start)
-                );
-            }
-        } else if !args.quiet {
-            eprintln!(
-                "note: no checkpoint at {}; starting from sample {}",
-                film_path.display(),
-                target.start
-            );
-        }
-    }
+    let mut film = scene.film().map_err(anyhow::Error::msg)?;
+    let todo = if args.resume {
+        resume(&mut film, film_path, out.target.clone(), args.quiet)?
+    } else {
+        out.target.clone()
+    };
 
     let stop = render::interrupt::ctrlc_flag().map_err(anyhow::Error::msg)?;
     let opts = RenderOptions {
@@ -339,43 +382,11 @@ pub fn render(args: RenderArgs) -> anyhow::Result<()> {
         return Ok(());
     }
     if !args.no_film {
-        film.save(&film_path)?;
+        film.save(film_path)?;
     }
-    write_images(&film, exr.as_deref(), png.as_deref(), args.quiet)?;
+    write_images(&film, exr, png, args.quiet)?;
     if !args.quiet {
-        match outcome {
-            Some(o) => {
-                eprintln!(
-                    "rendered samples {}..{} ({} spp in the film) in {:.2} s wall{cpu}: {:.3e} samples/s; {}",
-                    o.rendered.start,
-                    o.rendered.end,
-                    film.spp(),
-                    o.elapsed.as_secs_f64(),
-                    o.samples_per_second,
-                    if args.no_film {
-                        "no film written".to_string()
-                    } else {
-                        format!("film {}", film_path.display())
-                    }
-                );
-                if !o.complete {
-                    eprintln!(
-                        "stopped early at sample {} of {}; {}",
-                        o.rendered.end,
-                        todo.end,
-                        if args.no_film {
-                            "the images hold what was rendered (--no-film: nothing to resume from)"
-                        } else {
-                            "continue with `--resume`"
-                        }
-                    );
-                }
-            }
-            None => eprintln!(
-                "nothing to render: the film already holds samples up to {}",
-                target.end
-            ),
-        }
+        report(outcome.as_ref(), &film, &todo, &out, args.no_film, &cpu);
     }
     // Printed even with --quiet: the image is wrong where these samples fell.
     if let Some(w) = dropped_warning(film.dropped()) {
@@ -386,6 +397,50 @@ pub fn render(args: RenderArgs) -> anyhow::Result<()> {
         }
     }
     Ok(())
+}
+
+/// The summary of a render: what was rendered, how fast, and whether it
+/// stopped early (`outcome` is `None` when the film already held `todo`).
+fn report(
+    outcome: Option<&render::RenderOutcome>,
+    film: &Film,
+    todo: &Range<u64>,
+    out: &Outputs,
+    no_film: bool,
+    cpu: &str,
+) {
+    let Some(o) = outcome else {
+        eprintln!(
+            "nothing to render: the film already holds samples up to {}",
+            out.target.end
+        );
+        return;
+    };
+    eprintln!(
+        "rendered samples {}..{} ({} spp in the film) in {:.2} s wall{cpu}: {:.3e} samples/s; {}",
+        o.rendered.start,
+        o.rendered.end,
+        film.spp(),
+        o.elapsed.as_secs_f64(),
+        o.samples_per_second,
+        if no_film {
+            "no film written".to_string()
+        } else {
+            format!("film {}", out.film.display())
+        }
+    );
+    if !o.complete {
+        eprintln!(
+            "stopped early at sample {} of {}; {}",
+            o.rendered.end,
+            todo.end,
+            if no_film {
+                "the images hold what was rendered (--no-film: nothing to resume from)"
+            } else {
+                "continue with `--resume`"
+            }
+        );
+    }
 }
 
 /// Merges partial films.
@@ -522,7 +577,7 @@ mod tests {
         assert_eq!(parse_duration("2h").unwrap(), Duration::from_secs(7200));
         assert!(parse_duration("5 parsecs").is_err());
         assert!(parse_duration("-1").is_err());
-        // These panicked (Duration overflow) before.
+        // Past u64 seconds `Duration` overflows (a panic unless refused).
         for bad in ["inf", "infs", "1e30", "1e300h", "nan", "-inf", "0"] {
             let e = parse_duration(bad).unwrap_err().to_string();
             assert!(e.starts_with("--time-limit"), "{bad}: {e}");
@@ -542,7 +597,7 @@ mod tests {
         assert!(crate::flags::thread_count(Some(0), true).is_err());
         assert_eq!(
             crate::flags::thread_count(Some(10_000), true).unwrap(),
-            Some(render::render::max_threads())
+            Some(render::max_threads())
         );
         assert_eq!(crate::flags::thread_count(Some(1), true).unwrap(), Some(1));
         assert_eq!(

@@ -13,6 +13,7 @@ use std::path::PathBuf;
 
 use anyhow::Context;
 use brdf::paper::{AlphaRule, PaperModel, PaperSample, REFERENCE_LAMBDA_NM};
+use render::scene::presets::{PlateScene, preview_assets};
 
 use crate::models::{self, Surface};
 
@@ -48,7 +49,7 @@ pub fn files() -> anyhow::Result<Vec<(String, String)>> {
     for s in &brdf::paper::SAMPLES {
         out.push((psd_path(s), psd_csv(s)));
     }
-    for (name, text) in crate::cmd_preview::assets() {
+    for (name, text) in preview_assets() {
         out.push((format!("assets/{name}"), text));
     }
     for (name, text) in crate::cmd_preview::bundled_scenes()? {
@@ -77,13 +78,13 @@ fn psd_csv(s: &PaperSample) -> String {
     models::psd_csv_text(&z, &p)
 }
 
-/// Why the parameters of `model` are what they are, as comment lines.
+/// Why the parameters of `model` are what they are, as comment text.
 fn provenance(s: &PaperSample, model: PaperModel) -> String {
     let k = &s.surface;
     let lam = REFERENCE_LAMBDA_NM;
     match model {
         PaperModel::Ggx(rule) | PaperModel::Beckmann(rule) => format!(
-            "# alpha = {}: {} (at {lam} nm); sigma = {} um, Lc = {} um, gamma = {}.\n",
+            "alpha = {}: {} (at {lam} nm); sigma = {} um, Lc = {} um, gamma = {}.",
             brdf::paper::short(brdf::paper::microfacet_alpha(k, rule, lam)),
             rule.reason(),
             k.sigma_um,
@@ -91,14 +92,14 @@ fn provenance(s: &PaperSample, model: PaperModel) -> String {
             k.gamma
         ),
         PaperModel::TwoScale(m) => format!(
-            "# Two-scale split at {m} wavelengths ({:.1} um): beta from the KC slope variance \
-             below 2 pi / cutoff (6 beta^2 = <|grad h|^2>); micro scale = the sample's KC.\n",
+            "Two-scale split at {m} wavelengths ({:.1} um): beta from the KC slope variance \
+             below 2 pi / cutoff (6 beta^2 = <|grad h|^2>); micro scale = the sample's KC.",
             m * lam * 1e-3
         ),
         PaperModel::MeasuredPsd => format!(
-            "# No measured PSD of the paper's samples is in the repository: the KC PSD of {}\n\
-             # sampled as a table ({}), which exercises the tabulated-PSD path. For a real\n\
-             # sample use `include = \"fit.toml\"` from `lustre fit`.\n",
+            "No measured PSD of the paper's samples is in the repository: the KC PSD of {}\n\
+             sampled as a table ({}), which exercises the tabulated-PSD path. For a real\n\
+             sample use `include = \"fit.toml\"` from `lustre fit`.",
             s.name,
             psd_path(s)
         ),
@@ -106,24 +107,8 @@ fn provenance(s: &PaperSample, model: PaperModel) -> String {
     }
 }
 
-/// Where the plate scenes put the camera and the light for a view `view_deg` from the
-/// plate's normal: `(camera position, light centre, camera up as TOML)`. The light sits at
-/// the camera's mirror direction, so the specular peak is in view.
-pub fn plate_view(view_deg: f64) -> ([f64; 3], [f64; 3], &'static str) {
-    let t = view_deg.to_radians();
-    let cam = [0.0, t.cos(), t.sin()];
-    // At normal view the light sits 1° further out so camera and light do not coincide.
-    let tl = view_deg.max(1.0).to_radians();
-    let light = [0.0, 1.2 * tl.cos(), -1.2 * tl.sin()];
-    // Looking straight down, the usual +y up is the view direction itself.
-    let up = if view_deg < 1.0 {
-        "[0.0, 0.0, -1.0]"
-    } else {
-        "[0.0, 1.0, 0.0]"
-    };
-    (cam, light, up)
-}
-
+/// The plate scene of paper sample `s` under `model`, viewed at `theta_deg`
+/// from the normal ([`PlateScene`], the scene of `lustre compare`'s cells).
 fn scene(
     s: &PaperSample,
     tag: &str,
@@ -136,59 +121,31 @@ fn scene(
     let l = surface.material(model);
     let psd = format!("../{}", psd_path(s));
     let material = models::material_toml(&l.spec, Some(&psd))?;
-    let (cam, light, up) = plate_view(theta_deg);
-    let v = |p: [f64; 3]| format!("[{:.6}, {:.6}, {:.6}]", p[0], p[1], p[2]);
-    Ok(format!(
-        "# {} plate, model {tag} ({}), {view} viewing ({theta_deg} deg from the normal).\n\
-         # Written by `lustre scenes` from brdf::paper; do not edit by hand.\n\
-         \n\
-         [camera]\n\
-         look_from = {}\n\
-         look_at = [0.0, 0.0, 0.0]\n\
-         up = {up}\n\
-         fov_deg = 14.0\n\
-         resolution = [160, 120]\n\
-         \n\
-         [film]\n\
-         spp = 16\n\
-         seed = 1\n\
-         exr = \"{name}.exr\"\n\
-         png = \"{name}.png\"\n\
-         \n\
-         [integrator]\n\
-         max_depth = 3\n\
-         wavelengths = \"hero\"\n\
-         \n\
-         # Paper sample {} ({}); KC parameters of docs/physics.md section 12.\n\
-         {}[materials.plate]\n\
-         {material}\n\
-         # A 20 cm x 20 cm plate in the xz plane, normal +y.\n\
-         [[shapes]]\n\
-         type = \"rectangle\"\n\
-         size = [0.2, 0.2]\n\
-         material = \"plate\"\n\
-         transform = {{ rotate_deg = [-90.0, 0.0, 0.0] }}\n\
-         \n\
-         # A small light at the mirror direction of the camera (about 1.7 deg across).\n\
-         [[lights]]\n\
-         type = \"sphere\"\n\
-         center = {}\n\
-         radius = 0.018\n\
-         radiance = 200.0\n\
-         spectrum = \"d65\"\n\
-         \n\
-         [[lights]]\n\
-         type = \"environment\"\n\
-         radiance = 0.02\n\
-         spectrum = \"d65\"\n",
-        s.name,
-        l.label,
-        v(cam),
+    let mut file = PlateScene {
+        view_deg: theta_deg,
+        width: 160,
+        height: 120,
+        spp: 16,
+        material: toml::from_str(&material).context("the plate's material")?,
+        outputs: Some((format!("{name}.exr").into(), format!("{name}.png").into())),
+    }
+    .file();
+    file.comments.header = format!(
+        "{} plate, model {tag} ({}), {view} viewing ({theta_deg} deg from the normal).\n\
+         Written by `lustre scenes` from brdf::paper; do not edit by hand.",
+        s.name, l.label
+    );
+    let mut about = format!(
+        "Paper sample {} ({}); KC parameters of docs/physics.md section 12.",
         s.number,
-        s.metal.name(),
-        provenance(s, model),
-        v(light),
-    ))
+        s.metal.name()
+    );
+    let why = provenance(s, model);
+    if !why.is_empty() {
+        about = format!("{about}\n{why}");
+    }
+    file.comments.materials.insert("plate".into(), about);
+    Ok(file.to_toml()?)
 }
 
 /// Runs `lustre scenes`.

@@ -7,12 +7,12 @@ use anyhow::bail;
 pub const MAX_FIGURE_SPP: u64 = 1 << 20;
 
 /// The worker-thread count to use: `--threads 0` is refused, a count above
-/// [`render::render::max_threads`] is capped with a note (unless `quiet`).
+/// [`render::max_threads`] is capped with a note (unless `quiet`).
 pub fn thread_count(requested: Option<usize>, quiet: bool) -> anyhow::Result<Option<usize>> {
     match requested {
         Some(0) => bail!("--threads must be ≥ 1"),
-        Some(n) if n > render::render::max_threads() => {
-            let cap = render::render::max_threads();
+        Some(n) if n > render::max_threads() => {
+            let cap = render::max_threads();
             if !quiet {
                 eprintln!(
                     "note: --threads {n} capped at {cap} (4 per core): more threads than that \

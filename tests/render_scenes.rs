@@ -82,7 +82,7 @@ spectrum = "constant"
     // The cube must actually be in view: some camera rays hit it first.
     let cam_ray = scene.camera.ray(12.0, 9.0);
     let hit = scene.shapes.intersect(&cam_ray, f64::INFINITY).unwrap();
-    assert!(matches!(hit.surface, render::scene::Surface::Material(0)));
+    assert!(matches!(hit.surface, render::shapes::Surface::Material(0)));
     std::fs::remove_dir_all(&dir).unwrap();
 }
 

@@ -48,7 +48,7 @@ fn low_sun_shards_round_trip_through_the_film_checks() {
         let scene = render::load_str(&dir.join("sky.toml"), &scene(elevation)).unwrap();
         assert!(scene.signed_radiance);
         for start in 0..12u64 {
-            let mut film = Film::for_scene(&scene).unwrap();
+            let mut film = scene.film().unwrap();
             render::render_range(
                 &scene,
                 &mut film,

@@ -19,9 +19,9 @@ impl Ray {
     }
 }
 
-/// Surface geometry at a ray hit.
+/// The point of a surface a ray hit: ray parameter, position, normal and tangent.
 #[derive(Clone, Copy, Debug)]
-pub struct HitGeometry {
+pub struct SurfacePoint {
     /// Ray parameter.
     pub t: f64,
     /// Hit point.
@@ -137,7 +137,7 @@ impl Planar {
 
     /// Nearest hit with `t` in `(t_min, t_max)`.
     #[inline]
-    pub fn intersect(&self, ray: &Ray, t_min: f64, t_max: f64) -> Option<HitGeometry> {
+    pub fn intersect(&self, ray: &Ray, t_min: f64, t_max: f64) -> Option<SurfacePoint> {
         let denom = ray.d.dot(self.n);
         if denom.abs() < 1e-14 {
             return None;
@@ -154,7 +154,7 @@ impl Planar {
         } else {
             a.abs() <= self.half.0 && b.abs() <= self.half.1
         };
-        inside.then_some(HitGeometry {
+        inside.then_some(SurfacePoint {
             t,
             p,
             n: self.n,
@@ -199,15 +199,15 @@ pub struct Sphere {
 impl Sphere {
     /// Nearest hit with `t` in `(t_min, t_max)`.
     #[inline]
-    pub fn intersect(&self, ray: &Ray, t_min: f64, t_max: f64) -> Option<HitGeometry> {
+    pub fn intersect(&self, ray: &Ray, t_min: f64, t_max: f64) -> Option<SurfacePoint> {
         let t = self.hit_distance(ray, t_min, t_max)?;
-        Some(self.geometry_at(ray, t))
+        Some(self.point_at(ray, t))
     }
 
-    /// The hit geometry at distance `t` along `ray` (a `t` from
+    /// The surface point at distance `t` along `ray` (a `t` from
     /// [`Sphere::hit_distance`]).
     #[inline]
-    pub fn geometry_at(&self, ray: &Ray, t: f64) -> HitGeometry {
+    pub fn point_at(&self, ray: &Ray, t: f64) -> SurfacePoint {
         let p = ray.at(t);
         let n = (p - self.center) / self.radius;
         let n = n.normalize();
@@ -215,7 +215,7 @@ impl Sphere {
         let tangent = DVec3::new(-n.y, n.x, 0.0)
             .try_normalize()
             .unwrap_or(DVec3::X);
-        HitGeometry { t, p, n, tangent }
+        SurfacePoint { t, p, n, tangent }
     }
 
     /// The `t` of [`Sphere::intersect`] alone (no point, normal or tangent):
@@ -344,7 +344,7 @@ mod tests {
                     hits += 1;
                     assert!(t > t_min && t < t_max);
                     assert!(((h.p - s.center).length() - s.radius).abs() < 1e-12);
-                    let g = s.geometry_at(&ray, t);
+                    let g = s.point_at(&ray, t);
                     assert!(g.p == h.p && g.n == h.n && g.tangent == h.tangent);
                 } else {
                     misses += 1;
@@ -360,7 +360,7 @@ mod tests {
     /// and for planes under any rotation and scale.
     #[test]
     fn analytic_hit_tangents_are_orthonormal() {
-        let check = |g: &HitGeometry, what: &str| {
+        let check = |g: &SurfacePoint, what: &str| {
             assert!(
                 (g.n.length() - 1.0).abs() < 1e-15,
                 "{what}: |n| = {}",

@@ -22,14 +22,14 @@
 //! symmetric in which wavelength was the hero, which makes hero sampling
 //! unbiased.
 
-use crate::film::{BadSample, MAX_SAMPLE_XYZ};
+use crate::film::{BadSample, CameraSample, SampleRadiance, sample_xyz};
 use crate::geometry::Ray;
 use crate::light::{Emission, LightSample, Lights};
 use crate::sampler::{Reserved2d, Sampler};
 use crate::scene::desc::MisHeuristic;
-use crate::scene::{Hit, Scene, Surface};
+use crate::scene::{Scene, Settings};
+use crate::shapes::{Hit, Surface};
 use crate::spectral_table::SpectralTables;
-use crate::spectrum::Cie;
 use crate::wavelength::{MAX_WAVELENGTHS, SampledWavelengths};
 use brdf::Bxdf;
 use brdf::frame::orthonormal_basis;
@@ -163,6 +163,46 @@ fn lobe_peak(fixed: Option<f64>, bxdf: &(impl Bxdf + ?Sized), wi: DVec3) -> Opti
     }
 }
 
+/// How one vertex weighs light sampling against BSDF sampling: the
+/// scene's heuristic and fixed light-density count, and the vertex's lobe
+/// size ([`light_weight`]). Both strategies' weights come from here.
+#[derive(Clone, Copy)]
+struct VertexMis {
+    heuristic: MisHeuristic,
+    fixed: Option<f64>,
+    peak: Option<f64>,
+}
+
+impl VertexMis {
+    #[inline]
+    fn new(settings: &Settings, peak: Option<f64>) -> VertexMis {
+        VertexMis {
+            heuristic: settings.mis,
+            fixed: settings.mis_light_weight,
+            peak,
+        }
+    }
+
+    /// Weight / density of a light sample of solid-angle density `p_light`
+    /// on a path whose BSDF densities sum to `q_sum` over the hero choices
+    /// (1 with one wavelength), against the BSDF strategy's density
+    /// `p_bsdf` toward it.
+    #[inline]
+    fn light(&self, p_light: f64, q_sum: f64, p_bsdf: f64) -> f64 {
+        let c = light_weight(self.fixed, self.peak, p_light);
+        light_weight_over_pdf(self.heuristic, c, q_sum * p_light, p_bsdf)
+    }
+
+    /// Weight / density of emission reached by a BSDF sample of relative
+    /// density `own`, whose light strategy's density relative to it is
+    /// `l_sum · p_light` (`l_sum` the sum of the edge's `L_k`).
+    #[inline]
+    fn bsdf(&self, p_light: f64, own: f64, l_sum: f64) -> f64 {
+        let c = light_weight(self.fixed, self.peak, p_light);
+        bsdf_weight_over_pdf(self.heuristic, c, own, l_sum * p_light)
+    }
+}
+
 /// A glossy BSDF sample whose other-wavelength factors are not yet applied.
 struct Pending {
     material: u32,
@@ -171,31 +211,16 @@ struct Pending {
     pdf: f64,
 }
 
-/// One camera sample: its wavelengths and spectral radiance estimates.
-#[derive(Clone, Copy, Debug)]
-pub struct CameraSample {
-    /// The wavelengths carried ([`Settings::wavelengths_per_path`](crate::scene::Settings::wavelengths_per_path))
-    /// and their pdfs.
-    pub wavelengths: SampledWavelengths,
-    /// Radiance estimates at each wavelength, wavelength pdf included; the
-    /// first `wavelengths.len()` are used.
-    pub radiance: [f64; N],
-    /// XYZ (before the film's 1/∫ȳ normalisation) of the contributions
-    /// integrated over λ exactly ([`crate::spectral_table`]); a path that
-    /// needs no sampled wavelength carries none.
-    pub xyz: [f64; 3],
-}
-
 /// Traces camera sample `sample` of pixel (`x`, `y`).
 pub fn camera_sample(scene: &Scene, x: u32, y: u32, sample: u64) -> CameraSample {
     match traced(scene, x, y, sample) {
-        Traced::Spectral(cs) => cs,
-        Traced::Exact(xyz) => CameraSample {
+        SampleRadiance::Spectral(cs) => cs,
+        SampleRadiance::Xyz(xyz) => CameraSample {
             wavelengths: SampledWavelengths::none(),
             radiance: [0.0; N],
             xyz,
         },
-        Traced::Miss => {
+        SampleRadiance::Zero => {
             // Zero at the wavelengths its draws give.
             let (sampler, _, u_lambda) = camera_draws(scene, x, y, sample);
             CameraSample {
@@ -229,29 +254,16 @@ fn draw_wavelengths(scene: &Scene, sampler: &Sampler, u_lambda: Reserved2d) -> S
     )
 }
 
-/// What a traced camera sample produced.
-// Not boxed: the enum is returned through the caller's slot, so a small
-// variant writes its 24 bytes only, and a box would allocate per sample.
-#[allow(clippy::large_enum_variant)]
-enum Traced {
-    /// The ray escaped into no environment (most of the misses around an
-    /// object or a plate): zero at every wavelength, returned before the
-    /// wavelengths are drawn (their draw is reserved, so every later draw is
-    /// the same).
-    Miss,
-    /// Every contribution was integrated over λ exactly: their XYZ.
-    Exact([f64; 3]),
-    /// Sampled wavelengths were needed.
-    Spectral(CameraSample),
-}
-
-/// Traces a camera sample.
+/// Traces a camera sample: the radiance the film turns into colour.
 #[inline(always)]
-fn traced(scene: &Scene, x: u32, y: u32, sample: u64) -> Traced {
+fn traced(scene: &Scene, x: u32, y: u32, sample: u64) -> SampleRadiance {
     let (mut sampler, ray, u_lambda) = camera_draws(scene, x, y, sample);
     let first = scene.shapes.intersect(&ray, f64::INFINITY);
+    // Most of the misses around an object or a plate: returned before the
+    // wavelengths are drawn (their draw is reserved, so every later draw is
+    // the same).
     if first.is_none() && !scene.lights.has_environment() {
-        return Traced::Miss;
+        return SampleRadiance::Zero;
     }
     if let Some(tables) = &scene.spectral {
         return trace_exact(scene, tables, ray, first, &mut sampler, u_lambda);
@@ -259,7 +271,7 @@ fn traced(scene: &Scene, x: u32, y: u32, sample: u64) -> Traced {
     let wavelengths = draw_wavelengths(scene, &sampler, u_lambda);
     let start = Throughput::camera(&wavelengths);
     let radiance = trace(scene, ray, first, &wavelengths, &mut sampler, start, 0);
-    Traced::Spectral(CameraSample {
+    SampleRadiance::Spectral(CameraSample {
         wavelengths,
         radiance,
         xyz: [0.0; 3],
@@ -272,12 +284,8 @@ pub fn sample_pixel(scene: &Scene, x: u32, y: u32, sample: u64) -> [f64; 3] {
     sample_pixel_checked(scene, x, y, sample).unwrap_or([0.0; 3])
 }
 
-/// XYZ estimate of one camera sample, or why it cannot be averaged: a
-/// wavelength's radiance estimate is NaN, infinite, or negative in a scene
-/// whose emission spectra are all non-negative (see
-/// [`Scene::signed_radiance`](crate::Scene)). Either means a model
-/// misbehaved; the render loop counts and reports such samples instead of
-/// averaging them (one branch, never taken in a sound render).
+/// The XYZ the film adds for one camera sample, or why it cannot be
+/// averaged ([`sample_xyz`]).
 #[inline]
 pub fn sample_pixel_checked(
     scene: &Scene,
@@ -285,55 +293,7 @@ pub fn sample_pixel_checked(
     y: u32,
     sample: u64,
 ) -> Result<[f64; 3], BadSample> {
-    let cs = match traced(scene, x, y, sample) {
-        Traced::Miss => return Ok([0.0; 3]),
-        Traced::Exact(xyz) => {
-            // The checks below with no sampled wavelength, returned from here:
-            // folding this case into them (an empty radiance slice) made the
-            // caller hold the whole `Traced` and cost +5.7 % instructions on
-            // the wide-light plate. See below for why Y decides the sign.
-            let finite = xyz.iter().all(|v| in_film_range(*v));
-            return match (finite, scene.signed_radiance || xyz[1] >= 0.0) {
-                (false, _) => Err(BadSample::NonFinite),
-                (true, false) => Err(BadSample::Negative),
-                (true, true) => Ok(xyz),
-            };
-        }
-        Traced::Spectral(cs) => cs,
-    };
-    let n = cs.wavelengths.len();
-    let r = &cs.radiance[..n];
-    if !r.iter().all(|v| v.is_finite()) || !cs.xyz.iter().all(|v| v.is_finite()) {
-        return Err(BadSample::NonFinite);
-    }
-    // The exactly integrated part is a non-negative spectrum's XYZ, whose Y
-    // (unlike X and Z of a narrow band, within the table's tolerance of 0)
-    // is clearly positive: a negative Y is a model's negative value.
-    let non_negative = r.iter().all(|v| *v >= 0.0) && cs.xyz[1] >= 0.0;
-    if !scene.signed_radiance && !non_negative {
-        return Err(BadSample::Negative);
-    }
-    let cie = Cie::get();
-    let mut xyz = cs.xyz;
-    for (j, &lambda) in cs.wavelengths.lambdas().iter().enumerate() {
-        let c = cie.xyz(lambda);
-        for k in 0..3 {
-            xyz[k] += cs.radiance[j] * c[k];
-        }
-    }
-    // Finite radiances can still overflow in the sum, or leave the film's range.
-    if xyz.iter().all(|v| in_film_range(*v)) {
-        Ok(xyz)
-    } else {
-        Err(BadSample::NonFinite)
-    }
-}
-
-/// Whether a sample's XYZ component can be added to the film: finite and
-/// within [`MAX_SAMPLE_XYZ`] (false for NaN).
-#[inline(always)]
-fn in_film_range(v: f64) -> bool {
-    v.abs() <= MAX_SAMPLE_XYZ
+    sample_xyz(traced(scene, x, y, sample), scene.signed_radiance)
 }
 
 /// A path vertex on a reflecting surface, seen from the ray that reached it.
@@ -352,8 +312,8 @@ struct Vertex {
 
 impl Vertex {
     /// `None` if the viewer is below the shading frame's horizon.
-    // Inlined: returned from a call, the 152-byte option was copied out by
-    // a memcpy call (29 instructions per plate hit).
+    // Inlined: returned from a call, the 152-byte option would be copied
+    // out by a memcpy call at every hit.
     #[inline(always)]
     fn new(hit: &Hit, ray: &Ray) -> Option<Vertex> {
         let ng = if hit.geo.n.dot(ray.d) > 0.0 {
@@ -450,8 +410,8 @@ fn vertex_draws(
 /// fraction A = e^{−g} coherently, and its sampler picks the delta lobe with
 /// probability p = max(A, 0.05). Where the mirror direction meets a small,
 /// bright light, that lobe is most of the pixel, so the pick is a rare event
-/// of weight 1/p: it left the s138 full-GHS plates with a relative RMSE of
-/// 5.9 at 1 spp and 0.14 at 256 (hero), falling slower than spp^−½. One
+/// of weight 1/p: left to it, the s138 full-GHS plates have a relative RMSE
+/// of 5.9 at 1 spp and 0.14 at 256 (hero), falling slower than spp^−½. One
 /// more ray per such vertex makes the term exact; the sampled delta
 /// direction still carries the path on, but counts no emission.
 #[inline]
@@ -486,6 +446,41 @@ fn delta_emission(
     true
 }
 
+/// Next-event estimation at vertex `v`: one light sample drawn with
+/// `u_light`, weighted against BSDF sampling by `mis`. `bsdf(wo, is_delta)`
+/// evaluates the BSDF toward the sampled point: `None` where it is zero at
+/// every wavelength, otherwise the sum of the path's `Q_k`, the BSDF
+/// strategy's density toward it (0 for a delta light, which BSDF sampling
+/// cannot reach) and what `add` needs of the evaluation; `add(light sample,
+/// wo, weight / density, evaluation)` counts the contribution of a light
+/// that nothing blocks.
+#[inline(always)]
+fn next_event<'s, E>(
+    scene: &'s Scene,
+    v: &Vertex,
+    u_light: [f64; 3],
+    mis: VertexMis,
+    bsdf: impl FnOnce(DVec3, bool) -> Option<(f64, f64, E)>,
+    add: impl FnOnce(&LightSample<'s>, DVec3, f64, E),
+) {
+    let Some(ls) = scene.lights.sample(v.p, u_light) else {
+        return;
+    };
+    let Some(wo) = v.light_direction(&ls) else {
+        return;
+    };
+    let Some((q_sum, p_bsdf, eval)) = bsdf(wo, ls.is_delta) else {
+        return;
+    };
+    if !unoccluded(scene, v.p, &ls) {
+        return;
+    }
+    let w = mis.light(ls.pdf, q_sum, p_bsdf);
+    if w > 0.0 {
+        add(&ls, wo, w, eval);
+    }
+}
+
 /// Whether nothing blocks the segment from `p` to a light sample.
 #[inline]
 fn unoccluded(scene: &Scene, p: DVec3, ls: &LightSample) -> bool {
@@ -507,6 +502,9 @@ struct Throughput {
     l_mis: [f64; N],
     /// The last vertex's lobe size ([`light_weight`]).
     peak: Option<f64>,
+    /// The glossy sample of the last vertex, until its other wavelengths'
+    /// BSDF value and pdf are applied ([`Throughput::resolve`]).
+    pending: Option<Pending>,
 }
 
 impl Throughput {
@@ -521,6 +519,26 @@ impl Throughput {
             q: [1.0; N],
             l_mis: [0.0; N],
             peak: None,
+            pending: None,
+        }
+    }
+
+    /// Applies the pending glossy sample's factors at the wavelengths other
+    /// than the hero. They are needed only if the path goes on to another
+    /// vertex or reaches emission; a path that ends (it escapes into no
+    /// environment, or hits a surface at the last depth) skips them, and at
+    /// the last bounce of a direct-lighting render that is most paths.
+    #[inline]
+    fn resolve(&mut self, scene: &Scene, lambdas: &[f64; N], n: usize) {
+        if let Some(p) = self.pending.take() {
+            let bxdf = &scene.materials[p.material as usize].bxdf;
+            let mut fp = [(0.0, 0.0); N];
+            bxdf.eval_pdf_many(p.wi, p.wo, &lambdas[1..n], &mut fp[1..n]);
+            let pairs = self.t[1..n].iter_mut().zip(&mut self.q[1..n]);
+            for ((t, q), &(f, pdf)) in pairs.zip(&fp[1..n]) {
+                *t *= f * p.wo.z / p.pdf;
+                *q *= pdf / p.pdf;
+            }
         }
     }
 }
@@ -567,12 +585,12 @@ fn trace_exact(
     first: Option<Hit>,
     sampler: &mut Sampler,
     u_lambda: Reserved2d,
-) -> Traced {
+) -> SampleRadiance {
     let lights = &scene.lights;
     let settings = &scene.settings;
     // Only the XYZ of the exactly integrated part until a path needs
-    // sampled wavelengths: a whole `CameraSample` (416 bytes) built and
-    // moved per sample cost ~135 instructions in memset and memcpy.
+    // sampled wavelengths: a whole `CameraSample` would be built and moved
+    // (memset and memcpy of 416 bytes) for every sample.
     let mut xyz = [0.0; 3];
     let add = |xyz: &mut [f64; 3], e: [f64; 3], w: f64| {
         for c in 0..3 {
@@ -589,7 +607,7 @@ fn trace_exact(
         // Emission seen directly: the only strategy, weight 1.
         let (em, _) = emission_at(lights, &ray, first.as_ref());
         add(&mut xyz, tables.direct(&em), 1.0);
-        return Traced::Exact(xyz);
+        return SampleRadiance::Xyz(xyz);
     };
     let (Some(table), Some(split)) = (
         tables.material(m),
@@ -598,7 +616,7 @@ fn trace_exact(
         let wavelengths = draw_wavelengths(scene, sampler, u_lambda);
         let start = Throughput::camera(&wavelengths);
         let radiance = trace(scene, ray, Some(hit), &wavelengths, sampler, start, 0);
-        return Traced::Spectral(CameraSample {
+        return SampleRadiance::Spectral(CameraSample {
             wavelengths,
             radiance,
             xyz,
@@ -606,35 +624,32 @@ fn trace_exact(
     };
     let unit = &split.unit;
     let Some(v) = Vertex::new(&hit, &ray) else {
-        return Traced::Exact(xyz);
+        return SampleRadiance::Xyz(xyz);
     };
-    let (mis, fixed) = (settings.mis, settings.mis_light_weight);
-    let peak = lobe_peak(fixed, unit, v.wi);
+    let mis = VertexMis::new(settings, lobe_peak(settings.mis_light_weight, unit, v.wi));
     let (u_light, u_bsdf) = vertex_draws(sampler, lights, unit);
 
-    // Next-event estimation.
-    if let Some(ls) = lights.sample(v.p, u_light)
-        && let Some(wo) = v.light_direction(&ls)
-    {
-        let (f, pdf) = unit.eval_pdf(v.wi, wo, UNIT_LAMBDA);
-        // A delta light cannot be reached by BSDF sampling.
-        let pdf = if ls.is_delta { 0.0 } else { pdf };
-        if f > 0.0 && unoccluded(scene, v.p, &ls) {
-            let c = light_weight(fixed, peak, ls.pdf);
-            let w = light_weight_over_pdf(mis, c, ls.pdf, pdf);
-            if w > 0.0 {
-                let e = tables.reflected(table, (v.wi + wo).length_squared(), 4.0, &ls.emission);
-                add(&mut xyz, e, f * wo.z * w);
-            }
-        }
-    }
+    next_event(
+        scene,
+        &v,
+        u_light,
+        mis,
+        |wo, is_delta| {
+            let (f, pdf) = unit.eval_pdf(v.wi, wo, UNIT_LAMBDA);
+            (f > 0.0).then_some((1.0, if is_delta { 0.0 } else { pdf }, f))
+        },
+        |ls, wo, w, f| {
+            let e = tables.reflected(table, (v.wi + wo).length_squared(), 4.0, &ls.emission);
+            add(&mut xyz, e, f * wo.z * w);
+        },
+    );
 
     // BSDF sampling.
     let Some(s) = unit.sample(v.wi, UNIT_LAMBDA, u_bsdf) else {
-        return Traced::Exact(xyz);
+        return SampleRadiance::Xyz(xyz);
     };
     if s.pdf.is_nan() || s.pdf <= 0.0 || s.wo.z <= 0.0 {
-        return Traced::Exact(xyz);
+        return SampleRadiance::Xyz(xyz);
     }
     // cos²θd as a ratio: the mirror's θi, or |wi + wo|²/4.
     let (num, den) = if s.is_delta {
@@ -646,13 +661,12 @@ fn trace_exact(
     // this edge reaches (no light sample can produce a delta direction).
     let l_mis = if s.is_delta { 0.0 } else { 1.0 / s.pdf };
     let Some(ray) = v.ray(s.wo) else {
-        return Traced::Exact(xyz);
+        return SampleRadiance::Xyz(xyz);
     };
     let next = scene.shapes.intersect(&ray, f64::INFINITY);
     let (em, pdf_l) = emission_at(lights, &ray, next.as_ref());
     if !matches!(em, Emission::None) {
-        let c = light_weight(fixed, peak, pdf_l);
-        let w = bsdf_weight_over_pdf(mis, c, 1.0, l_mis * pdf_l);
+        let w = mis.bsdf(pdf_l, 1.0, l_mis);
         if w > 0.0 {
             add(
                 &mut xyz,
@@ -662,10 +676,10 @@ fn trace_exact(
         }
     }
     let Some(next) = next.filter(|h| matches!(h.surface, Surface::Material(_))) else {
-        return Traced::Exact(xyz);
+        return SampleRadiance::Xyz(xyz);
     };
     if settings.max_depth == 1 {
-        return Traced::Exact(xyz);
+        return SampleRadiance::Xyz(xyz);
     }
 
     // The path goes on: its wavelengths now, each carrying the first
@@ -684,14 +698,14 @@ fn trace_exact(
         *l = l_mis;
     }
     if 1 >= settings.rr_depth && !survives(&mut th, n, m0, sampler) {
-        return Traced::Spectral(CameraSample {
+        return SampleRadiance::Spectral(CameraSample {
             wavelengths,
             radiance: [0.0; N],
             xyz,
         });
     }
     let radiance = trace(scene, ray, Some(next), &wavelengths, sampler, th, 1);
-    Traced::Spectral(CameraSample {
+    SampleRadiance::Spectral(CameraSample {
         wavelengths,
         radiance,
         xyz,
@@ -716,27 +730,7 @@ fn trace(
     let settings = &scene.settings;
     let mut th = start;
     let m0 = roulette_scale(wavelengths);
-    let (mis, fixed) = (settings.mis, settings.mis_light_weight);
     let mut out = [0.0; N];
-
-    // The other wavelengths' BSDF value and pdf for the direction just
-    // sampled at the hero wavelength are needed only if the path goes on to
-    // another vertex or reaches emission; a path that ends (it escapes into
-    // no environment, or hits a surface at the last depth) skips them. At the
-    // last bounce of a direct-lighting render that is most paths.
-    let mut pending: Option<Pending> = None;
-    let resolve = |pending: &mut Option<Pending>, th: &mut Throughput| {
-        if let Some(p) = pending.take() {
-            let bxdf = &scene.materials[p.material as usize].bxdf;
-            let mut fp = [(0.0, 0.0); N];
-            bxdf.eval_pdf_many(p.wi, p.wo, &lambdas[1..n], &mut fp[1..n]);
-            let pairs = th.t[1..n].iter_mut().zip(&mut th.q[1..n]);
-            for ((t, q), &(f, pdf)) in pairs.zip(&fp[1..n]) {
-                *t *= f * p.wo.z / p.pdf;
-                *q *= pdf / p.pdf;
-            }
-        }
-    };
 
     // The last edge is a delta direction whose emission `delta_emission`
     // has already counted.
@@ -754,20 +748,8 @@ fn trace(
             },
         ) = hit
         else {
-            let (em, pdf_l) = emission_at(lights, &ray, hit.as_ref());
-            if !emission_counted && !matches!(em, Emission::None) {
-                resolve(&mut pending, &mut th);
-                let own: f64 = th.q[..n].iter().sum();
-                let other: f64 = th.l_mis[..n].iter().sum::<f64>() * pdf_l;
-                let c = light_weight(fixed, th.peak, pdf_l);
-                let w = bsdf_weight_over_pdf(mis, c, own, other);
-                if w > 0.0 {
-                    let mut e = [0.0; N];
-                    em.eval_many(&lambdas[..n], &mut e[..n]);
-                    for j in 0..n {
-                        out[j] += th.t[j] * e[j] * w;
-                    }
-                }
+            if !emission_counted {
+                reached_emission(scene, &ray, hit.as_ref(), &mut th, lambdas, n, &mut out);
             }
             break;
         };
@@ -779,39 +761,46 @@ fn trace(
             break;
         };
         let wi = v.wi;
-        resolve(&mut pending, &mut th);
-        th.peak = lobe_peak(fixed, bxdf, wi);
-        let peak = th.peak;
-        let Throughput { t, q, l_mis, .. } = &mut th;
+        th.resolve(scene, lambdas, n);
+        th.peak = lobe_peak(settings.mis_light_weight, bxdf, wi);
+        let mis = VertexMis::new(settings, th.peak);
+        let Throughput {
+            t,
+            q,
+            l_mis,
+            pending,
+            ..
+        } = &mut th;
         let (u_light, u_bsdf) = vertex_draws(sampler, lights, bxdf);
 
-        // Next-event estimation.
-        if let Some(ls) = lights.sample(v.p, u_light)
-            && let Some(wo) = v.light_direction(&ls)
-        {
-            // A delta light cannot be reached by BSDF sampling: its MIS
-            // denominator has no BSDF term, so the pdf is not needed.
-            let mut fp = [(0.0, 0.0); N];
-            bxdf.eval_pdf_many(wi, wo, &lambdas[..n], &mut fp[..n]);
-            if ls.is_delta {
-                for v in &mut fp[..n] {
-                    v.1 = 0.0;
-                }
-            }
-            if fp[..n].iter().any(|v| v.0 > 0.0) && unoccluded(scene, v.p, &ls) {
-                let own: f64 = q[..n].iter().sum::<f64>() * ls.pdf;
-                let other: f64 = (0..n).map(|k| q[k] * fp[k].1).sum();
-                let c = light_weight(fixed, peak, ls.pdf);
-                let w = light_weight_over_pdf(mis, c, own, other);
-                if w > 0.0 {
-                    let mut e = [0.0; N];
-                    ls.emission.eval_many(&lambdas[..n], &mut e[..n]);
-                    for j in 0..n {
-                        out[j] += t[j] * fp[j].0 * wo.z * e[j] * w;
+        next_event(
+            scene,
+            &v,
+            u_light,
+            mis,
+            |wo, is_delta| {
+                let mut fp = [(0.0, 0.0); N];
+                bxdf.eval_pdf_many(wi, wo, &lambdas[..n], &mut fp[..n]);
+                if is_delta {
+                    for v in &mut fp[..n] {
+                        v.1 = 0.0;
                     }
                 }
-            }
-        }
+                if !fp[..n].iter().any(|v| v.0 > 0.0) {
+                    return None;
+                }
+                let q_sum: f64 = q[..n].iter().sum();
+                let p_bsdf: f64 = (0..n).map(|k| q[k] * fp[k].1).sum();
+                Some((q_sum, p_bsdf, fp))
+            },
+            |ls, wo, w, fp| {
+                let mut e = [0.0; N];
+                ls.emission.eval_many(&lambdas[..n], &mut e[..n]);
+                for j in 0..n {
+                    out[j] += t[j] * fp[j].0 * wo.z * e[j] * w;
+                }
+            },
+        );
 
         // The emission a delta lobe mixed with others reflects, traced
         // deterministically (see `delta_emission`); a delta direction the
@@ -826,7 +815,7 @@ fn trace(
                 |j, e| {
                     out[j] += t[j] * e;
                 },
-                bsdf_weight_over_pdf(mis, 1.0, q[..n].iter().sum(), 0.0),
+                bsdf_weight_over_pdf(mis.heuristic, 1.0, q[..n].iter().sum(), 0.0),
             );
 
         // BSDF sampling at the hero wavelength.
@@ -850,7 +839,7 @@ fn trace(
             for k in 0..n {
                 l_mis[k] = q[k] / s.pdf;
             }
-            pending = Some(Pending {
+            *pending = Some(Pending {
                 material: m,
                 wi,
                 wo: s.wo,
@@ -859,7 +848,7 @@ fn trace(
         }
 
         if depth + 1 >= settings.rr_depth {
-            resolve(&mut pending, &mut th);
+            th.resolve(scene, lambdas, n);
             if !survives(&mut th, n, m0, sampler) {
                 break;
             }
@@ -870,6 +859,36 @@ fn trace(
         ray = next;
     }
     out
+}
+
+/// Adds the emission a BSDF-sampled edge of a path reaches along `ray` (at
+/// `hit`, an emitter, or the environment as it escapes), weighted against
+/// light sampling by the MIS of the vertex it left.
+#[inline]
+fn reached_emission(
+    scene: &Scene,
+    ray: &Ray,
+    hit: Option<&Hit>,
+    th: &mut Throughput,
+    lambdas: &[f64; N],
+    n: usize,
+    out: &mut [f64; N],
+) {
+    let (em, pdf_l) = emission_at(&scene.lights, ray, hit);
+    if matches!(em, Emission::None) {
+        return;
+    }
+    th.resolve(scene, lambdas, n);
+    let own: f64 = th.q[..n].iter().sum();
+    let l_sum: f64 = th.l_mis[..n].iter().sum();
+    let w = VertexMis::new(&scene.settings, th.peak).bsdf(pdf_l, own, l_sum);
+    if w > 0.0 {
+        let mut e = [0.0; N];
+        em.eval_many(&lambdas[..n], &mut e[..n]);
+        for j in 0..n {
+            out[j] += th.t[j] * e[j] * w;
+        }
+    }
 }
 
 #[cfg(test)]

@@ -3,7 +3,7 @@
 use crate::color::{SRGB_TO_XYZ, mul};
 use crate::distribution::Distribution2D;
 use crate::geometry::{Planar, Ray, Sphere};
-use crate::scene::Surface;
+use crate::shapes::Surface;
 use crate::sky::Sky;
 use crate::spectrum::{Cie, LAMBDA_MAX, LAMBDA_MIN, Spectrum};
 use glam::DVec3;

@@ -5,7 +5,7 @@
 //! `brdf::spec` validate and build the model: one schema, one validation, one
 //! builder for every entry point.
 
-use crate::scene::inputs::{Inputs, MAX_CSV_BYTES, MAX_TOML_BYTES};
+use crate::inputs::{Inputs, MAX_CSV_BYTES, MAX_TOML_BYTES};
 use crate::spectrum::parse_csv_rows;
 use brdf::Fresnel;
 pub use brdf::spec::DynBxdf;

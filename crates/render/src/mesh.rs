@@ -6,7 +6,7 @@
 //! (`vn`), the hit also carries the shading normal interpolated from them
 //! with f64 barycentrics; otherwise triangles are shaded flat.
 
-use crate::geometry::{HitGeometry, Ray, Transform};
+use crate::geometry::{Ray, SurfacePoint, Transform};
 use glam::{DVec3, Vec3A};
 use obvhs::cwbvh::CwBvh;
 use obvhs::ray::{Ray as BvhRay, RayHit};
@@ -17,7 +17,7 @@ use std::time::Duration;
 
 /// Largest |coordinate| of a mesh vertex after its transform. Both f32
 /// stages overflow with size: obvhs's build squares box extents (inf past
-/// √f32::MAX ≈ 1.8e19, which then panicked in its CWBVH conversion), and
+/// √f32::MAX ≈ 1.8e19, on which its CWBVH conversion panics), and
 /// its Möller–Trumbore test forms the triangle normal (edge²) dotted with
 /// the origin-to-vertex vector, a cube of the scene's size that must stay
 /// below f32::MAX ≈ 3.4e38. With coordinates within ±1e12 that product is
@@ -105,7 +105,7 @@ pub fn obj_from_bytes(
             // Neither does dropping a repeat of a triangle already kept (the
             // first hit is the same surface), and the BVH build's time grows
             // with the square of the repeats of one triangle (20 000 copies
-            // took 21 s, against 0.4 s for 10 000 distinct triangles).
+            // take 21 s, against 0.4 s for 10 000 distinct triangles).
             let mut key = [a, b, c].map(|v| [v.x, v.y, v.z].map(f64::to_bits));
             key.sort_unstable();
             if (b - a).cross(c - a).length_squared() > 0.0 && seen.insert(key) {
@@ -229,7 +229,7 @@ impl MeshAccel {
         ray: &Ray,
         t_min: f64,
         t_max: f64,
-    ) -> Option<(HitGeometry, u32, Option<DVec3>)> {
+    ) -> Option<(SurfacePoint, u32, Option<DVec3>)> {
         let mut hit = RayHit::none();
         let r = Self::bvh_ray(ray, t_min, t_max);
         if !self
@@ -264,7 +264,7 @@ impl MeshAccel {
             let w0 = 1.0 - w1 - w2;
             (w0 * na + w1 * nb + w2 * nc).try_normalize()
         });
-        Some((HitGeometry { t, p, n, tangent }, self.surface[id], shading))
+        Some((SurfacePoint { t, p, n, tangent }, self.surface[id], shading))
     }
 
     /// Whether anything blocks the segment `(t_min, t_max)` of `ray`.
@@ -306,7 +306,8 @@ mod tests {
 
     #[test]
     fn vertices_beyond_the_f32_bvh_range_are_refused() {
-        // Scale 1e20 once panicked inside obvhs's CWBVH conversion.
+        // Scale 1e20 takes obvhs's box extents to inf, on which its CWBVH
+        // conversion panics: refused before the build.
         for (bytes, scale) in [
             (QUAD, 1e20),
             (QUAD, 1e15),

@@ -400,7 +400,8 @@ mod tests {
 
     #[test]
     fn indices_past_two_to_the_32_are_new_samples() {
-        // Before the block hash, sample 2³² + i drew exactly sample i's numbers.
+        // Sample 2³² + i draws other numbers than sample i (a 32-bit index
+        // would repeat them).
         for kind in [SamplerKind::Sobol, SamplerKind::Independent] {
             for i in [0u64, 1, 77, (1 << 32) - 1] {
                 for block in [1u64, 2, 0xffff_ffff] {
@@ -419,7 +420,8 @@ mod tests {
                 .collect();
             check_net(&pts, k);
         }
-        // Block 0 is unchanged (films rendered before stay valid samples).
+        // Block 0 is the padded Sobol sequence with the pixel's scramble
+        // alone: sample indices below 2³² get no block term.
         let mut a = Sampler::new(SamplerKind::Sobol, 9, 3, 5);
         assert_eq!(
             a.get_2d(),

@@ -310,9 +310,10 @@ pub struct Sky {
     q_sun: f64,
 }
 
-impl Sky {
-    /// Builds the sky; errors name the offending parameter.
-    pub fn new(p: SkyParams) -> Result<Sky, String> {
+impl SkyParams {
+    /// Checks the parameters; errors name the offending one.
+    fn check(&self) -> Result<(), String> {
+        let p = self;
         if !(p.turbidity.is_finite() && (2.0..=10.0).contains(&p.turbidity)) {
             return Err(format!(
                 "turbidity = {} is invalid: the Preetham model covers 2 (very clear) to 10 (hazy)",
@@ -343,6 +344,51 @@ impl Sky {
                 p.ground_albedo
             ));
         }
+        Ok(())
+    }
+}
+
+/// The sun's column of the spectral basis, per table row (the other three
+/// are the daylight basis S0, S1, S2): its radiance in scene units, from the
+/// direct normal irradiance over the disk's solid angle `omega` with the sun
+/// at zenith angle `ts`; and the sun's physical luminance, cd/m².
+fn sun_basis_rows(p: &SkyParams, ts: f64, omega: f64) -> (Vec<[f64; 4]>, f64) {
+    let cie = Cie::get();
+    let t = tables();
+    let beta = angstrom_beta(p.turbidity);
+    let mut sun_lum = 0.0;
+    let rows: Vec<[f64; 4]> = t
+        .rows
+        .iter()
+        .enumerate()
+        .map(|(i, r)| {
+            let l = LAMBDA_MIN + i as f64;
+            let radiance =
+                sun_direct_normal(l, ts, beta, ANGSTROM_ALPHA, OZONE_CM, WATER_CM) / omega;
+            let w = if i == 0 || i == t.rows.len() - 1 {
+                0.5
+            } else {
+                1.0
+            };
+            sun_lum += w * radiance * cie.xyz(l)[1];
+            // Scene radiance S with ∫S ȳ/∫ȳ = scale · K_m ∫L ȳ.
+            [
+                r[0],
+                r[1],
+                r[2],
+                p.scale * K_M * cie.y_integral() * radiance,
+            ]
+        })
+        .collect();
+    let sun_luminance = K_M * sun_lum;
+
+    (rows, sun_luminance)
+}
+
+impl Sky {
+    /// Builds the sky; errors name the offending parameter.
+    pub fn new(p: SkyParams) -> Result<Sky, String> {
+        p.check()?;
         let e = p.sun_elevation_deg.to_radians();
         let az = p.sun_azimuth_deg.to_radians();
         let sun_dir = DVec3::new(e.cos() * az.sin(), e.sin(), -e.cos() * az.cos()).normalize();
@@ -355,34 +401,7 @@ impl Sky {
         let h = SUN_ANGULAR_RADIUS * 0.5;
         let sun_one_minus_cos = 2.0 * h.sin() * h.sin();
         let omega = 2.0 * PI * sun_one_minus_cos;
-        let cie = Cie::get();
-        let t = tables();
-        let beta = angstrom_beta(p.turbidity);
-        let mut sun_lum = 0.0;
-        let rows: Vec<[f64; 4]> = t
-            .rows
-            .iter()
-            .enumerate()
-            .map(|(i, r)| {
-                let l = LAMBDA_MIN + i as f64;
-                let radiance =
-                    sun_direct_normal(l, ts, beta, ANGSTROM_ALPHA, OZONE_CM, WATER_CM) / omega;
-                let w = if i == 0 || i == t.rows.len() - 1 {
-                    0.5
-                } else {
-                    1.0
-                };
-                sun_lum += w * radiance * cie.xyz(l)[1];
-                // Scene radiance S with ∫S ȳ/∫ȳ = scale · K_m ∫L ȳ.
-                [
-                    r[0],
-                    r[1],
-                    r[2],
-                    p.scale * K_M * cie.y_integral() * radiance,
-                ]
-            })
-            .collect();
-        let sun_luminance = K_M * sun_lum;
+        let (rows, sun_luminance) = sun_basis_rows(&p, ts, omega);
 
         let mut sky = Sky {
             params: p,
@@ -426,12 +445,28 @@ impl Sky {
         sky.ground = e_h.map(|v| v * p.ground_albedo / PI);
         let ground_lum = sky.ground_luminance();
 
-        // Sampling table: the brightest of each cell's centre and corners, times sin θ.
+        let weights = sky.sampling_weights(&centre, ground_lum);
+        sky.dist = Distribution2D::new(&weights, TABLE_W, TABLE_H);
+        let ground_power = ground_lum * 2.0 * PI;
+        let sun_power = if p.sun { sun_luminance * omega } else { 0.0 };
+        sky.q_sun = if p.sun {
+            (sun_power / (sun_power + sky_power + ground_power)).clamp(0.2, 0.8)
+        } else {
+            0.0
+        };
+        Ok(sky)
+    }
+
+    /// The weights of the sampling table: the brightest of each cell's
+    /// centre (`centre`, the upper half's cell-centre luminances) and
+    /// corners, times sin θ; the ground's luminance below the horizon.
+    fn sampling_weights(&self, centre: &[f64], ground_lum: f64) -> Vec<f64> {
+        let dth = PI / TABLE_H as f64;
         let corner = |i: usize, j: usize| -> f64 {
             if 2 * j > TABLE_H {
                 ground_lum
             } else {
-                sky.luminance_y(dir_of(i as f64, j as f64))
+                self.luminance_y(dir_of(i as f64, j as f64))
             }
         };
         let corners: Vec<f64> = (0..=TABLE_H / 2)
@@ -455,15 +490,7 @@ impl Sky {
                 weights.push(l.max(0.0) * th.sin());
             }
         }
-        sky.dist = Distribution2D::new(&weights, TABLE_W, TABLE_H);
-        let ground_power = ground_lum * 2.0 * PI;
-        let sun_power = if p.sun { sun_luminance * omega } else { 0.0 };
-        sky.q_sun = if p.sun {
-            (sun_power / (sun_power + sky_power + ground_power)).clamp(0.2, 0.8)
-        } else {
-            0.0
-        };
-        Ok(sky)
+        weights
     }
 
     /// The parameters.

@@ -12,7 +12,7 @@
 //! quadrature halfway between its nodes and refined until every channel is
 //! within [`TOLERANCE`] of that channel's largest magnitude; a term that
 //! needs more than [`MAX_INTERVALS`] intervals gets no table and its paths
-//! sample wavelengths as before.
+//! sample wavelengths.
 //!
 //! The quadrature over λ is Gauss–Legendre (4 points) on the intervals
 //! between every knot of the integrand's pieces (the 1 nm colour-matching

@@ -379,14 +379,14 @@ fn bundled(csv: &str) -> Spectrum {
 /// unit luminance.
 pub fn parse_spectrum(desc: &str, base_dir: &Path) -> Result<Spectrum, String> {
     parse_spectrum_with(desc, base_dir, &mut |p: &Path| {
-        let bytes = safe_io::read_input(p, "spectrum CSV", crate::scene::inputs::MAX_CSV_BYTES)
+        let bytes = safe_io::read_input(p, "spectrum CSV", crate::inputs::MAX_CSV_BYTES)
             .map_err(|e| e.to_string())?;
         String::from_utf8(bytes).map_err(|_| format!("{} is not UTF-8 text", p.display()))
     })
 }
 
 /// [`parse_spectrum`] reading a `csv(…)` file through `read` (the scene
-/// build passes its [`crate::scene::Inputs`], which hashes what it reads).
+/// build passes its [`crate::inputs::Inputs`], which hashes what it reads).
 pub fn parse_spectrum_with(
     desc: &str,
     base_dir: &Path,

@@ -9,11 +9,11 @@
 //!
 //! The hero set of a path is stratified in the CDF's primary space
 //! (u, u + 1/n, …): every member has the same marginal density p, which is
-//! what the integrator's spectral MIS relies on. Measured against the
-//! earlier choice (pdf ∝ x̄ + ȳ + z̄, hero set rotated in λ), the summed
-//! per-path variance of linear R, G, B for a flat spectrum drops from
-//! 13 900 to 1 490 (Mitsuba 3's sech² pdf with the same stratification:
-//! 3 530); for one wavelength per path it drops by 10 %.
+//! what the integrator's spectral MIS relies on. The summed per-path
+//! variance of linear R, G, B for a flat spectrum is 1 490 with this choice,
+//! against 13 900 with a pdf ∝ x̄ + ȳ + z̄ and the hero set rotated in λ,
+//! and 3 530 with Mitsuba 3's sech² pdf stratified the same way; with one
+//! wavelength per path it is 10 % lower than with the x̄ + ȳ + z̄ pdf.
 
 use crate::color::XYZ_TO_SRGB;
 use crate::distribution::Distribution1D;
@@ -26,10 +26,10 @@ pub const MAX_WAVELENGTHS: usize = 16;
 /// beyond its Fresnel term (the wave-optical models), where each further
 /// wavelength costs a model evaluation: four (Wilkie et al. 2014). Measured
 /// on `scenes/samples/s138_{ghs_ssa,ghs,two_scale}_45deg` at 64 spp, eight
-/// and sixteen wavelengths were 0.71–0.86× and 0.38–0.50× as efficient.
-/// Re-measured after the GHS delta-lobe floor (`brdf` `GhsCommon::choice`),
+/// and sixteen wavelengths are 0.71–0.86× and 0.38–0.50× as efficient; with
+/// the floor of the GHS delta-lobe choice (`brdf` `GhsCommon::choice`)
 /// sixteen are 0.69× on `s138_ghs_ssa_45deg` and 0.47× on
-/// `s138_two_scale_45deg` but 2.9× on `s138_ghs_normal`, whose noise is now
+/// `s138_two_scale_45deg` but 2.9× on `s138_ghs_normal`, whose noise is
 /// spectral: the split by model is a compromise, and `hero_wavelengths`
 /// overrides it.
 pub const HERO_COUNT: usize = 4;
@@ -55,16 +55,15 @@ const WALK: u16 = 1 << 15;
 /// The density follows |r̄| + |ḡ| + |b̄| on 0.25 nm bins. Drawing inverts the
 /// CDF through a guide table (four cells per bin) and a forward walk over
 /// bins laid out as `[cdf at the bin's start, 1/pmf, density]`, so a draw
-/// returns λ and its density from one bin record with no division: the
-/// generic [`Distribution1D`] inversion plus a separate density lookup cost
-/// ~150 instructions per wavelength (15 % of a direct-lighting camera
-/// sample with four hero wavelengths).
+/// returns λ and its density from one bin record with no division, where
+/// the generic [`Distribution1D`] inversion plus a separate density lookup
+/// would add 15 % to a direct-lighting camera sample with four hero
+/// wavelengths.
 ///
 /// The bins must stay fine where the density is small: a histogram of 2048
-/// equal-probability segments, cheaper still, was tried and measured 3× the
-/// RMSE at 256 spp on the peer GGX plate, because its segments in the tails
-/// span tens of nm over which the colour-matching functions change by
-/// orders of magnitude.
+/// equal-probability segments, cheaper still, gives 3× the RMSE at 256 spp
+/// on the peer GGX plate, because its segments in the tails span tens of nm
+/// over which the colour-matching functions change by orders of magnitude.
 #[derive(Clone, Debug)]
 pub struct WavelengthSampler {
     lo: f64,

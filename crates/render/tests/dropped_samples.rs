@@ -83,7 +83,7 @@ fn scene(broken: bool) -> render::Scene {
 fn broken_material_samples_are_counted_located_and_left_out() {
     let s = scene(true);
     let spp = s.settings.spp;
-    let mut film = Film::for_scene(&s).unwrap();
+    let mut film = s.film().unwrap();
     let opts = RenderOptions {
         threads: Some(2),
         ..RenderOptions::default()
@@ -143,7 +143,7 @@ fn broken_material_samples_are_counted_located_and_left_out() {
 #[test]
 fn a_sound_render_drops_nothing() {
     let s = scene(false);
-    let mut film = Film::for_scene(&s).unwrap();
+    let mut film = s.film().unwrap();
     let out = render::render_range(&s, &mut film, 0..8, &RenderOptions::default()).unwrap();
     assert_eq!(out.dropped, Dropped::default());
     assert_eq!(film.dropped().total(), 0);

@@ -5,7 +5,7 @@
 //! film silently accepted with other contents.
 
 use render::film::{BadSample, Film, MAX_PIXELS, MAX_SIDE, ResumeError};
-use render::scene::InputFile;
+use render::inputs::InputFile;
 
 /// A small film with every section populated.
 fn sample_film() -> Film {

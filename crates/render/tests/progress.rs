@@ -2,7 +2,7 @@
 //! announces at the start are exactly those it reports done, every pass is
 //! reported with the film's spp, and the loop says when it ends.
 
-use render::{Film, Progress, ProgressEvent, RenderOptions, load_str};
+use render::{Progress, ProgressEvent, RenderOptions, load_str};
 use std::path::Path;
 use std::sync::{Arc, Mutex};
 
@@ -42,7 +42,7 @@ fn progress_events_add_up() {
         progress: Some(Progress::new(move |e| sink.lock().unwrap().push(e))),
         ..RenderOptions::default()
     };
-    let mut film = Film::for_scene(&scene).unwrap();
+    let mut film = scene.film().unwrap();
     render::render_range(&scene, &mut film, 0..37, &opts).unwrap();
     let events = events.lock().unwrap();
     assert_eq!(

@@ -7,16 +7,16 @@ use super::desc::{
     LightDesc, MaterialDesc, ModelKind, SamplerKind, SceneDesc, ShapeDesc, SpectralIntegration,
     TransformDesc, WavelengthMode,
 };
-use super::inputs::{self, Inputs};
-use super::shapes::Shapes;
 use super::tables;
-use super::{ESTIMATOR, Scene, Settings, Surface};
+use super::{ESTIMATOR, Scene, Settings};
 use crate::camera::Camera;
 use crate::error::SceneError;
 use crate::geometry::{Planar, Sphere, Transform};
+use crate::inputs::{self, Inputs};
 use crate::light::{EnvMap, Environment, LightKind, Lights};
 use crate::material::{Material, build_material};
 use crate::mesh::{MeshAccel, MeshSource, obj_from_bytes};
+use crate::shapes::{Shapes, Surface};
 use crate::sky::{Sky, SkyParams};
 use crate::spectral_table::SpectralTables;
 use crate::spectrum::{LAMBDA_MAX, LAMBDA_MIN, Spectrum, parse_spectrum_with};
@@ -610,8 +610,8 @@ impl<'a> Builder<'a> {
         // lift of a map's colours, and the CIE daylight basis S0 + M1 S1 +
         // M2 S2 at the reddish chromaticities of a sun a few degrees above
         // the horizon, whose M1 makes the blue end negative. Dropping those
-        // samples darkened such skies (up to 40 % of samples at 0.5°); kept,
-        // they average to the sky's own XYZ.
+        // samples would darken such skies (up to 40 % of samples at 0.5°);
+        // kept, they average to the sky's own XYZ.
         let signed_radiance = environment.is_some_and(|i| {
             matches!(
                 lights[i],

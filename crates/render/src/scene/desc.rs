@@ -2,9 +2,14 @@
 //!
 //! Every table denies unknown keys, so a misspelt key is an error that lists
 //! the valid ones. Defaults are only used where this file documents them.
+//!
+//! The types serialise too, leaving out every key at its default, so a
+//! scene can be built in code and written as a file ([`super::write`]) that
+//! parses back to the same description. Positions ([`Spanned`]) are those of
+//! a parsed text; a description built in code has none ([`spanless`]).
 
-use serde::Deserialize;
 use serde::de::{self, Deserializer, IgnoredAny, SeqAccess, Visitor};
+use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::fmt;
 use std::marker::PhantomData;
@@ -13,8 +18,8 @@ use toml::Spanned;
 
 /// `[T; N]` read from an array of exactly `N` elements. serde's array impl
 /// stops after `N` elements and the TOML deserializer does not complain
-/// about the rest, so without this `resolution = [320, 240, 7, …]` passed
-/// as `[320, 240]`. The surplus is counted (without storing it) for the
+/// about the rest, so without this `resolution = [320, 240, 7, …]` would
+/// pass as `[320, 240]`. The surplus is counted (without storing it) for the
 /// message.
 struct Exact<T, const N: usize>([T; N]);
 
@@ -51,6 +56,15 @@ impl<'de, T: Deserialize<'de>, const N: usize> Deserialize<'de> for Exact<T, N> 
     }
 }
 
+/// A value with no position in any text: a description built in code.
+pub fn spanless<T>(value: T) -> Spanned<T> {
+    Spanned::new(0..0, value)
+}
+
+fn is_default<T: Default + PartialEq>(v: &T) -> bool {
+    *v == T::default()
+}
+
 fn exact<'de, D: Deserializer<'de>, T: Deserialize<'de>, const N: usize>(
     d: D,
 ) -> Result<[T; N], D::Error> {
@@ -66,7 +80,7 @@ fn exact_spanned<'de, D: Deserializer<'de>, T: Deserialize<'de>, const N: usize>
 }
 
 /// A whole scene file.
-#[derive(Deserialize, Debug)]
+#[derive(Deserialize, Serialize, Debug, Clone, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct SceneDesc {
     /// The camera.
@@ -74,7 +88,7 @@ pub struct SceneDesc {
     /// Samples, seed and outputs.
     pub film: FilmDesc,
     /// Path-tracing settings (all keys optional).
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "is_default")]
     pub integrator: IntegratorDesc,
     /// Named materials, `[materials.NAME]`.
     #[serde(default)]
@@ -88,7 +102,7 @@ pub struct SceneDesc {
 }
 
 /// `[camera]`: a pinhole perspective camera.
-#[derive(Deserialize, Debug)]
+#[derive(Deserialize, Serialize, Debug, Clone, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct CameraDesc {
     /// Eye position.
@@ -98,7 +112,11 @@ pub struct CameraDesc {
     #[serde(deserialize_with = "exact_spanned")]
     pub look_at: Spanned<[f64; 3]>,
     /// Up direction (default +y).
-    #[serde(default = "default_up", deserialize_with = "exact_spanned")]
+    #[serde(
+        default = "default_up",
+        deserialize_with = "exact_spanned",
+        skip_serializing_if = "is_default_up"
+    )]
     pub up: Spanned<[f64; 3]>,
     /// Vertical field of view in degrees, in (0, 179).
     pub fov_deg: Spanned<f64>,
@@ -115,29 +133,37 @@ fn default_up() -> Spanned<[f64; 3]> {
     Spanned::new(0..0, [0.0, 1.0, 0.0])
 }
 
+fn is_default_up(up: &Spanned<[f64; 3]>) -> bool {
+    *up == default_up()
+}
+
+fn is_zero_stops(stops: &Spanned<f64>) -> bool {
+    *stops.get_ref() == 0.0
+}
+
 /// `[film]`.
-#[derive(Deserialize, Debug)]
+#[derive(Deserialize, Serialize, Debug, Clone, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct FilmDesc {
     /// Samples per pixel (≥ 1).
     pub spp: Spanned<u64>,
     /// Random seed (default 0).
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "is_default")]
     pub seed: u64,
     /// Linear sRGB float EXR output, relative to the working directory.
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub exr: Option<PathBuf>,
     /// 8-bit sRGB PNG output, relative to the working directory.
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub png: Option<PathBuf>,
     /// Exposure in stops applied to both outputs (default 0; at most
     /// [`MAX_EXPOSURE_STOPS`](super::MAX_EXPOSURE_STOPS) either way).
-    #[serde(default = "zero_stops")]
+    #[serde(default = "zero_stops", skip_serializing_if = "is_zero_stops")]
     pub exposure: Spanned<f64>,
 }
 
 /// How wavelengths are sampled per camera path.
-#[derive(Deserialize, Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[derive(Deserialize, Serialize, Debug, Clone, Copy, PartialEq, Eq, Default)]
 #[serde(rename_all = "snake_case")]
 pub enum WavelengthMode {
     /// One wavelength per path.
@@ -150,7 +176,7 @@ pub enum WavelengthMode {
 }
 
 /// Where the random numbers of a camera sample come from (see `sampler.rs`).
-#[derive(Deserialize, Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[derive(Deserialize, Serialize, Debug, Clone, Copy, PartialEq, Eq, Default)]
 #[serde(rename_all = "snake_case")]
 pub enum SamplerKind {
     /// Owen-scrambled Sobol points, padded per draw (Burley 2020).
@@ -161,7 +187,7 @@ pub enum SamplerKind {
 }
 
 /// How next-event estimation and BSDF sampling are weighted (Veach 1997).
-#[derive(Deserialize, Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[derive(Deserialize, Serialize, Debug, Clone, Copy, PartialEq, Eq, Default)]
 #[serde(rename_all = "snake_case")]
 pub enum MisHeuristic {
     /// w_s = p_s² / Σ p². Near-zero weight for the rare BSDF hits on small
@@ -173,40 +199,40 @@ pub enum MisHeuristic {
 }
 
 /// `[integrator]`.
-#[derive(Deserialize, Debug)]
+#[derive(Deserialize, Serialize, Debug, Clone, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct IntegratorDesc {
     /// Maximum number of scattering events along a path (default 8; 1 = direct light only).
-    #[serde(default = "default_depth")]
+    #[serde(default = "default_depth", skip_serializing_if = "is_default_depth")]
     pub max_depth: Spanned<u32>,
     /// `hero` (default) or `single`.
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "is_default")]
     pub wavelengths: WavelengthMode,
     /// Wavelengths per path in `hero` mode, 2–16 (default: 16 when every
     /// material is a microfacet or smooth conductor, 4 otherwise).
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub hero_wavelengths: Option<Spanned<u32>>,
     /// Bounces before Russian roulette may end a path (default 3).
-    #[serde(default = "default_rr")]
+    #[serde(default = "default_rr", skip_serializing_if = "is_default_rr")]
     pub rr_depth: u32,
     /// `sobol` (default) or `independent`.
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "is_default")]
     pub sampler: SamplerKind,
     /// `power` (default) or `balance`.
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "is_default")]
     pub mis: MisHeuristic,
     /// How many times the light-sampling density counts in the MIS
     /// heuristic, > 0 (1 is the textbook heuristic); unset, it is chosen per
     /// vertex and light ([`Settings::mis_light_weight`](super::Settings::mis_light_weight)).
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub mis_light_weight: Option<Spanned<f64>>,
     /// `auto` (default) or `sampled`.
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "is_default")]
     pub spectral_integration: SpectralIntegration,
 }
 
 /// How the integral over λ is estimated.
-#[derive(Deserialize, Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[derive(Deserialize, Serialize, Debug, Clone, Copy, PartialEq, Eq, Default)]
 #[serde(rename_all = "snake_case")]
 pub enum SpectralIntegration {
     /// Exactly, through tables, for the contributions whose spectrum is one
@@ -223,8 +249,16 @@ fn default_depth() -> Spanned<u32> {
     Spanned::new(0..0, 8)
 }
 
+fn is_default_depth(d: &Spanned<u32>) -> bool {
+    *d == default_depth()
+}
+
 fn default_rr() -> u32 {
     3
+}
+
+fn is_default_rr(d: &u32) -> bool {
+    *d == default_rr()
 }
 
 impl Default for IntegratorDesc {
@@ -248,22 +282,34 @@ impl Default for IntegratorDesc {
 pub use brdf::spec::{FresnelKind, MaterialDesc, ModelKind};
 
 /// Optional placement of a shape.
-#[derive(Deserialize, Debug, Clone, Copy)]
+#[derive(Deserialize, Serialize, Debug, Clone, Copy, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct TransformDesc {
     /// Translation.
-    #[serde(default, deserialize_with = "exact")]
+    #[serde(
+        default,
+        deserialize_with = "exact",
+        skip_serializing_if = "is_default"
+    )]
     pub translate: [f64; 3],
     /// Rotation in degrees about x, then y, then z.
-    #[serde(default, deserialize_with = "exact")]
+    #[serde(
+        default,
+        deserialize_with = "exact",
+        skip_serializing_if = "is_default"
+    )]
     pub rotate_deg: [f64; 3],
     /// Uniform scale (default 1).
-    #[serde(default = "one")]
+    #[serde(default = "one", skip_serializing_if = "is_one")]
     pub scale: f64,
 }
 
 fn one() -> f64 {
     1.0
+}
+
+fn is_one(v: &f64) -> bool {
+    *v == 1.0
 }
 
 impl Default for TransformDesc {
@@ -277,7 +323,7 @@ impl Default for TransformDesc {
 }
 
 /// `[[shapes]]`, tagged by `type`.
-#[derive(Deserialize, Debug)]
+#[derive(Deserialize, Serialize, Debug, Clone, PartialEq)]
 #[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
 pub enum ShapeDesc {
     /// `size = [w, h]` in the local xy plane, normal +z.
@@ -288,7 +334,7 @@ pub enum ShapeDesc {
         /// Material name.
         material: String,
         /// Placement.
-        #[serde(default)]
+        #[serde(default, skip_serializing_if = "is_default")]
         transform: TransformDesc,
     },
     /// A disk in the local xy plane, normal +z.
@@ -298,7 +344,7 @@ pub enum ShapeDesc {
         /// Material name.
         material: String,
         /// Placement.
-        #[serde(default)]
+        #[serde(default, skip_serializing_if = "is_default")]
         transform: TransformDesc,
     },
     /// A sphere.
@@ -318,7 +364,7 @@ pub enum ShapeDesc {
         /// Material name.
         material: String,
         /// Placement.
-        #[serde(default)]
+        #[serde(default, skip_serializing_if = "is_default")]
         transform: TransformDesc,
     },
 }
@@ -326,7 +372,7 @@ pub enum ShapeDesc {
 /// `[[lights]]`, tagged by `type`. `spectrum` defaults to `"d65"`; every
 /// spectrum is normalised to unit luminance before `intensity`/`radiance`
 /// scales it.
-#[derive(Deserialize, Debug)]
+#[derive(Deserialize, Serialize, Debug, Clone, PartialEq)]
 #[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
 pub enum LightDesc {
     /// An isotropic point light; `intensity` in luminance units per sr.
@@ -337,7 +383,7 @@ pub enum LightDesc {
         /// Radiant intensity scale.
         intensity: f64,
         /// Spectrum.
-        #[serde(default)]
+        #[serde(default, skip_serializing_if = "Option::is_none")]
         spectrum: Option<String>,
     },
     /// A spherical emitter of uniform radiance.
@@ -350,7 +396,7 @@ pub enum LightDesc {
         /// Radiance scale.
         radiance: f64,
         /// Spectrum.
-        #[serde(default)]
+        #[serde(default, skip_serializing_if = "Option::is_none")]
         spectrum: Option<String>,
     },
     /// A rectangular emitter, emitting from its +z side (both with `two_sided`).
@@ -361,13 +407,13 @@ pub enum LightDesc {
         /// Radiance scale.
         radiance: f64,
         /// Placement.
-        #[serde(default)]
+        #[serde(default, skip_serializing_if = "is_default")]
         transform: TransformDesc,
         /// Emit from both sides.
-        #[serde(default)]
+        #[serde(default, skip_serializing_if = "is_default")]
         two_sided: bool,
         /// Spectrum.
-        #[serde(default)]
+        #[serde(default, skip_serializing_if = "Option::is_none")]
         spectrum: Option<String>,
     },
     /// Light from infinitely far away: constant, or a lat-long EXR map.
@@ -375,13 +421,13 @@ pub enum LightDesc {
         /// Radiance scale.
         radiance: f64,
         /// Spectrum of a constant environment.
-        #[serde(default)]
+        #[serde(default, skip_serializing_if = "Option::is_none")]
         spectrum: Option<String>,
         /// Lat-long (equirectangular) EXR file, relative to the scene file; +y is up.
-        #[serde(default)]
+        #[serde(default, skip_serializing_if = "Option::is_none")]
         file: Option<PathBuf>,
         /// Rotation of the map about +y in degrees.
-        #[serde(default)]
+        #[serde(default, skip_serializing_if = "is_default")]
         rotate_deg: f64,
     },
     /// A daylight sky with its sun and a ground below the horizon (Preetham
@@ -390,18 +436,24 @@ pub enum LightDesc {
         /// Sun elevation above the horizon in degrees, (0, 90].
         sun_elevation_deg: f64,
         /// Sun azimuth in degrees: 0 toward −z, 90 toward +x (default 0).
-        #[serde(default)]
+        #[serde(default, skip_serializing_if = "is_default")]
         sun_azimuth_deg: f64,
         /// Atmospheric turbidity, 2–10 (default 2.5).
-        #[serde(default = "default_turbidity")]
+        #[serde(
+            default = "default_turbidity",
+            skip_serializing_if = "is_default_turbidity"
+        )]
         turbidity: f64,
         /// Scene radiance per physical cd/m² (e.g. 1e-4: a 10 kcd/m² sky gives 1).
         scale: f64,
         /// Whether the sun disk emits (default true).
-        #[serde(default = "yes")]
+        #[serde(default = "yes", skip_serializing_if = "is_yes")]
         sun: bool,
         /// Albedo of the Lambertian ground below the horizon (default 0.2).
-        #[serde(default = "default_ground_albedo")]
+        #[serde(
+            default = "default_ground_albedo",
+            skip_serializing_if = "is_default_ground_albedo"
+        )]
         ground_albedo: f64,
     },
 }
@@ -410,10 +462,22 @@ fn default_turbidity() -> f64 {
     2.5
 }
 
+fn is_default_turbidity(t: &f64) -> bool {
+    *t == default_turbidity()
+}
+
 fn default_ground_albedo() -> f64 {
     0.2
 }
 
+fn is_default_ground_albedo(a: &f64) -> bool {
+    *a == default_ground_albedo()
+}
+
 fn yes() -> bool {
     true
+}
+
+fn is_yes(b: &bool) -> bool {
+    *b
 }

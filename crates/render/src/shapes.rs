@@ -1,8 +1,45 @@
-//! The runtime scene's geometry and the two ray queries the integrator asks of it.
+//! Everything a ray can hit, the two ray queries the integrator asks of it
+//! (`intersect`, `occluded`), and what they answer ([`Hit`], [`Surface`]).
 
-use super::{Hit, Surface};
-use crate::geometry::{Planar, Ray, Sphere};
+use crate::geometry::{Planar, Ray, Sphere, SurfacePoint};
 use crate::mesh::MeshAccel;
+use glam::DVec3;
+
+/// What a ray hit.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Surface {
+    /// A reflecting surface with this material index.
+    Material(u32),
+    /// An emitting shape: index into [`Lights::lights`](crate::light::Lights::lights).
+    Emitter(u32),
+}
+
+/// A ray hit.
+#[derive(Clone, Copy, Debug)]
+pub struct Hit {
+    /// Geometry at the hit.
+    pub geo: SurfacePoint,
+    /// What was hit.
+    pub surface: Surface,
+    /// Whether it is a mesh triangle (traversed in f32: needs a larger ray offset).
+    pub mesh: bool,
+    /// Interpolated vertex normal of a smooth-shaded mesh triangle (same
+    /// orientation convention as `geo.n`); `None`: shade with `geo.n`.
+    pub shading_n: Option<DVec3>,
+}
+
+impl Hit {
+    /// A hit on an analytic shape (intersected in f64, shaded with its geometric normal).
+    #[inline]
+    pub fn analytic(geo: SurfacePoint, surface: Surface) -> Hit {
+        Hit {
+            geo,
+            surface,
+            mesh: false,
+            shading_n: None,
+        }
+    }
+}
 
 /// Everything a ray can hit: analytic shapes tested one by one (a scene
 /// has a handful) and, only when the scene has meshes, one BVH over all
@@ -44,7 +81,7 @@ impl Shapes {
         }
         if let Some(i) = nearest_sphere {
             let (sp, s) = &self.spheres[i];
-            best = Some(Hit::analytic(sp.geometry_at(ray, t_max), *s));
+            best = Some(Hit::analytic(sp.point_at(ray, t_max), *s));
         }
         if let Some(m) = &self.mesh
             && let Some((g, mat, shading_n)) = m.intersect(ray, 0.0, t_max)

@@ -6,7 +6,7 @@
 //! pass in flight, costing at most one pass (sized to about two seconds).
 
 use crate::error::RenderError;
-use crate::film::{Dropped, Film, to_fixed};
+use crate::film::{Dropped, Film, TileSums};
 use crate::integrator::sample_pixel_checked;
 use crate::scene::Scene;
 pub use rayon::ThreadPool;
@@ -134,46 +134,31 @@ fn tiles(width: u32, height: u32) -> Vec<Tile> {
     v
 }
 
-/// One rendered tile: its sums and the samples it left out.
-type TileResult = (Vec<[i128; 3]>, Dropped);
-
 /// Renders one tile for samples `range`; `None` if stopped.
 fn render_tile(
     scene: &Scene,
     tile: Tile,
     range: &Range<u64>,
     stop: &AtomicBool,
-) -> Option<TileResult> {
-    let mut sums = Vec::with_capacity(((tile.x1 - tile.x0) * (tile.y1 - tile.y0)) as usize);
-    let mut dropped = Dropped::default();
+) -> Option<TileSums> {
+    let mut sums = TileSums::new(tile.x0, tile.y0, tile.x1, tile.y1);
     for y in tile.y0..tile.y1 {
         if stop.load(Ordering::Relaxed) {
             return None;
         }
         for x in tile.x0..tile.x1 {
-            let mut acc = [0i128; 3];
-            for s in range.clone() {
-                match sample_pixel_checked(scene, x, y, s) {
-                    Ok(xyz) => {
-                        let f = to_fixed(xyz);
-                        // Saturating: past a million samples at the film's
-                        // per-sample limit an i128 sum would wrap.
-                        for k in 0..3 {
-                            acc[k] = acc[k].saturating_add(f[k]);
-                        }
-                    }
-                    Err(why) => dropped.record(why, x, y, s),
-                }
-            }
-            sums.push(acc);
+            let samples = range
+                .clone()
+                .map(|s| (s, sample_pixel_checked(scene, x, y, s)));
+            sums.add_pixel(x, y, samples);
         }
     }
-    Some((sums, dropped))
+    Some(sums)
 }
 
 /// Most worker threads a render starts: four per core. More only add
-/// start-up and scheduling cost (`--threads 10000` turned a 0.05 s render
-/// into 60 s).
+/// start-up and scheduling cost (ten thousand threads make a 0.05 s render
+/// take a minute).
 pub fn max_threads() -> usize {
     std::thread::available_parallelism().map_or(1, |n| n.get()) * 4
 }
@@ -258,7 +243,7 @@ pub fn render_range_in(
     while next < range.end && !local_stop.load(Ordering::Relaxed) {
         let pass = next..next.saturating_add(pass_spp).min(range.end);
         let t0 = Instant::now();
-        let results: Vec<Option<TileResult>> = pool.install(|| {
+        let results: Vec<Option<TileSums>> = pool.install(|| {
             tiles
                 .par_iter()
                 .map(|&t| {
@@ -274,30 +259,16 @@ pub fn render_range_in(
                 })
                 .collect()
         });
-        if results.iter().any(Option::is_none) {
+        let Some(done) = results.into_iter().collect::<Option<Vec<TileSums>>>() else {
             break;
-        }
-        if let Err(m) = film.add_range(pass.clone()) {
-            result = Err(RenderError::Options(m));
-            break;
-        }
-        let mut pass_dropped = Dropped::default();
-        let (film_sums, film_dropped) = film.accumulators();
-        for (t, (sums, d)) in tiles.iter().zip(results.into_iter().flatten()) {
-            pass_dropped.add(&d);
-            let mut k = 0;
-            for y in t.y0..t.y1 {
-                for x in t.x0..t.x1 {
-                    let px = &mut film_sums[(y * w + x) as usize];
-                    for c in 0..3 {
-                        px[c] = px[c].saturating_add(sums[k][c]);
-                    }
-                    k += 1;
-                }
+        };
+        match film.add_pass(pass.clone(), &done) {
+            Ok(d) => dropped.add(&d),
+            Err(m) => {
+                result = Err(RenderError::Options(m));
+                break;
             }
         }
-        film_dropped.add(&pass_dropped);
-        dropped.add(&pass_dropped);
         next = pass.end;
         Progress::report(&opts.progress, ProgressEvent::Pass { spp: film.spp() });
         if let Some((path, every)) = &opts.checkpoint

@@ -1,0 +1,371 @@
+//! From one camera sample's spectral radiance to what the film adds.
+//!
+//! The integrator hands the film each camera sample as radiance estimates
+//! at its sampled wavelengths (wavelength pdf included) plus the XYZ of the
+//! contributions it integrated over λ exactly ([`SampleRadiance`]);
+//! [`sample_xyz`] matches each wavelength to CIE 1931 XYZ and checks the
+//! sample, [`to_fixed`] rounds its XYZ to a multiple of 2⁻⁴⁰ (≈ 9·10⁻¹³), and
+//! [`TileSums`] adds samples in i128, leaving 2⁸⁷ of head-room: quantisation
+//! is 10⁻⁹ of a unit radiance, far below Monte Carlo noise, and overflow
+//! needs ~10²⁶ in one pixel.
+
+use crate::spectrum::Cie;
+use crate::wavelength::{MAX_WAVELENGTHS, SampledWavelengths};
+use std::fmt;
+
+/// One unit of the fixed point is 2⁻⁴⁰.
+pub(super) const SCALE: f64 = (1u64 << 40) as f64;
+/// Largest |X|, |Y| or |Z| of one camera sample the film adds: 10²⁰ · 2⁴⁰ is
+/// 1.1·10³², so the i128 sums (up to 1.7·10³⁸) hold a million such samples
+/// per pixel. A larger estimate (lights of radiance ~10²⁴ and up) is dropped
+/// and counted: saturating the fixed-point conversion instead would give
+/// every lit pixel the same value without a word.
+pub const MAX_SAMPLE_XYZ: f64 = 1e20;
+/// [`MAX_SAMPLE_XYZ`] in the film's fixed point: no pixel sum exceeds the
+/// pixel's sample count times this.
+pub(super) const MAX_SAMPLE_FIXED: i128 = (MAX_SAMPLE_XYZ * SCALE) as i128;
+
+/// One camera sample: its wavelengths and spectral radiance estimates.
+#[derive(Clone, Copy, Debug)]
+pub struct CameraSample {
+    /// The wavelengths carried ([`Settings::wavelengths_per_path`](crate::scene::Settings::wavelengths_per_path))
+    /// and their pdfs.
+    pub wavelengths: SampledWavelengths,
+    /// Radiance estimates at each wavelength, wavelength pdf included; the
+    /// first `wavelengths.len()` are used.
+    pub radiance: [f64; MAX_WAVELENGTHS],
+    /// XYZ (before the film's 1/∫ȳ normalisation) of the contributions
+    /// integrated over λ exactly ([`crate::spectral_table`]); a path that
+    /// needs no sampled wavelength carries none.
+    pub xyz: [f64; 3],
+}
+
+/// What the integrator measured for one camera sample.
+// Not boxed: the value is returned through the caller's slot, so a small
+// variant writes its few bytes only, and a box would allocate per sample.
+#[allow(clippy::large_enum_variant)]
+pub enum SampleRadiance {
+    /// Nothing reached the camera: zero at every wavelength.
+    Zero,
+    /// Every contribution was integrated over λ exactly: their XYZ (before
+    /// the film's 1/∫ȳ normalisation).
+    Xyz([f64; 3]),
+    /// Sampled wavelengths were needed.
+    Spectral(CameraSample),
+}
+
+/// The XYZ one camera sample adds to the film (before the film's 1/∫ȳ
+/// normalisation), or why it cannot be averaged: a wavelength's radiance
+/// estimate is NaN, infinite, or negative while `signed` is false (no
+/// emission spectrum of the scene is negative anywhere; see
+/// [`Scene::signed_radiance`](crate::Scene)), or the XYZ lies beyond
+/// [`MAX_SAMPLE_XYZ`]. Each means a model misbehaved; the render loop counts
+/// and reports such samples instead of averaging them (one branch, never
+/// taken in a sound render).
+#[inline]
+pub fn sample_xyz(radiance: SampleRadiance, signed: bool) -> Result<[f64; 3], BadSample> {
+    let cs = match radiance {
+        SampleRadiance::Zero => return Ok([0.0; 3]),
+        SampleRadiance::Xyz(xyz) => {
+            // The checks below with no sampled wavelength, returned from
+            // here so that the caller need not keep the whole value alive.
+            // See below for why Y decides the sign.
+            let finite = xyz.iter().all(|v| in_film_range(*v));
+            return match (finite, signed || xyz[1] >= 0.0) {
+                (false, _) => Err(BadSample::NonFinite),
+                (true, false) => Err(BadSample::Negative),
+                (true, true) => Ok(xyz),
+            };
+        }
+        SampleRadiance::Spectral(cs) => cs,
+    };
+    let n = cs.wavelengths.len();
+    let r = &cs.radiance[..n];
+    if !r.iter().all(|v| v.is_finite()) || !cs.xyz.iter().all(|v| v.is_finite()) {
+        return Err(BadSample::NonFinite);
+    }
+    // The exactly integrated part is a non-negative spectrum's XYZ, whose Y
+    // (unlike X and Z of a narrow band, within the table's tolerance of 0)
+    // is clearly positive: a negative Y is a model's negative value.
+    let non_negative = r.iter().all(|v| *v >= 0.0) && cs.xyz[1] >= 0.0;
+    if !signed && !non_negative {
+        return Err(BadSample::Negative);
+    }
+    let cie = Cie::get();
+    let mut xyz = cs.xyz;
+    for (j, &lambda) in cs.wavelengths.lambdas().iter().enumerate() {
+        let c = cie.xyz(lambda);
+        for k in 0..3 {
+            xyz[k] += cs.radiance[j] * c[k];
+        }
+    }
+    // Finite radiances can still overflow in the sum, or leave the film's range.
+    if xyz.iter().all(|v| in_film_range(*v)) {
+        Ok(xyz)
+    } else {
+        Err(BadSample::NonFinite)
+    }
+}
+
+/// Whether a sample's XYZ component can be added to the film: finite and
+/// within [`MAX_SAMPLE_XYZ`] (false for NaN).
+#[inline(always)]
+fn in_film_range(v: f64) -> bool {
+    v.abs() <= MAX_SAMPLE_XYZ
+}
+
+/// The sums of a rectangle of pixels over a range of samples, in the film's
+/// fixed point: what a render task builds off the film, to be added to it
+/// whole ([`Film::add_pass`](super::Film::add_pass)).
+#[derive(Clone, Debug)]
+pub struct TileSums {
+    /// First column.
+    pub x0: u32,
+    /// First row.
+    pub y0: u32,
+    /// One past the last column.
+    pub x1: u32,
+    /// One past the last row.
+    pub y1: u32,
+    sums: Vec<[i128; 3]>,
+    dropped: Dropped,
+}
+
+impl TileSums {
+    /// Empty sums of columns `x0..x1` and rows `y0..y1`.
+    pub fn new(x0: u32, y0: u32, x1: u32, y1: u32) -> TileSums {
+        let pixels = x1.saturating_sub(x0) as usize * y1.saturating_sub(y0) as usize;
+        TileSums {
+            x0,
+            y0,
+            x1,
+            y1,
+            sums: Vec::with_capacity(pixels),
+            dropped: Dropped::default(),
+        }
+    }
+
+    /// Adds pixel (`x`, `y`), the tile's next in row-major order, from its
+    /// samples: (sample index, what [`sample_xyz`] made of it).
+    #[inline]
+    pub fn add_pixel(
+        &mut self,
+        x: u32,
+        y: u32,
+        samples: impl Iterator<Item = (u64, Result<[f64; 3], BadSample>)>,
+    ) {
+        debug_assert_eq!(
+            (x, y),
+            {
+                let (w, i) = ((self.x1 - self.x0) as usize, self.sums.len());
+                (self.x0 + (i % w) as u32, self.y0 + (i / w) as u32)
+            },
+            "pixels are added in row-major order"
+        );
+        let mut acc = [0i128; 3];
+        for (s, value) in samples {
+            match value {
+                Ok(xyz) => {
+                    let f = to_fixed(xyz);
+                    // Saturating: past a million samples at the film's
+                    // per-sample limit an i128 sum would wrap.
+                    for k in 0..3 {
+                        acc[k] = acc[k].saturating_add(f[k]);
+                    }
+                }
+                Err(why) => self.dropped.record(why, x, y, s),
+            }
+        }
+        self.sums.push(acc);
+    }
+
+    /// The pixels' sums so far, row-major.
+    pub fn sums(&self) -> &[[i128; 3]] {
+        &self.sums
+    }
+
+    /// The samples left out so far.
+    pub fn dropped(&self) -> &Dropped {
+        &self.dropped
+    }
+
+    /// Whether the tile is complete and lies inside a `width` × `height` image.
+    pub(super) fn fits(&self, width: u32, height: u32) -> bool {
+        self.x0 <= self.x1
+            && self.y0 <= self.y1
+            && self.x1 <= width
+            && self.y1 <= height
+            && self.sums.len() as u64 == (self.x1 - self.x0) as u64 * (self.y1 - self.y0) as u64
+    }
+}
+
+/// Converts one sample's XYZ to fixed point: `(v·2⁴⁰).round() as i128`,
+/// 0 for non-finite `v`.
+#[inline]
+pub fn to_fixed(xyz: [f64; 3]) -> [i128; 3] {
+    xyz.map(fixed_one)
+}
+
+/// `(v·2⁴⁰).round() as i128` without the libm `round` and the f64→i128
+/// `__fixdfti` call for |v·2⁴⁰| < 2⁶³ (|v| < 8.4·10⁶, every sample a sane scene
+/// produces): truncate to i64 (one instruction), and the fractional part
+/// `w − trunc(w)` is exact in f64 (`trunc(w)` lies on `w`'s ulp grid and, below
+/// 2⁶³, converts back without rounding: for |w| ≥ 2⁵² `w` is an integer), so
+/// |frac| ≥ ½ → step away from zero reproduces `round`'s ties-away rule
+/// exactly. Larger values take the general i128 path.
+#[inline]
+fn fixed_one(v: f64) -> i128 {
+    const I64_RANGE: f64 = 9_223_372_036_854_775_808.0; // 2⁶³
+    let w = v * SCALE;
+    if w.abs() < I64_RANGE {
+        let t = w as i64;
+        let frac = w - t as f64;
+        let r = if frac >= 0.5 {
+            t + 1
+        } else if frac <= -0.5 {
+            t - 1
+        } else {
+            t
+        };
+        r as i128
+    } else if v.is_finite() {
+        w.round() as i128
+    } else {
+        0
+    }
+}
+
+/// Why a camera sample was left out of the film.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum BadSample {
+    /// A wavelength's radiance estimate was NaN or infinite, or the
+    /// sample's XYZ lies beyond [`MAX_SAMPLE_XYZ`].
+    NonFinite,
+    /// A wavelength's radiance estimate was negative (a model returned f < 0).
+    Negative,
+}
+
+/// Where the first dropped sample was.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct DroppedAt {
+    /// Pixel column.
+    pub x: u32,
+    /// Pixel row, from the top.
+    pub y: u32,
+    /// Sample index within the pixel.
+    pub sample: u64,
+}
+
+/// Camera samples that were not averaged into the film because their
+/// estimate was non-finite or negative. They count as black (the sample is
+/// still part of the pixel's sample count), so a render with dropped samples
+/// is biased dark there; the count says by how much at most.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Dropped {
+    /// Samples with a NaN or infinite estimate.
+    pub non_finite: u64,
+    /// Samples with a negative estimate.
+    pub negative: u64,
+    /// The first dropped sample: lowest sample index, then row-major pixel order.
+    pub first: Option<DroppedAt>,
+}
+
+impl Dropped {
+    /// All dropped samples.
+    pub fn total(&self) -> u64 {
+        self.non_finite.saturating_add(self.negative)
+    }
+
+    /// Counts one dropped sample.
+    pub fn record(&mut self, why: BadSample, x: u32, y: u32, sample: u64) {
+        match why {
+            BadSample::NonFinite => self.non_finite = self.non_finite.saturating_add(1),
+            BadSample::Negative => self.negative = self.negative.saturating_add(1),
+        }
+        self.keep_first(DroppedAt { x, y, sample });
+    }
+
+    /// Adds another count (another tile, pass or film).
+    pub fn add(&mut self, other: &Dropped) {
+        self.non_finite = self.non_finite.saturating_add(other.non_finite);
+        self.negative = self.negative.saturating_add(other.negative);
+        if let Some(at) = other.first {
+            self.keep_first(at);
+        }
+    }
+
+    fn keep_first(&mut self, at: DroppedAt) {
+        let key = |a: &DroppedAt| (a.sample, a.y, a.x);
+        if self.first.is_none_or(|f| key(&at) < key(&f)) {
+            self.first = Some(at);
+        }
+    }
+}
+
+impl fmt::Display for Dropped {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(
+            f,
+            "{} sample(s) dropped ({} non-finite or beyond the film's range, {} negative)",
+            self.total(),
+            self.non_finite,
+            self.negative
+        )?;
+        if let Some(a) = self.first {
+            write!(f, ", first at pixel ({}, {}) sample {}", a.x, a.y, a.sample)?;
+        }
+        write!(
+            f,
+            "; they count as black, so the image is too dark where they fell"
+        )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn fast_fixed_point_matches_round_as_i128_bit_for_bit() {
+        let reference = |v: f64| {
+            if v.is_finite() {
+                (v * SCALE).round() as i128
+            } else {
+                0
+            }
+        };
+        let mut vals = vec![
+            0.0,
+            -0.0,
+            f64::NAN,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::MAX,
+            f64::MIN_POSITIVE,
+            1e300,
+            -1e300,
+        ];
+        // Ties and their neighbours, at every scale up to and beyond 2⁶³.
+        for e in -60..80 {
+            for m in [0.5, 1.0, 1.5, 2.5, 0.49999999999999994, 3.0] {
+                let w = m * 2f64.powi(e);
+                for w in [w, w.next_up(), w.next_down()] {
+                    let v = w / SCALE;
+                    vals.extend([v, -v]);
+                }
+            }
+        }
+        // Random bit patterns of every exponent.
+        let mut x = 0x9e37_79b9_7f4a_7c15u64;
+        for _ in 0..200_000 {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            vals.push(f64::from_bits(x));
+            vals.push(f64::from_bits(x >> 3)); // biased toward small exponents
+        }
+        for v in vals {
+            assert_eq!(fixed_one(v), reference(v), "v = {v:e}");
+        }
+    }
+}
