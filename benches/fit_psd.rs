@@ -75,7 +75,7 @@ fn bench(c: &mut Criterion) {
             let r = psd::radial(black_box(&map)).unwrap();
             let zmax = *r.zeta.last().unwrap();
             kc::fit(
-                kc::Form::Radial2d,
+                kc::PsdForm::Radial2d,
                 &r.zeta,
                 &r.p,
                 r.zeta[2] * 0.999,

@@ -351,7 +351,7 @@ fn ghs_with_kc_departs_on_a_binary_surface() {
     let first = binary(70);
     let r = fit::psd::radial(&first).unwrap();
     let fitted = fit::kc::fit_weighted(
-        fit::kc::Form::Radial2d,
+        fit::kc::PsdForm::Radial2d,
         &r.zeta,
         &r.p,
         Some(&r.count),

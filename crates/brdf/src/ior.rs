@@ -204,7 +204,7 @@ pub enum Ior {
 /// Smallest n of a user-given index (constant or table).
 pub const N_MIN: f64 = 1e-6;
 /// Largest n and κ of a user-given index: past it the Fresnel arithmetic
-/// loses the reflectance (n = κ = 1e77 gave 0 for a mirror).
+/// loses the reflectance (n = κ = 1e77 gives 0 for a mirror).
 pub const NK_MAX: f64 = 1e6;
 
 /// Whether (n, κ) lies within the bounds every user-given index obeys.

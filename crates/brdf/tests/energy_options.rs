@@ -1,5 +1,5 @@
 //! The energy-conserving options keep their promise over the accepted
-//! domain (issue 35, item 4): with R ≡ 1 the directional albedo — specular
+//! domain: with R ≡ 1 the directional albedo — specular
 //! weight plus ∫ f cosθo dωo by the independent adaptive cubature of
 //! `brdf::testing::albedo_quadrature`, which never calls the model's own
 //! tables or quadrature — is ≤ 1 + 1e−3 at every θi ≤ 89.5°:
@@ -11,8 +11,9 @@
 //! σ 0–10 µm, Lc 0.03–1000 µm, γ 1.001 (full: 1.05)–100, β 1e−4–10,
 //! λ 360–830 nm, θi 0–89.5° (a third of the angles beyond 85°), with fixed
 //! seeds. CI runs a few dozen materials per model; `cargo test --release -p
-//! brdf --test energy_options -- --ignored` runs 10× more. The three points of
-//! the issue are pinned below.
+//! brdf --test energy_options -- --ignored` runs 10× more. Three grazing
+//! points where tables that stop short of grazing incidence exceed 1 are
+//! pinned below.
 
 use brdf::statistics::KcPsd;
 use brdf::statistics::kc::{GAMMA_MIN, GAMMA_MIN_FULL};
@@ -193,10 +194,10 @@ fn energy_options_never_exceed_one_long() {
     two_scale_suite(160, 13);
 }
 
-/// The issue's three points: before the tables were built for grazing
-/// incidence they gave 1.026 (Krywonos), 1.007 (σ_rel) and 1.035 (two-scale).
+/// Three points near grazing incidence where tables that stop short of it
+/// give albedos of 1.026 (Krywonos), 1.007 (σ_rel) and 1.035 (two-scale).
 #[test]
-fn the_three_points_of_the_issue() {
+fn three_grazing_points_conserve_energy() {
     let s808 = KcPsd::new(0.808, 10.0, 3.5).unwrap();
     for energy in [Energy::Krywonos, Energy::SigmaRel] {
         let (m, _) = ghs(s808, true, energy);

@@ -112,7 +112,7 @@ fn normal_incidence_reflectance_matches_data_readme() {
 
 #[test]
 fn copper_and_aluminium_known_values() {
-    // The anchors: Cu at 550 nm R ≈ 0.62, Al ≈ 0.91 (normal incidence).
+    // Known values: Cu at 550 nm R ≈ 0.62, Al ≈ 0.91 (normal incidence).
     let cu = Fresnel::conductor(Ior::metal(Metal::Cu)).reflectance(1.0, 550.0);
     let al = Fresnel::conductor(Ior::metal(Metal::Al)).reflectance(1.0, 550.0);
     assert!((cu - 0.62).abs() < 0.01, "Cu: {cu}");

@@ -1,11 +1,11 @@
 //! GHS with the Rayleigh–Rice polarisation factor (`polarization_factor =
 //! Q`, physics.md §13.2):
 //!
-//! * the scalar SSA relates to Rayleigh–Rice exactly as the issue measured,
+//! * the scalar SSA relates to Rayleigh–Rice exactly by three factors,
 //!   lustre/RR = [(1 − e^{−g})/g]·[(cosθi + cosθo)²/(4 cosθi cosθo)]·[R(θd)/Q];
 //! * with Q the SSA and the full GHS tend to Rayleigh–Rice as g → 0, for every
 //!   polarisation, metal and geometry tried (the deviation shrinks with g);
-//! * the default (`R`) is today's model, bit for bit;
+//! * the default (`R`) is the scalar model, bit for bit;
 //! * reciprocity (unpolarised), and the energy options with Q: with the
 //!   perfect conductor (`Fresnel::One`) `krywonos` gives albedo 1.
 
@@ -86,7 +86,7 @@ fn scalar_ssa_over_rayleigh_rice_is_the_three_factors() {
         }
         assert!(worst < 1e-12, "{f:?}: {worst:e}");
     }
-    // The issue's grazing numbers: backscatter θi = θo = 89° (φo = 0) and
+    // Grazing geometries: backscatter θi = θo = 89° (φo = 0) and
     // forward scatter 89° → 60°, at 550 nm.
     let ratio = |f: &Fresnel, wi, wo| {
         GhsSsa::new(psd, f.clone()).unwrap().eval(wi, wo, lam)

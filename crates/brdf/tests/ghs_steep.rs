@@ -6,7 +6,8 @@
 //!   quadrature is above its own round-off floor;
 //! * the deep tail at small g against the closed form e^{−g}·g·p₁(u)
 //!   (exact to O(g²), which no transform resolves there);
-//! * the issue-13 reproducer (γ = 12, 31° off the mirror gave 2.8e17 sr⁻¹).
+//! * γ = 12, 31° off the mirror, where a table whose steps are not bounded
+//!   interpolates to 2.8e17 sr⁻¹.
 
 use std::f64::consts::PI;
 
@@ -126,7 +127,7 @@ fn deep_tail_at_small_g_is_the_first_order_term() {
 }
 
 #[test]
-fn issue_13_reproducer_is_the_transform() {
+fn steep_tail_off_the_mirror_is_the_transform() {
     // {"model":"ghs","fresnel":"none","sigma_um":0.01,"lc_um":1.667,
     //  "gamma":12,"lambda_nm":550,"theta_i_deg":30,"theta_o_deg":61}
     let psd = KcPsd::new(0.01, 1.667, 12.0).unwrap();

@@ -1,5 +1,5 @@
-//! The default full-GHS table resolution holds S̃ to ≤ 1e−3 relative (the
-//! issue's bound) over g ∈ [1e−4, 1e4] and u ≤ 2k(360 nm)Lc, measured
+//! The default full-GHS table resolution holds S̃ to ≤ 1e−3 relative
+//! over g ∈ [1e−4, 1e4] and u ≤ 2k(360 nm)Lc, measured
 //! against freshly transformed rows half-way between the table's rows and at
 //! quarter points between its columns, for values ≥ 1e−9 of the peak (below
 //! that both generators sit at their ~1e−18 absolute round-off floor).

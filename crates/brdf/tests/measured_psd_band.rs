@@ -1,11 +1,11 @@
-//! The full GHS of a measured PSD that covers only a scan's band (issue 35,
-//! item 5). `TabulatedPsd` continues the samples below the band by the
+//! The full GHS of a measured PSD that covers only a scan's band.
+//! `TabulatedPsd` continues the samples below the band by the
 //! K-correlation roll-off that matches the first segment in value and slope,
 //! and above it by the last segment's power law; with that (C¹) continuation
 //! the S̃ table agrees with the direct Hankel transform of the same
 //! covariance (`numerics::hankel::s_tilde_direct`, physics.md §4.1) to 2e−3
-//! wherever S̃ is above 1e−3 of its peak — held flat below the band (the
-//! earlier rule) they disagreed by up to 26 %.
+//! wherever S̃ is above 1e−3 of its peak — held flat below the band they
+//! would disagree by up to 26 %.
 
 use std::f64::consts::PI;
 

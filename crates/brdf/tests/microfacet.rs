@@ -528,7 +528,7 @@ fn never_negative_nan_or_infinite() {
                         );
                         assert!(s.pdf.is_finite() && s.pdf > 0.0 && !s.is_delta, "{s:?}");
                         assert!(s.wo.z > 0.0 && i.z > 0.0, "{s:?}");
-                        // θi ≤ 89.99°, the range the issue asks for; beyond it see
+                        // θi ≤ 89.99°; beyond it see
                         // `sampled_pdf_positive_within_1e9_rad_of_grazing`.
                         if i.z >= 89.99f64.to_radians().cos() {
                             assert!(
@@ -544,11 +544,10 @@ fn never_negative_nan_or_infinite() {
 }
 
 /// At θi = 90° − 1e-9 rad and α = 1e-4 a sample near the mirror direction
-/// gets pdf() = 0 although eval > 0: pdf() computes i·h as the dot product
-/// with the normalised h = (i + o)/|i + o|, whose tangential components are a
-/// cancelling difference, so i·h (≈ 3e-9) comes out ≤ 0. Using the exact
-/// identity i·h = |i + o|/2, which the model now uses, fixes it: this is the
-/// regression test.
+/// must get pdf() > 0 where eval > 0. i·h as the dot product with the
+/// normalised h = (i + o)/|i + o|, whose tangential components are a
+/// cancelling difference, comes out ≤ 0 there (it is ≈ 3e-9), so the model
+/// uses the exact identity i·h = |i + o|/2; this test holds it to that.
 #[test]
 fn sampled_pdf_positive_within_1e9_rad_of_grazing() {
     let wi = spherical(PI / 2.0 - 1e-9, 0.7);

@@ -157,7 +157,7 @@ fn smooth_stress_long() {
     smooth_suite(LONG_CASES);
 }
 
-/// σ 0.1 nm…10 µm, Lc 0.01…1000 µm, γ 1.001…10 (issue 6's ranges); with
+/// σ 0.1 nm…10 µm, Lc 0.01…1000 µm, γ 1.001…10; with
 /// λ ≥ 360 nm and cosθ ≤ 1 that spans g = (kσ(cosθi + cosθo))² from 0 to 1.2e5.
 fn kc_params() -> impl Strategy<Value = (f64, f64, f64)> {
     (

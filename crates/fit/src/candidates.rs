@@ -371,7 +371,7 @@ fn tail_slope(tx: &[f64], ty: &[f64]) -> f64 {
 const TWO_SCALE_LC_MAX_UM: f64 = kc::LC_MAX_UM;
 
 /// The two-scale model of one split: its β and residual K-correlation fit, in range.
-fn two_scale(t: &crate::two_scale::TwoScale, fresnel: &FresnelSpec) -> Candidate {
+fn two_scale(t: &crate::two_scale::Split, fresnel: &FresnelSpec) -> Candidate {
     let m = t.multiple;
     let mut c = blank(Family::TwoScale, String::new());
     c.key = format!("{}_{m}", Family::TwoScale.name());

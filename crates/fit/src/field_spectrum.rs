@@ -329,8 +329,7 @@ mod too_small_tests {
     use super::*;
 
     /// A map too small for the explicit BRDF is refused with its size and
-    /// what to do about it (`judge` on a 3 × 4 text export said what was
-    /// wrong but not how to fix it).
+    /// what to do about it (a 3 × 4 text export).
     #[test]
     fn a_map_too_small_is_refused_with_its_size_and_the_fix() {
         let t = Topography {

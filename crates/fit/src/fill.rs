@@ -5,8 +5,8 @@
 //! The discrete Laplace equation over the holes is a sparse symmetric positive-definite
 //! system (every hole region touches a valid point), solved by conjugate gradients with
 //! a Jacobi preconditioner: it converges in about as many iterations as the widest hole
-//! is wide, where relaxation sweeps need its square and stopped short on a scan with 89 %
-//! of its points invalid (Sq 7 % below SurfaceTopography's).
+//! is wide, where relaxation sweeps need its square and, stopped at an affordable count,
+//! leave a scan with 89 % of its points invalid with Sq 7 % below SurfaceTopography's.
 
 use crate::{FitError, Topography};
 

@@ -62,9 +62,10 @@ impl KcParams {
     }
 }
 
-/// Which form of the model a fit uses.
+/// Which form of the model a fit uses: the 1D profile PSD or the radially averaged 2D
+/// PSD.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Form {
+pub enum PsdForm {
     /// One-sided 1D PSD of profiles or x-lines, x = f [cycles/m], P [m³].
     Profile1d,
     /// Radially averaged 2D PSD, x = ζ [rad/m], P [m⁴].
@@ -145,7 +146,7 @@ pub struct KcFit {
     /// Power law through the top half (in log abscissa) of the fitted band.
     pub asymptote: Option<PowerLaw>,
     /// Form fitted.
-    pub form: Form,
+    pub form: PsdForm,
 }
 
 fn ln_norm_1d(gamma: f64) -> f64 {
@@ -153,10 +154,10 @@ fn ln_norm_1d(gamma: f64) -> f64 {
 }
 
 /// `ln P_model − 2 ln σ` for given ℓ (B or Lc) and γ, split as `c(γ) + a·ln ℓ − e(γ)·ln(1+u²)`.
-fn shape_consts(form: Form, gamma: f64) -> (f64, f64, f64) {
+fn shape_consts(form: PsdForm, gamma: f64) -> (f64, f64, f64) {
     match form {
-        Form::Profile1d => (ln_norm_1d(gamma), 1.0, gamma / 2.0),
-        Form::Radial2d => (
+        PsdForm::Profile1d => (ln_norm_1d(gamma), 1.0, gamma / 2.0),
+        PsdForm::Radial2d => (
             (gamma - 1.0).ln() - (2.0 * PI).ln(),
             2.0,
             (gamma + 1.0) / 2.0,
@@ -164,22 +165,22 @@ fn shape_consts(form: Form, gamma: f64) -> (f64, f64, f64) {
     }
 }
 
-fn dshape_dgamma(form: Form, gamma: f64) -> (f64, f64) {
+fn dshape_dgamma(form: PsdForm, gamma: f64) -> (f64, f64) {
     // (d c/dγ, d e/dγ)
     match form {
-        Form::Profile1d => {
+        PsdForm::Profile1d => {
             let h = 1e-5;
             (
                 (ln_norm_1d(gamma + h) - ln_norm_1d(gamma - h)) / (2.0 * h),
                 0.5,
             )
         }
-        Form::Radial2d => (1.0 / (gamma - 1.0), 0.5),
+        PsdForm::Radial2d => (1.0 / (gamma - 1.0), 0.5),
     }
 }
 
 struct Problem<'a> {
-    form: Form,
+    form: PsdForm,
     lx: &'a [f64],
     ly: &'a [f64],
     sw: &'a [f64],
@@ -280,20 +281,101 @@ impl LeastSquaresProblem<f64, Dyn, U3> for Problem<'_> {
 
 /// Fit the K-correlation `form` to `(x, p)` restricted to `x_min ≤ x ≤ x_max`.
 /// Non-positive or non-finite points are ignored.
-pub fn fit(form: Form, x: &[f64], p: &[f64], x_min: f64, x_max: f64) -> Result<KcFit, FitError> {
+pub fn fit(form: PsdForm, x: &[f64], p: &[f64], x_min: f64, x_max: f64) -> Result<KcFit, FitError> {
     fit_weighted(form, x, p, None, x_min, x_max)
 }
 
 /// As [`fit`], with per-point weights (e.g. the number of periodogram samples averaged in
 /// a radial bin: the variance of a log-averaged periodogram is ≈ 1/count).
 pub fn fit_weighted(
-    form: Form,
+    form: PsdForm,
     x: &[f64],
     p: &[f64],
     weights: Option<&[f64]>,
     x_min: f64,
     x_max: f64,
 ) -> Result<KcFit, FitError> {
+    let (lx, ly, lw) = log_points(x, p, weights, x_min, x_max);
+    let n = lx.len();
+    if n < 6 {
+        return Err(FitError::data(
+            "K-correlation fit",
+            format!("only {n} usable PSD points in the fit range; need ≥ 6"),
+        ));
+    }
+    // Normalise weights to mean 1 so residual scales stay comparable.
+    let wmean = lw.iter().sum::<f64>() / n as f64;
+    let sw: Vec<f64> = lw.iter().map(|w| (w / wmean).sqrt()).collect();
+    let lw: Vec<f64> = lw.iter().map(|w| w / wmean).collect();
+    let (xlo, xhi) = (lx[0].min(lx[n - 1]).exp(), lx[0].max(lx[n - 1]).exp());
+    let ll = ln_length_bounds(form, xlo, xhi)?;
+    let gb = GAMMA_BOUNDS;
+    let mut problem = Problem {
+        form,
+        lx: &lx,
+        ly: &ly,
+        sw: &sw,
+        q: Vector3::zeros(),
+        ll,
+        gb,
+    };
+    let (ln_sigma, l, g) = grid_start(form, &lx, &ly, &lw, ll, gb);
+    problem.q = problem.pack(ln_sigma, l, g);
+    let (problem, res, converged) = refine(problem)?;
+    let (lns, l, g) = problem.unpack();
+    let ssr = res.norm_squared();
+    let sigma = lns.exp();
+    let lc = match form {
+        PsdForm::Profile1d => l / (2.0 * PI),
+        PsdForm::Radial2d => l,
+    };
+    // On a bound: within 0.1 % of the transformed range.
+    let at = |v: f64, (a, b): (f64, f64)| (v - a) <= 1e-3 * (b - a) || (b - v) <= 1e-3 * (b - a);
+    let reason = if !converged {
+        Some(Degeneracy::NotConverged)
+    } else if at(g, gb) {
+        Some(Degeneracy::GammaAtBound)
+    } else if at(l.ln(), ll) {
+        Some(Degeneracy::LengthAtBound)
+    } else if g > GAMMA_STEEP {
+        Some(Degeneracy::Steep)
+    } else {
+        None
+    };
+    let stderr = match reason {
+        None => standard_errors(&problem, ssr, sigma, lc),
+        Some(_) => KcParams {
+            sigma: f64::NAN,
+            lc: f64::NAN,
+            gamma: f64::NAN,
+        },
+    };
+    Ok(KcFit {
+        params: KcParams {
+            sigma,
+            lc,
+            gamma: g,
+        },
+        stderr,
+        rms_log_residual: (ssr / n as f64).sqrt(),
+        points: n,
+        range: (xlo, xhi),
+        degenerate: reason.is_some(),
+        reason,
+        asymptote: power_law(&lx, &ly),
+        form,
+    })
+}
+
+/// `(ln x, ln p, weight)` of the points in `[x_min, x_max]` with positive finite x, p and
+/// weight (a missing weight is 0).
+fn log_points(
+    x: &[f64],
+    p: &[f64],
+    weights: Option<&[f64]>,
+    x_min: f64,
+    x_max: f64,
+) -> (Vec<f64>, Vec<f64>, Vec<f64>) {
     let mut lx = Vec::new();
     let mut ly = Vec::new();
     let mut lw = Vec::new();
@@ -313,24 +395,15 @@ pub fn fit_weighted(
             lw.push(w);
         }
     }
-    let n = lx.len();
-    if n < 6 {
-        return Err(FitError::data(
-            "K-correlation fit",
-            format!("only {n} usable PSD points in the fit range; need ≥ 6"),
-        ));
-    }
-    // Normalise weights to mean 1 so residual scales stay comparable.
-    let wmean = lw.iter().sum::<f64>() / n as f64;
-    let sw: Vec<f64> = lw.iter().map(|w| (w / wmean).sqrt()).collect();
-    let lw: Vec<f64> = lw.iter().map(|w| w / wmean).collect();
-    let (xlo, xhi) = (lx[0].min(lx[n - 1]).exp(), lx[0].max(lx[n - 1]).exp());
+    (lx, ly, lw)
+}
 
-    // Bounds: lengths within 10³ of the band and in the renderer's Lc range, γ in the
-    // renderer's range.
+/// Bounds of ln ℓ for the band `xlo … xhi`: lengths within 10³ of the band and in the
+/// renderer's Lc range.
+fn ln_length_bounds(form: PsdForm, xlo: f64, xhi: f64) -> Result<(f64, f64), FitError> {
     let to_l = |lc: f64| match form {
-        Form::Profile1d => 2.0 * PI * lc,
-        Form::Radial2d => lc,
+        PsdForm::Profile1d => 2.0 * PI * lc,
+        PsdForm::Radial2d => lc,
     };
     let l_lo = (1e-3 / xhi).max(to_l(LC_BOUNDS_M.0));
     let l_hi = (1e3 / xlo).min(to_l(LC_BOUNDS_M.1));
@@ -340,9 +413,20 @@ pub fn fit_weighted(
             format!("the band {xlo:e}…{xhi:e} lies outside the lengths the renderer accepts"),
         ));
     }
-    let ll = (l_lo.ln(), l_hi.ln());
-    let gb = GAMMA_BOUNDS;
-    // Profiled grid search inside the bounds: σ enters additively in log space.
+    Ok((l_lo.ln(), l_hi.ln()))
+}
+
+/// The starting point `(ln σ, ℓ, γ)` of the least-squares fit: a grid search over ℓ and γ
+/// inside the bounds, with σ profiled out (it enters additively in log space).
+fn grid_start(
+    form: PsdForm,
+    lx: &[f64],
+    ly: &[f64],
+    lw: &[f64],
+    ll: (f64, f64),
+    gb: (f64, f64),
+) -> (f64, f64, f64) {
+    let n = lx.len();
     let mut best = (f64::INFINITY, 0.0, 0.0, 0.0);
     let nl = 60;
     let ng = 48;
@@ -357,14 +441,14 @@ pub fn fit_weighted(
             let mean = ly
                 .iter()
                 .zip(&lg)
-                .zip(&lw)
+                .zip(lw)
                 .map(|((y, t), w)| w * (y - (base - e * t)))
                 .sum::<f64>()
                 / n as f64;
             let ssr: f64 = ly
                 .iter()
                 .zip(&lg)
-                .zip(&lw)
+                .zip(lw)
                 .map(|((y, t), w)| w * (y - (base - e * t) - mean).powi(2))
                 .sum();
             if ssr < best.0 {
@@ -372,16 +456,13 @@ pub fn fit_weighted(
             }
         }
     }
-    let mut problem = Problem {
-        form,
-        lx: &lx,
-        ly: &ly,
-        sw: &sw,
-        q: Vector3::zeros(),
-        ll,
-        gb,
-    };
-    problem.q = problem.pack(best.1, best.2, best.3);
+    (best.1, best.2, best.3)
+}
+
+/// Levenberg–Marquardt from the problem's start; the fitted problem, its residuals and
+/// whether it converged. A fit that leaves the region where the model is finite keeps the
+/// start (not converged).
+fn refine(problem: Problem<'_>) -> Result<(Problem<'_>, DVector<f64>, bool), FitError> {
     let start = problem.q;
     let (mut problem, report) = LevenbergMarquardt::new()
         .with_patience(400)
@@ -390,7 +471,6 @@ pub fn fit_weighted(
     let res = match problem.residuals() {
         Some(r) => r,
         None => {
-            // Outside the region where the model is finite: keep the grid optimum.
             converged = false;
             problem.q = start;
             problem.residuals().ok_or_else(|| {
@@ -401,60 +481,31 @@ pub fn fit_weighted(
             })?
         }
     };
-    let (lns, l, g) = problem.unpack();
-    let ssr = res.norm_squared();
-    let sigma = lns.exp();
-    let lc = match form {
-        Form::Profile1d => l / (2.0 * PI),
-        Form::Radial2d => l,
-    };
-    // On a bound: within 0.1 % of the transformed range.
-    let at = |v: f64, (a, b): (f64, f64)| (v - a) <= 1e-3 * (b - a) || (b - v) <= 1e-3 * (b - a);
-    let reason = if !converged {
-        Some(Degeneracy::NotConverged)
-    } else if at(g, gb) {
-        Some(Degeneracy::GammaAtBound)
-    } else if at(l.ln(), ll) {
-        Some(Degeneracy::LengthAtBound)
-    } else if g > GAMMA_STEEP {
-        Some(Degeneracy::Steep)
-    } else {
-        None
-    };
-    let mut stderr = KcParams {
-        sigma: f64::NAN,
-        lc: f64::NAN,
-        gamma: f64::NAN,
-    };
-    if reason.is_none()
-        && let Some(j) = problem.jacobian()
+    Ok((problem, res, converged))
+}
+
+/// Standard errors of σ, Lc and γ from the Jacobian at the optimum (NaN where it is
+/// singular or there are no more points than parameters).
+fn standard_errors(problem: &Problem<'_>, ssr: f64, sigma: f64, lc: f64) -> KcParams {
+    let n = problem.lx.len();
+    if let Some(j) = problem.jacobian()
         && n > 3
         && let Some(inv) = (j.transpose() * &j).try_inverse()
     {
         let (_, _, _, dl, dg) = problem.unpack_full();
         let s2 = ssr / (n - 3) as f64;
         let var = |i: usize| (s2 * inv[(i, i)]).max(0.0).sqrt();
-        stderr = KcParams {
+        return KcParams {
             sigma: sigma * var(0),
             lc: lc * dl * var(1),
             gamma: dg * var(2),
         };
     }
-    Ok(KcFit {
-        params: KcParams {
-            sigma,
-            lc,
-            gamma: g,
-        },
-        stderr,
-        rms_log_residual: (ssr / n as f64).sqrt(),
-        points: n,
-        range: (xlo, xhi),
-        degenerate: reason.is_some(),
-        reason,
-        asymptote: power_law(&lx, &ly),
-        form,
-    })
+    KcParams {
+        sigma: f64::NAN,
+        lc: f64::NAN,
+        gamma: f64::NAN,
+    }
 }
 
 /// Power law through the points in the upper half of the log-abscissa range (at least
@@ -496,7 +547,7 @@ fn power_law(lx: &[f64], ly: &[f64]) -> Option<PowerLaw> {
 /// Parameters when there are too few PSD points to fit: σ = Sq, γ = 4, and Lc from the
 /// K-correlation slope variance `2σ²/(Lc²(γ − 3))` = Sdq² (or the scan length when the
 /// surface is flat); clamped to the renderer's ranges.
-pub fn estimate_from_stats(sq: f64, rms_slope: f64, scan_length: f64, form: Form) -> KcFit {
+pub fn estimate_from_stats(sq: f64, rms_slope: f64, scan_length: f64, form: PsdForm) -> KcFit {
     let gamma = 4.0;
     let lc = if rms_slope > 0.0 && sq > 0.0 {
         (2.0f64 / (gamma - 3.0)).sqrt() * sq / rms_slope
@@ -532,7 +583,7 @@ pub fn fit_bins(psd: &crate::psd::Psd1d, k_lo: usize, k_hi: usize) -> Result<KcF
         return Err(FitError::data("K-correlation fit", "empty bin range"));
     }
     fit(
-        Form::Profile1d,
+        PsdForm::Profile1d,
         &psd.f,
         &psd.p,
         psd.f[k_lo] * (1.0 - 1e-9),

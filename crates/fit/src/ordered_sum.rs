@@ -3,8 +3,8 @@
 //!
 //! A rayon `fold` + `reduce` splits the work wherever work stealing happens
 //! to split it, so floating-point sums, and everything fitted from them,
-//! changed in the last bits from run to run and with `RAYON_NUM_THREADS`; a
-//! KC fit then moved by ~10⁻⁸ relative, enough to make `lustre fit` and
+//! change in the last bits from run to run and with `RAYON_NUM_THREADS`; a
+//! KC fit then moves by ~10⁻⁸ relative, enough to make `lustre fit` and
 //! `lustre judge` not reproducible. Here the items (rows, columns) are
 //! grouped in blocks of a fixed size, each block is summed in item order on
 //! whichever thread takes it, and the block results come back in block order

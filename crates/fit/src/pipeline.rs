@@ -12,10 +12,10 @@ use crate::io::Units;
 use crate::kc::{self, KcFit};
 use crate::level::{self, Form, Level};
 use crate::ndf::{self, Ndf};
-use crate::psd::{self, Psd1d, RadialPsd, WelchOptions};
+use crate::psd::{self, Psd1d, RadialPsdTable, WelchOptions};
 use crate::quality::{self, InvalidPolicy};
 use crate::stats::{self, Stats};
-use crate::two_scale::{self, TwoScale};
+use crate::two_scale;
 use crate::{FitError, Topography, fill};
 use std::f64::consts::PI;
 
@@ -118,13 +118,13 @@ pub struct Analysis {
     /// 2D K-correlation fit to the radial PSD (maps only).
     pub kc_2d: Option<KcFit>,
     /// Radially averaged 2D PSD of the map.
-    pub radial: Option<RadialPsd>,
+    pub radial: Option<RadialPsdTable>,
     /// Tabulated isotropic 2D PSD for the measured-PSD model, and how it was made.
-    pub table: (RadialPsd, &'static str),
+    pub table: (RadialPsdTable, &'static str),
     /// NDF fits.
     pub ndf: NdfFits,
     /// Two-scale splits, one per cutoff that could be computed.
-    pub two_scale: Vec<TwoScale>,
+    pub two_scale: Vec<two_scale::Split>,
     /// Direction dependence (maps only).
     pub anisotropy: Option<Anisotropy>,
     /// Parts skipped or degraded, in words.
@@ -146,7 +146,7 @@ pub struct Prepared {
 
 /// Largest fraction of invalid points that is filled. Harmonic filling is smooth, so filled
 /// points carry no roughness: Sq falls roughly as `√(1 − fraction)` on a rough surface (a
-/// 91 % invalid map gave half the true Sq) and the fit is of the filling, not of the
+/// 91 % invalid map gives half the true Sq) and the fit is of the filling, not of the
 /// surface. Past one half the invented part would outweigh the measured one, which no
 /// warning can repair, so the map is refused.
 pub const MAX_INVALID_FRACTION: f64 = 0.5;
@@ -346,14 +346,19 @@ pub fn kc_of(t: &Topography, stats: &Stats, p: &Psd1d) -> KcFit {
     let f_lo = p.f.get(3).copied().unwrap_or(f64::NAN);
     let f_hi = p.f.get(k_hi).copied().unwrap_or(f64::NAN);
     kc::fit(
-        kc::Form::Profile1d,
+        kc::PsdForm::Profile1d,
         &p.f,
         &p.p,
         f_lo * (1.0 - 1e-9),
         f_hi * (1.0 + 1e-9),
     )
     .unwrap_or_else(|_| {
-        kc::estimate_from_stats(stats.sq, stats.rms_slope(), t.size_x(), kc::Form::Profile1d)
+        kc::estimate_from_stats(
+            stats.sq,
+            stats.rms_slope(),
+            t.size_x(),
+            kc::PsdForm::Profile1d,
+        )
     })
 }
 
@@ -378,37 +383,16 @@ pub fn analyse(
     let nseg = line_psd.f.len().saturating_sub(1) * 2;
     let k_hi = (nseg / 4).max(4);
     let f_hi = line_psd.f[k_hi.min(line_psd.f.len() - 1)];
-    let f_merge = opts.merge_cutoff / (2.0 * PI);
-
-    let (stylus_psd, fit_psd, f_lo) = match stylus {
-        Some(st) => {
-            let stylus_err = |e| FitError::Stylus(Box::new(e));
-            let st = prepare_with(st, None).map_err(stylus_err)?.scan;
-            let nperseg = (st.nx / opts.stylus_segments.max(1)).max(8).min(st.nx);
-            let sp = psd::welch(
-                &st,
-                &WelchOptions {
-                    nperseg: Some(nperseg),
-                    noverlap: None,
-                },
-            )
-            .map_err(stylus_err)?;
-            let f_lo = sp.f.get(3).copied().unwrap_or(0.0);
-            let merged = psd::merge(&sp, &line_psd, f_merge);
-            (Some(sp), merged, f_lo)
-        }
-        None => (
-            None,
-            line_psd.clone(),
-            line_psd.f.get(3).copied().unwrap_or(0.0),
-        ),
-    };
+    let (stylus_psd, fit_psd, f_lo) = fit_psd(&line_psd, stylus, opts)?;
+    // The band every K-correlation fit of the line PSD uses, widened by rounding so that
+    // its end bins are inside.
+    let band = (f_lo * (1.0 - 1e-9), f_hi * (1.0 + 1e-9));
     let kc = kc::fit(
-        kc::Form::Profile1d,
+        kc::PsdForm::Profile1d,
         &fit_psd.f,
         &fit_psd.p,
-        f_lo * (1.0 - 1e-9),
-        f_hi * (1.0 + 1e-9),
+        band.0,
+        band.1,
     )
     .unwrap_or_else(|e| {
         notes.push(format!("{e}"));
@@ -416,10 +400,9 @@ pub fn analyse(
             stats.sq,
             stats.rms_slope(),
             scan.size_x(),
-            kc::Form::Profile1d,
+            kc::PsdForm::Profile1d,
         )
     });
-
     let radial = if scan.is_profile() || scan.nx < 8 || scan.ny < 8 {
         if !scan.is_profile() {
             notes.push("map smaller than 8 × 8: no radial 2D PSD".into());
@@ -428,113 +411,22 @@ pub fn analyse(
     } else {
         Some(psd::radial(&scan)?)
     };
-    let kc_2d = match &radial {
-        Some(r) if r.zeta.len() > 8 => {
-            let zmax = r.zeta[r.zeta.len() - 1];
-            kc::fit_weighted(
-                kc::Form::Radial2d,
-                &r.zeta,
-                &r.p,
-                Some(&r.count),
-                r.zeta[2] * (1.0 - 1e-9),
-                zmax / 2.0,
-            )
-            .ok()
-        }
-        _ => None,
-    };
-
-    let table = match (&radial, &stylus_psd) {
-        (Some(r), None) => (r.clone(), "radially averaged 2D PSD of the map"),
-        (Some(r), Some(sp)) => {
-            let low = psd::radial_from_profile(sp, 4);
-            let mut t = RadialPsd {
-                zeta: Vec::new(),
-                p: Vec::new(),
-                count: Vec::new(),
-            };
-            for (z, p) in low
-                .zeta
-                .iter()
-                .zip(&low.p)
-                .filter(|(z, _)| **z < opts.merge_cutoff)
-            {
-                t.zeta.push(*z);
-                t.p.push(*p);
-            }
-            for (z, p) in r
-                .zeta
-                .iter()
-                .zip(&r.p)
-                .filter(|(z, _)| **z >= opts.merge_cutoff)
-            {
-                t.zeta.push(*z);
-                t.p.push(*p);
-            }
-            (
-                t,
-                "stylus 1D PSD converted by the local power-law relation below the merge cutoff, radial 2D PSD of the map above",
-            )
-        }
-        (None, _) => (
-            psd::radial_from_profile(&fit_psd, 4),
-            "1D PSD converted to 2D by the local power-law relation (approximate near roll-offs)",
-        ),
-    };
-
-    // Scoped so the slopes (two map-sized arrays) are freed before the two-scale splits.
-    let ndf = {
-        let (sx, sy) = ndf::slopes(&scan);
-        if scan.is_profile() {
-            let smax = 6.0 * stats.rdq_x.max(1e-9);
-            NdfFits {
-                ndf: None,
-                alpha_ggx: ndf::fit_alpha_marginal(&sx, 2 * opts.ndf_bins, smax, ndf::ggx_marginal),
-                alpha_beckmann: ndf::fit_alpha_marginal(
-                    &sx,
-                    2 * opts.ndf_bins,
-                    smax,
-                    ndf::beckmann_marginal,
-                ),
-                alpha_beckmann_moment: 2f64.sqrt() * stats.rdq_x,
-            }
-        } else {
-            let tmax = ndf::theta_max_for(&sx, &sy);
-            let bin = tmax / opts.ndf_bins as f64;
-            let h = ndf::histogram(&sx, &sy, opts.ndf_bins, tmax, opts.ndf_smooth_bins * bin);
-            NdfFits {
-                alpha_ggx: ndf::fit_alpha(&h, ndf::ggx),
-                alpha_beckmann: ndf::fit_alpha(&h, ndf::beckmann),
-                alpha_beckmann_moment: stats.sdq,
-                ndf: Some(h),
-            }
-        }
-    };
-
+    let kc_2d = radial.as_ref().and_then(kc_2d_of);
+    let table = psd_table(
+        radial.as_ref(),
+        stylus_psd.as_ref(),
+        &fit_psd,
+        opts.merge_cutoff,
+    );
+    let ndf = ndf_fits(&scan, &stats, opts);
     let mut splits = Vec::new();
     for &m in &opts.cutoff_multiples {
-        match two_scale::split(
-            &scan,
-            &fit_psd,
-            m,
-            opts.wavelength,
-            (f_lo * (1.0 - 1e-9), f_hi * (1.0 + 1e-9)),
-        ) {
+        match two_scale::split(&scan, &fit_psd, m, opts.wavelength, band) {
             Ok(t) => splits.push(t),
             Err(e) => notes.push(format!("two-scale split at {m} λ skipped: {e}")),
         }
     }
-    let anisotropy = if scan.is_profile() {
-        None
-    } else {
-        match anisotropy::analyse(&scan, line_psd.clone()) {
-            Ok(a) => Some(a),
-            Err(e) => {
-                notes.push(format!("{e}"));
-                None
-            }
-        }
-    };
+    let anisotropy = anisotropy_of(&scan, &line_psd, &mut notes);
     Ok(Analysis {
         scan,
         filled,
@@ -553,6 +445,145 @@ pub fn analyse(
         notes,
         quality,
     })
+}
+
+/// The PSD the material is fitted to, with the stylus PSD it was merged from if any, and
+/// the low end of the fit band [cycles/m]: the scan's line PSD, or the stylus profile's
+/// Welch PSD below the merge cutoff joined to it.
+fn fit_psd(
+    line_psd: &Psd1d,
+    stylus: Option<Topography>,
+    opts: &Options,
+) -> Result<(Option<Psd1d>, Psd1d, f64), FitError> {
+    let Some(st) = stylus else {
+        return Ok((
+            None,
+            line_psd.clone(),
+            line_psd.f.get(3).copied().unwrap_or(0.0),
+        ));
+    };
+    let f_merge = opts.merge_cutoff / (2.0 * PI);
+    let stylus_err = |e| FitError::Stylus(Box::new(e));
+    let st = prepare_with(st, None).map_err(stylus_err)?.scan;
+    let nperseg = (st.nx / opts.stylus_segments.max(1)).max(8).min(st.nx);
+    let sp = psd::welch(
+        &st,
+        &WelchOptions {
+            nperseg: Some(nperseg),
+            noverlap: None,
+        },
+    )
+    .map_err(stylus_err)?;
+    let f_lo = sp.f.get(3).copied().unwrap_or(0.0);
+    let merged = psd::merge(&sp, line_psd, f_merge);
+    Ok((Some(sp), merged, f_lo))
+}
+
+/// The 2D K-correlation fit to the radial PSD, on bins 2 up to half the largest frequency;
+/// `None` for fewer than nine bins or a fit that fails.
+fn kc_2d_of(r: &RadialPsdTable) -> Option<KcFit> {
+    if r.zeta.len() <= 8 {
+        return None;
+    }
+    let zmax = r.zeta[r.zeta.len() - 1];
+    kc::fit_weighted(
+        kc::PsdForm::Radial2d,
+        &r.zeta,
+        &r.p,
+        Some(&r.count),
+        r.zeta[2] * (1.0 - 1e-9),
+        zmax / 2.0,
+    )
+    .ok()
+}
+
+/// The tabulated isotropic 2D PSD of the measured-PSD model, and how it was made: the
+/// map's radial PSD, joined at `merge_cutoff` [rad/m] to the converted stylus PSD below
+/// it when there is one; the converted line PSD for a profile.
+fn psd_table(
+    radial: Option<&RadialPsdTable>,
+    stylus_psd: Option<&Psd1d>,
+    fit_psd: &Psd1d,
+    merge_cutoff: f64,
+) -> (RadialPsdTable, &'static str) {
+    match (radial, stylus_psd) {
+        (Some(r), None) => (r.clone(), "radially averaged 2D PSD of the map"),
+        (Some(r), Some(sp)) => {
+            let low = psd::radial_from_profile(sp, 4);
+            let mut t = RadialPsdTable {
+                zeta: Vec::new(),
+                p: Vec::new(),
+                count: Vec::new(),
+            };
+            for (z, p) in low
+                .zeta
+                .iter()
+                .zip(&low.p)
+                .filter(|(z, _)| **z < merge_cutoff)
+            {
+                t.zeta.push(*z);
+                t.p.push(*p);
+            }
+            for (z, p) in r.zeta.iter().zip(&r.p).filter(|(z, _)| **z >= merge_cutoff) {
+                t.zeta.push(*z);
+                t.p.push(*p);
+            }
+            (
+                t,
+                "stylus 1D PSD converted by the local power-law relation below the merge cutoff, radial 2D PSD of the map above",
+            )
+        }
+        (None, _) => (
+            psd::radial_from_profile(fit_psd, 4),
+            "1D PSD converted to 2D by the local power-law relation (approximate near roll-offs)",
+        ),
+    }
+}
+
+/// GGX and Beckmann α fitted to the slope distribution: the 2D NDF of a map, the slope
+/// marginal of a profile.
+fn ndf_fits(scan: &Topography, stats: &Stats, opts: &Options) -> NdfFits {
+    // The slopes are two map-sized arrays, freed on return before the two-scale splits.
+    let (sx, sy) = ndf::slopes(scan);
+    if scan.is_profile() {
+        let smax = 6.0 * stats.rdq_x.max(1e-9);
+        NdfFits {
+            ndf: None,
+            alpha_ggx: ndf::fit_alpha_marginal(&sx, 2 * opts.ndf_bins, smax, ndf::ggx_marginal),
+            alpha_beckmann: ndf::fit_alpha_marginal(
+                &sx,
+                2 * opts.ndf_bins,
+                smax,
+                ndf::beckmann_marginal,
+            ),
+            alpha_beckmann_moment: 2f64.sqrt() * stats.rdq_x,
+        }
+    } else {
+        let tmax = ndf::theta_max_for(&sx, &sy);
+        let bin = tmax / opts.ndf_bins as f64;
+        let h = ndf::histogram(&sx, &sy, opts.ndf_bins, tmax, opts.ndf_smooth_bins * bin);
+        NdfFits {
+            alpha_ggx: ndf::fit_alpha(&h, ndf::ggx),
+            alpha_beckmann: ndf::fit_alpha(&h, ndf::beckmann),
+            alpha_beckmann_moment: stats.sdq,
+            ndf: Some(h),
+        }
+    }
+}
+
+/// The direction dependence of a map (`None` for a profile, or with a note when it
+/// cannot be computed).
+fn anisotropy_of(
+    scan: &Topography,
+    line_psd: &Psd1d,
+    notes: &mut Vec<String>,
+) -> Option<Anisotropy> {
+    if scan.is_profile() {
+        return None;
+    }
+    anisotropy::analyse(scan, line_psd.clone())
+        .map_err(|e| notes.push(e.to_string()))
+        .ok()
 }
 
 /// What `lustre fit stats` reports: statistics, the line PSD, the material
@@ -606,17 +637,7 @@ pub fn summarise_checked(
             line_psd.f.len()
         ));
     }
-    let anisotropy = if t.is_profile() {
-        None
-    } else {
-        match anisotropy::analyse(t, line_psd.clone()) {
-            Ok(a) => Some(a),
-            Err(e) => {
-                notes.push(e.to_string());
-                None
-            }
-        }
-    };
+    let anisotropy = anisotropy_of(t, &line_psd, &mut notes);
     Ok(Summary {
         prepared,
         stats,

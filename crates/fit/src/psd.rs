@@ -123,7 +123,7 @@ pub fn welch(t: &Topography, opts: &WelchOptions) -> Result<Psd1d, FitError> {
 
 /// A radially averaged isotropic 2D PSD, rad convention.
 #[derive(Debug, Clone, PartialEq)]
-pub struct RadialPsd {
+pub struct RadialPsdTable {
     /// Bin-mean radial frequency ζ [rad/m].
     pub zeta: Vec<f64>,
     /// Mean PSD in the bin [m⁴]; `∫ P d²ζ = σ²`.
@@ -136,7 +136,7 @@ pub struct RadialPsd {
 /// Radially averaged 2D PSD of a NaN-free map (separable Hann window, power-normalised).
 /// Bins have the width of the coarser frequency step; the DC bin is dropped and the last
 /// bin ends at the Nyquist frequency of the coarser axis.
-pub fn radial(t: &Topography) -> Result<RadialPsd, FitError> {
+pub fn radial(t: &Topography) -> Result<RadialPsdTable, FitError> {
     if t.is_profile() || t.nx < 8 || t.ny < 8 {
         return Err(FitError::data(
             "radial PSD",
@@ -211,7 +211,7 @@ pub fn radial(t: &Topography) -> Result<RadialPsd, FitError> {
     let sums = sum_in_order(parts, 3 * nbins);
     let (sz, rest) = sums.split_at(nbins);
     let (sp, sw) = rest.split_at(nbins);
-    let mut out = RadialPsd {
+    let mut out = RadialPsdTable {
         zeta: Vec::new(),
         p: Vec::new(),
         count: Vec::new(),
@@ -252,7 +252,7 @@ pub fn merge(low: &Psd1d, high: &Psd1d, f_cut: f64) -> Psd1d {
 /// local power-law relation `C2(f) = P1(f)·Γ((a+1)/2) / (2√π Γ(a/2) f)`, where
 /// `a = −d ln P1/d ln f` is estimated over ±`half_window` bins and clamped to [0.5, 10].
 /// Exact for a power law; near a PSD roll-off (small `a`) it is only indicative.
-pub fn radial_from_profile(psd: &Psd1d, half_window: usize) -> RadialPsd {
+pub fn radial_from_profile(psd: &Psd1d, half_window: usize) -> RadialPsdTable {
     let pts: Vec<(f64, f64)> = psd
         .f
         .iter()
@@ -260,7 +260,7 @@ pub fn radial_from_profile(psd: &Psd1d, half_window: usize) -> RadialPsd {
         .filter(|(f, p)| **f > 0.0 && **p > 0.0)
         .map(|(f, p)| (f.ln(), p.ln()))
         .collect();
-    let mut out = RadialPsd {
+    let mut out = RadialPsdTable {
         zeta: Vec::new(),
         p: Vec::new(),
         count: Vec::new(),

@@ -27,9 +27,10 @@ pub enum BetaSource {
     Unresolved,
 }
 
-/// One two-scale split.
+/// A surface split at one cutoff period into a large scale (its slope distribution, β) and
+/// the residual roughness (its K-correlation fit): the parameters of the two-scale model.
 #[derive(Debug, Clone, PartialEq)]
-pub struct TwoScale {
+pub struct Split {
     /// Cutoff as a multiple of the wavelength.
     pub multiple: f64,
     /// Cutoff period Λ [m].
@@ -52,7 +53,7 @@ pub fn split(
     multiple: f64,
     wavelength: f64,
     (f_min, f_max): (f64, f64),
-) -> Result<TwoScale, FitError> {
+) -> Result<Split, FitError> {
     let cutoff = multiple * wavelength;
     if !(cutoff.is_finite() && cutoff > 0.0) {
         return Err(FitError::data(
@@ -88,13 +89,13 @@ pub fn split(
         (beta, source, line_psd)
     };
     let kc = kc::fit(
-        kc::Form::Profile1d,
+        kc::PsdForm::Profile1d,
         &kc_psd.f,
         &kc_psd.p,
         f_cut.max(f_min),
         f_max,
     )?;
-    Ok(TwoScale {
+    Ok(Split {
         multiple,
         cutoff,
         beta,
@@ -272,7 +273,8 @@ mod tests {
     use crate::rng::{Normal, SplitMix64};
     use rustfft::FftPlanner;
 
-    /// The low-pass as it was first written: one complex 2D FFT of the whole mirrored map.
+    /// The low-pass by its definition, the reference for the separable one: one complex
+    /// 2D FFT of the whole mirrored map.
     fn lowpass_2d_fft(t: &Topography, cutoff: f64) -> Topography {
         let (mut buf, mx, my) = extended(t, true);
         let mut planner = FftPlanner::<f64>::new();

@@ -1,7 +1,7 @@
 //! Files damaged on the way from the instrument: cut short by a failed copy, their first
 //! bytes overwritten, or a header whose physical size is absurd. Each is refused with an
-//! error that names the file, the field and the fix, where it used to be read silently,
-//! parsed as something else, or give a `null` RMS slope.
+//! error that names the file, the field and the fix, rather than read silently, parsed as
+//! something else, or given a `null` RMS slope.
 
 use fit::ReadError;
 use fit::io::{ChannelSel, Format, ReadOptions, Units, list_channels, read_bytes};
@@ -66,8 +66,8 @@ fn assert_mentions(e: &str, needles: &[&str]) {
 // ---- 1. Files cut short ----------------------------------------------------------------
 
 /// di-3.di holds four 256 × 256 channels (data at 40960, 172032, 303104 and 434176, 131072
-/// bytes each). Cut in half, its first channel is still whole: it used to be read as if
-/// nothing were wrong.
+/// bytes each). Cut in half, its first channel is still whole, so a reader that checked
+/// only the channel it reads would not notice.
 #[test]
 fn a_nanoscope_file_cut_in_half_is_refused_naming_the_channel_and_byte_range() {
     let b = data("di-3.di");
@@ -108,7 +108,7 @@ fn a_nanoscope_file_cut_in_half_is_refused_naming_the_channel_and_byte_range() {
 
 /// Every binary reader whose header says how much data follows refuses a copy cut at half
 /// and at two thirds of its length. NanoScope, PicoView, Nanosurf, Wyko and Alicona files
-/// cut there used to read: their first channel (or the depth image) was still whole.
+/// cut there still hold their first channel (or the depth image) whole.
 #[test]
 fn every_binary_reader_refuses_a_file_cut_short() {
     let files: Vec<(&str, Vec<u8>)> = vec![
@@ -150,7 +150,8 @@ fn every_binary_reader_refuses_a_file_cut_short() {
     refused("plu-1.plu", &plu[..plu.len() / 2], &o);
 }
 
-/// The ones that used to read, with the channel or block and the byte range named.
+/// Files whose channel read is still whole: the error names the channel or block and the
+/// byte range.
 #[test]
 fn truncation_errors_name_what_is_missing_and_where() {
     let o = ReadOptions::default();
@@ -295,9 +296,9 @@ fn signed_samples() -> Vec<(&'static str, String, Vec<u8>)> {
 }
 
 /// Zeroing a file's first 16 bytes leaves its extension naming a format it no longer
-/// carries the signature of. NanoScope, PicoView and Digital Surf files used to be read
-/// anyway (the data lie past the damage), Nanosurf and WSxM files were parsed as text
-/// matrices ("no rows of numbers"), the others got an error about some other field.
+/// carries the signature of. NanoScope, PicoView and Digital Surf files could still be read
+/// (the data lie past the damage), Nanosurf and WSxM files look like text matrices, and
+/// the others would be refused for some other field.
 #[test]
 fn a_file_whose_signature_is_overwritten_is_refused_naming_extension_and_format() {
     let o = ReadOptions::default();
@@ -422,8 +423,8 @@ fn dialects_and_explained_variants_still_reach_their_readers() {
 
 // ---- 3. Physical sizes out of range -----------------------------------------------------
 
-/// XReal = 1e-300 m over 64 points is a 1.6e-302 m pixel: Δz/Δx overflowed to infinity
-/// and `fit stats` printed `"rms_slope": null`. Such a size is refused, naming the field.
+/// XReal = 1e-300 m over 64 points is a 1.6e-302 m pixel: Δz/Δx overflows to infinity
+/// and `fit stats` would print `"rms_slope": null`. Such a size is refused, naming the field.
 #[test]
 fn a_pixel_spacing_outside_the_physical_range_is_refused_naming_the_field() {
     let o = ReadOptions::default();
@@ -479,8 +480,8 @@ fn a_pixel_spacing_outside_the_physical_range_is_refused_naming_the_field() {
     }
 }
 
-/// A NanoScope Z sensitivity of 2.2e300 nm/V gave heights near 1e290 m, whose squares
-/// overflow: `fit` wrote a material file with Sq `inf`, σ 0 and α at its floor. Heights
+/// A NanoScope Z sensitivity of 2.2e300 nm/V gives heights near 1e290 m, whose squares
+/// overflow: unchecked, `fit` would write Sq `inf`, σ 0 and α at its floor. Heights
 /// are bounded like pixel spacings; the test files of a few metres still read.
 #[test]
 fn heights_beyond_any_scan_are_refused_naming_the_height_scale() {

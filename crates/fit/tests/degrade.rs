@@ -1,4 +1,4 @@
-//! Analysis that degrades instead of dying (issue 14 §3–5, issue 13 §5): levelling choices
+//! Analysis that degrades instead of dying: levelling choices
 //! and form detection, tiny maps, fits that do not converge or hit a bound, anisotropy,
 //! and material files whose every parameter the renderer accepts.
 
@@ -96,8 +96,8 @@ fn map(nx: usize, ny: usize, dx: f64, f: impl Fn(f64, f64) -> f64) -> Topography
     }
 }
 
-/// Issue 13 §5: `bcrf-1.bcrf` gave γ = 72007. Now the fit is bounded and flagged, and the
-/// material file holds only values the renderer accepts.
+/// `bcrf-1.bcrf`: an unbounded fit runs to γ = 72007. The fit is bounded and flagged, and
+/// the material file holds only values the renderer accepts.
 #[test]
 fn bcrf_fit_is_bounded_flagged_and_renderable() {
     let path = data("bcrf-1.bcrf");

@@ -1,4 +1,4 @@
-//! The formats and dialects read since issue 36 (NanoFocus NMS, Dektak OPDx, NumPy NPY,
+//! Formats and dialects (NanoFocus NMS, Dektak OPDx, NumPy NPY,
 //! NetCDF, the `.hfm` profile export, X3P zipped in a folder or with `<Datum/>` invalid
 //! points, a units line followed by a point count) against SurfaceTopography's reading of
 //! the same files (`data/surfaces/reference/statistics.json`), against independent
@@ -140,8 +140,8 @@ fn opdx_agrees_with_its_text_export() {
     }
 }
 
-/// `X;Y;valid` with a `[mm];[mm];[1/0]` unit row is a profile whose heights are Y (it was
-/// read as an x y z map and refused as "not one grid step apart").
+/// `X;Y;valid` with a `[mm];[mm];[1/0]` unit row is a profile whose heights are Y, not an
+/// x y z map (which it would be refused as: "not one grid step apart").
 #[test]
 fn hfm_profiles_take_y_as_the_height() {
     let s = open_path(&path("formats/hfm-1.hfm"), &ReadOptions::default()).unwrap();

@@ -457,7 +457,7 @@ fn unknown_formats_are_reported() {
     assert!(matches!(e, ReadError::UnknownFormat { .. }), "{e}");
 }
 
-/// Issue 13: a flipped byte anywhere in the X3P's compressed point data or header is
+/// A flipped byte anywhere in the X3P's compressed point data or header is
 /// caught by the zip CRC-32 or the file's MD5 checksums, never read as heights.
 #[test]
 fn x3p_checksums_catch_flipped_bytes() {
@@ -565,7 +565,7 @@ fn x3p_checksums_catch_flipped_bytes() {
     );
 }
 
-/// Issue 13: truncated, cut or garbled Dektak profiles are errors naming the problem.
+/// Truncated, cut or garbled Dektak profiles are errors naming the problem.
 #[test]
 fn dektak_truncation_and_garbling_are_detected() {
     let d = data("dektak-1.csv");

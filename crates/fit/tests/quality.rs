@@ -1,7 +1,6 @@
-//! What can make a readable scan's numbers wrong (issue 36 and issue 31 items 9 and 10): a
-//! scan mostly invalid (refused with a way on: crop or fill), spikes from corrupted bytes
-//! (found, located, flagged, maskable), a text export cut inside its last number, and
-//! heights or lengths read in the wrong unit.
+//! What can make a readable scan's numbers wrong: a scan mostly invalid (refused with a
+//! way on: crop or fill), spikes from corrupted bytes (found, located, flagged, maskable), a
+//! text export cut inside its last number, and heights or lengths read in the wrong unit.
 
 use fit::io::{ReadOptions, Units, open_path, read_bytes};
 use fit::kc::KcParams;
@@ -159,8 +158,8 @@ fn largest_valid_rectangle_is_the_largest() {
     }
 }
 
-/// Issue 31 item 9: 8 corrupted bytes in metropro-1.dat (its last two phase values set to
-/// 0x10000000) gave Sq 13 nm → 46 µm with no warning. They are found, located, flagged in
+/// 8 corrupted bytes in metropro-1.dat (its last two phase values set to 0x10000000)
+/// raise Sq from 13 nm to 46 µm. They are found, located, flagged in
 /// the summary and the material file, and `--outliers mask` restores Sq.
 #[test]
 fn corrupted_values_are_found_located_and_maskable() {
@@ -232,8 +231,8 @@ fn sound_gaussian_scans_have_no_outliers_and_any_large_spike_is_found() {
     }
 }
 
-/// Issue 31 item 9: a Dektak profile cut inside its last number (`16.58112` → `16.`) was
-/// accepted; so would a column or matrix export be.
+/// A Dektak profile cut inside its last number (`16.58112` → `16.`) still parses, as would
+/// a column or matrix export: such a cut is refused.
 #[test]
 fn a_text_export_cut_inside_its_last_number_is_refused() {
     let whole = std::fs::read(path("dektak-1.csv")).unwrap();
@@ -263,8 +262,8 @@ fn a_text_export_cut_inside_its_last_number_is_refused() {
     assert!(read_bytes("p.xyz", b"0 1\n1 2\n2 3.5", &o).is_ok());
 }
 
-/// Issue 31 item 10: `--units um` on metre heights (Sq 5.6e-14 m) and `--units m` on
-/// micrometre heights (Sq 0.05 m) were written with every part "ok". Both are flagged with
+/// `--units um` on metre heights (Sq 5.6e-14 m) and `--units m` on micrometre heights
+/// (Sq 0.05 m) read without complaint. Both are flagged with
 /// the factor and the `--units` that makes Sq and the slope plausible.
 #[test]
 fn heights_in_the_wrong_unit_are_flagged_with_the_right_units() {

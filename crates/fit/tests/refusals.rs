@@ -42,7 +42,7 @@ fn gsf(nx: usize, ny: usize, values: &[f32]) -> Vec<u8> {
 
 #[test]
 fn a_mostly_invalid_map_is_refused_with_its_invalid_fraction() {
-    // 90 % NaN: filling it halved Sq and the fit still looked sound.
+    // 90 % NaN: filling it halves Sq while the fit still looks sound.
     let t = map(40, 40, |x, y| {
         if (x + 40 * y) % 10 == 0 {
             rough(x, y)

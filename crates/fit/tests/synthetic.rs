@@ -131,7 +131,7 @@ fn kc_parameters_are_recovered_from_synthetic_maps() {
     let r = psd::radial(&t).unwrap();
     let zmax = *r.zeta.last().unwrap();
     let f2 = kc::fit_weighted(
-        kc::Form::Radial2d,
+        kc::PsdForm::Radial2d,
         &r.zeta,
         &r.p,
         Some(&r.count),

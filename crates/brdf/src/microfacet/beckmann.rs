@@ -191,7 +191,7 @@ fn sample_slopes_unit(cot: f64, c: f64, s: f64, u: [f64; 2]) -> (f64, f64, f64) 
     // Start from the cotθ → ∞ limit, moved by the tabulated difference
     // between it and the root: within 1e−4 of the root for nine draws in
     // ten, so one Halley step usually finishes (from the limit alone it
-    // took four to five, each an erfc and an exp).
+    // takes four to five, each an erfc and an exp).
     let st = gaussian_start_and_target(cot, u[0]);
     let start = st.start + start_correction(c, s, u[0]);
     (solve_slope(cot, st.target, start, true), sy, st.lambda)

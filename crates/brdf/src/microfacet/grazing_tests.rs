@@ -7,10 +7,9 @@
 //! given. That value is continuous up to the horizon but not small there:
 //! with height-correlated Smith shadowing G₂ ≈ 2 cosθi cosθo /
 //! (α(cosθi + cosθo)) when both are grazing, so at the mirror pair f ≈ D /
-//! (2α (cosθi + cosθo)) grows like 1/cosθ while f·cosθo stays bounded. The
-//! 5e14 that `brdf eval` printed for θi = θo = 90° was that value at
-//! cos(π/2) = 6.1e−17, a round-off distance above the horizon; the CLI now
-//! places 90° exactly on it.
+//! (2α (cosθi + cosθo)) grows like 1/cosθ while f·cosθo stays bounded: for
+//! θi = θo = 90° in f64, cos(π/2) = 6.1e−17 is a round-off distance above the
+//! horizon and f is 5e14, which is why the CLI places 90° exactly on it.
 //!
 //! Checked at exactly 0, at cosines from 1e−300 to 1e−3 (including
 //! cos(π/2) in f64 and the cosine of 90° − 1e−12°), for wi and wo, GGX and

@@ -522,7 +522,7 @@ mod tests {
 
     /// The half-length real transform against the definition (a naive
     /// N-point DFT, the Hermitian kernel on all N bins, a naive DFT back)
-    /// and against the full-length complex FFT it replaced.
+    /// and against the full-length complex FFT of the same sequence.
     #[cfg(feature = "alloc")]
     #[test]
     fn fftlog_real_split_matches_naive_dft() {
@@ -565,7 +565,7 @@ mod tests {
                 .map(|j| dft(&|m| y[m], j).0 * scale_out * plan.bias_out[j])
                 .collect();
             let peak = want.iter().fold(0.0f64, |a, v| a.max(v.abs()));
-            // The previous full-length complex path, for the error scale.
+            // The full-length complex transform, for the error scale.
             let full = fftlog::Fft::new(n);
             let (mut fr, mut fi): (Vec<f64>, Vec<f64>) = (x.clone(), alloc::vec![0.0; n]);
             full.run(&mut fr, &mut fi);

@@ -179,7 +179,7 @@ pub fn ln_gamma_complex(re: f64, im: f64) -> (f64, f64) {
     // Stirling's series below is accurate once |z| ≥ 15 anywhere in the
     // right half-plane, so only small |z| is shifted: FFTLog plans evaluate
     // this at every frequency bin, nearly all with |Im z| ≫ 15, and the
-    // shift (a log and an atan2 per step) was most of a plan's cost.
+    // shift (a log and an atan2 per step) would be most of a plan's cost.
     while zr < 15.0 && zr * zr + zi * zi < 225.0 {
         acc_r += 0.5 * libm::log(zr * zr + zi * zi);
         acc_i += libm::atan2(zi, zr);

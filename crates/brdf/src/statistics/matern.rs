@@ -25,7 +25,7 @@ pub struct Matern {
     /// Γ(1 − ν) for the series (unused near integers).
     gamma_1m_nu: f64,
     /// ln Γ(1 + ν) and Γ(2 − ν), the series' other constants: evaluated
-    /// per call they were most of its cost (the S̃ tables call it millions of
+    /// per call they would be most of its cost (the S̃ tables call it millions of
     /// times).
     lgamma_1p_nu: f64,
     gamma_2m_nu: f64,

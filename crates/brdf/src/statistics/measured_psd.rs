@@ -25,7 +25,7 @@ use crate::numerics::interp::lagrange4;
 /// with γ = [`GAMMA_MAX`](super::kc::GAMMA_MAX), ζ^−(γ+1). The tail sets the
 /// Matérn smoothness ν_t = (−slope − 2)/2 of the covariance, whose
 /// evaluation costs O(ν_t) and is called millions of times while the GHS
-/// table is built (a segment falling as ζ^−7e6 took minutes); past ν ≈ 50
+/// table is built (a segment falling as ζ^−7e6 would take minutes); past ν ≈ 50
 /// the Matérn function is Gaussian to far below any measurable difference.
 pub const TAIL_SLOPE_MIN: f64 = -(super::kc::GAMMA_MAX + 1.0);
 
@@ -364,8 +364,8 @@ fn fitted_tail_slope(ln_zeta: &[f64], ln_p: &[f64], slope_hi: f64) -> f64 {
 /// the first segment is steeper still) and t such that the log-slope at ζ₀, −2βt/(1 + t), is the
 /// first segment's s₀. P and d ln P/d ln ζ are continuous at ζ₀: a table
 /// held flat below ζ₀ has a kink there whose slowly decaying, oscillating
-/// covariance the transforms of the full GHS could not resolve (the table
-/// and the direct transform disagreed by 7–69 %). A first segment that is
+/// covariance the transforms of the full GHS cannot resolve (the table
+/// and the direct transform would disagree by 7–69 %). A first segment that is
 /// flat or rising is continued flat (t = 0), and so is one so steep that
 /// the roll-off would rise more than [`ROLLOFF_RISE_MAX`] above P₀ (a C¹
 /// continuation of a ζ^{s₀} segment to a plateau rises by 2^{−s₀} when
@@ -673,7 +673,7 @@ mod tests {
 
     #[test]
     fn the_steepest_accepted_tail_sets_up_in_bounded_time() {
-        // Rows 1,1e-3 / 1.0001,1e-300 (slope −6.9e6) hung the scene setup.
+        // Rows 1,1e-3 / 1.0001,1e-300 (slope −6.9e6) would take hours to set up.
         let steep = TabulatedPsd::new(&[1.0, 1.0001], &[1e-3, 1e-300]);
         assert!(
             matches!(steep, Err(BrdfError::InvalidTable { row: Some(1), .. })),
@@ -683,7 +683,7 @@ mod tests {
         assert!(TabulatedPsd::new(&[1.0, 2.0], &[1e-3, 1e-3 * just_past]).is_err());
         // The worst accepted table: the transform and the covariance at the
         // number of separations a GHS table asks for (a ζ^−1000 segment
-        // needed ~2 s for this; ζ^−7e6 hours).
+        // would need ~2 s for this).
         extern crate std;
         let start = std::time::Instant::now();
         let t = TabulatedPsd::new(&[1.0, 2.0], &[1e-3, 1e-3 * 2f64.powf(TAIL_SLOPE_MIN)]).unwrap();

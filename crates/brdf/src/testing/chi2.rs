@@ -44,7 +44,7 @@ use super::gamma::chi2_survival;
 use super::quadrature::{Cubature, Rect, Tolerance, rings_around};
 use super::rng::Pcg32;
 use crate::frame::reflect_z;
-use crate::model::Bxdf;
+use crate::model::{Bxdf, BxdfSample, Specular};
 
 /// Settings of [`chi2_test`].
 #[derive(Clone, Debug, PartialEq)]
@@ -303,6 +303,16 @@ impl Defects {
     }
 }
 
+/// The model under test at one incident direction and wavelength.
+struct Setup<'a, B: ?Sized> {
+    bxdf: &'a B,
+    wi: DVec3,
+    lambda_nm: f64,
+    domain: Domain,
+    mirror: DVec3,
+    spec: Specular,
+}
+
 /// Runs the chi-square test of `bxdf.sample` against `bxdf.pdf` (and
 /// `bxdf.specular`) for one incident direction and wavelength.
 pub fn chi2_test<B: Bxdf + ?Sized>(
@@ -311,60 +321,155 @@ pub fn chi2_test<B: Bxdf + ?Sized>(
     lambda_nm: f64,
     cfg: &Chi2Config,
 ) -> Chi2Report {
-    let domain = Domain::new(wi);
-    let mirror = reflect_z(wi);
-    let spec = bxdf.specular(wi, lambda_nm);
+    let setup = Setup {
+        bxdf,
+        wi,
+        lambda_nm,
+        domain: Domain::new(wi),
+        mirror: reflect_z(wi),
+        spec: bxdf.specular(wi, lambda_nm),
+    };
     let n = cfg.samples.max(1);
     let mut defects = Defects {
         list: Vec::new(),
         count: 0,
     };
 
-    // Pilot run: only the positions of glossy samples matter.
+    let pilot = pilot_run(&setup, cfg);
+    let bins = Bins::from_pilot(&pilot, cfg);
+    let pilot_cells = PilotCells::new(&bins, &pilot);
+    let run = test_run(&setup, &bins, n, cfg, &mut defects);
+    let expected = expected_counts(&setup, &bins, &pilot_cells, &run.observed, n, &mut defects);
+    let (pdf_integral, quadrature_error) = (expected.pdf_integral, expected.quadrature_error);
+
+    let p_delta = setup.spec.probability;
+    if !(p_delta.is_finite() && (0.0..=1.0).contains(&p_delta)) {
+        defects.push(|| format!("specular().probability = {p_delta} is not a probability"));
+    }
+    let lost_p = 1.0 - p_delta - pdf_integral;
+    if lost_p < -(1e-6 + quadrature_error) {
+        defects.push(|| {
+            format!("∫pdf = {pdf_integral} plus P_delta = {p_delta} exceeds 1: the pdf is over-normalised")
+        });
+    }
+    let lost_expected = n as f64 * lost_p.max(0.0);
+    let delta_expected = n as f64 * p_delta;
+
+    // Categories: glossy cells, delta, lost.
+    let mut categories: Vec<(f64, f64)> = expected
+        .cells
+        .iter()
+        .map(|c| (c.observed, c.expected))
+        .collect();
+    if p_delta > 0.0 || run.delta > 0 {
+        categories.push((run.delta as f64, delta_expected));
+    }
+    categories.push((run.lost as f64, lost_expected));
+    let pooled = pool_and_sum(categories, cfg.min_expected);
+
+    Chi2Report {
+        statistic: pooled.statistic,
+        dof: pooled.dof,
+        p_value: pooled.p_value,
+        samples: n,
+        glossy: (run.glossy, n as f64 * pdf_integral),
+        delta: (run.delta, delta_expected),
+        lost: (run.lost, lost_expected),
+        pdf_integral,
+        quadrature_error,
+        cells: expected.cells.len(),
+        pooled: pooled.pooled,
+        max_pdf_mismatch: run.max_pdf_mismatch,
+        max_weight_mismatch: run.max_weight_mismatch,
+        worst_cells: worst_cells(&expected.cells),
+        defects: defects.list,
+        defect_count: defects.count,
+    }
+}
+
+/// Positions (z, φ) of the glossy samples of the pilot run, which places the cell edges.
+fn pilot_run<B: Bxdf + ?Sized>(setup: &Setup<'_, B>, cfg: &Chi2Config) -> Vec<(f64, f64)> {
     let mut rng = Pcg32::new(cfg.seed, 1);
     let mut pilot = Vec::with_capacity(cfg.pilot_samples);
     for _ in 0..cfg.pilot_samples {
-        if let Some(s) = bxdf.sample(wi, lambda_nm, rng.uniform3())
+        if let Some(s) = setup.bxdf.sample(setup.wi, setup.lambda_nm, rng.uniform3())
             && !s.is_delta
             && s.wo.is_finite()
         {
-            pilot.push(domain.coords(s.wo));
+            pilot.push(setup.domain.coords(s.wo));
         }
     }
-    let bins = Bins::from_pilot(&pilot, cfg);
-    // Per cell: pilot count and bounding box of its pilot points, around which
-    // the cubature grades its panels (edge cells of a narrow lobe hold all
-    // their mass in one corner).
-    let mut pilot_counts = alloc::vec![0usize; bins.cell_count()];
-    let empty = Rect {
-        x0: f64::INFINITY,
-        x1: f64::NEG_INFINITY,
-        y0: f64::INFINITY,
-        y1: f64::NEG_INFINITY,
-    };
-    let mut pilot_boxes = alloc::vec![empty; bins.cell_count()];
-    for &(z, phi) in &pilot {
-        let c = bins.locate(z, phi);
-        pilot_counts[c] += 1;
-        let b = &mut pilot_boxes[c];
-        *b = Rect {
-            x0: b.x0.min(z),
-            x1: b.x1.max(z),
-            y0: b.y0.min(phi),
-            y1: b.y1.max(phi),
-        };
-    }
+    pilot
+}
 
-    // Test run.
+/// Per cell: pilot count and bounding box of its pilot points, around which the cubature
+/// grades its panels (edge cells of a narrow lobe hold all their mass in one corner).
+struct PilotCells {
+    counts: Vec<usize>,
+    boxes: Vec<Rect>,
+    total: usize,
+}
+
+impl PilotCells {
+    fn new(bins: &Bins, pilot: &[(f64, f64)]) -> PilotCells {
+        let mut counts = alloc::vec![0usize; bins.cell_count()];
+        let empty = Rect {
+            x0: f64::INFINITY,
+            x1: f64::NEG_INFINITY,
+            y0: f64::INFINITY,
+            y1: f64::NEG_INFINITY,
+        };
+        let mut boxes = alloc::vec![empty; bins.cell_count()];
+        for &(z, phi) in pilot {
+            let c = bins.locate(z, phi);
+            counts[c] += 1;
+            let b = &mut boxes[c];
+            *b = Rect {
+                x0: b.x0.min(z),
+                x1: b.x1.max(z),
+                y0: b.y0.min(phi),
+                y1: b.y1.max(phi),
+            };
+        }
+        PilotCells {
+            counts,
+            boxes,
+            total: pilot.len(),
+        }
+    }
+}
+
+/// Counts of the test run and the worst per-sample mismatches seen.
+struct TestRun {
+    observed: Vec<usize>,
+    glossy: usize,
+    delta: usize,
+    lost: usize,
+    max_pdf_mismatch: f64,
+    max_weight_mismatch: f64,
+}
+
+/// Draws `n` samples, checks each for consistency and histograms the glossy ones.
+fn test_run<B: Bxdf + ?Sized>(
+    setup: &Setup<'_, B>,
+    bins: &Bins,
+    n: usize,
+    cfg: &Chi2Config,
+    defects: &mut Defects,
+) -> TestRun {
     let mut rng = Pcg32::new(cfg.seed, 2);
-    let mut observed = alloc::vec![0usize; bins.cell_count()];
-    let (mut delta, mut lost, mut glossy) = (0usize, 0usize, 0usize);
-    let (mut max_pdf_mismatch, mut max_weight_mismatch) = (0.0f64, 0.0f64);
-    let tol = cfg.consistency_tol;
+    let mut run = TestRun {
+        observed: alloc::vec![0usize; bins.cell_count()],
+        glossy: 0,
+        delta: 0,
+        lost: 0,
+        max_pdf_mismatch: 0.0,
+        max_weight_mismatch: 0.0,
+    };
     for _ in 0..n {
         let u = rng.uniform3();
-        let Some(s) = bxdf.sample(wi, lambda_nm, u) else {
-            lost += 1;
+        let Some(s) = setup.bxdf.sample(setup.wi, setup.lambda_nm, u) else {
+            run.lost += 1;
             continue;
         };
         if !(s.weight.is_finite() && s.weight >= 0.0 && s.pdf.is_finite() && s.pdf > 0.0) {
@@ -381,66 +486,115 @@ pub fn chi2_test<B: Bxdf + ?Sized>(
             continue;
         }
         if s.is_delta {
-            delta += 1;
-            let want_w = if spec.probability > 0.0 {
-                spec.weight / spec.probability
-            } else {
-                f64::NAN
-            };
-            let dw = rel_diff(s.weight, want_w);
-            let dp = rel_diff(s.pdf, spec.probability);
-            max_weight_mismatch = max_weight_mismatch.max(if dw.is_nan() { 1.0 } else { dw });
-            max_pdf_mismatch = max_pdf_mismatch.max(dp);
-            if !(dw <= tol && dp <= tol) || (s.wo - mirror).length() > 1e-9 {
-                defects.push(|| {
-                    format!(
-                        "u = {u:?}: delta sample (wo {:?}, weight {}, pdf {}) disagrees with mirror {:?} / \
-                         specular() {:?}",
-                        s.wo, s.weight, s.pdf, mirror, spec
-                    )
-                });
-            }
+            run.delta += 1;
+            check_delta(setup, &s, u, cfg.consistency_tol, &mut run, defects);
             continue;
         }
-        glossy += 1;
-        let pdf = bxdf.pdf(wi, s.wo, lambda_nm);
-        let f = bxdf.eval(wi, s.wo, lambda_nm);
-        if !(pdf > 0.0 && pdf.is_finite()) {
-            defects.push(|| {
-                format!(
-                    "u = {u:?}: sampled wo = {:?} where pdf() = {pdf} (eval {f})",
-                    s.wo
-                )
-            });
-        } else {
-            let dp = rel_diff(s.pdf, pdf);
-            let want_w = f * libm::fabs(s.wo.z) / pdf;
-            let dw = rel_diff(s.weight, want_w);
-            max_pdf_mismatch = max_pdf_mismatch.max(dp);
-            max_weight_mismatch = max_weight_mismatch.max(dw);
-            if dp > tol || dw > tol {
-                defects.push(|| {
-                    format!(
-                        "u = {u:?}, wo = {:?}: sample (weight {}, pdf {}) vs eval·cos/pdf = {want_w}, pdf() = {pdf}",
-                        s.wo, s.weight, s.pdf
-                    )
-                });
-            }
-        }
-        let (z, phi) = domain.coords(s.wo);
-        observed[bins.locate(z, phi)] += 1;
+        run.glossy += 1;
+        check_glossy(setup, &s, u, cfg.consistency_tol, &mut run, defects);
+        let (z, phi) = setup.domain.coords(s.wo);
+        run.observed[bins.locate(z, phi)] += 1;
     }
+    run
+}
 
-    // Expected counts by cubature of the pdf over each cell. The absolute
-    // tolerance keeps N·error far below the cell's Poisson noise √E.
+/// A delta sample must be the mirror direction with the weight and probability of
+/// `specular()`.
+fn check_delta<B: Bxdf + ?Sized>(
+    setup: &Setup<'_, B>,
+    s: &BxdfSample,
+    u: [f64; 3],
+    tol: f64,
+    run: &mut TestRun,
+    defects: &mut Defects,
+) {
+    let spec = setup.spec;
+    let want_w = if spec.probability > 0.0 {
+        spec.weight / spec.probability
+    } else {
+        f64::NAN
+    };
+    let dw = rel_diff(s.weight, want_w);
+    let dp = rel_diff(s.pdf, spec.probability);
+    run.max_weight_mismatch = run
+        .max_weight_mismatch
+        .max(if dw.is_nan() { 1.0 } else { dw });
+    run.max_pdf_mismatch = run.max_pdf_mismatch.max(dp);
+    if !(dw <= tol && dp <= tol) || (s.wo - setup.mirror).length() > 1e-9 {
+        defects.push(|| {
+            format!(
+                "u = {u:?}: delta sample (wo {:?}, weight {}, pdf {}) disagrees with mirror {:?} / \
+                 specular() {:?}",
+                s.wo, s.weight, s.pdf, setup.mirror, spec
+            )
+        });
+    }
+}
+
+/// A glossy sample must land where `pdf()` is positive, with `pdf()` as its pdf and
+/// `eval · cosθo / pdf` as its weight.
+fn check_glossy<B: Bxdf + ?Sized>(
+    setup: &Setup<'_, B>,
+    s: &BxdfSample,
+    u: [f64; 3],
+    tol: f64,
+    run: &mut TestRun,
+    defects: &mut Defects,
+) {
+    let pdf = setup.bxdf.pdf(setup.wi, s.wo, setup.lambda_nm);
+    let f = setup.bxdf.eval(setup.wi, s.wo, setup.lambda_nm);
+    if !(pdf > 0.0 && pdf.is_finite()) {
+        defects.push(|| {
+            format!(
+                "u = {u:?}: sampled wo = {:?} where pdf() = {pdf} (eval {f})",
+                s.wo
+            )
+        });
+        return;
+    }
+    let dp = rel_diff(s.pdf, pdf);
+    let want_w = f * libm::fabs(s.wo.z) / pdf;
+    let dw = rel_diff(s.weight, want_w);
+    run.max_pdf_mismatch = run.max_pdf_mismatch.max(dp);
+    run.max_weight_mismatch = run.max_weight_mismatch.max(dw);
+    if dp > tol || dw > tol {
+        defects.push(|| {
+            format!(
+                "u = {u:?}, wo = {:?}: sample (weight {}, pdf {}) vs eval·cos/pdf = {want_w}, pdf() = {pdf}",
+                s.wo, s.weight, s.pdf
+            )
+        });
+    }
+}
+
+/// The glossy cells with their expected counts, and ∫_{S²} pdf dω with its error.
+struct Expected {
+    cells: Vec<Cell>,
+    pdf_integral: f64,
+    quadrature_error: f64,
+}
+
+/// Expected counts by cubature of the pdf over each cell. The absolute tolerance keeps
+/// N·error far below the cell's Poisson noise √E.
+fn expected_counts<B: Bxdf + ?Sized>(
+    setup: &Setup<'_, B>,
+    bins: &Bins,
+    pilot_cells: &PilotCells,
+    observed: &[usize],
+    n: usize,
+    defects: &mut Defects,
+) -> Expected {
     let cubature = Cubature::new();
-    let pilot_n = pilot.len().max(1) as f64;
-    let mut cells = Vec::with_capacity(bins.cell_count());
-    let (mut pdf_integral, mut quadrature_error) = (0.0, 0.0);
-    for (i, (&obs, &pc)) in observed.iter().zip(&pilot_counts).enumerate() {
+    let pilot_n = pilot_cells.total.max(1) as f64;
+    let mut out = Expected {
+        cells: Vec::with_capacity(bins.cell_count()),
+        pdf_integral: 0.0,
+        quadrature_error: 0.0,
+    };
+    for (i, (&obs, &pc)) in observed.iter().zip(&pilot_cells.counts).enumerate() {
         let rect = bins.rect(i);
         let panels = if pc > 0 {
-            rings_around(rect, pilot_boxes[i])
+            rings_around(rect, pilot_cells.boxes[i])
         } else {
             alloc::vec![rect]
         };
@@ -452,7 +606,9 @@ pub fn chi2_test<B: Bxdf + ?Sized>(
         };
         let integral = cubature.integrate(
             |z, phi| {
-                let p = bxdf.pdf(wi, domain.direction(z, phi), lambda_nm);
+                let p = setup
+                    .bxdf
+                    .pdf(setup.wi, setup.domain.direction(z, phi), setup.lambda_nm);
                 if p.is_finite() { p } else { f64::INFINITY }
             },
             &panels,
@@ -466,40 +622,34 @@ pub fn chi2_test<B: Bxdf + ?Sized>(
                 )
             });
         }
-        pdf_integral += integral.value;
-        quadrature_error += integral.error;
-        cells.push(Cell {
+        out.pdf_integral += integral.value;
+        out.quadrature_error += integral.error;
+        out.cells.push(Cell {
             z: (rect.x0, rect.x1),
             phi: (rect.y0, rect.y1),
             observed: obs as f64,
             expected: n as f64 * integral.value,
         });
     }
+    out
+}
 
-    let p_delta = spec.probability;
-    if !(p_delta.is_finite() && (0.0..=1.0).contains(&p_delta)) {
-        defects.push(|| format!("specular().probability = {p_delta} is not a probability"));
-    }
-    let lost_p = 1.0 - p_delta - pdf_integral;
-    if lost_p < -(1e-6 + quadrature_error) {
-        defects.push(|| {
-            format!("∫pdf = {pdf_integral} plus P_delta = {p_delta} exceeds 1: the pdf is over-normalised")
-        });
-    }
-    let lost_expected = n as f64 * lost_p.max(0.0);
-    let delta_expected = n as f64 * p_delta;
+/// The statistic over the pooled categories.
+struct Pooled {
+    statistic: f64,
+    dof: usize,
+    p_value: f64,
+    pooled: usize,
+}
 
-    // Categories: glossy cells, delta, lost; pool the small ones.
-    let mut cats: Vec<(f64, f64)> = cells.iter().map(|c| (c.observed, c.expected)).collect();
-    if p_delta > 0.0 || delta > 0 {
-        cats.push((delta as f64, delta_expected));
-    }
-    cats.push((lost as f64, lost_expected));
-    cats.sort_by(|a, b| a.1.total_cmp(&b.1));
+/// Pools the (observed, expected) categories expecting fewer than `min_expected`, smallest
+/// first, until the pool reaches it; then Σ (O − E)²/E and its chi-square tail.
+fn pool_and_sum(mut categories: Vec<(f64, f64)>, min_expected: f64) -> Pooled {
+    categories.sort_by(|a, b| a.1.total_cmp(&b.1));
     let (mut pool_o, mut pool_e, mut pooled) = (0.0, 0.0, 0usize);
-    let mut kept = Vec::with_capacity(cats.len());
-    for (o, e) in cats {
-        if e < cfg.min_expected || (pooled > 0 && pool_e < cfg.min_expected) {
+    let mut kept = Vec::with_capacity(categories.len());
+    for (o, e) in categories {
+        if e < min_expected || (pooled > 0 && pool_e < min_expected) {
             pool_o += o;
             pool_e += e;
             pooled += 1;
@@ -528,8 +678,17 @@ pub fn chi2_test<B: Bxdf + ?Sized>(
     } else {
         0.0
     };
+    Pooled {
+        statistic,
+        dof,
+        p_value,
+        pooled,
+    }
+}
 
-    let mut worst = cells.clone();
+/// The three cells contributing most to the statistic.
+fn worst_cells(cells: &[Cell]) -> Vec<Cell> {
+    let mut worst = cells.to_vec();
     let contribution = |c: &Cell| {
         if c.expected > 0.0 {
             (c.observed - c.expected) * (c.observed - c.expected) / c.expected
@@ -539,23 +698,5 @@ pub fn chi2_test<B: Bxdf + ?Sized>(
     };
     worst.sort_by(|a, b| contribution(b).total_cmp(&contribution(a)));
     worst.truncate(3);
-
-    Chi2Report {
-        statistic,
-        dof,
-        p_value,
-        samples: n,
-        glossy: (glossy, n as f64 * pdf_integral),
-        delta: (delta, delta_expected),
-        lost: (lost, lost_expected),
-        pdf_integral,
-        quadrature_error,
-        cells: cells.len(),
-        pooled,
-        max_pdf_mismatch,
-        max_weight_mismatch,
-        worst_cells: worst,
-        defects: defects.list,
-        defect_count: defects.count,
-    }
+    worst
 }

@@ -37,7 +37,7 @@ const MARGIN: f64 = 1e-3;
 const SCREEN: [usize; 3] = [5, 7, 8];
 
 /// Wavenumber nodes (uniform in k between the ends of the visible range):
-/// C is close to linear in k (4 nodes changed no capped albedo by more
+/// C is close to linear in k (4 nodes change no capped albedo by more
 /// than 1e−3 in the furnace tests, and cost a third more).
 const K_NODES: usize = 3;
 
@@ -158,7 +158,7 @@ const REFINE_DMU_MIN: f64 = 2e-5;
 /// Where it lies above (C convex in μ) the cap is only conservative, and
 /// nothing is added. C is not always convex: for β 4e−4, Lc 0.036 µm, γ 2
 /// at 360 nm it peaks at 89.8°, and between the fixed 89° and 89.9° nodes
-/// the interpolation was 0.7 % low (albedo 1.0014 at 89.34°).
+/// the interpolation is 0.7 % low (albedo 1.0014 at 89.34°).
 fn refine(columns: &mut Vec<(f64, [f64; K_NODES])>, value: impl Fn(f64, usize) -> f64 + Sync) {
     let mut added = 0;
     // Intervals still to check, by the index of their upper-μ end.
@@ -208,8 +208,8 @@ pub(crate) fn albedo(mu: f64, width: f64, f: impl Fn(DVec3) -> f64) -> f64 {
     // ≈ sinθ·width. In φ it is ≈ width/tanθ around the mirror azimuth π: a
     // normal tilted across the plane of incidence by δ moves wo sideways by
     // only 2δ·cosθi, so at grazing incidence the lobe is far narrower in φ
-    // than in θ (with width/sinθ, a β = 1.2e−4 lobe at 89° fell between the
-    // φ nodes and its albedo came out 0.7 % high).
+    // than in θ (with width/sinθ, a β = 1.2e−4 lobe at 89° falls between the
+    // φ nodes and its albedo comes out 0.7 % high).
     let hz = (0.25 * width * sin_i.max(width)).max(1e-6);
     let hp = (0.25 * width * mu.max(width) / sin_i.max(width)).clamp(1e-9, 0.5);
     let zs = gl4_nodes(&edges(0.0, 1.0, &[(mu, hz)]));

@@ -90,7 +90,7 @@ const X_UNIFORM: f64 = 1.2;
 /// x = 1e−3. Near grazing the tabulated albedos change over x ~ sqrt(2/(kL))
 /// (where the rim of the propagating disk reaches the lobe), 0.011 rad for
 /// the narrowest lobe of the domain, which nodes uniform in θi (1.4° apart)
-/// did not resolve.
+/// do not resolve.
 #[derive(Clone, Debug, PartialEq)]
 pub(crate) struct EnergyTable {
     data: [f64; TABLE_THETA_NODES * TABLE_LAMBDA_NODES],

@@ -71,7 +71,7 @@ impl GhsCommon {
     /// The tables hold the albedo a_s, and 1 − A_s is formed here exactly:
     /// near grazing 1 − A_s → 0 as cos²θi while a_s stays finite, so their
     /// ratio changes far faster than either, and interpolating the ratio
-    /// left the renormalised albedo 2.6 % above 1 at 89°.
+    /// would leave the renormalised albedo 2.6 % above 1 at 89°.
     #[inline]
     pub fn scatter_factor(&self, ci: f64, lambda_nm: f64) -> f64 {
         let loss = |sigma: f64| {

@@ -23,7 +23,7 @@
 //! * below 1e−12 of a row's peak (`RELIABLE`) S̃ is carried by its exact
 //!   asymptote and the row's own Gaussian continuation (`tail_safe_row`);
 //!   steps between nodes are bounded so the interpolation cannot overshoot
-//!   (γ = 12 once gave 2.8e17 sr⁻¹ 31° off the mirror);
+//!   (unbounded, it gives 2.8e17 sr⁻¹ 31° off the mirror for γ = 12);
 //! * for heavy tails (ν < ¼) and measured spectra the first diffraction
 //!   order g e^{−g} p(u) is left out of the rows and added back exactly
 //!   ([`Correlation::separate_first_order`]).
@@ -341,8 +341,8 @@ impl Row {
 /// Heavy tails at large g: the orders sit at scales m^{1/(2ν)} apart
 /// (2^{20} for γ = 1.05), so the first order is a spike near u ~ 1 up to
 /// 10⁴⁶× the core's peak, whose position in w moves by a factor 2 or more
-/// between rows; no affordable row density interpolates it (it cost 100 % at
-/// 2.7 % of the row's peak before). Tables of such surfaces
+/// between rows; no affordable row density interpolates it (interpolated, it
+/// errs by 100 % where S̃ is 2.7 % of the row's peak). Tables of such surfaces
 /// ([`Correlation::separate_first_order`]) hold S̃ without the first order.
 fn first_order_apart<C: Correlation + ?Sized>(c: &C) -> bool {
     c.separate_first_order()
@@ -406,7 +406,7 @@ const MAX_STEP: f64 = 8.0;
 /// Raises the table where it falls by more than [`MAX_STEP`] per node (the
 /// hand-over from the floor to the analytic tail can be hundreds of e-folds
 /// for γ → 100): 4-point Lagrange weights reach −0.064, so an unbounded step
-/// would overshoot by e^{0.064·step} — how γ = 12 once gave S̃ = 1e17. The
+/// would overshoot by e^{0.064·step} (S̃ = 1e17 for γ = 12). The
 /// max-plus dilation by an L1 cone is separable: one forward and one
 /// backward pass per axis is exact. It only raises values near the floor, by
 /// at most what keeps every step ≤ MAX_STEP.

@@ -360,7 +360,7 @@ impl TwoScale {
     /// A·D + (1 − A)·D̃_eff, whose Λ is A·Λ_D + (1 − A)·Λ_eff; Delta
     /// reading, D̃_eff alone. With Λ of the macro NDF alone (HP17's reading
     /// of G₂) the wider D̃_eff lobe is under-shadowed and the albedo
-    /// exceeded 1 by up to 7 % at oblique incidence; with the lobe's own Λ,
+    /// exceeds 1 by up to 7 % at oblique incidence; with the lobe's own Λ,
     /// single scattering conserves energy.
     #[inline]
     fn lobe_lambda(&self, tan_t: f64, macro_lambda: f64, wb: (usize, f64), a: f64) -> f64 {

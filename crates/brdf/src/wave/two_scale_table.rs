@@ -128,7 +128,7 @@ impl Kernel {
     fn at(&self, sin2_psi: f64) -> f64 {
         // exp(−(ν+1) ln(1 + x)) rather than pow: the exponent's absolute
         // error is ~1e−14 at most (the table is built to 1e−4), at two
-        // thirds of pow's cost, which was a third of the build. Forming
+        // thirds of pow's cost, and pow would be a third of the build. Forming
         // 1 + x costs at most one rounding (relative 1e−16 in the result).
         self.scale
             * crate::numerics::math::exp(

@@ -20,37 +20,21 @@ pub(crate) fn sniff(bytes: &[u8]) -> Sniff {
     }
 }
 
+/// The numbered lines of the file.
+type Lines<'t> = std::iter::Enumerate<std::str::Lines<'t>>;
+
 /// Read a Dektak CSV profile.
 pub(crate) fn read(ctx: Ctx<'_>, bytes: &[u8], want: Want<'_>) -> Result<Decoded, ReadError> {
     let text = text::decode(bytes);
     text::check_not_cut(ctx, &text)?;
     let mut lines = text.lines().enumerate();
-    let mut length = None;
-    let mut resolution = None;
-    let mut found = false;
-    for (_, l) in lines.by_ref() {
-        let t = l.trim().trim_end_matches(',');
-        if t.eq_ignore_ascii_case("Scan Data") {
-            found = true;
-            break;
-        }
-        let mut f = t.splitn(2, ',');
-        let (k, v) = (f.next().unwrap_or("").trim(), f.next().unwrap_or("").trim());
-        match k.to_ascii_lowercase().as_str() {
-            "length" => length = units::parse_length(v.split(',').next().unwrap_or("")),
-            "resolution" => {
-                resolution = units::parse_length(v.split('/').next().unwrap_or(""));
-            }
-            _ => {}
-        }
-    }
-    if !found {
+    let Some((length, resolution)) = scan_parameters(&mut lines) else {
         return Err(ctx.err(
             "Scan Data",
             "section not found",
             "export the profile with its data section",
         ));
-    }
+    };
     let (_, head) = lines.next().ok_or_else(|| {
         ctx.err(
             "Scan Data",
@@ -74,6 +58,61 @@ pub(crate) fn read(ctx: Ctx<'_>, bytes: &[u8], want: Want<'_>) -> Result<Decoded
     };
     let xu = unit_of(cols.first(), "lateral column")?;
     let zu = unit_of(cols.get(1), "height column")?;
+    let (xs, zs, lineno) = rows(ctx, lines, xu, zu)?;
+    if xs.len() < 2 {
+        return Err(ctx.err(
+            "Scan Data",
+            "fewer than two points",
+            "the profile is empty or truncated",
+        ));
+    }
+    let n = xs.len();
+    let span = xs[n - 1] - xs[0];
+    let dx = check_spacing(ctx, "lateral column", span / (n - 1) as f64)?;
+    check_regular(ctx, &xs, &lineno, dx)?;
+    check_header_agrees(ctx, span, dx, length, resolution)?;
+    let raw = Raw::si(
+        n,
+        1,
+        dx,
+        dx,
+        zs,
+        cols.get(1).copied().unwrap_or("height").to_string(),
+    )
+    .spacing_from("lateral column", "lateral column");
+    Decoded::single(ctx, want, raw)
+}
+
+/// The `Length` and `Resolution` of the "Scan Parameters" block, reading up to the
+/// "Scan Data" title; `None` when there is no such title.
+fn scan_parameters(lines: &mut Lines<'_>) -> Option<(Option<f64>, Option<f64>)> {
+    let mut length = None;
+    let mut resolution = None;
+    for (_, l) in lines.by_ref() {
+        let t = l.trim().trim_end_matches(',');
+        if t.eq_ignore_ascii_case("Scan Data") {
+            return Some((length, resolution));
+        }
+        let mut f = t.splitn(2, ',');
+        let (k, v) = (f.next().unwrap_or("").trim(), f.next().unwrap_or("").trim());
+        match k.to_ascii_lowercase().as_str() {
+            "length" => length = units::parse_length(v.split(',').next().unwrap_or("")),
+            "resolution" => {
+                resolution = units::parse_length(v.split('/').next().unwrap_or(""));
+            }
+            _ => {}
+        }
+    }
+    None
+}
+
+/// The `x,z` rows in metres (x scaled by `xu`, z by `zu`) and their 1-based line numbers.
+fn rows(
+    ctx: Ctx<'_>,
+    lines: Lines<'_>,
+    xu: f64,
+    zu: f64,
+) -> Result<(Vec<f64>, Vec<f64>, Vec<usize>), ReadError> {
     let mut xs = Vec::new();
     let mut zs = Vec::new();
     let mut lineno = Vec::new();
@@ -101,16 +140,12 @@ pub(crate) fn read(ctx: Ctx<'_>, bytes: &[u8], want: Want<'_>) -> Result<Decoded
             }
         }
     }
-    if xs.len() < 2 {
-        return Err(ctx.err(
-            "Scan Data",
-            "fewer than two points",
-            "the profile is empty or truncated",
-        ));
-    }
-    let n = xs.len();
-    let span = xs[n - 1] - xs[0];
-    let dx = check_spacing(ctx, "lateral column", span / (n - 1) as f64)?;
+    Ok((xs, zs, lineno))
+}
+
+/// Every x within half a sample (plus the export's rounding) of the regular grid from the
+/// first x with spacing `dx`.
+fn check_regular(ctx: Ctx<'_>, xs: &[f64], lineno: &[usize], dx: f64) -> Result<(), ReadError> {
     // The export rounds x to a few decimals; allow half a sample plus that rounding.
     let rounding = xs
         .windows(2)
@@ -134,6 +169,18 @@ pub(crate) fn read(ctx: Ctx<'_>, bytes: &[u8], want: Want<'_>) -> Result<Decoded
             ));
         }
     }
+    Ok(())
+}
+
+/// The data span the header's `Length` and are spaced by its `Resolution`, where it
+/// states them.
+fn check_header_agrees(
+    ctx: Ctx<'_>,
+    span: f64,
+    dx: f64,
+    length: Option<f64>,
+    resolution: Option<f64>,
+) -> Result<(), ReadError> {
     if let Some(len) = length.filter(|l| *l > 0.0) {
         let res = resolution.filter(|r| *r > 0.0).unwrap_or(dx);
         let expected_span = len - res;
@@ -164,14 +211,5 @@ pub(crate) fn read(ctx: Ctx<'_>, bytes: &[u8], want: Want<'_>) -> Result<Decoded
             "re-export the profile",
         ));
     }
-    let raw = Raw::si(
-        n,
-        1,
-        dx,
-        dx,
-        zs,
-        cols.get(1).copied().unwrap_or("height").to_string(),
-    )
-    .spacing_from("lateral column", "lateral column");
-    Decoded::single(ctx, want, raw)
+    Ok(())
 }

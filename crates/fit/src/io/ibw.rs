@@ -120,8 +120,104 @@ fn is_height_name(name: &str) -> bool {
     n.starts_with("height") || n.starts_with("zsensor") || n.starts_with("topograph")
 }
 
+/// The fields of the binary and wave headers this reader uses.
+struct Headers {
+    little: bool,
+    /// Bytes of the wave header and data.
+    wfm_size: u64,
+    formula: u64,
+    note_size: u64,
+    data_e_units: u64,
+    dim_e_units: [u64; 4],
+    dim_labels: [u64; 4],
+    npts: u64,
+    kind: Sample,
+    dims: [u64; 4],
+    /// Per-dimension spacing.
+    sfa: [f64; 4],
+    data_unit: String,
+    dim_unit: [String; 4],
+}
+
+/// Where the data lie and how they are shaped.
+struct Layout {
+    nx: u64,
+    ny: u64,
+    /// Channels (layers).
+    nch: u64,
+    /// Points per channel.
+    per: u64,
+    data_start: u64,
+    data_end: u64,
+}
+
+/// What the sections after the data say: the note's key-value pairs, the wave's unit,
+/// the lateral unit and the channel names.
+struct Trailer {
+    note: Vec<(String, String)>,
+    wave_unit: String,
+    lateral_unit: String,
+    names: Vec<String>,
+}
+
 /// Read an Igor binary wave.
 pub(crate) fn read(ctx: Ctx<'_>, bytes: &[u8], want: Want<'_>) -> Result<Decoded, ReadError> {
+    let h = headers(ctx, bytes)?;
+    let l = layout(ctx, &h, bytes)?;
+    let t = trailer(bytes, &h, &l);
+    let (nx, ny) = (l.nx, l.ny);
+    let named = t.names.iter().any(|n| !n.starts_with("channel "));
+    let channels: Vec<ChannelInfo> = t
+        .names
+        .iter()
+        .enumerate()
+        .map(|(i, n)| {
+            let unit = channel_unit(n, &t.note, &t.wave_unit);
+            let is_height = if named {
+                is_height_name(n) && units::length_factor(&unit).is_some()
+            } else {
+                // Unnamed channels: a height if the unit is a length or not stated.
+                unit.is_empty() || units::length_factor(&unit).is_some()
+            };
+            ChannelInfo {
+                index: i,
+                name: n.clone(),
+                unit,
+                is_height,
+                nx: nx as usize,
+                ny: ny as usize,
+            }
+        })
+        .collect();
+    let (kind, per, data_end) = (h.kind, l.per, l.data_end);
+    Decoded::pick(ctx, want, channels, |selected, channel| {
+        let size = kind.size() as u64;
+        let off = l.data_start + per * size * selected as u64;
+        let block = &bytes[off as usize..data_end as usize];
+        let heights = decode(block, kind, h.little, per as usize)
+            .ok_or_else(|| ctx.short("wave data", off + per * size, data_end))?;
+        let hu = match units::length_factor(&channel.unit) {
+            Some(f) => Unit::Known(f),
+            None => Unit::Unknown,
+        };
+        let lu = match units::length_factor(&t.lateral_unit) {
+            Some(f) => Unit::Known(f),
+            None => Unit::Unknown,
+        };
+        let dx = check_spacing(ctx, "sfA[0]", h.sfa[0].abs())?;
+        let dy = if ny == 1 {
+            dx
+        } else {
+            check_spacing(ctx, "sfA[1]", h.sfa[1].abs())?
+        };
+        let raw = Raw::si(nx as usize, ny as usize, dx, dy, heights, &channel.name)
+            .spacing_from("sfA[0]", "sfA[1]");
+        Ok(raw.in_units(hu, lu))
+    })
+}
+
+/// The version-5 headers, checked against their checksum.
+fn headers(ctx: Ctx<'_>, bytes: &[u8]) -> Result<Headers, ReadError> {
     if bytes.len() < HEADERS {
         return Err(ctx.short("headers", HEADERS as u64, bytes.len() as u64));
     }
@@ -142,20 +238,9 @@ pub(crate) fn read(ctx: Ctx<'_>, bytes: &[u8], want: Want<'_>) -> Result<Decoded
             "the file is corrupt; re-export it",
         ));
     }
-    let wfm_size = r.u32(4) as u64;
-    let formula = r.u32(8) as u64;
-    let note_size = r.u32(12) as u64;
-    let data_e_units = r.u32(16) as u64;
-    let dim_e_units: Vec<u64> = (0..4).map(|i| r.u32(20 + 4 * i) as u64).collect();
-    let dim_labels: Vec<u64> = (0..4).map(|i| r.u32(36 + 4 * i) as u64).collect();
+    // The wave header follows the 64-byte binary header.
     let w = 64;
-    let npts = r.u32(w + 12) as u64;
-    let dtype = r.u16(w + 16);
-    let dims: Vec<u64> = (0..4).map(|i| r.u32(w + 68 + 4 * i) as u64).collect();
-    let sfa: Vec<f64> = (0..4).map(|i| r.f64(w + 84 + 8 * i)).collect();
-    let data_unit = r.text(w + 148, 4);
-    let dim_unit: Vec<String> = (0..4).map(|i| r.text(w + 152 + 4 * i, 4)).collect();
-    let kind = match dtype {
+    let kind = match r.u16(w + 16) {
         0x02 => Sample::F32,
         0x04 => Sample::F64,
         0x08 => Sample::I8,
@@ -172,9 +257,29 @@ pub(crate) fn read(ctx: Ctx<'_>, bytes: &[u8], want: Want<'_>) -> Result<Decoded
             ));
         }
     };
-    let (nx, ny) = (dims[0], dims[1].max(1));
-    let nch = dims[2].max(1);
-    if dims[3] > 1 {
+    Ok(Headers {
+        little,
+        wfm_size: r.u32(4) as u64,
+        formula: r.u32(8) as u64,
+        note_size: r.u32(12) as u64,
+        data_e_units: r.u32(16) as u64,
+        dim_e_units: std::array::from_fn(|i| r.u32(20 + 4 * i) as u64),
+        dim_labels: std::array::from_fn(|i| r.u32(36 + 4 * i) as u64),
+        npts: r.u32(w + 12) as u64,
+        kind,
+        dims: std::array::from_fn(|i| r.u32(w + 68 + 4 * i) as u64),
+        sfa: std::array::from_fn(|i| r.f64(w + 84 + 8 * i)),
+        data_unit: r.text(w + 148, 4),
+        dim_unit: std::array::from_fn(|i| r.text(w + 152 + 4 * i, 4)),
+    })
+}
+
+/// The grid and where its data lie, checked against the point count, the wave size and
+/// the file's length (the sections after the data included).
+fn layout(ctx: Ctx<'_>, h: &Headers, bytes: &[u8]) -> Result<Layout, ReadError> {
+    let (nx, ny) = (h.dims[0], h.dims[1].max(1));
+    let nch = h.dims[2].max(1);
+    if h.dims[3] > 1 {
         return Err(ctx.err(
             "nDim",
             "four-dimensional waves are not supported",
@@ -183,6 +288,7 @@ pub(crate) fn read(ctx: Ctx<'_>, bytes: &[u8], want: Want<'_>) -> Result<Decoded
     }
     let per = checked_grid(ctx, "nDim", nx, ny, 1, u64::MAX)? as u64;
     let total = per.saturating_mul(nch);
+    let npts = h.npts;
     if total != npts {
         return Err(ctx.err(
             "npnts",
@@ -190,7 +296,8 @@ pub(crate) fn read(ctx: Ctx<'_>, bytes: &[u8], want: Want<'_>) -> Result<Decoded
             "the file is corrupt",
         ));
     }
-    let data_bytes = total.saturating_mul(kind.size() as u64);
+    let data_bytes = total.saturating_mul(h.kind.size() as u64);
+    let wfm_size = h.wfm_size;
     if wfm_size < 320 || wfm_size - 320 < data_bytes {
         return Err(ctx.err(
             "wfmSize",
@@ -206,11 +313,11 @@ pub(crate) fn read(ctx: Ctx<'_>, bytes: &[u8], want: Want<'_>) -> Result<Decoded
     // Note, then extended units, then labels. They name the channels and give their
     // units, so a file cut inside them is refused rather than read with guessed ones.
     let sections = [
-        ("formulaSize", formula),
-        ("noteSize", note_size),
-        ("dataEUnitsSize", data_e_units),
-        ("dimEUnitsSize", dim_e_units.iter().sum()),
-        ("dimLabelsSize", dim_labels.iter().sum()),
+        ("formulaSize", h.formula),
+        ("noteSize", h.note_size),
+        ("dataEUnitsSize", h.data_e_units),
+        ("dimEUnitsSize", h.dim_e_units.iter().sum()),
+        ("dimLabelsSize", h.dim_labels.iter().sum()),
     ];
     let mut end = data_end;
     for (field, size) in sections {
@@ -225,9 +332,22 @@ pub(crate) fn read(ctx: Ctx<'_>, bytes: &[u8], want: Want<'_>) -> Result<Decoded
             ));
         }
     }
-    let note_start = data_end + formula;
+    Ok(Layout {
+        nx,
+        ny,
+        nch,
+        per,
+        data_start,
+        data_end,
+    })
+}
+
+/// The note, the extended units and the channel labels after the data (their sizes
+/// already checked by [`layout`]).
+fn trailer(bytes: &[u8], h: &Headers, l: &Layout) -> Trailer {
+    let note_start = l.data_end + h.formula;
     let note: Vec<(String, String)> = bytes
-        .get(note_start as usize..(note_start + note_size).min(bytes.len() as u64) as usize)
+        .get(note_start as usize..(note_start + h.note_size).min(bytes.len() as u64) as usize)
         .map(|n| {
             n.iter()
                 .map(|&c| c as char)
@@ -238,7 +358,7 @@ pub(crate) fn read(ctx: Ctx<'_>, bytes: &[u8], want: Want<'_>) -> Result<Decoded
                 .collect()
         })
         .unwrap_or_default();
-    let mut p = note_start + note_size;
+    let mut p = note_start + h.note_size;
     let ext = |p: u64, n: u64| -> Option<String> {
         (n > 0).then(|| {
             bytes
@@ -247,70 +367,27 @@ pub(crate) fn read(ctx: Ctx<'_>, bytes: &[u8], want: Want<'_>) -> Result<Decoded
                 .unwrap_or_default()
         })
     };
-    let wave_unit = ext(p, data_e_units).unwrap_or(data_unit);
-    p += data_e_units;
-    let mut lateral_unit = dim_unit[0].clone();
-    if let Some(u) = ext(p, dim_e_units[0]) {
-        lateral_unit = u;
-    }
-    p += dim_e_units.iter().sum::<u64>();
-    p += dim_labels[0] + dim_labels[1];
+    let wave_unit = ext(p, h.data_e_units).unwrap_or_else(|| h.data_unit.clone());
+    p += h.data_e_units;
+    let lateral_unit = ext(p, h.dim_e_units[0]).unwrap_or_else(|| h.dim_unit[0].clone());
+    p += h.dim_e_units.iter().sum::<u64>();
+    p += h.dim_labels[0] + h.dim_labels[1];
     let mut names: Vec<String> = Vec::new();
-    if dim_labels[2] >= 64 {
+    if h.dim_labels[2] >= 64 {
         let lab = bytes
-            .get(p as usize..(p + dim_labels[2]).min(bytes.len() as u64) as usize)
+            .get(p as usize..(p + h.dim_labels[2]).min(bytes.len() as u64) as usize)
             .unwrap_or(&[]);
         // The first label names the dimension itself.
         names = lab.chunks(32).skip(1).map(super::binary::cstr).collect();
     }
-    names.truncate(nch as usize);
-    while names.len() < nch as usize {
+    names.truncate(l.nch as usize);
+    while names.len() < l.nch as usize {
         names.push(format!("channel {}", names.len()));
     }
-    let channels: Vec<ChannelInfo> = names
-        .iter()
-        .enumerate()
-        .map(|(i, n)| {
-            let unit = channel_unit(n, &note, &wave_unit);
-            let named = names.iter().any(|n| !n.starts_with("channel "));
-            let is_height = if named {
-                is_height_name(n) && units::length_factor(&unit).is_some()
-            } else {
-                // Unnamed channels: a height if the unit is a length or not stated.
-                unit.is_empty() || units::length_factor(&unit).is_some()
-            };
-            ChannelInfo {
-                index: i,
-                name: n.clone(),
-                unit,
-                is_height,
-                nx: nx as usize,
-                ny: ny as usize,
-            }
-        })
-        .collect();
-    Decoded::pick(ctx, want, channels, |selected, channel| {
-        let size = kind.size() as u64;
-        let off = data_start + per * size * selected as u64;
-        let block = &bytes[off as usize..data_end as usize];
-        let heights = decode(block, kind, little, per as usize)
-            .ok_or_else(|| ctx.short("wave data", off + per * size, data_end))?;
-        let hu = match units::length_factor(&channel.unit) {
-            Some(f) => Unit::Known(f),
-            None => Unit::Unknown,
-        };
-        let lu = match units::length_factor(&lateral_unit) {
-            Some(f) => Unit::Known(f),
-            None => Unit::Unknown,
-        };
-        let dx = check_spacing(ctx, "sfA[0]", sfa[0].abs())?;
-        let dy = if ny == 1 {
-            dx
-        } else {
-            check_spacing(ctx, "sfA[1]", sfa[1].abs())?
-        };
-        let raw = Raw::si(nx as usize, ny as usize, dx, dy, heights, &channel.name)
-            .spacing_from("sfA[0]", "sfA[1]");
-        Ok(raw.in_units(hu, lu))
-    })
+    Trailer {
+        note,
+        wave_unit,
+        lateral_unit,
+        names,
+    }
 }

@@ -135,99 +135,57 @@ fn header_length(ctx: Ctx<'_>, field: &str, v: &str) -> Result<(f64, Option<f64>
     Ok((num, Some(f)))
 }
 
-/// Read a text matrix.
-pub(crate) fn read(ctx: Ctx<'_>, bytes: &[u8], want: Want<'_>) -> Result<Decoded, ReadError> {
-    let text = text::decode(bytes);
-    text::check_not_cut(ctx, &text)?;
-    let dialect = text::Dialect::guess(text.lines().filter(|l| looks_numeric(l)));
-    let mut size_x = None;
-    let mut size_y = None;
-    let mut pixel = None;
-    // The keys as the header spells them (x size, y size, pixel size), for messages.
-    let mut keys = (String::new(), String::new(), String::new());
-    let mut lateral_unit: Option<f64> = None;
-    let mut height_unit: Option<Result<f64, String>> = None;
-    let mut factor: Option<(f64, Option<f64>)> = None;
-    let mut pixels: (Option<usize>, Option<usize>) = (None, None);
-    let mut channel = String::from("matrix");
-    let mut values: Vec<f64> = Vec::new();
-    let (mut nx, mut ny) = (0usize, 0usize);
-    let mut data_ended = false;
-    for (lineno, line) in text.lines().enumerate() {
-        let t = line.trim();
-        if t.is_empty() {
-            if ny > 0 {
-                data_ended = true;
-            }
-            continue;
-        }
-        if let Some(row) = dialect.row(t) {
-            if data_ended {
-                return Err(ctx.err(
-                    &format!("line {}", lineno + 1),
-                    "data continue after a blank line",
-                    "a matrix must be one block of rows; remove the blank line or split the file",
-                ));
-            }
-            if nx == 0 {
-                nx = row.len();
-            } else if row.len() != nx {
-                return Err(ctx.err(
-                    &format!("line {}", lineno + 1),
-                    format!("has {} values but the first row has {nx}", row.len()),
-                    "every row of the matrix must have the same length",
-                ));
-            }
-            values.extend_from_slice(&row);
-            ny += 1;
-            continue;
-        }
-        if ny > 0 && !t.starts_with('#') {
-            return Err(ctx.err(
-                &format!("line {}", lineno + 1),
-                format!(
-                    "`{}` is not a row of numbers",
-                    t.chars().take(40).collect::<String>()
-                ),
-                "remove stray text; header lines go before the data",
-            ));
-        }
-        let Some((k, v)) = text::key_value(t) else {
-            continue;
-        };
-        let Some(key) = classify(&k) else {
-            continue;
-        };
+/// What the header lines state; `None` where they are silent.
+#[derive(Default)]
+struct Header {
+    /// Lengths with the unit written beside them, if any.
+    size_x: Option<(f64, Option<f64>)>,
+    size_y: Option<(f64, Option<f64>)>,
+    pixel: Option<(f64, Option<f64>)>,
+    /// The keys as the header spells them (x size, y size, pixel size), for messages.
+    keys: (String, String, String),
+    lateral_unit: Option<f64>,
+    /// A length unit, or the unit text when it is not one (the values are not heights).
+    height_unit: Option<Result<f64, String>>,
+    /// A height factor and the unit it converts to, when it names one.
+    factor: Option<(f64, Option<f64>)>,
+    pixels: (Option<usize>, Option<usize>),
+    channel: Option<String>,
+}
+
+impl Header {
+    /// Record one `key: value` line the reader understands.
+    fn take(&mut self, ctx: Ctx<'_>, key: Key, k: &str, v: &str) -> Result<(), ReadError> {
         match key {
             Key::SizeX => {
-                size_x = Some(header_length(ctx, &k, &v)?);
-                keys.0 = k.trim().to_string();
+                self.size_x = Some(header_length(ctx, k, v)?);
+                self.keys.0 = k.trim().to_string();
             }
             Key::SizeY => {
-                size_y = Some(header_length(ctx, &k, &v)?);
-                keys.1 = k.trim().to_string();
+                self.size_y = Some(header_length(ctx, k, v)?);
+                self.keys.1 = k.trim().to_string();
             }
             Key::PixelSize => {
-                pixel = Some(header_length(ctx, &k, &v)?);
-                keys.2 = k.trim().to_string();
+                self.pixel = Some(header_length(ctx, k, v)?);
+                self.keys.2 = k.trim().to_string();
             }
             Key::LateralUnit => {
-                lateral_unit = Some(units::length_factor(&v).ok_or_else(|| {
+                self.lateral_unit = Some(units::length_factor(v).ok_or_else(|| {
                     ctx.err(
-                        &k,
+                        k,
                         format!("`{v}` is not a length unit"),
                         "use m, mm, µm or nm",
                     )
                 })?)
             }
             Key::HeightUnit => {
-                height_unit = Some(units::length_factor(&v).ok_or_else(|| v.trim().to_string()))
+                self.height_unit = Some(units::length_factor(v).ok_or_else(|| v.trim().to_string()))
             }
             Key::HeightFactor => {
-                let (f, unit_in_value) = units::split_number(&v)
+                let (f, unit_in_value) = units::split_number(v)
                     .map(|(f, u)| (f, units::length_factor(u)))
                     .ok_or_else(|| {
-                        ctx.err(&k, format!("`{v}` is not a number"), "write e.g. `= 0.001`")
+                        ctx.err(k, format!("`{v}` is not a number"), "write e.g. `= 0.001`")
                     })?;
                 // "height conversion factor (-> µm) = 0.001": the unit sits in the key.
                 let unit_in_key = k
@@ -235,13 +193,28 @@ pub(crate) fn read(ctx: Ctx<'_>, bytes: &[u8], want: Want<'_>) -> Result<Decoded
                     .nth(1)
                     .map(|u| u.trim_end_matches(')').trim())
                     .and_then(units::length_factor);
-                factor = Some((f, unit_in_value.or(unit_in_key)));
+                self.factor = Some((f, unit_in_value.or(unit_in_key)));
             }
-            Key::Channel => channel = v.to_string(),
-            Key::PixelsX => pixels.0 = v.trim().parse().ok(),
-            Key::PixelsY => pixels.1 = v.trim().parse().ok(),
+            Key::Channel => self.channel = Some(v.to_string()),
+            Key::PixelsX => self.pixels.0 = v.trim().parse().ok(),
+            Key::PixelsY => self.pixels.1 = v.trim().parse().ok(),
         }
+        Ok(())
     }
+}
+
+/// The rows of numbers: `ny` rows of `nx` values, x fastest.
+struct Rows {
+    values: Vec<f64>,
+    nx: usize,
+    ny: usize,
+}
+
+/// Read a text matrix.
+pub(crate) fn read(ctx: Ctx<'_>, bytes: &[u8], want: Want<'_>) -> Result<Decoded, ReadError> {
+    let text = text::decode(bytes);
+    text::check_not_cut(ctx, &text)?;
+    let (Rows { mut values, nx, ny }, header) = scan(ctx, &text)?;
     if nx == 0 || ny == 0 {
         return Err(ctx.err(
             "data",
@@ -251,7 +224,7 @@ pub(crate) fn read(ctx: Ctx<'_>, bytes: &[u8], want: Want<'_>) -> Result<Decoded
     }
     // A single column is a profile written one value per line.
     let (nx, ny) = if nx == 1 { (ny, 1) } else { (nx, ny) };
-    if let (Some(px), Some(py)) = pixels
+    if let (Some(px), Some(py)) = header.pixels
         && (px, py) != (nx, ny)
         && (py, px) != (nx, ny)
     {
@@ -262,52 +235,8 @@ pub(crate) fn read(ctx: Ctx<'_>, bytes: &[u8], want: Want<'_>) -> Result<Decoded
         ));
     }
     let mut notes = Vec::new();
-    let (height_unit, is_height, unit_name) = match (&height_unit, factor) {
-        (Some(Err(u)), _) => (Unit::Unknown, false, u.clone()),
-        (_, Some((f, Some(u)))) => (Unit::Known(f * u), true, units::name_of(u)),
-        (Some(Ok(u)), Some((f, None))) => (Unit::Known(f * u), true, units::name_of(*u)),
-        (None, Some((f, None))) => {
-            for v in &mut values {
-                *v *= f;
-            }
-            (Unit::Unknown, true, String::new())
-        }
-        (Some(Ok(u)), None) => (Unit::Known(*u), true, units::name_of(*u)),
-        (None, None) => (Unit::Unknown, true, String::new()),
-    };
-    // Lateral spacing and its unit.
-    let lat = |u: Option<f64>| u.or(lateral_unit);
-    let (spacing, lunit) = if let Some((p, u)) = pixel {
-        (Some((p, p)), lat(u))
-    } else if let Some((sx, ux)) = size_x {
-        let (sy, uy) = match size_y {
-            Some((sy, uy)) => (sy, uy),
-            None if ny > 1 => {
-                notes.push("the header gives no height (y size): square pixels assumed".into());
-                (sx * ny as f64 / nx as f64, ux)
-            }
-            None => (sx, ux),
-        };
-        let (ux, uy) = (lat(ux), lat(uy));
-        // Mixed units (`Width: 12.34 µm`, `Height: 5678.9 nm`) are folded into x's unit.
-        let sy = match (ux, uy) {
-            (Some(a), Some(b)) => sy * b / a,
-            _ => sy,
-        };
-        (
-            Some((
-                sx / nx as f64,
-                if ny > 1 {
-                    sy / ny as f64
-                } else {
-                    sx / nx as f64
-                },
-            )),
-            ux.or(uy),
-        )
-    } else {
-        (None, lateral_unit)
-    };
+    let (height_unit, is_height, unit_name) = height_unit(&header, &mut values);
+    let (spacing, lunit) = lateral_spacing(&header, (nx, ny), &mut notes);
     let lateral_unit = match (lunit, height_unit, spacing) {
         (Some(u), _, _) => Unit::Known(u),
         (None, Unit::Known(u), Some(_)) if is_height => {
@@ -319,9 +248,10 @@ pub(crate) fn read(ctx: Ctx<'_>, bytes: &[u8], want: Want<'_>) -> Result<Decoded
         }
         _ => Unit::Unknown,
     };
-    let spacing_fields = if pixel.is_some() {
+    let keys = header.keys;
+    let spacing_fields = if header.pixel.is_some() {
         (keys.2.clone(), keys.2)
-    } else if size_y.is_some() {
+    } else if header.size_y.is_some() {
         (keys.0, keys.1)
     } else {
         (keys.0.clone(), keys.0)
@@ -334,7 +264,7 @@ pub(crate) fn read(ctx: Ctx<'_>, bytes: &[u8], want: Want<'_>) -> Result<Decoded
         spacing,
         lateral_unit,
         spacing_fields,
-        channel,
+        channel: header.channel.unwrap_or_else(|| String::from("matrix")),
         notes,
     };
     let info = ChannelInfo {
@@ -343,4 +273,121 @@ pub(crate) fn read(ctx: Ctx<'_>, bytes: &[u8], want: Want<'_>) -> Result<Decoded
         ..raw.info(0)
     };
     Decoded::single_listed(ctx, want, info, raw)
+}
+
+/// The header lines and the one block of equal-length rows after them.
+fn scan(ctx: Ctx<'_>, text: &str) -> Result<(Rows, Header), ReadError> {
+    let dialect = text::Dialect::guess(text.lines().filter(|l| looks_numeric(l)));
+    let mut header = Header::default();
+    let mut rows = Rows {
+        values: Vec::new(),
+        nx: 0,
+        ny: 0,
+    };
+    let mut data_ended = false;
+    for (lineno, line) in text.lines().enumerate() {
+        let t = line.trim();
+        if t.is_empty() {
+            if rows.ny > 0 {
+                data_ended = true;
+            }
+            continue;
+        }
+        if let Some(row) = dialect.row(t) {
+            if data_ended {
+                return Err(ctx.err(
+                    &format!("line {}", lineno + 1),
+                    "data continue after a blank line",
+                    "a matrix must be one block of rows; remove the blank line or split the file",
+                ));
+            }
+            if rows.nx == 0 {
+                rows.nx = row.len();
+            } else if row.len() != rows.nx {
+                return Err(ctx.err(
+                    &format!("line {}", lineno + 1),
+                    format!("has {} values but the first row has {}", row.len(), rows.nx),
+                    "every row of the matrix must have the same length",
+                ));
+            }
+            rows.values.extend_from_slice(&row);
+            rows.ny += 1;
+            continue;
+        }
+        if rows.ny > 0 && !t.starts_with('#') {
+            return Err(ctx.err(
+                &format!("line {}", lineno + 1),
+                format!(
+                    "`{}` is not a row of numbers",
+                    t.chars().take(40).collect::<String>()
+                ),
+                "remove stray text; header lines go before the data",
+            ));
+        }
+        if let Some((k, v)) = text::key_value(t)
+            && let Some(key) = classify(&k)
+        {
+            header.take(ctx, key, &k, &v)?;
+        }
+    }
+    Ok((rows, header))
+}
+
+/// The unit of the values, whether they are heights, and the unit's name for listings. A
+/// factor with no unit is applied to `values` here, leaving the unit to the user.
+fn height_unit(header: &Header, values: &mut [f64]) -> (Unit, bool, String) {
+    match (&header.height_unit, header.factor) {
+        (Some(Err(u)), _) => (Unit::Unknown, false, u.clone()),
+        (_, Some((f, Some(u)))) => (Unit::Known(f * u), true, units::name_of(u)),
+        (Some(Ok(u)), Some((f, None))) => (Unit::Known(f * u), true, units::name_of(*u)),
+        (None, Some((f, None))) => {
+            for v in values.iter_mut() {
+                *v *= f;
+            }
+            (Unit::Unknown, true, String::new())
+        }
+        (Some(Ok(u)), None) => (Unit::Known(*u), true, units::name_of(*u)),
+        (None, None) => (Unit::Unknown, true, String::new()),
+    }
+}
+
+/// Pixel spacing in the header's lateral unit, and that unit: from the pixel size, else
+/// from the scan size over the grid.
+fn lateral_spacing(
+    header: &Header,
+    (nx, ny): (usize, usize),
+    notes: &mut Vec<String>,
+) -> (Option<(f64, f64)>, Option<f64>) {
+    let lat = |u: Option<f64>| u.or(header.lateral_unit);
+    if let Some((p, u)) = header.pixel {
+        return (Some((p, p)), lat(u));
+    }
+    let Some((sx, ux)) = header.size_x else {
+        return (None, header.lateral_unit);
+    };
+    let (sy, uy) = match header.size_y {
+        Some((sy, uy)) => (sy, uy),
+        None if ny > 1 => {
+            notes.push("the header gives no height (y size): square pixels assumed".into());
+            (sx * ny as f64 / nx as f64, ux)
+        }
+        None => (sx, ux),
+    };
+    let (ux, uy) = (lat(ux), lat(uy));
+    // Mixed units (`Width: 12.34 µm`, `Height: 5678.9 nm`) are folded into x's unit.
+    let sy = match (ux, uy) {
+        (Some(a), Some(b)) => sy * b / a,
+        _ => sy,
+    };
+    (
+        Some((
+            sx / nx as f64,
+            if ny > 1 {
+                sy / ny as f64
+            } else {
+                sx / nx as f64
+            },
+        )),
+        ux.or(uy),
+    )
 }

@@ -18,60 +18,23 @@ struct Buffer {
     direction: String,
 }
 
+/// The text header: global keys, the channel blocks, the `data` line's value and the
+/// offset of the values after it.
+struct Header {
+    global: Vec<(String, String)>,
+    buffers: Vec<Buffer>,
+    data_kind: Option<String>,
+    data_start: usize,
+}
+
 /// Read a PicoView image.
 pub(crate) fn read(ctx: Ctx<'_>, bytes: &[u8], want: Want<'_>) -> Result<Decoded, ReadError> {
-    let mut pos = 0usize;
-    let mut global: Vec<(String, String)> = Vec::new();
-    let mut buffers: Vec<Buffer> = Vec::new();
-    let mut data_kind = None;
-    while pos < bytes.len() {
-        let end = bytes[pos..]
-            .iter()
-            .position(|&b| b == b'\n')
-            .map_or(bytes.len(), |e| pos + e);
-        let raw = &bytes[pos..end];
-        pos = (end + 1).min(bytes.len());
-        let raw = raw.strip_suffix(b"\r").unwrap_or(raw);
-        if raw.first() == Some(&b' ') || raw.len() < 2 {
-            continue;
-        }
-        // Keys fill the first 14 bytes; values are Latin-1.
-        let text = |b: &[u8]| {
-            b.iter()
-                .map(|&c| c as char)
-                .collect::<String>()
-                .trim()
-                .to_string()
-        };
-        let (k, v) = if raw.len() > 14 {
-            (text(&raw[..14]), text(&raw[14..]))
-        } else {
-            (text(raw), String::new())
-        };
-        let (k, v) = (k.as_str(), v.as_str());
-        if k == "data" {
-            data_kind = Some(v.to_string());
-            break;
-        }
-        if k == "bufferLabel" {
-            buffers.push(Buffer {
-                label: v.to_string(),
-                range: f64::NAN,
-                unit: String::new(),
-                direction: String::new(),
-            });
-            continue;
-        }
-        match buffers.last_mut() {
-            Some(b) => match k {
-                "bufferRange" => b.range = v.parse().unwrap_or(f64::NAN),
-                "bufferUnit" => b.unit = v.to_string(),
-                "direction" => b.direction = v.to_string(),
-                _ => {}
-            },
-            None => global.push((k.to_string(), v.to_string())),
-        }
-    }
+    let Header {
+        global,
+        buffers,
+        data_kind,
+        data_start: pos,
+    } = header(bytes);
     let kind = data_kind.ok_or_else(|| {
         ctx.err(
             "data",
@@ -123,27 +86,8 @@ pub(crate) fn read(ctx: Ctx<'_>, bytes: &[u8], want: Want<'_>) -> Result<Decoded
         "BINARY_32" => Some((binary::Sample::I32, 2147483648.0)),
         _ => None,
     };
-    // Every channel, not only the one asked for: a copy cut short holds its first
-    // channels whole, and reading them would hide that the file is broken.
-    // (A grid beyond the supported size is `checked_grid`'s to report.)
-    if let Some((sample, _)) = format.filter(|_| nx.saturating_mul(ny) <= MAX_POINTS) {
-        let block = nx.saturating_mul(ny).saturating_mul(sample.size() as u64);
-        let file_len = bytes.len() as u64;
-        for c in &channels {
-            let start = (pos as u64).saturating_add(block.saturating_mul(c.index as u64));
-            let end = start.saturating_add(block);
-            if end > file_len {
-                return Err(ctx.truncated(
-                    "data",
-                    &format!(
-                        "channel {} `{}` ({nx} × {ny} {kind} values)",
-                        c.index, c.name
-                    ),
-                    (start, end),
-                    file_len,
-                ));
-            }
-        }
+    if let Some((sample, _)) = format {
+        check_complete(ctx, &channels, (nx, ny), sample, &kind, (pos, bytes.len()))?;
     }
     Decoded::pick(ctx, want, channels, |selected, channel| {
         let (sample, full) = match format {
@@ -181,4 +125,100 @@ pub(crate) fn read(ctx: Ctx<'_>, bytes: &[u8], want: Want<'_>) -> Result<Decoded
             .spacing_from("xLength", "yLength");
         Ok(out.in_units(Unit::Known(zu), Unit::Known(1.0)))
     })
+}
+
+/// The header lines up to and including `data`: keys fill the first 14 bytes, values are
+/// Latin-1; lines after a `bufferLabel` describe that channel.
+fn header(bytes: &[u8]) -> Header {
+    let mut pos = 0usize;
+    let mut global: Vec<(String, String)> = Vec::new();
+    let mut buffers: Vec<Buffer> = Vec::new();
+    let mut data_kind = None;
+    while pos < bytes.len() {
+        let end = bytes[pos..]
+            .iter()
+            .position(|&b| b == b'\n')
+            .map_or(bytes.len(), |e| pos + e);
+        let raw = &bytes[pos..end];
+        pos = (end + 1).min(bytes.len());
+        let raw = raw.strip_suffix(b"\r").unwrap_or(raw);
+        if raw.first() == Some(&b' ') || raw.len() < 2 {
+            continue;
+        }
+        let text = |b: &[u8]| {
+            b.iter()
+                .map(|&c| c as char)
+                .collect::<String>()
+                .trim()
+                .to_string()
+        };
+        let (k, v) = if raw.len() > 14 {
+            (text(&raw[..14]), text(&raw[14..]))
+        } else {
+            (text(raw), String::new())
+        };
+        let (k, v) = (k.as_str(), v.as_str());
+        if k == "data" {
+            data_kind = Some(v.to_string());
+            break;
+        }
+        if k == "bufferLabel" {
+            buffers.push(Buffer {
+                label: v.to_string(),
+                range: f64::NAN,
+                unit: String::new(),
+                direction: String::new(),
+            });
+            continue;
+        }
+        match buffers.last_mut() {
+            Some(b) => match k {
+                "bufferRange" => b.range = v.parse().unwrap_or(f64::NAN),
+                "bufferUnit" => b.unit = v.to_string(),
+                "direction" => b.direction = v.to_string(),
+                _ => {}
+            },
+            None => global.push((k.to_string(), v.to_string())),
+        }
+    }
+    Header {
+        global,
+        buffers,
+        data_kind,
+        data_start: pos,
+    }
+}
+
+/// Every channel's block lies in the file, not only the one asked for: a copy cut short
+/// holds its first channels whole, and reading them would hide that the file is broken.
+/// (A grid beyond the supported size is `checked_grid`'s to report.)
+fn check_complete(
+    ctx: Ctx<'_>,
+    channels: &[ChannelInfo],
+    (nx, ny): (u64, u64),
+    sample: binary::Sample,
+    kind: &str,
+    (data_start, file_len): (usize, usize),
+) -> Result<(), ReadError> {
+    if nx.saturating_mul(ny) > MAX_POINTS {
+        return Ok(());
+    }
+    let block = nx.saturating_mul(ny).saturating_mul(sample.size() as u64);
+    let file_len = file_len as u64;
+    for c in channels {
+        let start = (data_start as u64).saturating_add(block.saturating_mul(c.index as u64));
+        let end = start.saturating_add(block);
+        if end > file_len {
+            return Err(ctx.truncated(
+                "data",
+                &format!(
+                    "channel {} `{}` ({nx} × {ny} {kind} values)",
+                    c.index, c.name
+                ),
+                (start, end),
+                file_len,
+            ));
+        }
+    }
+    Ok(())
 }

@@ -729,146 +729,29 @@ fn finish(
         height_unit,
         spacing,
         lateral_unit,
-        spacing_fields: raw_fields,
+        spacing_fields,
         channel,
         mut notes,
     } = raw;
-    if heights.len() != nx.saturating_mul(ny) || nx == 0 || ny == 0 {
-        return Err(ctx.err(
-            "data",
-            format!("{} values for a {nx} × {ny} grid", heights.len()),
-            "the file is corrupt",
-        ));
-    }
-    if nx == 1 && ny == 1 {
-        return Err(ctx.err(
-            "data",
-            "the file holds a single point (a 1 × 1 grid)",
-            "a roughness fit needs a profile or a map; export the whole scan",
-        ));
-    }
-    let mut missing: Vec<&str> = Vec::new();
-    let mut fixes: Vec<&str> = Vec::new();
-    let z = match (height_unit, opts.units) {
-        (Unit::Known(f), Some(u)) => {
-            if (u.height / f - 1.0).abs() > 1e-9 {
-                notes.push(format!(
-                    "--units ignored for heights: the file states them in {}",
-                    units::name_of(f)
-                ));
-            }
-            f
-        }
-        (Unit::Known(f), None) => f,
-        (Unit::Unknown, Some(u)) => {
-            notes.push(format!(
-                "heights taken in {} (--units)",
-                units::name_of(u.height)
-            ));
-            u.height
-        }
-        (Unit::Unknown, None) => {
-            missing.push("the unit of its heights");
-            fixes.push("--units um (or m, mm, nm; `--units um,nm` for lateral,height)");
-            f64::NAN
-        }
-    };
-    let lateral = |d: (f64, f64), notes: &mut Vec<String>| -> Option<(f64, f64)> {
-        match (lateral_unit, opts.units) {
-            (Unit::Known(f), Some(u)) => {
-                if (u.lateral / f - 1.0).abs() > 1e-9 {
-                    notes.push(format!(
-                        "--units ignored for lengths: the file states them in {}",
-                        units::name_of(f)
-                    ));
-                }
-                Some((d.0 * f, d.1 * f))
-            }
-            (Unit::Known(f), None) => Some((d.0 * f, d.1 * f)),
-            (Unit::Unknown, Some(u)) => {
-                notes.push(format!(
-                    "lengths taken in {} (--units)",
-                    units::name_of(u.lateral)
-                ));
-                Some((d.0 * u.lateral, d.1 * u.lateral))
-            }
-            (Unit::Unknown, None) => None,
-        }
-    };
-    // Where the spacing comes from, for the range check below: a flag, or header fields
-    // (read in the unit --units gave when the file states none).
-    let flag_fix = |flag: &str| {
-        let (lo, hi) = PIXEL_SIZE_RANGE;
-        format!("give {flag} as a length with its unit within {lo:e} m … {hi} m, e.g. {flag} 0.5um")
-    };
-    let from_units = matches!(lateral_unit, Unit::Unknown) && opts.units.is_some();
-    let file_fix = |field: &str| {
-        if from_units {
-            format!(
-                "`{field}` is in the lateral unit --units gives: pass the unit it is really in, \
-                 or override the spacing with --pixel-size or --size"
-            )
-        } else {
-            format!(
-                "the header's `{field}` is corrupt or in the wrong unit: correct it, or override \
-                 it with --pixel-size or --size"
-            )
-        }
-    };
-    let (range_fields, range_fixes) = if opts.pixel_size.is_some() {
-        let f = "--pixel-size".to_string();
-        (
-            (f.clone(), f),
-            (flag_fix("--pixel-size"), flag_fix("--pixel-size")),
-        )
-    } else if opts.size.is_some() {
-        let f = "--size".to_string();
-        ((f.clone(), f), (flag_fix("--size"), flag_fix("--size")))
-    } else {
-        let (x, y) = raw_fields;
-        let fixes = (file_fix(&x), file_fix(&y));
-        ((x, y), fixes)
-    };
-    let (dx, dy) = if let Some(p) = opts.pixel_size {
-        if spacing.is_some() {
-            notes.push("--pixel-size overrides the file's pixel size".into());
-        }
-        p
-    } else if let Some(s) = opts.size {
-        if spacing.is_some() {
-            notes.push("--size overrides the file's scan size".into());
-        }
-        (
-            s.0 / nx as f64,
-            if ny > 1 {
-                s.1 / ny as f64
-            } else {
-                s.0 / nx as f64
-            },
-        )
-    } else if let Some(d) = spacing {
-        match lateral(d, &mut notes) {
-            Some(d) => d,
-            None => {
-                missing.push("the unit of its lengths");
-                if !fixes.iter().any(|f| f.starts_with("--units")) {
-                    fixes.push("--units um (or m, mm, nm)");
-                }
-                (f64::NAN, f64::NAN)
-            }
-        }
-    } else {
-        missing.push("its pixel size or scan size");
-        fixes.push("--pixel-size 0.5um (or --size 100um,80um)");
-        (f64::NAN, f64::NAN)
-    };
-    if !missing.is_empty() {
+    check_grid(ctx, nx, ny, heights.len())?;
+    let mut missing = Missing::default();
+    let z = height_factor(height_unit, opts, &mut notes, &mut missing);
+    let (dx, dy) = spacing_in_metres(
+        (nx, ny),
+        spacing,
+        lateral_unit,
+        opts,
+        &mut notes,
+        &mut missing,
+    );
+    if !missing.facts.is_empty() {
         return Err(ctx.err(
             "units",
-            format!("the file does not state {}", missing.join(", nor ")),
-            format!("pass {}", fixes.join(" and ")),
+            format!("the file does not state {}", missing.facts.join(", nor ")),
+            format!("pass {}", missing.fixes.join(" and ")),
         ));
     }
+    let (range_fields, range_fixes) = spacing_sources(opts, lateral_unit, spacing_fields);
     // A single column is a profile along y, as a single row is one along x: its x spacing
     // means nothing and is not checked.
     let column = nx == 1;
@@ -897,9 +780,213 @@ fn finish(
             "the header is corrupt",
         ));
     }
+    scale_heights(ctx, &mut heights, z, height_unit)?;
+    Ok((
+        Topography {
+            nx,
+            ny,
+            dx,
+            dy,
+            heights,
+            channel,
+            format: format.name(),
+        },
+        notes,
+    ))
+}
+
+/// A grid that holds its values and more than one point.
+fn check_grid(ctx: Ctx<'_>, nx: usize, ny: usize, values: usize) -> Result<(), ReadError> {
+    if values != nx.saturating_mul(ny) || nx == 0 || ny == 0 {
+        return Err(ctx.err(
+            "data",
+            format!("{values} values for a {nx} × {ny} grid"),
+            "the file is corrupt",
+        ));
+    }
+    if nx == 1 && ny == 1 {
+        return Err(ctx.err(
+            "data",
+            "the file holds a single point (a 1 × 1 grid)",
+            "a roughness fit needs a profile or a map; export the whole scan",
+        ));
+    }
+    Ok(())
+}
+
+/// The facts a file does not state and the flags that supply them, gathered so that one
+/// error names them all.
+#[derive(Default)]
+struct Missing {
+    facts: Vec<&'static str>,
+    fixes: Vec<&'static str>,
+}
+
+/// Metres per stored height unit: the file's, else `--units`'; NaN (and a missing fact)
+/// when neither says.
+fn height_factor(
+    height_unit: Unit,
+    opts: &ReadOptions,
+    notes: &mut Vec<String>,
+    missing: &mut Missing,
+) -> f64 {
+    match (height_unit, opts.units) {
+        (Unit::Known(f), Some(u)) => {
+            if (u.height / f - 1.0).abs() > 1e-9 {
+                notes.push(format!(
+                    "--units ignored for heights: the file states them in {}",
+                    units::name_of(f)
+                ));
+            }
+            f
+        }
+        (Unit::Known(f), None) => f,
+        (Unit::Unknown, Some(u)) => {
+            notes.push(format!(
+                "heights taken in {} (--units)",
+                units::name_of(u.height)
+            ));
+            u.height
+        }
+        (Unit::Unknown, None) => {
+            missing.facts.push("the unit of its heights");
+            missing
+                .fixes
+                .push("--units um (or m, mm, nm; `--units um,nm` for lateral,height)");
+            f64::NAN
+        }
+    }
+}
+
+/// The file's spacing in metres, in its unit or the one `--units` gives; `None` when
+/// neither says.
+fn lateral_in_metres(
+    d: (f64, f64),
+    lateral_unit: Unit,
+    opts: &ReadOptions,
+    notes: &mut Vec<String>,
+) -> Option<(f64, f64)> {
+    match (lateral_unit, opts.units) {
+        (Unit::Known(f), Some(u)) => {
+            if (u.lateral / f - 1.0).abs() > 1e-9 {
+                notes.push(format!(
+                    "--units ignored for lengths: the file states them in {}",
+                    units::name_of(f)
+                ));
+            }
+            Some((d.0 * f, d.1 * f))
+        }
+        (Unit::Known(f), None) => Some((d.0 * f, d.1 * f)),
+        (Unit::Unknown, Some(u)) => {
+            notes.push(format!(
+                "lengths taken in {} (--units)",
+                units::name_of(u.lateral)
+            ));
+            Some((d.0 * u.lateral, d.1 * u.lateral))
+        }
+        (Unit::Unknown, None) => None,
+    }
+}
+
+/// Pixel spacing `(dx, dy)` [m]: `--pixel-size`, else `--size` over the grid, else the
+/// file's; NaN (and a missing fact) when none gives it.
+fn spacing_in_metres(
+    (nx, ny): (usize, usize),
+    spacing: Option<(f64, f64)>,
+    lateral_unit: Unit,
+    opts: &ReadOptions,
+    notes: &mut Vec<String>,
+    missing: &mut Missing,
+) -> (f64, f64) {
+    if let Some(p) = opts.pixel_size {
+        if spacing.is_some() {
+            notes.push("--pixel-size overrides the file's pixel size".into());
+        }
+        p
+    } else if let Some(s) = opts.size {
+        if spacing.is_some() {
+            notes.push("--size overrides the file's scan size".into());
+        }
+        (
+            s.0 / nx as f64,
+            if ny > 1 {
+                s.1 / ny as f64
+            } else {
+                s.0 / nx as f64
+            },
+        )
+    } else if let Some(d) = spacing {
+        match lateral_in_metres(d, lateral_unit, opts, notes) {
+            Some(d) => d,
+            None => {
+                missing.facts.push("the unit of its lengths");
+                if !missing.fixes.iter().any(|f| f.starts_with("--units")) {
+                    missing.fixes.push("--units um (or m, mm, nm)");
+                }
+                (f64::NAN, f64::NAN)
+            }
+        }
+    } else {
+        missing.facts.push("its pixel size or scan size");
+        missing
+            .fixes
+            .push("--pixel-size 0.5um (or --size 100um,80um)");
+        (f64::NAN, f64::NAN)
+    }
+}
+
+/// Where the spacing comes from, for the range check: a flag, or header fields (read in
+/// the unit --units gave when the file states none); `((x field, y field), (x fix, y fix))`.
+fn spacing_sources(
+    opts: &ReadOptions,
+    lateral_unit: Unit,
+    header_fields: (String, String),
+) -> ((String, String), (String, String)) {
+    let flag_fix = |flag: &str| {
+        let (lo, hi) = PIXEL_SIZE_RANGE;
+        format!("give {flag} as a length with its unit within {lo:e} m … {hi} m, e.g. {flag} 0.5um")
+    };
+    let from_units = matches!(lateral_unit, Unit::Unknown) && opts.units.is_some();
+    let file_fix = |field: &str| {
+        if from_units {
+            format!(
+                "`{field}` is in the lateral unit --units gives: pass the unit it is really in, \
+                 or override the spacing with --pixel-size or --size"
+            )
+        } else {
+            format!(
+                "the header's `{field}` is corrupt or in the wrong unit: correct it, or override \
+                 it with --pixel-size or --size"
+            )
+        }
+    };
+    if opts.pixel_size.is_some() {
+        let f = "--pixel-size".to_string();
+        (
+            (f.clone(), f),
+            (flag_fix("--pixel-size"), flag_fix("--pixel-size")),
+        )
+    } else if opts.size.is_some() {
+        let f = "--size".to_string();
+        ((f.clone(), f), (flag_fix("--size"), flag_fix("--size")))
+    } else {
+        let (x, y) = header_fields;
+        let fixes = (file_fix(&x), file_fix(&y));
+        ((x, y), fixes)
+    }
+}
+
+/// Heights into metres (`z` per stored unit); invalid values become NaN. A height that
+/// overflows or exceeds [`HEIGHT_MAX`] is a wrong scale, named with its likely cause.
+fn scale_heights(
+    ctx: Ctx<'_>,
+    heights: &mut [f64],
+    z: f64,
+    height_unit: Unit,
+) -> Result<(), ReadError> {
     let mut overflowed = 0usize;
     let mut largest = 0.0f64;
-    for h in &mut heights {
+    for h in heights.iter_mut() {
         if h.is_finite() {
             *h *= z;
             if h.is_finite() {
@@ -931,16 +1018,5 @@ fn finish(
             fix,
         ));
     }
-    Ok((
-        Topography {
-            nx,
-            ny,
-            dx,
-            dy,
-            heights,
-            channel,
-            format: format.name(),
-        },
-        notes,
-    ))
+    Ok(())
 }

@@ -29,6 +29,10 @@ struct DataSet {
     offset: u64,
 }
 
+/// The header's sections, `[name]` → key → value; lines before the first section belong
+/// to `DataSet`.
+type Sections = HashMap<String, HashMap<String, String>>;
+
 /// Read a Nanosurf file.
 pub(crate) fn read(ctx: Ctx<'_>, bytes: &[u8], want: Want<'_>) -> Result<Decoded, ReadError> {
     let marker = bytes
@@ -44,109 +48,7 @@ pub(crate) fn read(ctx: Ctx<'_>, bytes: &[u8], want: Want<'_>) -> Result<Decoded
         })?;
     let header: String = bytes[..marker].iter().map(|&b| b as char).collect();
     let data = &bytes[marker + 2..];
-    let mut sections: HashMap<String, HashMap<String, String>> = HashMap::new();
-    let mut current = String::from("DataSet");
-    for line in header.lines() {
-        let l = line.trim();
-        if l.starts_with('[') && l.ends_with(']') {
-            current = l[1..l.len() - 1].to_string();
-            continue;
-        }
-        if let Some((k, v)) = l.split_once('=') {
-            sections
-                .entry(current.clone())
-                .or_default()
-                .insert(k.trim().to_string(), v.trim().to_string());
-        }
-    }
-    let global = sections.get("DataSet").ok_or_else(|| {
-        ctx.err(
-            "[DataSet]",
-            "section missing",
-            "not a Nanosurf file, or a corrupt one",
-        )
-    })?;
-    let int =
-        |m: &HashMap<String, String>, k: &str| -> Option<u64> { m.get(k)?.trim().parse().ok() };
-    let groups = int(global, "GroupCount")
-        .ok_or_else(|| ctx.err("GroupCount", "missing", "the header is incomplete"))?;
-    let mut sets = Vec::new();
-    let mut offset = 0u64;
-    for g in 0..groups.min(1000) {
-        let count = int(global, &format!("Gr{g}-Count")).unwrap_or(0);
-        for j in 0..count.min(1000) {
-            let Some(name) = global.get(&format!("Gr{g}-Ch{j}")) else {
-                continue;
-            };
-            let Some(s) = sections.get(name) else {
-                continue;
-            };
-            let field = |k: &str| -> Result<&String, ReadError> {
-                s.get(k).ok_or_else(|| {
-                    ctx.err(
-                        &format!("[{name}] {k}"),
-                        "missing",
-                        "the header is incomplete",
-                    )
-                })
-            };
-            let num = |k: &str| -> Result<f64, ReadError> {
-                field(k)?.parse::<f64>().map_err(|_| {
-                    ctx.err(
-                        &format!("[{name}] {k}"),
-                        "not a number",
-                        "the header is corrupt",
-                    )
-                })
-            };
-            if field("SaveMode")? != "Binary" {
-                return Err(ctx.err(
-                    &format!("[{name}] SaveMode"),
-                    "only binary data sets are supported",
-                    "save the measurement in binary mode",
-                ));
-            }
-            let nx = int(s, "Points")
-                .ok_or_else(|| ctx.err("Points", "missing", "the header is incomplete"))?;
-            let ny = int(s, "Lines")
-                .ok_or_else(|| ctx.err("Lines", "missing", "the header is incomplete"))?;
-            let bits = int(s, "SaveBits").unwrap_or(32) as u32;
-            let signed = s.get("SaveSign").map(String::as_str) != Some("Unsigned");
-            let kind = match (bits, signed) {
-                (8, true) => Sample::I8,
-                (8, false) => Sample::U8,
-                (16, true) => Sample::I16,
-                (16, false) => Sample::U16,
-                (32, true) => Sample::I32,
-                (32, false) => Sample::U32,
-                _ => {
-                    return Err(ctx.err(
-                        &format!("[{name}] SaveBits"),
-                        format!("{bits}-bit samples are not supported"),
-                        "expected 8, 16 or 32",
-                    ));
-                }
-            };
-            let frame = s.get("Frame").cloned().unwrap_or_default();
-            let dim2 = s.get("Dim2Name").cloned().unwrap_or_default();
-            sets.push(DataSet {
-                section: name.clone(),
-                name: format!("{frame} ({dim2})"),
-                unit: s.get("Dim2Unit").cloned().unwrap_or_default(),
-                nx,
-                ny,
-                kind,
-                little: s.get("SaveOrder").is_none_or(|v| v == "Intel"),
-                bits,
-                range_x: num("Dim0Range")?,
-                range_y: num("Dim1Range").unwrap_or(f64::NAN),
-                xy_unit: s.get("Dim0Unit").cloned().unwrap_or_else(|| "m".into()),
-                z_range: num("Dim2Range")?,
-                offset,
-            });
-            offset = offset.saturating_add(nx.saturating_mul(ny).saturating_mul(bits as u64 / 8));
-        }
-    }
+    let sets = data_sets(ctx, &sections(&header))?;
     if sets.is_empty() {
         return Err(ctx.err("[DataSet]", "no data set listed", "the file holds no image"));
     }
@@ -162,29 +64,13 @@ pub(crate) fn read(ctx: Ctx<'_>, bytes: &[u8], want: Want<'_>) -> Result<Decoded
             ny: s.ny as usize,
         })
         .collect();
-    // Every data set, not only the one asked for: a copy cut short holds its first
-    // channels whole, and reading them would hide that the file is broken. (A grid
-    // beyond the supported size is `checked_grid`'s to report.)
-    let data_start = (marker + 2) as u64;
-    let file_len = bytes.len() as u64;
-    for (s, c) in sets.iter().zip(&channels) {
-        if s.nx.saturating_mul(s.ny) > MAX_POINTS {
-            continue;
-        }
-        let start = data_start.saturating_add(s.offset);
-        let end = start.saturating_add(s.nx * s.ny * (s.bits as u64 / 8));
-        if end > file_len {
-            return Err(ctx.truncated(
-                &format!("[{}] Points × Lines", s.section),
-                &format!(
-                    "data set {} `{}` ({} × {} {}-bit values)",
-                    c.index, c.name, s.nx, s.ny, s.bits
-                ),
-                (start, end),
-                file_len,
-            ));
-        }
-    }
+    check_complete(
+        ctx,
+        &sets,
+        &channels,
+        (marker + 2) as u64,
+        bytes.len() as u64,
+    )?;
     Decoded::pick(ctx, want, channels, |selected, _| {
         let s = &sets[selected];
         let block = data
@@ -218,4 +104,166 @@ pub(crate) fn read(ctx: Ctx<'_>, bytes: &[u8], want: Want<'_>) -> Result<Decoded
             .spacing_from("Dim0Range", "Dim1Range");
         Ok(out.in_units(Unit::Known(zu), Unit::Known(1.0)))
     })
+}
+
+/// The INI-style header as [`Sections`].
+fn sections(header: &str) -> Sections {
+    let mut sections = Sections::new();
+    let mut current = String::from("DataSet");
+    for line in header.lines() {
+        let l = line.trim();
+        if l.starts_with('[') && l.ends_with(']') {
+            current = l[1..l.len() - 1].to_string();
+            continue;
+        }
+        if let Some((k, v)) = l.split_once('=') {
+            sections
+                .entry(current.clone())
+                .or_default()
+                .insert(k.trim().to_string(), v.trim().to_string());
+        }
+    }
+    sections
+}
+
+fn int(m: &HashMap<String, String>, k: &str) -> Option<u64> {
+    m.get(k)?.trim().parse().ok()
+}
+
+/// The data sets `[DataSet]` lists, group by group, each at its offset in the binary part
+/// (the blocks follow each other in that order).
+fn data_sets(ctx: Ctx<'_>, sections: &Sections) -> Result<Vec<DataSet>, ReadError> {
+    let global = sections.get("DataSet").ok_or_else(|| {
+        ctx.err(
+            "[DataSet]",
+            "section missing",
+            "not a Nanosurf file, or a corrupt one",
+        )
+    })?;
+    let groups = int(global, "GroupCount")
+        .ok_or_else(|| ctx.err("GroupCount", "missing", "the header is incomplete"))?;
+    let mut sets = Vec::new();
+    let mut offset = 0u64;
+    for g in 0..groups.min(1000) {
+        let count = int(global, &format!("Gr{g}-Count")).unwrap_or(0);
+        for j in 0..count.min(1000) {
+            let Some(name) = global.get(&format!("Gr{g}-Ch{j}")) else {
+                continue;
+            };
+            let Some(s) = sections.get(name) else {
+                continue;
+            };
+            let set = data_set(ctx, name, s, offset)?;
+            offset = offset.saturating_add(
+                set.nx
+                    .saturating_mul(set.ny)
+                    .saturating_mul(set.bits as u64 / 8),
+            );
+            sets.push(set);
+        }
+    }
+    Ok(sets)
+}
+
+/// One data set from its section `[name]` (`s`), its block starting at `offset`.
+fn data_set(
+    ctx: Ctx<'_>,
+    name: &str,
+    s: &HashMap<String, String>,
+    offset: u64,
+) -> Result<DataSet, ReadError> {
+    let field = |k: &str| -> Result<&String, ReadError> {
+        s.get(k).ok_or_else(|| {
+            ctx.err(
+                &format!("[{name}] {k}"),
+                "missing",
+                "the header is incomplete",
+            )
+        })
+    };
+    let num = |k: &str| -> Result<f64, ReadError> {
+        field(k)?.parse::<f64>().map_err(|_| {
+            ctx.err(
+                &format!("[{name}] {k}"),
+                "not a number",
+                "the header is corrupt",
+            )
+        })
+    };
+    if field("SaveMode")? != "Binary" {
+        return Err(ctx.err(
+            &format!("[{name}] SaveMode"),
+            "only binary data sets are supported",
+            "save the measurement in binary mode",
+        ));
+    }
+    let nx =
+        int(s, "Points").ok_or_else(|| ctx.err("Points", "missing", "the header is incomplete"))?;
+    let ny =
+        int(s, "Lines").ok_or_else(|| ctx.err("Lines", "missing", "the header is incomplete"))?;
+    let bits = int(s, "SaveBits").unwrap_or(32) as u32;
+    let signed = s.get("SaveSign").map(String::as_str) != Some("Unsigned");
+    let kind = match (bits, signed) {
+        (8, true) => Sample::I8,
+        (8, false) => Sample::U8,
+        (16, true) => Sample::I16,
+        (16, false) => Sample::U16,
+        (32, true) => Sample::I32,
+        (32, false) => Sample::U32,
+        _ => {
+            return Err(ctx.err(
+                &format!("[{name}] SaveBits"),
+                format!("{bits}-bit samples are not supported"),
+                "expected 8, 16 or 32",
+            ));
+        }
+    };
+    let frame = s.get("Frame").cloned().unwrap_or_default();
+    let dim2 = s.get("Dim2Name").cloned().unwrap_or_default();
+    Ok(DataSet {
+        section: name.to_string(),
+        name: format!("{frame} ({dim2})"),
+        unit: s.get("Dim2Unit").cloned().unwrap_or_default(),
+        nx,
+        ny,
+        kind,
+        little: s.get("SaveOrder").is_none_or(|v| v == "Intel"),
+        bits,
+        range_x: num("Dim0Range")?,
+        range_y: num("Dim1Range").unwrap_or(f64::NAN),
+        xy_unit: s.get("Dim0Unit").cloned().unwrap_or_else(|| "m".into()),
+        z_range: num("Dim2Range")?,
+        offset,
+    })
+}
+
+/// Every data set's block lies in the file, not only the one asked for: a copy cut short
+/// holds its first channels whole, and reading them would hide that the file is broken.
+/// (A grid beyond the supported size is `checked_grid`'s to report.)
+fn check_complete(
+    ctx: Ctx<'_>,
+    sets: &[DataSet],
+    channels: &[ChannelInfo],
+    data_start: u64,
+    file_len: u64,
+) -> Result<(), ReadError> {
+    for (s, c) in sets.iter().zip(channels) {
+        if s.nx.saturating_mul(s.ny) > MAX_POINTS {
+            continue;
+        }
+        let start = data_start.saturating_add(s.offset);
+        let end = start.saturating_add(s.nx * s.ny * (s.bits as u64 / 8));
+        if end > file_len {
+            return Err(ctx.truncated(
+                &format!("[{}] Points × Lines", s.section),
+                &format!(
+                    "data set {} `{}` ({} × {} {}-bit values)",
+                    c.index, c.name, s.nx, s.ny, s.bits
+                ),
+                (start, end),
+                file_len,
+            ));
+        }
+    }
+    Ok(())
 }

@@ -21,52 +21,7 @@ struct Block {
 
 /// Read a Wyko OPD file.
 pub(crate) fn read(ctx: Ctx<'_>, bytes: &[u8], want: Want<'_>) -> Result<Decoded, ReadError> {
-    let short = |need: usize| ctx.short("directory", need as u64, bytes.len() as u64);
-    let mut c = Cursor::le(bytes, 2);
-    let dir_name = c.text(16).ok_or_else(|| short(26))?;
-    let _dir_type = c.i16().ok_or_else(|| short(26))?;
-    let dir_len = c.i32().ok_or_else(|| short(26))?;
-    let _attr = c.u16().ok_or_else(|| short(26))?;
-    if dir_name != "Directory" {
-        return Err(ctx.err(
-            "Directory",
-            format!("the first block is `{dir_name}`, not the directory"),
-            "not a Wyko OPD file",
-        ));
-    }
-    if dir_len <= 0 || !(dir_len as usize).is_multiple_of(BLOCK) {
-        return Err(ctx.err(
-            "Directory",
-            format!("directory length {dir_len} is not a positive multiple of {BLOCK}"),
-            "the file is corrupt",
-        ));
-    }
-    let nblocks = dir_len as usize / BLOCK;
-    let mut offset = 2 + dir_len as usize;
-    let mut blocks = Vec::with_capacity(nblocks.min(4096));
-    for _ in 1..nblocks {
-        let name = c.text(16).ok_or_else(|| short(2 + dir_len as usize))?;
-        let _kind = c.i16().ok_or_else(|| short(2 + dir_len as usize))?;
-        let len = c.i32().ok_or_else(|| short(2 + dir_len as usize))?;
-        let _attr = c.u16().ok_or_else(|| short(2 + dir_len as usize))?;
-        let len = len.max(0) as usize;
-        blocks.push(Block { name, len, offset });
-        offset = offset.saturating_add(len);
-    }
-    // Every block, not only those read: a copy cut short holds the first arrays whole,
-    // and the scale blocks missing from its end would be taken as absent (Mult = 1).
-    let file_len = bytes.len() as u64;
-    if let Some(b) = blocks
-        .iter()
-        .find(|b| b.offset.saturating_add(b.len) as u64 > file_len)
-    {
-        return Err(ctx.truncated(
-            "Directory",
-            &format!("block `{}` ({} bytes)", b.name, b.len),
-            (b.offset as u64, b.offset.saturating_add(b.len) as u64),
-            file_len,
-        ));
-    }
+    let blocks = directory(ctx, bytes)?;
     let value = |name: &str| blocks.iter().find(|b| b.name == name && b.len > 0);
     let f32_of = |b: &Block| Cursor::le(bytes, b.offset).f32();
     let wavelength = value("Wavelength").and_then(f32_of).ok_or_else(|| {
@@ -169,4 +124,55 @@ pub(crate) fn read(ctx: Ctx<'_>, bytes: &[u8], want: Want<'_>) -> Result<Decoded
             notes: Vec::new(),
         })
     })
+}
+
+/// The blocks the directory lists, each checked to lie within the file.
+fn directory(ctx: Ctx<'_>, bytes: &[u8]) -> Result<Vec<Block>, ReadError> {
+    let short = |need: usize| ctx.short("directory", need as u64, bytes.len() as u64);
+    let mut c = Cursor::le(bytes, 2);
+    let dir_name = c.text(16).ok_or_else(|| short(26))?;
+    let _dir_type = c.i16().ok_or_else(|| short(26))?;
+    let dir_len = c.i32().ok_or_else(|| short(26))?;
+    let _attr = c.u16().ok_or_else(|| short(26))?;
+    if dir_name != "Directory" {
+        return Err(ctx.err(
+            "Directory",
+            format!("the first block is `{dir_name}`, not the directory"),
+            "not a Wyko OPD file",
+        ));
+    }
+    if dir_len <= 0 || !(dir_len as usize).is_multiple_of(BLOCK) {
+        return Err(ctx.err(
+            "Directory",
+            format!("directory length {dir_len} is not a positive multiple of {BLOCK}"),
+            "the file is corrupt",
+        ));
+    }
+    let nblocks = dir_len as usize / BLOCK;
+    let mut offset = 2 + dir_len as usize;
+    let mut blocks = Vec::with_capacity(nblocks.min(4096));
+    for _ in 1..nblocks {
+        let name = c.text(16).ok_or_else(|| short(2 + dir_len as usize))?;
+        let _kind = c.i16().ok_or_else(|| short(2 + dir_len as usize))?;
+        let len = c.i32().ok_or_else(|| short(2 + dir_len as usize))?;
+        let _attr = c.u16().ok_or_else(|| short(2 + dir_len as usize))?;
+        let len = len.max(0) as usize;
+        blocks.push(Block { name, len, offset });
+        offset = offset.saturating_add(len);
+    }
+    // Every block, not only those read: a copy cut short holds the first arrays whole,
+    // and the scale blocks missing from its end would be taken as absent (Mult = 1).
+    let file_len = bytes.len() as u64;
+    if let Some(b) = blocks
+        .iter()
+        .find(|b| b.offset.saturating_add(b.len) as u64 > file_len)
+    {
+        return Err(ctx.truncated(
+            "Directory",
+            &format!("block `{}` ({} bytes)", b.name, b.len),
+            (b.offset as u64, b.offset.saturating_add(b.len) as u64),
+            file_len,
+        ));
+    }
+    Ok(blocks)
 }

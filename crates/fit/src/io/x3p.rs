@@ -27,6 +27,9 @@ pub(crate) fn read(ctx: Ctx<'_>, bytes: &[u8], want: Want<'_>) -> Result<Decoded
     Decoded::single(ctx, want, parse(ctx, bytes)?)
 }
 
+/// The archive of an X3P file read from memory.
+type Archive<'b> = zip::ZipArchive<std::io::Cursor<&'b [u8]>>;
+
 /// Parse an X3P file.
 fn parse(ctx: Ctx<'_>, bytes: &[u8]) -> Result<Raw, ReadError> {
     let mut zip = zip::ZipArchive::new(std::io::Cursor::new(bytes)).map_err(|e| {
@@ -42,52 +45,108 @@ fn parse(ctx: Ctx<'_>, bytes: &[u8]) -> Result<Raw, ReadError> {
     let xml = String::from_utf8(xml)
         .map_err(|_| ctx.err("main.xml", "not UTF-8", "the X3P file is corrupt"))?;
     let doc = parse_xml(ctx, &xml)?;
-    let get = |path: &str| doc.fields.get(path).map(String::as_str);
-    let need = |path: &str| {
-        get(path).ok_or_else(|| {
-            ctx.err(
+    let header = Header {
+        ctx,
+        fields: &doc.fields,
+    };
+    check_supported(&header)?;
+    let (nx, ny, dx, dy) = grid(&header)?;
+    let (kind, zscale) = sample_kind(&header)?;
+    // Paths in main.xml are relative to its folder, with either separator.
+    let in_dir = |link: &str| format!("{dir}{}", link.trim().replace('\\', "/"));
+    let mut heights = if let Some(link) = header.get("Record3/DataLink/PointDataLink") {
+        linked_points(&header, &mut zip, &in_dir(link), (nx, ny), kind)?
+    } else if !doc.data_list.is_empty() {
+        listed_points(ctx, &doc.data_list, (nx, ny))?
+    } else {
+        return Err(ctx.err(
+            "Record3/DataLink",
+            "neither a PointDataLink nor a DataList",
+            "the X3P file holds no data",
+        ));
+    };
+    for h in &mut heights {
+        *h = if h.is_finite() { *h * zscale } else { f64::NAN };
+    }
+    if let Some(valid) = header.get("Record3/DataLink/ValidPointsLink") {
+        mask_invalid_points(ctx, &mut zip, &in_dir(valid), &mut heights)?;
+    }
+    let channel = header.get("Record2/Comment").unwrap_or("x3p").trim();
+    Ok(Raw::si(nx as usize, ny as usize, dx, dy, heights, channel)
+        .spacing_from("Record1/Axes/CX/Increment", "Record1/Axes/CY/Increment"))
+}
+
+/// The fields of `main.xml` by their record path, with errors naming the path.
+struct Header<'h> {
+    ctx: Ctx<'h>,
+    fields: &'h HashMap<String, String>,
+}
+
+impl<'h> Header<'h> {
+    fn get(&self, path: &str) -> Option<&'h str> {
+        self.fields.get(path).map(String::as_str)
+    }
+
+    fn need(&self, path: &str) -> Result<&'h str, ReadError> {
+        self.get(path).ok_or_else(|| {
+            self.ctx.err(
                 path,
                 "missing from main.xml",
                 "the X3P file is incomplete; re-export it",
             )
         })
-    };
-    let feature = get("Record1/FeatureType").unwrap_or("SUR");
+    }
+
+    fn num(&self, path: &str) -> Result<f64, ReadError> {
+        self.need(path)?.trim().parse::<f64>().map_err(|_| {
+            self.ctx
+                .err(path, "not a number", "the X3P header is corrupt")
+        })
+    }
+
+    fn count(&self, path: &str) -> Result<u64, ReadError> {
+        self.need(path)?.trim().parse::<u64>().map_err(|_| {
+            self.ctx.err(
+                path,
+                "not a non-negative integer",
+                "the X3P header is corrupt",
+            )
+        })
+    }
+}
+
+/// Refuse what this reader does not read: point clouds and absolute lateral axes.
+fn check_supported(header: &Header<'_>) -> Result<(), ReadError> {
+    let feature = header.get("Record1/FeatureType").unwrap_or("SUR");
     if feature == "PCL" {
-        return Err(ctx.err(
+        return Err(header.ctx.err(
             "Record1/FeatureType",
             "point clouds (PCL) are not supported",
             "export the surface as a regular grid (SUR)",
         ));
     }
     for axis in ["CX", "CY"] {
-        let t = get(&format!("Record1/Axes/{axis}/AxisType")).unwrap_or("I");
+        let t = header
+            .get(&format!("Record1/Axes/{axis}/AxisType"))
+            .unwrap_or("I");
         if t != "I" {
-            return Err(ctx.err(
+            return Err(header.ctx.err(
                 &format!("Record1/Axes/{axis}/AxisType"),
                 format!("axis type `{t}` (absolute coordinates) is not supported"),
                 "export with incremental (regular-grid) lateral axes",
             ));
         }
     }
-    let num = |path: &str| -> Result<f64, ReadError> {
-        need(path)?
-            .trim()
-            .parse::<f64>()
-            .map_err(|_| ctx.err(path, "not a number", "the X3P header is corrupt"))
-    };
-    let count = |path: &str| -> Result<u64, ReadError> {
-        need(path)?.trim().parse::<u64>().map_err(|_| {
-            ctx.err(
-                path,
-                "not a non-negative integer",
-                "the X3P header is corrupt",
-            )
-        })
-    };
-    let nx = count("Record3/MatrixDimension/SizeX")?;
-    let ny = count("Record3/MatrixDimension/SizeY")?;
-    let nz = get("Record3/MatrixDimension/SizeZ")
+    Ok(())
+}
+
+/// `(nx, ny, dx, dy)` of the one-layer grid, spacings in the file's unit (metres).
+fn grid(header: &Header<'_>) -> Result<(u64, u64, f64, f64), ReadError> {
+    let ctx = header.ctx;
+    let nx = header.count("Record3/MatrixDimension/SizeX")?;
+    let ny = header.count("Record3/MatrixDimension/SizeY")?;
+    let nz = header
+        .get("Record3/MatrixDimension/SizeZ")
         .map(|s| s.trim().parse::<u64>())
         .unwrap_or(Ok(1));
     if nz != Ok(1) {
@@ -100,7 +159,7 @@ fn parse(ctx: Ctx<'_>, bytes: &[u8]) -> Result<Raw, ReadError> {
     let dx = check_spacing(
         ctx,
         "Record1/Axes/CX/Increment",
-        num("Record1/Axes/CX/Increment")?,
+        header.num("Record1/Axes/CX/Increment")?,
     )?;
     let dy = if ny == 1 {
         dx
@@ -108,11 +167,16 @@ fn parse(ctx: Ctx<'_>, bytes: &[u8]) -> Result<Raw, ReadError> {
         check_spacing(
             ctx,
             "Record1/Axes/CY/Increment",
-            num("Record1/Axes/CY/Increment")?,
+            header.num("Record1/Axes/CY/Increment")?,
         )?
     };
-    let dtype = need("Record1/Axes/CZ/DataType")?.trim();
-    let kind = match dtype {
+    Ok((nx, ny, dx, dy))
+}
+
+/// The stored sample type and the factor to metres (the Z increment of integer data).
+fn sample_kind(header: &Header<'_>) -> Result<(binary::Sample, f64), ReadError> {
+    let ctx = header.ctx;
+    let kind = match header.need("Record1/Axes/CZ/DataType")?.trim() {
         "D" => binary::Sample::F64,
         "F" => binary::Sample::F32,
         "L" => binary::Sample::I32,
@@ -125,123 +189,132 @@ fn parse(ctx: Ctx<'_>, bytes: &[u8]) -> Result<Raw, ReadError> {
             ));
         }
     };
-    let zscale = if kind.is_float() {
-        1.0
-    } else {
-        match get("Record1/Axes/CZ/Increment") {
-            Some(s) => s
-                .trim()
-                .parse::<f64>()
-                .ok()
-                .filter(|v| v.is_finite() && *v != 0.0)
-                .ok_or_else(|| {
-                    ctx.err(
-                        "Record1/Axes/CZ/Increment",
-                        "not a usable number",
-                        "the X3P header is corrupt",
-                    )
-                })?,
-            None => 1.0,
-        }
-    };
-
-    let mut heights = if let Some(link) = get("Record3/DataLink/PointDataLink") {
-        let link = format!("{dir}{}", link.trim().replace('\\', "/"));
-        let size = entry_size(ctx, &mut zip, &link)?;
-        let n = checked_grid(
-            ctx,
-            "Record3/MatrixDimension",
-            nx,
-            ny,
-            kind.size() as u64,
-            size,
-        )?;
-        let need = n as u64 * kind.size() as u64;
-        if size > need.saturating_mul(2).saturating_add(1 << 20) {
-            return Err(ctx.err(
-                &link,
-                format!("the entry holds {size} bytes but the header implies {need}"),
-                "the X3P file is corrupt; re-export it",
-            ));
-        }
-        let data = read_entry(ctx, &mut zip, &link, size)?;
-        if let Some(want) = get("Record3/DataLink/MD5ChecksumPointData") {
-            let have = md5::hex(&data);
-            if !have.eq_ignore_ascii_case(want.trim()) {
-                return Err(ctx.err(
-                    "Record3/DataLink/MD5ChecksumPointData",
-                    format!(
-                        "MD5 check failed: {link} has MD5 {have}, main.xml records {}",
-                        want.trim()
-                    ),
-                    "the point data are corrupt; re-export or re-copy the file",
-                ));
-            }
-        }
-        binary::decode(&data, kind, true, n)
-            .ok_or_else(|| ctx.short(&link, (n * kind.size()) as u64, data.len() as u64))?
-    } else if !doc.data_list.is_empty() {
-        let n = checked_grid(ctx, "Record3/MatrixDimension", nx, ny, 0, 0)?;
-        if doc.data_list.len() < n {
-            return Err(ctx.err(
-                "Record3/DataList",
-                format!(
-                    "the header implies {n} points ({nx} × {ny}) but the data list holds only {}",
-                    doc.data_list.len()
-                ),
-                "the file is truncated or its header is corrupt; re-export it",
-            ));
-        }
-        doc.data_list[..n]
-            .iter()
-            .map(|d| {
-                // A datum holds the z value, or "x;y;z" for absolute axes.
-                let last = d.rsplit(';').next().unwrap_or("").trim();
-                if last.is_empty() {
-                    Ok(f64::NAN)
-                } else {
-                    last.parse::<f64>()
-                }
-            })
-            .collect::<Result<Vec<f64>, _>>()
-            .map_err(|_| {
+    if kind.is_float() {
+        return Ok((kind, 1.0));
+    }
+    let zscale = match header.get("Record1/Axes/CZ/Increment") {
+        Some(s) => s
+            .trim()
+            .parse::<f64>()
+            .ok()
+            .filter(|v| v.is_finite() && *v != 0.0)
+            .ok_or_else(|| {
                 ctx.err(
-                    "Record3/DataList/Datum",
-                    "a datum is not a number",
-                    "the X3P data list is corrupt",
+                    "Record1/Axes/CZ/Increment",
+                    "not a usable number",
+                    "the X3P header is corrupt",
                 )
-            })?
-    } else {
-        return Err(ctx.err(
-            "Record3/DataLink",
-            "neither a PointDataLink nor a DataList",
-            "the X3P file holds no data",
-        ));
+            })?,
+        None => 1.0,
     };
-    for h in &mut heights {
-        *h = if h.is_finite() { *h * zscale } else { f64::NAN };
+    Ok((kind, zscale))
+}
+
+/// The points of the binary entry `link`, checked against the grid and their MD5.
+fn linked_points(
+    header: &Header<'_>,
+    zip: &mut Archive<'_>,
+    link: &str,
+    (nx, ny): (u64, u64),
+    kind: binary::Sample,
+) -> Result<Vec<f64>, ReadError> {
+    let ctx = header.ctx;
+    let size = entry_size(ctx, zip, link)?;
+    let n = checked_grid(
+        ctx,
+        "Record3/MatrixDimension",
+        nx,
+        ny,
+        kind.size() as u64,
+        size,
+    )?;
+    let need = n as u64 * kind.size() as u64;
+    if size > need.saturating_mul(2).saturating_add(1 << 20) {
+        return Err(ctx.err(
+            link,
+            format!("the entry holds {size} bytes but the header implies {need}"),
+            "the X3P file is corrupt; re-export it",
+        ));
     }
-    if let Some(valid) = get("Record3/DataLink/ValidPointsLink") {
-        let valid = format!("{dir}{}", valid.trim().replace('\\', "/"));
-        let n = heights.len();
-        let size = entry_size(ctx, &mut zip, &valid)?;
-        let need_bytes = n.div_ceil(8) as u64;
-        if size < need_bytes {
-            return Err(ctx.short(&valid, need_bytes, size));
+    let data = read_entry(ctx, zip, link, size)?;
+    if let Some(want) = header.get("Record3/DataLink/MD5ChecksumPointData") {
+        let have = md5::hex(&data);
+        if !have.eq_ignore_ascii_case(want.trim()) {
+            return Err(ctx.err(
+                "Record3/DataLink/MD5ChecksumPointData",
+                format!(
+                    "MD5 check failed: {link} has MD5 {have}, main.xml records {}",
+                    want.trim()
+                ),
+                "the point data are corrupt; re-export or re-copy the file",
+            ));
         }
-        if size > need_bytes.saturating_mul(2).saturating_add(1 << 20) {
-            return Err(ctx.short(&valid, need_bytes, size));
-        }
-        let bits = read_entry(ctx, &mut zip, &valid, size)?;
-        for (i, h) in heights.iter_mut().enumerate() {
-            if bits.get(i / 8).is_some_and(|b| b & (1 << (i % 8)) == 0) {
-                *h = f64::NAN;
+    }
+    binary::decode(&data, kind, true, n)
+        .ok_or_else(|| ctx.short(link, (n * kind.size()) as u64, data.len() as u64))
+}
+
+/// The points of an inline `<DataList>`; an empty datum is an invalid point.
+fn listed_points(
+    ctx: Ctx<'_>,
+    data_list: &[String],
+    (nx, ny): (u64, u64),
+) -> Result<Vec<f64>, ReadError> {
+    let n = checked_grid(ctx, "Record3/MatrixDimension", nx, ny, 0, 0)?;
+    if data_list.len() < n {
+        return Err(ctx.err(
+            "Record3/DataList",
+            format!(
+                "the header implies {n} points ({nx} × {ny}) but the data list holds only {}",
+                data_list.len()
+            ),
+            "the file is truncated or its header is corrupt; re-export it",
+        ));
+    }
+    data_list[..n]
+        .iter()
+        .map(|d| {
+            // A datum holds the z value, or "x;y;z" for absolute axes.
+            let last = d.rsplit(';').next().unwrap_or("").trim();
+            if last.is_empty() {
+                Ok(f64::NAN)
+            } else {
+                last.parse::<f64>()
             }
+        })
+        .collect::<Result<Vec<f64>, _>>()
+        .map_err(|_| {
+            ctx.err(
+                "Record3/DataList/Datum",
+                "a datum is not a number",
+                "the X3P data list is corrupt",
+            )
+        })
+}
+
+/// NaN where the valid-points bit map `valid` (one bit per point, LSB first) has a 0.
+fn mask_invalid_points(
+    ctx: Ctx<'_>,
+    zip: &mut Archive<'_>,
+    valid: &str,
+    heights: &mut [f64],
+) -> Result<(), ReadError> {
+    let n = heights.len();
+    let size = entry_size(ctx, zip, valid)?;
+    let need_bytes = n.div_ceil(8) as u64;
+    if size < need_bytes {
+        return Err(ctx.short(valid, need_bytes, size));
+    }
+    if size > need_bytes.saturating_mul(2).saturating_add(1 << 20) {
+        return Err(ctx.short(valid, need_bytes, size));
+    }
+    let bits = read_entry(ctx, zip, valid, size)?;
+    for (i, h) in heights.iter_mut().enumerate() {
+        if bits.get(i / 8).is_some_and(|b| b & (1 << (i % 8)) == 0) {
+            *h = f64::NAN;
         }
     }
-    let channel = get("Record2/Comment").unwrap_or("x3p").trim();
-    Ok(Raw::si(nx as usize, ny as usize, dx, dy, heights, channel)
-        .spacing_from("Record1/Axes/CX/Increment", "Record1/Axes/CY/Increment"))
+    Ok(())
 }
 
 /// The folder of the archive that holds `main.xml` (`""` at the root, `scan/` for one

@@ -123,63 +123,136 @@ fn numeric_start(l: &str) -> bool {
         .is_some_and(|c| c.is_ascii_digit() || c == '-' || c == '+' || c == '.')
 }
 
+/// The lines of a column file: header lines before the data, and the data rows.
+struct Lines {
+    header: Vec<String>,
+    rows: Vec<Vec<f64>>,
+    /// 1-based line of the first data row.
+    first_line: usize,
+    ncol: usize,
+    /// Lateral and height units from `# x-unit: µm` style comment lines.
+    kv_units: (Option<f64>, Option<f64>),
+    /// A point count written before the rows: its line and value.
+    point_count: Option<(usize, f64)>,
+}
+
 /// Read a column file.
 pub(crate) fn read(ctx: Ctx<'_>, bytes: &[u8], want: Want<'_>) -> Result<Decoded, ReadError> {
     let text = text::decode(bytes);
     text::check_not_cut(ctx, &text)?;
     let d = text::Dialect::guess(text.lines().filter(|l| numeric_start(l)));
-    let mut header: Vec<String> = Vec::new();
-    let mut rows: Vec<Vec<f64>> = Vec::new();
-    let mut first_line = 0;
-    let mut ncol = 0;
-    let mut kv_units: (Option<f64>, Option<f64>) = (None, None);
-    let mut point_count: Option<(usize, f64)> = None;
+    let lines = scan(ctx, &text, &d)?;
+    if lines.rows.len() < 2 {
+        return Err(ctx.err(
+            "data",
+            "fewer than two data lines",
+            "the file holds no profile or surface",
+        ));
+    }
+    let rows = &lines.rows;
+    let ncol = lines.ncol;
+    let columns = columns(&lines, &d);
+    let values: Vec<usize> = (0..ncol)
+        .filter(|&c| columns[c].role == Role::Value)
+        .collect();
+    let valid = (0..ncol).find(|&c| columns[c].role == Role::Valid);
+    let mut notes = Vec::new();
+    if let Some(v) = valid {
+        notes.push(format!(
+            "column `{}` marks invalid points",
+            columns[v].title
+        ));
+    }
+    if let Some((line, n)) = lines.point_count
+        && n != rows.len() as f64
+    {
+        notes.push(format!(
+            "line {line} gives a point count of {n}, but {} data lines follow: all are read",
+            rows.len()
+        ));
+    }
+    let is_valid = |r: &[f64]| valid.is_none_or(|v| r[v].is_finite() && r[v] != 0.0);
+    let (xc, yc, zc) = match values.as_slice() {
+        [x, z] => (*x, None, *z),
+        [x, y, z] => (*x, Some(*y), *z),
+        _ => {
+            return Err(ctx.err(
+                &format!("line {}", lines.first_line),
+                format!("{} value columns", values.len()),
+                "expected `x z` or `x y z` (plus optional index and validity columns)",
+            ));
+        }
+    };
+    // Units: per column, then `# x-unit:` style lines, then the other axis.
+    let (lateral_unit, height_unit) = units_of(
+        columns[xc].unit.or(lines.kv_units.0),
+        columns[zc].unit.or(lines.kv_units.1),
+        &mut notes,
+    );
+    let name = if columns[zc].title.is_empty() {
+        "z".to_string()
+    } else {
+        columns[zc].title.clone()
+    };
+    let mut raw = match yc {
+        None => profile(ctx, rows, xc, zc, &is_valid, &mut notes)?,
+        Some(yc) => grid(ctx, rows, xc, yc, zc, &is_valid)?,
+    };
+    raw.height_unit = height_unit;
+    raw.lateral_unit = lateral_unit;
+    raw.channel = name;
+    raw.notes = notes;
+    Decoded::single(ctx, want, raw)
+}
+
+/// Split the file into header lines and rows of equally many numbers; comment lines only
+/// contribute the units they state.
+fn scan(ctx: Ctx<'_>, text: &str, d: &text::Dialect) -> Result<Lines, ReadError> {
+    let mut lines = Lines {
+        header: Vec::new(),
+        rows: Vec::new(),
+        first_line: 0,
+        ncol: 0,
+        kv_units: (None, None),
+        point_count: None,
+    };
     for (i, line) in text.lines().enumerate() {
         let t = line.trim();
         if t.is_empty() {
             continue;
         }
         if t.starts_with('#') || t.starts_with('%') || t.starts_with("//") {
-            if let Some((k, v)) = text::key_value(t) {
-                let k = k.to_lowercase();
-                if k.contains("unit") {
-                    let f = units::length_factor(&v);
-                    if k.starts_with('z') || k.contains("height") || k.contains("value") {
-                        kv_units.1 = f.or(kv_units.1);
-                    } else if k.starts_with('x') || k.contains("lateral") || k.contains("length") {
-                        kv_units.0 = f.or(kv_units.0);
-                    }
-                }
-            }
+            comment_units(t, &mut lines.kv_units);
             continue;
         }
         match d.row(t) {
             Some(r) => {
+                let rows = &mut lines.rows;
                 // A lone integer before rows of x z: the point count some exporters
                 // write after the units line.
-                let count_line = ncol == 1
+                let count_line = lines.ncol == 1
                     && rows.len() == 1
                     && r.len() >= 2
                     && rows[0][0] >= 0.0
                     && rows[0][0].fract() == 0.0;
                 if count_line {
-                    point_count = Some((first_line, rows[0][0]));
+                    lines.point_count = Some((lines.first_line, rows[0][0]));
                     rows.clear();
-                    ncol = 0;
+                    lines.ncol = 0;
                 }
-                if ncol == 0 {
-                    ncol = r.len();
-                    first_line = i + 1;
-                } else if r.len() != ncol {
+                if lines.ncol == 0 {
+                    lines.ncol = r.len();
+                    lines.first_line = i + 1;
+                } else if r.len() != lines.ncol {
                     return Err(ctx.err(
                         &format!("line {}", i + 1),
-                        format!("{} columns, earlier lines have {ncol}", r.len()),
+                        format!("{} columns, earlier lines have {}", r.len(), lines.ncol),
                         "every line needs the same number of columns",
                     ));
                 }
                 rows.push(r);
             }
-            None if rows.is_empty() => header.push(t.to_string()),
+            None if lines.rows.is_empty() => lines.header.push(t.to_string()),
             None => {
                 return Err(ctx.err(
                     &format!("line {}", i + 1),
@@ -192,15 +265,29 @@ pub(crate) fn read(ctx: Ctx<'_>, bytes: &[u8], want: Want<'_>) -> Result<Decoded
             }
         }
     }
-    if rows.len() < 2 {
-        return Err(ctx.err(
-            "data",
-            "fewer than two data lines",
-            "the file holds no profile or surface",
-        ));
+    Ok(lines)
+}
+
+/// The lateral or height unit a comment line states (`# z-unit: nm`), into `kv_units`.
+fn comment_units(t: &str, kv_units: &mut (Option<f64>, Option<f64>)) {
+    let Some((k, v)) = text::key_value(t) else {
+        return;
+    };
+    let k = k.to_lowercase();
+    if k.contains("unit") {
+        let f = units::length_factor(&v);
+        if k.starts_with('z') || k.contains("height") || k.contains("value") {
+            kv_units.1 = f.or(kv_units.1);
+        } else if k.starts_with('x') || k.contains("lateral") || k.contains("length") {
+            kv_units.0 = f.or(kv_units.0);
+        }
     }
-    // Titles: the last header line with as many fields as there are columns, possibly
-    // followed by a row of units.
+}
+
+/// Title, role and unit of each column. The titles are the last header line with as many
+/// fields as there are columns, possibly followed by a row of units.
+fn columns(lines: &Lines, d: &text::Dialect) -> Vec<Column> {
+    let ncol = lines.ncol;
     let mut columns: Vec<Column> = (0..ncol)
         .map(|_| Column {
             role: Role::Value,
@@ -216,7 +303,8 @@ pub(crate) fn read(ctx: Ctx<'_>, bytes: &[u8], want: Want<'_>) -> Result<Decoded
     };
     // A header line may be split by spaces where the rows use commas (`µm µm` over
     // `1.3e+01, 1.7e+01`).
-    let fitting: Vec<Vec<String>> = header
+    let fitting: Vec<Vec<String>> = lines
+        .header
         .iter()
         .map(|l| {
             let f = split(l);
@@ -252,7 +340,8 @@ pub(crate) fn read(ctx: Ctx<'_>, bytes: &[u8], want: Want<'_>) -> Result<Decoded
     // Without titles, a first column counting 0, 1, 2, … is an index.
     if columns.iter().all(|c| c.title.is_empty())
         && ncol >= 3
-        && rows
+        && lines
+            .rows
             .iter()
             .enumerate()
             .all(|(i, r)| r[0] == i as f64 || r[0] == i as f64 + 1.0)
@@ -260,41 +349,12 @@ pub(crate) fn read(ctx: Ctx<'_>, bytes: &[u8], want: Want<'_>) -> Result<Decoded
     {
         columns[0].role = Role::Index;
     }
-    let values: Vec<usize> = (0..ncol)
-        .filter(|&c| columns[c].role == Role::Value)
-        .collect();
-    let valid = (0..ncol).find(|&c| columns[c].role == Role::Valid);
-    let mut notes = Vec::new();
-    if let Some(v) = valid {
-        notes.push(format!(
-            "column `{}` marks invalid points",
-            columns[v].title
-        ));
-    }
-    if let Some((line, n)) = point_count
-        && n != rows.len() as f64
-    {
-        notes.push(format!(
-            "line {line} gives a point count of {n}, but {} data lines follow: all are read",
-            rows.len()
-        ));
-    }
-    let is_valid = |r: &[f64]| valid.is_none_or(|v| r[v].is_finite() && r[v] != 0.0);
-    let (xc, yc, zc) = match values.as_slice() {
-        [x, z] => (*x, None, *z),
-        [x, y, z] => (*x, Some(*y), *z),
-        _ => {
-            return Err(ctx.err(
-                &format!("line {first_line}"),
-                format!("{} value columns", values.len()),
-                "expected `x z` or `x y z` (plus optional index and validity columns)",
-            ));
-        }
-    };
-    // Units: per column, then `# x-unit:` style lines, then the other axis.
-    let lat = columns[xc].unit.or(kv_units.0);
-    let hgt = columns[zc].unit.or(kv_units.1);
-    let (lateral_unit, height_unit) = match (lat, hgt) {
+    columns
+}
+
+/// Lateral and height units; an axis without one takes the other's, with a note.
+fn units_of(lat: Option<f64>, hgt: Option<f64>, notes: &mut Vec<String>) -> (Unit, Unit) {
+    match (lat, hgt) {
         (Some(l), Some(h)) => (Unit::Known(l), Unit::Known(h)),
         (Some(l), None) => {
             notes.push(format!(
@@ -311,21 +371,7 @@ pub(crate) fn read(ctx: Ctx<'_>, bytes: &[u8], want: Want<'_>) -> Result<Decoded
             (Unit::Known(h), Unit::Known(h))
         }
         (None, None) => (Unit::Unknown, Unit::Unknown),
-    };
-    let name = if columns[zc].title.is_empty() {
-        "z".to_string()
-    } else {
-        columns[zc].title.clone()
-    };
-    let mut raw = match yc {
-        None => profile(ctx, &rows, xc, zc, &is_valid, &mut notes)?,
-        Some(yc) => grid(ctx, &rows, xc, yc, zc, &is_valid)?,
-    };
-    raw.height_unit = height_unit;
-    raw.lateral_unit = lateral_unit;
-    raw.channel = name;
-    raw.notes = notes;
-    Decoded::single(ctx, want, raw)
+    }
 }
 
 /// A profile: sorted by x, duplicates averaged, resampled when not uniformly spaced.
