@@ -543,6 +543,73 @@ mod tests {
     }
 
     #[test]
+    fn hostile_numbers_are_refused_or_run_briefly() {
+        let d = dir("hostile");
+        let out = d.join("h.bsdf");
+        let o = out.to_str().unwrap();
+        let values = [
+            "0",
+            "-1",
+            "nan",
+            "inf",
+            "-inf",
+            "1e308",
+            "-1e308",
+            "18446744073709551615",
+        ];
+        let flags = [
+            "--theta-i",
+            "--sample-nodes",
+            "--phi-nodes",
+            "--vndf-nodes",
+            "--ndf-nodes",
+            "--sigma-nodes",
+            "--wavelengths",
+            "--max-theta",
+            "--check-samples",
+        ];
+        for flag in flags {
+            for v in values {
+                let v = if flag.ends_with("-nodes")
+                    && flag != "--sample-nodes"
+                    && flag != "--phi-nodes"
+                {
+                    format!("{v},8")
+                } else {
+                    v.to_string()
+                };
+                let mut line = vec!["--sample", "S280", "--model", "ggx", "-o", o, "-q"];
+                for (f, default) in [
+                    ("--theta-i", "0,60"),
+                    ("--sample-nodes", "6"),
+                    ("--vndf-nodes", "8,6"),
+                    ("--ndf-nodes", "16,4"),
+                    ("--sigma-nodes", "8,4"),
+                    ("--wavelengths", "500,600"),
+                    ("--check-samples", "16"),
+                ] {
+                    if f != flag {
+                        line.extend([f, default]);
+                    }
+                }
+                line.extend([flag, v.as_str()]);
+                let start = std::time::Instant::now();
+                let parsed =
+                    Cli::try_parse_from(std::iter::once("export").chain(line.iter().copied()));
+                if let Ok(cli) = parsed {
+                    let _ = run(cli.args);
+                }
+                assert!(
+                    start.elapsed().as_secs() < 20,
+                    "{flag} {v}: {:?}",
+                    start.elapsed()
+                );
+            }
+        }
+        std::fs::remove_dir_all(&d).unwrap();
+    }
+
+    #[test]
     fn exports_a_sample_and_refuses_what_does_not_apply() {
         let d = dir("run");
         let out = d.join("s280.bsdf");

@@ -47,6 +47,9 @@ pub use merl::{MerlOptions, MerlTable};
 pub use ndf::NdfSource;
 pub use rgl::{Colour, RglOptions, RglTable};
 
+/// Most Monte Carlo directions per check an export accepts.
+pub const MAX_CHECK_SAMPLES: usize = 1 << 22;
+
 /// Largest coherent (delta) reflectance, as a fraction of the incident
 /// light, an export leaves out without being told to.
 pub const DELTA_TOLERANCE: f64 = 1e-3;

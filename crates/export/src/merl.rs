@@ -40,6 +40,8 @@ pub const THETA_D: usize = 90;
 pub const PHI_D: usize = 180;
 /// Cells per channel.
 pub const CELLS: usize = THETA_H * THETA_D * PHI_D;
+/// Most wavelengths a MERL export integrates (every 5 nm over 360–830 nm).
+pub const MAX_WAVELENGTHS: usize = 95;
 /// The readers' channel scales: value (sr⁻¹) = stored × scale.
 pub const SCALE: [f64; 3] = [1.0 / 1500.0, 1.15 / 1500.0, 1.66 / 1500.0];
 
@@ -190,14 +192,23 @@ impl MerlTable {
 fn validate(o: &MerlOptions) -> Result<(), ExportError> {
     let l = &o.wavelengths_nm;
     let (lo, hi) = (brdf::WAVELENGTH_MIN_NM, brdf::WAVELENGTH_MAX_NM);
+    // Each wavelength costs 1.46 million evaluations of the model.
     if l.is_empty()
-        || l.len() > 1024
+        || l.len() > MAX_WAVELENGTHS
         || l.iter().any(|v| !(lo..=hi).contains(v))
         || l.windows(2).any(|w| w[1] <= w[0])
     {
         return Err(ExportError::Option {
             field: "wavelengths_nm",
-            message: format!("1 to 1024 strictly increasing wavelengths within {lo}–{hi} nm"),
+            message: format!(
+                "1 to {MAX_WAVELENGTHS} strictly increasing wavelengths within {lo}–{hi} nm"
+            ),
+        });
+    }
+    if o.check_samples > crate::MAX_CHECK_SAMPLES {
+        return Err(ExportError::Option {
+            field: "check_samples",
+            message: format!("{}: at most {}", o.check_samples, crate::MAX_CHECK_SAMPLES),
         });
     }
     if !(0.0..90.0).contains(&o.check_theta_max_deg) {

@@ -39,16 +39,22 @@ fn validate(o: &RglOptions) -> Result<(), ExportError> {
             "angles must be strictly increasing degrees in [0, 90]".into(),
         ));
     }
-    check_nodes("phi_i_nodes", o.phi_i_nodes, 3, 1024)?;
+    check_nodes("phi_i_nodes", o.phi_i_nodes, 3, 256)?;
     check_nodes("sample_nodes", o.sample_nodes, 2, 1024)?;
     for (f, v) in [
         ("vndf_nodes", o.vndf_nodes),
         ("ndf_nodes", o.ndf_nodes),
         ("sigma_nodes", o.sigma_nodes),
     ] {
-        check_nodes(f, v[0], 2, 4096)?;
-        check_nodes(f, v[1], 2, 4096)?;
+        check_nodes(f, v[0], 2, 2048)?;
+        check_nodes(f, v[1], 2, 2048)?;
     }
+    check_nodes(
+        "check_samples",
+        o.check_samples,
+        0,
+        crate::MAX_CHECK_SAMPLES,
+    )?;
     let l = &o.wavelengths_nm;
     let (lo, hi) = (brdf::WAVELENGTH_MIN_NM, brdf::WAVELENGTH_MAX_NM);
     if l.is_empty() || l.len() > 1024 {
@@ -72,7 +78,9 @@ fn validate(o: &RglOptions) -> Result<(), ExportError> {
     Ok(())
 }
 
-/// Refuses a table whose spectra alone would pass 2^28 f32 values (1 GiB).
+/// Refuses a table whose spectra would pass 2^28 f32 values (1 GiB), or
+/// whose warps 2^25 (each of their nodes costs an evaluation of the model
+/// at a dozen wavelengths).
 fn check_size(o: &RglOptions, phi_slices: usize) -> Result<(), ExportError> {
     let slices = o.theta_i_deg.len() * phi_slices;
     let per = o.sample_nodes * o.sample_nodes * o.wavelengths_nm.len().max(3);
@@ -83,6 +91,13 @@ fn check_size(o: &RglOptions, phi_slices: usize) -> Result<(), ExportError> {
                 "{slices} slices × {per} values exceed 2^28 (1 GiB of f32): lower the \
                  resolution (sample nodes, wavelengths, incidence or azimuth slices)"
             ),
+        ));
+    }
+    let warp = o.vndf_nodes[0] * o.vndf_nodes[1];
+    if slices.saturating_mul(warp) > 1 << 25 {
+        return Err(opt(
+            "vndf_nodes",
+            format!("{slices} slices × {warp} warp nodes exceed 2^25: lower the VNDF grid"),
         ));
     }
     Ok(())
