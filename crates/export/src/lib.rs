@@ -265,19 +265,42 @@ pub fn merl(model: &(dyn Bxdf + Sync), options: &MerlOptions) -> Result<Exported
     merl::build(model, options)
 }
 
-/// The MERL table of a material (refused for anisotropic GGX / Beckmann).
+/// The MERL table of a material (refused for an anisotropic one).
 pub fn merl_material(spec: &MaterialSpec, options: &MerlOptions) -> Result<Exported, ExportError> {
-    if let ModelSpec::Ggx { alpha_x, alpha_y } | ModelSpec::Beckmann { alpha_x, alpha_y } =
-        &spec.model
-        && alpha_x != alpha_y
-    {
-        return Err(ExportError::Model(format!(
-            "a MERL table is isotropic; this material has alpha_x {alpha_x} ≠ alpha_y {alpha_y} \
-             (export it as an RGL file, which keeps the anisotropy)"
-        )));
-    }
     let model = glossy(spec)?;
     merl::build(&*model, options)
+}
+
+/// Whether `model` is isotropic: unchanged, to 1e-9, when both directions
+/// turn together about the normal (probed at three incidences, three
+/// rotations and four outgoing directions each, at 550 nm). The exports
+/// that assume isotropy (MERL, and RGL tables parameterised by the
+/// retro-reflection) ask this of the model itself rather than of its kind.
+pub fn is_isotropic(model: &dyn Bxdf) -> bool {
+    use param::direction;
+    for theta_i in [0.35f64, 0.9, 1.25] {
+        let wi = direction(theta_i, 0.0);
+        for (t, p) in [
+            (theta_i, core::f64::consts::PI),
+            (theta_i + 0.05, 3.1),
+            (0.5 * theta_i, 2.0),
+            (0.3, 0.6),
+        ] {
+            let wo = direction(t, p);
+            let f = model.eval(wi, wo, 550.0);
+            for psi in [0.5f64, core::f64::consts::FRAC_PI_2, 2.4] {
+                let rot = |w: brdf::DVec3| {
+                    let (s, c) = psi.sin_cos();
+                    brdf::DVec3::new(c * w.x - s * w.y, s * w.x + c * w.y, w.z)
+                };
+                let g = model.eval(rot(wi), rot(wo), 550.0);
+                if (f - g).abs() > 1e-9 * f.abs().max(g.abs()) + 1e-300 {
+                    return false;
+                }
+            }
+        }
+    }
+    true
 }
 
 /// The built model, refusing one that is all delta.

@@ -223,6 +223,14 @@ fn validate(o: &MerlOptions) -> Result<(), ExportError> {
 /// The MERL table of `model`, with its error estimate.
 pub fn build(model: &(dyn Bxdf + Sync), o: &MerlOptions) -> Result<Exported, ExportError> {
     validate(o)?;
+    if !crate::is_isotropic(model) {
+        return Err(ExportError::Model(
+            "the model is anisotropic (its BRDF changes when both directions turn about the \
+             normal) and a MERL table is isotropic; export it as an RGL file, which keeps \
+             the anisotropy of GGX and Beckmann"
+                .into(),
+        ));
+    }
     let mut dropped = 0.0f64;
     let mut worst = (0.0, 0.0);
     for t in (0..=90)

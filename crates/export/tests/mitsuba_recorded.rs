@@ -7,7 +7,8 @@
 //! written by `validate/mitsuba_check.py record` from files made with
 //! `lustre brdf export`. This test rebuilds the same tables with the library
 //! and evaluates them with the crate's reader: a disagreement means the
-//! file or the reader departs from the format as Mitsuba reads it.
+//! file or the reader departs from the format as Mitsuba reads it. (A change
+//! to what the exporter writes changes the tables: record them again.)
 
 use brdf::DVec3;
 use brdf::spec::{MaterialDesc, NoFiles};

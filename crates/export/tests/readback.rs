@@ -278,7 +278,20 @@ fn what_a_table_cannot_hold_is_refused_by_name() {
     let e = export::merl_material(&ggx(0.1, 0.2, Metal::Cu), &MerlOptions::default())
         .unwrap_err()
         .to_string();
-    assert!(e.contains("isotropic") && e.contains("alpha_x"), "{e}");
+    assert!(e.contains("anisotropic") && e.contains("MERL"), "{e}");
+    // Isotropy is asked of the model, not of its kind: a generic anisotropic
+    // BRDF is refused by MERL and by the retro-reflection parameterisation.
+    let aniso = ggx(0.1, 0.2, Metal::Cu).build().unwrap();
+    assert!(!export::is_isotropic(&*aniso));
+    assert!(export::is_isotropic(
+        &*ggx(0.2, 0.2, Metal::Cu).build().unwrap()
+    ));
+    assert!(export::is_isotropic(&*s027.build().unwrap()));
+    let e = export::rgl(&*aniso, &export::NdfSource::Backscatter, &small())
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("anisotropic"), "{e}");
+    assert!(export::merl(&*aniso, &MerlOptions::default()).is_err());
     for (o, field) in [
         (
             RglOptions {

@@ -324,6 +324,14 @@ pub fn build(
         NdfSource::Backscatter => true,
     };
     check_size(o, if iso { 1 } else { o.phi_i_nodes })?;
+    if matches!(source, NdfSource::Backscatter) && !crate::is_isotropic(model) {
+        return Err(ExportError::Model(
+            "the model is anisotropic, and the distribution derived from its retro-reflection \
+             is isotropic: only GGX and Beckmann, through their own distribution, export \
+             anisotropic tables"
+                .into(),
+        ));
+    }
     let lambdas = &o.wavelengths_nm;
     let w = Weights {
         lum: luminance_weights(lambdas, o.illuminant),
