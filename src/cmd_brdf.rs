@@ -41,6 +41,7 @@
 //! and metals builds each table once (see [`cache`]).
 
 mod cache;
+mod export;
 
 use std::io::{BufRead, BufWriter, Write};
 
@@ -66,6 +67,9 @@ pub enum BrdfCommand {
     Eval,
     /// In-plane BRDF slices and directional albedo as PNG + CSV (see `cmd_brdf_plot`).
     Plot(crate::cmd_brdf_plot::PlotArgs),
+    /// Write a model as a tabulated BSDF file: RGL `.bsdf` (Mitsuba 3, pbrt-v4
+    /// `measured`) or MERL `.binary` (see `cmd_brdf/export.rs`).
+    Export(export::ExportArgs),
 }
 
 pub fn run(cmd: BrdfCommand) -> anyhow::Result<()> {
@@ -76,6 +80,7 @@ pub fn run(cmd: BrdfCommand) -> anyhow::Result<()> {
             eval_stream(stdin.lock(), stdout.lock())
         }
         BrdfCommand::Plot(args) => crate::cmd_brdf_plot::run(args),
+        BrdfCommand::Export(args) => export::run(args),
     }
 }
 
