@@ -12,8 +12,8 @@
 use std::path::{Path, PathBuf};
 
 use anyhow::{anyhow, bail};
-use brdf::spec::{FileLoader, MaterialDesc, MaterialSpec, ModelKind};
-use render::scene::inputs::{MAX_CSV_BYTES, MAX_TOML_BYTES};
+use brdf::spec::{MaterialDesc, MaterialSpec, ModelKind};
+use render::scene::inputs::MAX_TOML_BYTES;
 
 /// File format of the export.
 #[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
@@ -245,192 +245,49 @@ fn material(args: &ExportArgs) -> anyhow::Result<MaterialSpec> {
     material_file(path, model, args.cutoff.as_deref())
 }
 
-/// A PSD table `(ζ rad/µm, P µm⁴)` under the name `psd_csv` refers to it by.
-type NamedPsd = (String, (Vec<f64>, Vec<f64>));
-
-/// Reads `nk_csv` / `psd_csv` next to the material file, and answers a
-/// fit file's `[psd]` table under its name.
-struct Files<'a> {
-    dir: &'a Path,
-    psd: Option<NamedPsd>,
-}
-
-impl Files<'_> {
-    fn rows(&self, path: &str, what: &str, cols: usize) -> Result<Vec<Vec<f64>>, String> {
-        let full = self.dir.join(path);
-        let bytes = safe_io::read_input(&full, what, MAX_CSV_BYTES).map_err(|e| e.to_string())?;
-        let text =
-            String::from_utf8(bytes).map_err(|_| format!("{}: not UTF-8 text", full.display()))?;
-        let mut out = Vec::new();
-        for (i, line) in text.lines().enumerate() {
-            let cells: Vec<&str> = line.split(',').map(str::trim).collect();
-            if line.trim().is_empty() || cells.iter().any(|c| c.parse::<f64>().is_err()) && i == 0 {
-                continue;
-            }
-            let row: Result<Vec<f64>, _> = cells.iter().map(|c| c.parse::<f64>()).collect();
-            match row {
-                Ok(r) if r.len() == cols => out.push(r),
-                _ => {
-                    return Err(format!(
-                        "{}:{}: expected {cols} numbers",
-                        full.display(),
-                        i + 1
-                    ));
-                }
-            }
-        }
-        Ok(out)
-    }
-}
-
-impl FileLoader for Files<'_> {
-    fn nk_table(&mut self, path: &str) -> Result<Vec<[f64; 3]>, String> {
-        Ok(self
-            .rows(path, "nk_csv", 3)?
-            .into_iter()
-            .map(|r| [r[0], r[1], r[2]])
-            .collect())
-    }
-
-    fn psd_table(&mut self, path: &str) -> Result<(Vec<f64>, Vec<f64>), String> {
-        if let Some((name, t)) = &self.psd
-            && name == path
-        {
-            return Ok(t.clone());
-        }
-        Ok(self
-            .rows(path, "psd_csv", 2)?
-            .into_iter()
-            .map(|r| (r[0], r[1]))
-            .unzip())
-    }
-}
-
 /// The file's text.
 fn read_text(path: &Path, what: &str) -> anyhow::Result<String> {
     let bytes = safe_io::read_input(path, what, MAX_TOML_BYTES)?;
     String::from_utf8(bytes).map_err(|_| anyhow!("{}: not UTF-8 text", path.display()))
 }
 
-/// `text` of `path` as a `T`; an error names the file, line and column.
-fn parse_toml<T: serde::de::DeserializeOwned>(path: &Path, text: &str) -> anyhow::Result<T> {
-    toml::from_str(text).map_err(|e| {
-        let at = e.span().map(|s| render::error::line_column(text, s.start));
-        match at {
-            Some((l, c)) => anyhow!("{}:{l}:{c}: {}", path.display(), e.message().trim()),
-            None => anyhow!("{}: {}", path.display(), e.message().trim()),
-        }
-    })
-}
-
-fn read_toml(path: &Path, what: &str) -> anyhow::Result<toml::Table> {
-    parse_toml(path, &read_text(path, what)?)
-}
-
-/// The `[material]` of a fit file with the `[two_scale.NAME]` of `model`
-/// two_scale over it, and its `[psd]` table for measured_psd.
-fn fit_base(
-    path: &Path,
-    doc: &toml::Table,
-    model: Option<ModelKind>,
-    cutoff: Option<&str>,
-) -> anyhow::Result<(MaterialDesc, Option<NamedPsd>)> {
-    let at = |what: &str, e: String| anyhow!("{}: {what}: {e}", path.display());
-    let mut base: MaterialDesc = doc
-        .get("material")
-        .cloned()
-        .ok_or_else(|| at("[material]", "missing".into()))?
-        .try_into()
-        .map_err(|e: toml::de::Error| at("[material]", e.message().to_string()))?;
-    let model = model.or(base.model);
-    if model == Some(ModelKind::TwoScale) {
-        let splits = doc.get("two_scale").and_then(toml::Value::as_table);
-        let names: Vec<String> = splits
-            .map(|t| t.keys().cloned().collect())
-            .unwrap_or_default();
-        let name = match (cutoff, names.as_slice()) {
-            (Some(c), _) => c.to_string(),
-            (None, [only]) => only.clone(),
-            (None, _) => bail!(
-                "{}: choose a two-scale split with --cutoff; the file has: {}",
-                path.display(),
-                names.join(", ")
-            ),
-        };
-        let t = splits
-            .and_then(|t| t.get(&name))
-            .and_then(toml::Value::as_table)
-            .ok_or_else(|| {
-                at(
-                    &format!("[two_scale.{name}]"),
-                    format!("missing; the file has: {}", names.join(", ")),
-                )
-            })?;
-        let num = |k: &str| {
-            t.get(k)
-                .and_then(|v| v.as_float().or(v.as_integer().map(|i| i as f64)))
-                .ok_or_else(|| at(&format!("[two_scale.{name}]"), format!("no number `{k}`")))
-        };
-        base.beta = Some(num("beta")?);
-        base.sigma_um = Some(num("sigma_um")?);
-        base.lc_um = Some(num("lc_um")?);
-        base.gamma = Some(num("gamma")?);
-    } else if cutoff.is_some() {
-        bail!("--cutoff picks a two-scale split; the model is not two_scale");
-    }
-    let mut psd = None;
-    if model == Some(ModelKind::MeasuredPsd)
-        && let Some(t) = doc.get("psd").and_then(toml::Value::as_table)
-    {
-        let list = |k: &str| -> anyhow::Result<Vec<f64>> {
-            t.get(k)
-                .and_then(toml::Value::as_array)
-                .and_then(|a| a.iter().map(|v| v.as_float()).collect())
-                .ok_or_else(|| at("[psd]", format!("`{k}` must be an array of numbers")))
-        };
-        let name = format!("[psd] of {}", path.display());
-        base.psd_csv.get_or_insert(name.clone());
-        psd = Some((name, (list("zeta_rad_per_um")?, list("p_um4")?)));
-    }
-    Ok((base, psd))
-}
-
-/// The material of a file: a fit file, or a material description (which
-/// may `include` a fit file, relative to it).
+/// The material of a file as a scene would draw it (render's `resolve_spec`, one route): a
+/// fit file is a bare `include` of it with `--model`/`--cutoff` over it; a material
+/// description (which may `include` a fit file, relative to it) is a scene's
+/// `[materials.NAME]`, with `--model`/`--cutoff` replacing its own.
 fn material_file(
     path: &Path,
     model: Option<ModelKind>,
     cutoff: Option<&str>,
 ) -> anyhow::Result<MaterialSpec> {
     let text = read_text(path, "material file")?;
-    let doc: toml::Table = parse_toml(path, &text)?;
-    let dir = path.parent().unwrap_or(Path::new(""));
-    let spec = if doc.contains_key("material") {
-        let (base, psd) = fit_base(path, &doc, model, cutoff)?;
-        let over = MaterialDesc {
-            model: model.or(base.model),
-            ..MaterialDesc::default()
-        };
-        over.resolve(Some(&base), &mut Files { dir, psd })
-    } else {
-        let mut desc: MaterialDesc = parse_toml(path, &text)?;
-        if model.is_some() {
-            desc.model = model;
-        }
-        let cut = cutoff.or(desc.cutoff.as_deref()).map(str::to_string);
-        match desc.include.take() {
-            Some(inc) => {
-                let inc_path = dir.join(&inc);
-                let inc_doc = read_toml(&inc_path, "material file")?;
-                let (base, psd) = fit_base(&inc_path, &inc_doc, desc.model, cut.as_deref())?;
-                desc.cutoff = None;
-                let inc_dir = inc_path.parent().unwrap_or(Path::new("")).to_path_buf();
-                desc.resolve(Some(&base), &mut Files { dir: &inc_dir, psd })
-            }
-            None => desc.into_spec(&mut Files { dir, psd: None }),
+    let at = |e: toml::de::Error| {
+        let pos = e.span().map(|s| render::error::line_column(&text, s.start));
+        match pos {
+            Some((l, c)) => anyhow!("{}:{l}:{c}: {}", path.display(), e.message().trim()),
+            None => anyhow!("{}: {}", path.display(), e.message().trim()),
         }
     };
-    spec.map_err(|e| anyhow!("{}: {e}", path.display()))
+    let doc: toml::Table = toml::from_str(&text).map_err(at)?;
+    let dir = path.parent().unwrap_or(Path::new(""));
+    let mut desc = if doc.contains_key("material") {
+        let name = path.file_name().unwrap_or_default().to_string_lossy();
+        MaterialDesc {
+            include: Some(name.into_owned()),
+            ..MaterialDesc::default()
+        }
+    } else {
+        toml::from_str::<MaterialDesc>(&text).map_err(at)?
+    };
+    if model.is_some() {
+        desc.model = model;
+    }
+    if cutoff.is_some() {
+        desc.cutoff = cutoff.map(str::to_string);
+    }
+    let mut inputs = render::inputs::Inputs::new(dir);
+    render::material::resolve_spec(&desc, dir, &mut inputs)
+        .map_err(|e| anyhow!("{}: {e}", path.display()))
 }
 
 #[cfg(test)]

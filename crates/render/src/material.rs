@@ -147,14 +147,15 @@ fn read_include(
     })
 }
 
-/// Builds the named material. `base_dir` resolves relative paths; every
-/// file is read through `inputs`.
-pub fn build_material(
-    name: &str,
+/// The typed material of a description as a scene's `[materials.NAME]` gives it: its
+/// `include`d fit file (with the split `cutoff` names) under it, every file it names read
+/// through `inputs` relative to `base_dir`. An invalid value an include supplied is reported
+/// at its own file and line. `lustre brdf export` takes a material file this way too.
+pub fn resolve_spec(
     desc: &MaterialDesc,
     base_dir: &Path,
     inputs: &mut Inputs,
-) -> Result<Material, String> {
+) -> Result<MaterialSpec, String> {
     let included = match &desc.include {
         Some(inc) => Some(read_include(desc, inc, base_dir, inputs)?),
         None => {
@@ -184,15 +185,24 @@ pub fn build_material(
             },
         ),
     };
-    let spec = desc
-        .resolve(base, &mut files)
-        .map_err(|e| match &included {
-            // The value came from the include: say where it is, not only which key.
-            Some(inc) if desc.inherits(&inc.base, e.field) => {
-                format!("{}: {e}", inc.locate(e.field))
-            }
-            _ => e.to_string(),
-        })?;
+    desc.resolve(base, &mut files).map_err(|e| match &included {
+        // The value came from the include: say where it is, not only which key.
+        Some(inc) if desc.inherits(&inc.base, e.field) => {
+            format!("{}: {e}", inc.locate(e.field))
+        }
+        _ => e.to_string(),
+    })
+}
+
+/// Builds the named material. `base_dir` resolves relative paths; every
+/// file is read through `inputs`.
+pub fn build_material(
+    name: &str,
+    desc: &MaterialDesc,
+    base_dir: &Path,
+    inputs: &mut Inputs,
+) -> Result<Material, String> {
+    let spec = resolve_spec(desc, base_dir, inputs)?;
     let bxdf = spec.build().map_err(|e| e.to_string())?;
     let fresnel_only = if spec.model.kind().fresnel_only() {
         let unit = MaterialSpec {
