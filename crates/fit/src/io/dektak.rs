@@ -106,13 +106,11 @@ fn scan_parameters(lines: &mut Lines<'_>) -> Option<(Option<f64>, Option<f64>)> 
     None
 }
 
+/// x and z in metres, and the 1-based line number of each row.
+type Rows = (Vec<f64>, Vec<f64>, Vec<usize>);
+
 /// The `x,z` rows in metres (x scaled by `xu`, z by `zu`) and their 1-based line numbers.
-fn rows(
-    ctx: Ctx<'_>,
-    lines: Lines<'_>,
-    xu: f64,
-    zu: f64,
-) -> Result<(Vec<f64>, Vec<f64>, Vec<usize>), ReadError> {
+fn rows(ctx: Ctx<'_>, lines: Lines<'_>, xu: f64, zu: f64) -> Result<Rows, ReadError> {
     let mut xs = Vec::new();
     let mut zs = Vec::new();
     let mut lineno = Vec::new();
