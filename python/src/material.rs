@@ -110,6 +110,9 @@ fn row_count(counts: &[(&str, usize)]) -> PyResult<usize> {
     }
 }
 
+/// Two arrays of one number per row.
+type Pair<'py> = (Bound<'py, PyArray1<f64>>, Bound<'py, PyArray1<f64>>);
+
 fn array1<'py>(py: Python<'py>, v: Vec<f64>) -> Bound<'py, PyArray1<f64>> {
     v.into_pyarray(py)
 }
@@ -168,7 +171,7 @@ impl Material {
         wi: PyReadonlyArray2<'py, f64>,
         wo: PyReadonlyArray2<'py, f64>,
         lambda_nm: PyReadonlyArray1<'py, f64>,
-    ) -> PyResult<(Bound<'py, PyArray1<f64>>, Bound<'py, PyArray1<f64>>)> {
+    ) -> PyResult<Pair<'py>> {
         let (wi, wo) = (Rows::new(&wi, "wi")?, Rows::new(&wo, "wo")?);
         let lambda = Lambdas::new(&lambda_nm)?;
         let n = row_count(&[("wi", wi.n), ("wo", wo.n), ("lambda_nm", lambda.n())])?;
@@ -261,7 +264,7 @@ impl Material {
         py: Python<'py>,
         theta_i_deg: PyReadonlyArray1<'py, f64>,
         lambda_nm: PyReadonlyArray1<'py, f64>,
-    ) -> PyResult<(Bound<'py, PyArray1<f64>>, Bound<'py, PyArray1<f64>>)> {
+    ) -> PyResult<Pair<'py>> {
         let theta = theta_i_deg
             .as_slice()
             .map_err(|_| value_error("theta_i_deg: the array must be contiguous"))?;
