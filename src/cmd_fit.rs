@@ -99,18 +99,6 @@ impl CheckArgs {
     }
 }
 
-/// Warnings for what the checks of a scan found.
-fn quality_warnings(q: &pipeline::Quality) -> Vec<String> {
-    [
-        ("invalid", &q.invalid),
-        ("outliers", &q.outliers),
-        ("units", &q.units),
-    ]
-    .into_iter()
-    .filter_map(|(k, v)| v.as_ref().map(|v| format!("{k}: {v}")))
-    .collect()
-}
-
 /// `lustre fit channels <scan>`.
 #[derive(clap::Args)]
 pub struct ChannelsArgs {
@@ -327,142 +315,23 @@ fn stats(args: StatsArgs) -> anyhow::Result<()> {
     let checks = args.checks.checks(ropts.units);
     let s = pipeline::summarise_checked(topo, level_of(&args.read), &checks)
         .map_err(|e| in_file(e, &args.scan, None))?;
-    let t = &s.prepared.scan;
-    let form = &s.prepared.form;
-    let kc = &s.kc;
-    let mut warnings: Vec<String> = Vec::new();
-    if let Some(f) = &s.flat {
-        warnings.push(format!(
-            "{f}; the statistics stand but the K-correlation fit is of rounding noise, and \
-             `lustre fit` refuses this scan"
-        ));
-    }
-    if let Some(w) = form.warning() {
-        warnings.push(w);
-    }
-    if let Some(r) = kc.reason {
-        warnings.push(format!("K-correlation fit degenerate: {}", r.describe()));
-    }
-    if let Some(a) = s.anisotropy.as_ref().filter(|a| a.anisotropic) {
-        warnings.push(format!(
-            "anisotropic surface ({}, lay at {:.1}°): the isotropic \
-             K-correlation fit is an approximation",
-            a.ratio_text(),
-            a.lay_direction_deg()
-        ));
-    }
-    if s.flat.is_none()
-        && kc.reason.is_none()
-        && let Some(w) =
-            fit::material_file::variance_mismatch(kc.params.sigma, s.stats.sq, kc.range, false)
-    {
-        warnings.push(w);
-    }
-    warnings.extend(quality_warnings(&s.quality));
-    for w in &warnings {
+    let file = args.scan.display().to_string();
+    let source = fit::stats_report::Source {
+        file: &file,
+        format: format.name(),
+        channel,
+        channel_name: channels.get(channel).map(|c| c.name.as_str()),
+        notes: &read_notes,
+    };
+    let report = fit::stats_report::report(&source, &s);
+    for w in &report.warnings {
         eprintln!("warning: {}: {w}", args.scan.display());
     }
-    let num = |v: f64| {
-        if v.is_finite() {
-            serde_json::json!(v)
-        } else {
-            serde_json::Value::Null
-        }
-    };
-    let json = serde_json::json!({
-        "file": args.scan.display().to_string(),
-        "format": format.name(),
-        "channel": { "index": channel, "name": channels.get(channel).map(|c| c.name.clone()) },
-        "grid": [t.nx, t.ny],
-        "pixel_m": [t.dx, t.dy],
-        "filled_points": s.prepared.filled,
-        "notes": read_notes.iter().chain(&s.notes).collect::<Vec<_>>(),
-        "warnings": warnings,
-        "level": {
-            "kind": form.level.name(),
-            "removed_rms_m": form.removed_rms,
-            "terms": form.terms.iter().map(|x| serde_json::json!({"x_pow": x.i, "y_pow": x.j, "coefficient_si": x.c})).collect::<Vec<_>>(),
-            "residual_form_fraction": form.residual_form.map(|r| r.1),
-            "residual_shows_form": form.warning().is_some(),
-        },
-        "quality": {
-            "invalid": s.quality.invalid,
-            "outliers": s.quality.outliers,
-            "outlier_points": s.quality.outlier_count,
-            "units": s.quality.units,
-        },
-        "sq_m": s.stats.sq,
-        "rms_slope": s.stats.rms_slope(),
-        "iso25178": iso_json(t),
-        "rq_lines_m": s.stats.rq_lines,
-        "rdq_x": num(s.stats.rdq_x),
-        "kc": {
-            "sigma_m": kc.params.sigma,
-            "lc_m": kc.params.lc,
-            "l_1d_m": kc.params.l_cycles(),
-            "gamma": kc.params.gamma,
-            "degenerate": kc.degenerate,
-            "reason": kc.reason.map(|r| r.describe()),
-            "stderr": { "sigma_m": num(kc.stderr.sigma), "lc_m": num(kc.stderr.lc), "gamma": num(kc.stderr.gamma) },
-            "fit_f_range_per_m": [num(kc.range.0), num(kc.range.1)],
-            "asymptote": kc.asymptote.map(|a| serde_json::json!({
-                "exponent": a.exponent,
-                "prefactor_si": a.prefactor,
-                "f_range_per_m": [a.range.0, a.range.1],
-                "form": "P1 = prefactor · f^(−exponent), P1 in m³, f in cycles/m",
-            })),
-        },
-        "anisotropy": s.anisotropy.as_ref().map(|a| serde_json::json!({
-            "rms_slope_x": a.rms_slope_x,
-            "rms_slope_y": a.rms_slope_y,
-            "ratio_xy": num(a.ratio_xy),
-            "principal_rms_slopes": [a.principal.0, a.principal.1],
-            "ratio": num(a.ratio),
-            "slope_direction_deg": a.slope_direction_deg,
-            "lay_direction_deg": a.lay_direction_deg(),
-            "anisotropic": a.anisotropic,
-            "psd_rms_slopes": [a.psd_slopes.0, a.psd_slopes.1],
-            "psd_y": { "f_per_m": a.psd_y.f, "p": a.psd_y.p },
-        })),
-        "psd": { "f_per_m": s.line_psd.f, "p": s.line_psd.p },
-        "units": "SI; lc_m is the Matérn range Lc (physics.md), l_1d_m = 2π·Lc is the data-README 1D-form length; psd p in m³ (one-sided, f in cycles/m, along x; psd_y along y)",
-    });
     if !args.json {
         eprintln!("note: only JSON output is implemented; printing JSON");
     }
-    println!("{}", serde_json::to_string(&json)?);
+    println!("{}", serde_json::to_string(&report.json)?);
     Ok(())
-}
-
-/// The ISO 25178-2 height parameters, the ACF with its correlation length and the height
-/// histogram of a prepared scan, as `fit stats` prints them.
-fn iso_json(t: &fit::Topography) -> serde_json::Value {
-    use fit::areal;
-    let num = |v: f64| v.is_finite().then_some(v);
-    let p = areal::height_params(t);
-    let acf = areal::acf(t);
-    let hist = areal::histogram(t, 64);
-    serde_json::json!({
-        "sa_m": num(p.sa),
-        "sz_m": num(p.sz),
-        "ssk": num(p.ssk),
-        "sku": num(p.sku),
-        "acf": acf.as_ref().map(|a| serde_json::json!({
-            "r_m": a.r,
-            "rho": a.rho,
-            "correlation_length_m": a.length(areal::ACF_THRESHOLD),
-            "threshold": areal::ACF_THRESHOLD,
-        })),
-        "histogram": hist.map(|h| serde_json::json!({
-            "edges_m": h.edges,
-            "counts": h.counts,
-            "density_per_m": h.density,
-        })),
-        "conventions": "heights about their mean; Sz = max − min; Ssk, Sku over Sq³, Sq⁴; ACF \
-            ρ = 1 − A/Sq², A the non-periodic height-difference ACF over every direction, \
-            averaged radially in one-pixel bins to half the scan; correlation length where ρ \
-            first falls to the threshold (null: longer than half the scan)",
-    })
 }
 
 /// An analysis error prefixed with the file it concerns: the library knows the step that

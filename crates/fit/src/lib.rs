@@ -34,6 +34,7 @@ pub mod rng;
 pub mod sampled_kc;
 pub mod sha256;
 pub mod stats;
+pub mod stats_report;
 pub mod surrogate;
 pub mod synth;
 pub mod topography;

@@ -25,12 +25,33 @@ enum Group {
     NotInherited,
 }
 
+/// The documentation lines of a key's attributes (`///` comments), one per line.
+macro_rules! doc_text {
+    () => { "" };
+    ([doc = $d:literal] $($rest:tt)*) => { concat!($d, "\n", doc_text!($($rest)*)) };
+    ([$($other:tt)*] $($rest:tt)*) => { doc_text!($($rest)*) };
+}
+
+/// One key of [`MaterialDesc`], as [`MaterialDesc::KEY_DOCS`] lists it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct KeyDoc {
+    /// The key as written in a scene, a `brdf eval` line or a material file.
+    pub key: &'static str,
+    /// Its Rust type (`f64`, `String`, `[f64; 2]`, or an option's enum).
+    pub ty: &'static str,
+    /// Its documentation, one source line per line (each with a leading space).
+    pub doc: &'static str,
+    /// The models that read it; empty: every model (the index keys, `model`) or none
+    /// but the resolution of an include.
+    pub models: &'static [ModelKind],
+}
+
 /// Every key of the flat schema, listed once: its type and documentation, how it is
 /// inherited from an included file, and which models read it (`[]`: every model, or
 /// none but the resolution of the include). The struct, the key lists and the per-key
 /// accessors are all made from this one table.
 macro_rules! material_keys {
-    ($( $(#[$attr:meta])* $key:ident : $ty:ty, $group:ident, [$($model:ident),*]; )*) => {
+    ($( $(#[$($attr:tt)*])* $key:ident : $ty:ty, $group:ident, [$($model:ident),*]; )*) => {
         /// The flat key/value form of a material, as scene files, `brdf eval`
         /// queries and `lustre fit` material files write it (keys in the module
         /// documentation). Unknown keys are refused when deserialised.
@@ -38,7 +59,7 @@ macro_rules! material_keys {
         #[serde(deny_unknown_fields)]
         pub struct MaterialDesc {
             $(
-                $(#[$attr])*
+                $(#[$($attr)*])*
                 #[serde(default, skip_serializing_if = "Option::is_none")]
                 pub $key: Option<$ty>,
             )*
@@ -49,6 +70,17 @@ macro_rules! material_keys {
             /// only: a key with no model is read by every model, or by none).
             const KEYS: &'static [(&'static str, Group, &'static [ModelKind])] = &[
                 $( (stringify!($key), Group::$group, &[$(ModelKind::$model),*]), )*
+            ];
+
+            /// Every key with its type, documentation and the models that read it, in
+            /// schema order (for help texts such as the Python package's).
+            pub const KEY_DOCS: &'static [KeyDoc] = &[
+                $( KeyDoc {
+                    key: stringify!($key),
+                    ty: stringify!($ty),
+                    doc: doc_text!($( [$($attr)*] )*),
+                    models: &[$(ModelKind::$model),*],
+                }, )*
             ];
 
             /// Whether `key` (as written in a scene) is set.
@@ -622,5 +654,33 @@ impl MaterialSpec {
             }
         }
         d
+    }
+}
+
+#[cfg(test)]
+mod key_doc_tests {
+    use super::*;
+
+    /// The documented table is the schema: the same keys in the same order, each
+    /// documented, each accepted by the deserialiser under that name and with those models.
+    #[test]
+    fn key_docs_list_every_key_of_the_schema() {
+        let docs = MaterialDesc::KEY_DOCS;
+        assert_eq!(docs.len(), MaterialDesc::KEYS.len());
+        for (d, (k, _, models)) in docs.iter().zip(MaterialDesc::KEYS) {
+            assert_eq!(d.key, *k);
+            assert_eq!(d.models, *models);
+            assert!(!d.doc.trim().is_empty(), "{k} has no documentation");
+            assert!(!d.doc.contains("serde"), "{k}: {}", d.doc);
+            let one = serde_json::json!({ (d.key): serde_json::Value::Null });
+            let err = serde_json::from_value::<MaterialDesc>(one)
+                .err()
+                .map(|e| e.to_string())
+                .unwrap_or_default();
+            assert!(!err.contains("unknown field"), "{k}: {err}");
+        }
+        let nk = docs.iter().find(|d| d.key == "nk").unwrap();
+        assert_eq!(nk.ty, "[f64; 2]");
+        assert_eq!(nk.doc, " A constant `[n, k]` (exactly two numbers).\n");
     }
 }

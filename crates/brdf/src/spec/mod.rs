@@ -628,7 +628,7 @@ impl MaterialSpec {
 }
 
 #[cfg(feature = "serde")]
-pub use desc::{FileLoader, FresnelKind, MaterialDesc, NoFiles};
+pub use desc::{FileLoader, FresnelKind, KeyDoc, MaterialDesc, NoFiles};
 #[cfg(feature = "serde")]
 pub mod file;
 #[cfg(feature = "serde")]

@@ -1,0 +1,92 @@
+"""Scans: `stats()` is the dict `lustre fit stats --json` prints, `fit()` the material
+file `lustre fit` writes and `judge()` the report `lustre judge --json` prints, each
+equal to the CLI's to the last bit; arrays and files give the same analysis."""
+
+import json
+import math
+import tomllib
+
+import numpy as np
+import pytest
+
+import lustre
+from conftest import SURFACES
+
+STATS_FILES = ["dektak-1.csv", "di-3.di", "matrix-3.txt", "formats/sdf-1.sdf", "formats/xy-2.txt"]
+
+
+@pytest.mark.parametrize("name", STATS_FILES)
+def test_stats_equal_fit_stats_json(cli, name):
+    path = f"data/surfaces/{name}"
+    want = json.loads(cli("fit", "stats", path, "--json"))
+    got = lustre.read_scan(path).stats()
+    assert got == want
+
+
+def test_stats_options_are_the_cli_flags(cli):
+    path = "data/surfaces/di-3.di"
+    want = json.loads(cli("fit", "stats", path, "--json", "--level", "poly2", "--outliers", "mask"))
+    got = lustre.read_scan(path).stats(level="poly2", outliers="mask")
+    assert got == want
+    assert got["level"]["kind"] == "poly2"
+
+
+def test_an_array_gives_the_analysis_of_the_file():
+    scan = lustre.read_scan("data/surfaces/di-3.di")
+    assert scan.heights.shape[1] > 1 and scan.heights.dtype == np.float64
+    copy = lustre.Scan(scan.heights, scan.dx, scan.dy, name=scan.name)
+    a, b = scan.stats(), copy.stats()
+    for k in ("sq_m", "rms_slope", "kc", "psd", "iso25178", "anisotropy", "grid", "pixel_m"):
+        assert a[k] == b[k], k
+    assert b["format"] == "array"
+    profile = lustre.read_scan(np.sin(np.arange(512) * 0.3) * 1e-7, dx=1e-7)
+    assert profile.heights.shape == (1, 512) and profile.dy == profile.dx
+
+
+def nan_to_none(v):
+    if isinstance(v, float) and math.isnan(v):
+        return None
+    if isinstance(v, dict):
+        return {k: nan_to_none(x) for k, x in v.items()}
+    if isinstance(v, list):
+        return [nan_to_none(x) for x in v]
+    return v
+
+
+@pytest.mark.parametrize("name, metal", [("di-3.di", "cu"), ("dektak-1.csv", "stainless_steel")])
+def test_fit_equals_the_material_file(cli, tmp_path, name, metal):
+    path = f"data/surfaces/{name}"
+    out = tmp_path / "m.toml"
+    cli("fit", path, "--metal", metal, "-o", str(out), "--no-plots")
+    want = tomllib.loads(out.read_text())
+    got = lustre.fit(path, metal=metal)
+    assert nan_to_none(got) == nan_to_none(want)
+    m = lustre.Material.from_fit(got)
+    f, _ = m.eval([0, 0, 1], [0.1, 0, math.sqrt(0.99)], 550.0)
+    assert f[0] > 0
+
+
+def test_judge_equals_judge_json(cli, tmp_path):
+    path = "data/surfaces/di-3.di"
+    flags = dict(crop=64, angles=16, lambda_nm=[550.0], theta_i_deg=[30.0], surrogate=False)
+    want = json.loads(
+        cli("judge", path, "--json", "--no-plots", "-o", str(tmp_path), "--crop", "64",
+            "--angles", "16", "--lambda", "550", "--theta-i", "30", "--no-surrogate", "--metal", "cu")
+    )
+    got = lustre.judge(path, metal="cu", **flags)
+    assert got == want
+
+
+def test_read_errors_are_os_and_value_errors(tmp_path):
+    with pytest.raises(OSError, match="nope.x3p"):
+        lustre.read_scan(tmp_path / "nope.x3p")
+    bad = tmp_path / "bad.x3p"
+    bad.write_bytes(b"not a zip at all")
+    with pytest.raises(ValueError, match="bad.x3p"):
+        lustre.read_scan(bad)
+    with pytest.raises(ValueError, match="units"):
+        lustre.read_scan(SURFACES / "dektak-1.csv", units="furlongs")
+    with pytest.raises(ValueError, match="dx"):
+        lustre.Scan(np.zeros((4, 4)), dx=-1.0)
+    with pytest.raises(ValueError, match="level"):
+        lustre.read_scan(SURFACES / "di-3.di").stats(level="quartic")
