@@ -442,7 +442,7 @@ fn slice_plot(fig: &Figure<'_>) -> anyhow::Result<(Plot, String)> {
     }
     // Twelve decades below the highest peak: deeper tails are numerically
     // meaningless for the figure (they stay in the CSV).
-    let mut p = Plot::new(format!("{title}, in-plane BRDF"))
+    let mut p = Plot::new(format!("{title}, in-plane BRDF, {}", lambda_text(args)))
         .x_axis(Axis::linear(x_label))
         .y_axis(Axis::log("BRDF [sr⁻¹]").range(y_max * 1e-12, y_max * 3.0))
         .legend(Legend::Outside);
@@ -465,10 +465,13 @@ fn albedo_plot(fig: &Figure<'_>) -> anyhow::Result<(Plot, String)> {
     let mut csv = csv_header(
         "lambda_nm,theta_i_deg,lobe_rho,scattered_albedo,specular_weight,total_albedo,tis",
     );
-    let mut p = Plot::new(format!("{title}, directional albedo"))
-        .x_axis(Axis::linear("θi [deg]").range(0.0, 90.0))
-        .y_axis(Axis::linear("albedo (solid) · TIS (dashed)").range(0.0, 1.05))
-        .legend(Legend::Outside);
+    let mut p = Plot::new(format!(
+        "{title}, directional albedo, {}",
+        lambda_text(args)
+    ))
+    .x_axis(Axis::linear("θi [deg]").range(0.0, 90.0))
+    .legend(Legend::Outside);
+    let mut y_max = 1.0f64;
     let multi_lambda = args.lambda_nm.len() > 1;
     for (mi, (spec, model)) in fig.specs.iter().zip(fig.built).enumerate() {
         for (li, &lambda) in args.lambda_nm.iter().enumerate() {
@@ -488,6 +491,7 @@ fn albedo_plot(fig: &Figure<'_>) -> anyhow::Result<(Plot, String)> {
                 xs.push(theta_i);
                 total.push(t);
                 tis.push(r);
+                y_max = y_max.max(t).max(r);
             }
             let suffix = if multi_lambda {
                 format!(", {lambda} nm")
@@ -511,5 +515,19 @@ fn albedo_plot(fig: &Figure<'_>) -> anyhow::Result<(Plot, String)> {
             );
         }
     }
+    // Up to 1 with a margin; a model that reflects more than it receives (a raw energy
+    // option near grazing) stays on the figure instead of leaving it.
+    let top = if y_max.is_finite() {
+        1.05 * y_max
+    } else {
+        1.05
+    };
+    let p = p.y_axis(Axis::linear("albedo (solid) · TIS (dashed)").range(0.0, top));
     Ok((p, csv))
+}
+
+/// The wavelengths of a figure for its title: `λ 550 nm`, `λ 450, 550, 650 nm`.
+fn lambda_text(args: &PlotArgs) -> String {
+    let list: Vec<String> = args.lambda_nm.iter().map(|l| format!("{l}")).collect();
+    format!("λ {} nm", list.join(", "))
 }

@@ -55,7 +55,11 @@ pub struct CompareArgs {
     /// Worker threads (default: all cores).
     #[arg(long)]
     pub threads: Option<usize>,
-    /// Output PNG (default out/compare/<sample>.png); the cell table goes beside it as `.cells.csv`.
+    /// Exposure in stops (the PNG clips at 1; each cell's EXR holds the unclipped values).
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+    pub exposure: f64,
+    /// Output PNG (default out/compare/<sample>.png); the cell table goes beside it as
+    /// `.cells.csv`, each cell's linear EXR as `<stem>_r<row>c<col>.exr`.
     #[arg(long, short)]
     pub out: Option<PathBuf>,
     /// Print nothing but errors.
@@ -170,9 +174,22 @@ pub fn scene_text(
     Ok(plate.file().to_toml()?)
 }
 
+/// The linear EXR of the cell in row `r`, column `c`, beside the grid's PNG.
+fn cell_exr(png: &Path, r: usize, c: usize) -> PathBuf {
+    let stem = png.file_stem().unwrap_or_default().to_string_lossy();
+    png.with_file_name(format!("{stem}_r{r}c{c}.exr"))
+}
+
+/// Fraction of the pixels with a channel above 1 (white in the PNG).
+fn clipped_fraction(rgb: &[[f32; 3]]) -> f64 {
+    let n = rgb.iter().filter(|p| p.iter().any(|v| *v > 1.0)).count();
+    n as f64 / rgb.len().max(1) as f64
+}
+
 /// Runs `lustre compare`.
 pub fn run(args: CompareArgs) -> anyhow::Result<()> {
     let (w, h) = parse_size(&args.size)?;
+    crate::flags::check_exposure(args.exposure)?;
     crate::flags::check_spp(args.spp, crate::flags::MAX_FIGURE_SPP)?;
     let threads = crate::flags::thread_count(args.threads, args.quiet)?;
     if args.views.is_empty() || args.views.iter().any(|v| !(0.0..90.0).contains(v)) {
@@ -213,11 +230,15 @@ pub fn run(args: CompareArgs) -> anyhow::Result<()> {
         .unwrap_or_else(|| PathBuf::from(format!("out/compare/{name}.png")));
     if let Some(material) = &args.material {
         safe_io::register_input(material);
-        crate::outputs::check(&[
-            (out.clone(), "compare PNG"),
-            (out.with_extension("cells.csv"), "cell table"),
-        ])?;
     }
+    let mut outputs = vec![
+        (out.clone(), "compare PNG"),
+        (out.with_extension("cells.csv"), "cell table"),
+    ];
+    for r in 0..rows.len() {
+        outputs.extend((0..args.views.len()).map(|c| (cell_exr(&out, r, c), "cell EXR")));
+    }
+    crate::outputs::check(&outputs)?;
     if let Some(dir) = out.parent().filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
     }
@@ -227,7 +248,10 @@ pub fn run(args: CompareArgs) -> anyhow::Result<()> {
     };
     let pool = render::thread_pool(threads)?;
     let mut grid = ImageGrid::new(rows.len(), args.views.len())
-        .title(format!("{title}\n{w}×{h} px, {} spp per cell", args.spp))
+        .title(format!(
+            "{title}\n{w}×{h} px, {} spp per cell, exposure {:+} stops",
+            args.spp, args.exposure
+        ))
         .row_labels(rows.iter().map(|r| r.label.clone()))
         .col_labels(args.views.iter().map(|v| match *v {
             0.0 => "normal (0°)".to_string(),
@@ -236,6 +260,7 @@ pub fn run(args: CompareArgs) -> anyhow::Result<()> {
         }));
     let scene_path = base.join("compare.toml");
     let start = Instant::now();
+    let mut most_clipped = (0.0f64, String::new());
     for (r, row) in rows.iter().enumerate() {
         for (c, &view) in args.views.iter().enumerate() {
             let text = scene_text(view, w, h, args.spp, &row.material)?;
@@ -246,11 +271,20 @@ pub fn run(args: CompareArgs) -> anyhow::Result<()> {
                 h,
                 scene.fingerprint,
                 scene.settings.seed,
-                scene.settings.exposure,
+                scene.settings.exposure + args.exposure,
             )
             .map_err(anyhow::Error::msg)?;
             render::render_range_in(&pool, &scene, &mut film, 0..args.spp, &opts)?;
-            let px: Vec<u8> = film.rgb().iter().flat_map(|p| p.map(to_srgb8)).collect();
+            let rgb = film.rgb();
+            render::output::write_exr(&cell_exr(&out, r, c), w, h, &rgb)?;
+            let clipped = clipped_fraction(&rgb);
+            if clipped > most_clipped.0 {
+                most_clipped = (
+                    clipped,
+                    format!("{} at {view}°", row.label.replace('\n', ", ")),
+                );
+            }
+            let px: Vec<u8> = rgb.iter().flat_map(|p| p.map(to_srgb8)).collect();
             grid.set_rgb8(r, c, w, h, px)?;
             if !args.quiet {
                 eprintln!(
@@ -263,27 +297,37 @@ pub fn run(args: CompareArgs) -> anyhow::Result<()> {
     }
     let layout = grid.save_png(&out)?;
     // The cell table: where each render sits in the grid and what it shows.
-    let mut cells = String::from("row,col,model,view_deg,x0,y0,x1,y1,grid_width,grid_height\n");
+    let mut cells = String::from("row,col,model,view_deg,x0,y0,x1,y1,grid_width,grid_height,exr\n");
     for (r, row) in rows.iter().enumerate() {
         for (c, view) in args.views.iter().enumerate() {
             let s = layout.slots[r * args.views.len() + c];
             cells += &format!(
-                "{r},{c},\"{}\",{view},{},{},{},{},{},{}\n",
+                "{r},{c},\"{}\",{view},{},{},{},{},{},{},\"{}\"\n",
                 row.label.replace('\n', ", "),
                 s.x0,
                 s.y0,
                 s.x1,
                 s.y1,
                 layout.width,
-                layout.height
+                layout.height,
+                cell_exr(&out, r, c).display()
             );
         }
     }
     let cells_path = out.with_extension("cells.csv");
     plot::write_atomic(&cells_path, cells.as_bytes())?;
+    if most_clipped.0 > 0.01 {
+        eprintln!(
+            "note: {:.1} % of the pixels of {} are above 1 and white in the PNG; each cell's EXR \
+             holds them unclipped, or lower --exposure (now {:+} stops)",
+            100.0 * most_clipped.0,
+            most_clipped.1,
+            args.exposure
+        );
+    }
     if !args.quiet {
         eprintln!(
-            "wrote {} ({}×{} px) and {}",
+            "wrote {} ({}×{} px), {} and one EXR per cell",
             out.display(),
             layout.width,
             layout.height,

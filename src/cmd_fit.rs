@@ -12,6 +12,9 @@ use fit::level::Level;
 use fit::pipeline::{self, Options};
 use std::path::{Path, PathBuf};
 
+/// The metal a material file names when `--metal` is not given.
+const DEFAULT_METAL: &str = "stainless_steel";
+
 /// Arguments of the fit command.
 #[derive(clap::Args)]
 #[command(args_conflicts_with_subcommands = true)]
@@ -131,9 +134,9 @@ pub struct MaterialArgs {
     /// AFM/stylus merge cutoff [rad/µm].
     #[arg(long, default_value_t = 1.0)]
     pub merge_cutoff: f64,
-    /// Metal written to [material].metal.
-    #[arg(long, default_value = "stainless_steel")]
-    pub metal: String,
+    /// Metal written to [material].metal (without it, stainless_steel, said in a note).
+    #[arg(long)]
+    pub metal: Option<String>,
     /// Model written to [material].model; `auto` picks GHS when the K-correlation fit is
     /// sound, else the measured PSD, else GGX.
     #[arg(long, default_value = "auto", value_parser = model_names())]
@@ -411,7 +414,7 @@ fn material(args: MaterialArgs) -> anyhow::Result<()> {
         bytes: &bytes,
         stylus: stylus_name.as_deref().zip(stylus.as_deref()),
         merge_cutoff_rad_per_um: args.merge_cutoff,
-        metal: &args.metal,
+        metal: args.metal.as_deref().unwrap_or(DEFAULT_METAL),
         model: &args.model,
         notes: &read_notes,
     };
@@ -443,6 +446,12 @@ fn material(args: MaterialArgs) -> anyhow::Result<()> {
     );
     for n in &analysis.notes {
         eprintln!("note: {n}");
+    }
+    if args.metal.is_none() {
+        eprintln!(
+            "note: no --metal: [material].metal = \"{DEFAULT_METAL}\"; give the sample's metal \
+             (--metal cu, au, ag, al, …) or set `metal` in the scene over the include"
+        );
     }
     let r = &doc.reliability;
     for (part, state) in [

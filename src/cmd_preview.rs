@@ -357,6 +357,42 @@ fn check_sky_flags(args: &PreviewArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// Renders every image to the same number of samples, in rounds over all of them (1 sample
+/// each, then as many again, doubling while the budget allows): a round is started only when
+/// its projected end lies within `budget`, so every image stops at the same count (`spp` at
+/// most; the first round always runs, so no image is black). Returns the count.
+fn render_equally(
+    pool: &render::ThreadPool,
+    scenes: &[render::Scene],
+    films: &mut [Film],
+    (spp, budget): (u64, Duration),
+    opts: &RenderOptions,
+) -> anyhow::Result<u64> {
+    let start = Instant::now();
+    let mut done = 0u64;
+    let mut step = 1u64;
+    while step > 0 && done < spp {
+        let next = done + step.min(spp - done);
+        let t0 = Instant::now();
+        for (scene, film) in scenes.iter().zip(films.iter_mut()) {
+            let outcome = render::render_range_in(pool, scene, film, done..next, opts)?;
+            if !outcome.complete {
+                bail!("interrupted");
+            }
+        }
+        let per_sample = t0.elapsed().as_secs_f64() / (next - done) as f64;
+        done = next;
+        let left = budget.saturating_sub(start.elapsed()).as_secs_f64();
+        let affordable = if per_sample > 0.0 {
+            (left / per_sample).floor().min(u64::MAX as f64) as u64
+        } else {
+            u64::MAX
+        };
+        step = done.min(affordable);
+    }
+    Ok(done)
+}
+
 /// Runs `lustre preview`.
 pub fn run(args: PreviewArgs) -> anyhow::Result<()> {
     crate::flags::check_spp(args.spp, crate::flags::MAX_FIGURE_SPP)?;
@@ -430,58 +466,48 @@ pub fn run(args: PreviewArgs) -> anyhow::Result<()> {
     let pool = render::thread_pool(threads)?;
     let (mut image_grid, cols) = image_grid(cells.len(), &title, args.light, (w, h));
     let start = Instant::now();
+    let mut scenes = Vec::with_capacity(cells.len());
+    let mut films = Vec::with_capacity(cells.len());
+    for cell in &cells {
+        let scene = cell_scene(&args, cell, &stem_of(cell), (w, h), &title, &dir)?;
+        films.push(
+            Film::new(w, h, scene.fingerprint, scene.settings.seed, args.exposure)
+                .map_err(anyhow::Error::msg)?,
+        );
+        scenes.push(scene);
+    }
+    let opts = RenderOptions {
+        threads,
+        stop: stop.clone(),
+        ..RenderOptions::default()
+    };
+    let spp = render_equally(&pool, &scenes, &mut films, (args.spp, budget), &opts)?;
     let mut single_rgb = None;
-    for (i, cell) in cells.iter().enumerate() {
-        let stem = stem_of(cell);
-        let scene = cell_scene(&args, cell, &stem, (w, h), &title, &dir)?;
-        // Each remaining image gets an equal share of what is left of the budget.
-        let left = budget.saturating_sub(start.elapsed());
-        let share = left / (cells.len() - i) as u32;
-        let opts = RenderOptions {
-            threads,
-            time_limit: Some(share.max(Duration::from_millis(100))),
-            stop: stop.clone(),
-            progress: crate::progress::bar(!args.quiet),
-            pass_target: Duration::from_secs(1),
-            ..RenderOptions::default()
-        };
-        let mut film = Film::new(w, h, scene.fingerprint, scene.settings.seed, args.exposure)
-            .map_err(anyhow::Error::msg)?;
-        let t0 = Instant::now();
-        let outcome = render::render_range_in(&pool, &scene, &mut film, 0..args.spp, &opts)?;
-        if film.spp() == 0 {
-            // The budget ran out before one pass: render one anyway rather than write black.
-            render::render_range_in(&pool, &scene, &mut film, 0..1, &RenderOptions::default())?;
-        }
+    for (i, (cell, film)) in cells.iter().zip(&films).enumerate() {
         let rgb = film.rgb();
-        let exr = dir.join(format!("{stem}.exr"));
+        let exr = dir.join(format!("{}.exr", stem_of(cell)));
         render::output::write_exr(&exr, w, h, &rgb)?;
         if grid {
             let px: Vec<u8> = rgb.iter().flat_map(|p| p.map(to_srgb8)).collect();
-            let r = i / cols;
-            let c = i % cols;
+            let (r, c) = (i / cols, i % cols);
             image_grid.set_rgb8(r, c, w, h, px)?;
-            image_grid.caption(r, c, format!("{} ({} spp)", cell.label, film.spp()))?;
+            image_grid.caption(r, c, format!("{} ({spp} spp)", cell.label))?;
         } else {
             single_rgb = Some(rgb);
         }
         if !args.quiet {
             eprintln!(
-                "  {}: {} spp in {:.1} s{} → {}",
+                "  {}: {spp} spp → {}",
                 cell.label.replace('\n', ", "),
-                film.spp(),
-                t0.elapsed().as_secs_f64(),
-                if outcome.complete {
-                    ""
-                } else {
-                    " (time limit)"
-                },
                 exr.display()
             );
         }
-        if stop.load(std::sync::atomic::Ordering::Relaxed) {
-            bail!("interrupted");
-        }
+    }
+    if spp < args.spp && !args.quiet {
+        eprintln!(
+            "note: the time limit ({}) allowed {spp} of {} spp per image, the same for every image",
+            args.time_limit, args.spp
+        );
     }
     match single_rgb {
         Some(rgb) => render::output::write_png(&out, w, h, &rgb)?,

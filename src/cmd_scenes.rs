@@ -20,8 +20,9 @@ use crate::models::{self, Surface};
 /// Arguments of `lustre scenes`.
 #[derive(clap::Args, Debug)]
 pub struct ScenesArgs {
-    /// Folder to write `samples/` and `psd/` into.
-    #[arg(long, default_value = "scenes")]
+    /// Folder to write `samples/`, `psd/`, `preview/` and `assets/` into (required, so that
+    /// a stray run never rewrites a checkout's `scenes/`; `--out scenes` regenerates them).
+    #[arg(long)]
     pub out: PathBuf,
     /// Print nothing but errors.
     #[arg(long, short)]

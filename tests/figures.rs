@@ -318,6 +318,10 @@ fn compare_grid_has_one_cell_per_model_and_view() {
         );
         let (x0, y0, x1, y1) = (num(c, "x0"), num(c, "y0"), num(c, "x1"), num(c, "y1"));
         assert_eq!((x1 - x0, y1 - y0), (40.0, 30.0), "cell size");
+        // Each cell's unclipped linear image.
+        let (ew, eh, rgb) = render::output::read_exr(Path::new(&c["exr"])).unwrap();
+        assert_eq!((ew, eh), (40, 30), "{}", c["exr"]);
+        assert!(rgb.iter().flatten().all(|v| v.is_finite() && *v >= 0.0));
         assert!(x0 >= 0.0 && y0 >= 0.0 && x1 <= f64::from(w) && y1 <= f64::from(h));
     }
     let views: Vec<f64> = cells

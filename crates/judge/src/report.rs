@@ -442,7 +442,14 @@ impl Report<'_> {
     pub(crate) fn plots(&self, out: &Path) -> Result<(), JudgeError> {
         let thetas: Vec<f64> = dedup(self.sets.iter().map(|s| s.theta_i));
         let lambdas: Vec<f64> = dedup(self.sets.iter().map(|s| s.lambda_nm));
-        let mut grid = ImageGrid::new(thetas.len(), lambdas.len());
+        let name = Path::new(self.scan).file_name().map_or_else(
+            || self.scan.to_string(),
+            |n| n.to_string_lossy().into_owned(),
+        );
+        let mut grid = ImageGrid::new(thetas.len(), lambdas.len()).title(format!(
+            "{name}: in-plane BRDF slices, the scan's explicit BRDF against the best models \
+             (rows θi, columns λ)"
+        ));
         // Best few models only, so the slices stay readable.
         let shown: Vec<usize> = (0..self.judged.len().min(6)).collect();
         for (k, set) in self.sets.iter().enumerate() {

@@ -12,8 +12,9 @@ impl Rgb {
 
     /// The `i`-th colour of the default palette (cycles after 8).
     ///
-    /// The palette is Okabe & Ito's colour-blind-safe set, reordered so the first colours are
-    /// the most distinct, with yellow replaced by a darker gold that stays visible on white.
+    /// Okabe & Ito's colour-blind-safe set, reordered so the first colours are the most
+    /// distinct; their yellow (invisible on white) is replaced by a slate violet, and orange
+    /// comes last, since within the first six it is hard to tell from vermillion.
     pub fn palette(i: usize) -> Rgb {
         const P: [Rgb; 8] = [
             Rgb(0, 114, 178),   // blue
@@ -21,9 +22,9 @@ impl Rgb {
             Rgb(0, 158, 115),   // bluish green
             Rgb(204, 121, 167), // reddish purple
             Rgb(86, 180, 233),  // sky blue
-            Rgb(230, 159, 0),   // orange
+            Rgb(117, 112, 179), // slate violet
             Rgb(0, 0, 0),       // black
-            Rgb(170, 140, 0),   // dark gold
+            Rgb(230, 159, 0),   // orange
         ];
         P[i % P.len()]
     }
