@@ -10,11 +10,11 @@ use crate::kc::KcParams;
 use crate::pipeline::Analysis;
 use crate::two_scale::BetaSource;
 use brdf::paper::{REFERENCE_LAMBDA_NM, short};
-use brdf::spec::{FresnelSpec, KcSpec, MaterialSpec, ModelKind, ModelSpec};
+use brdf::spec::{AnisoSpec, FresnelSpec, KcSpec, MaterialSpec, ModelKind, ModelSpec, RrSurface};
 use brdf::statistics::{TabulatedPsd, epd, kc};
-use brdf::wave::GhsOptions;
 use brdf::wave::two_scale::CoherentPart;
 use brdf::wave::wavenumber;
+use brdf::wave::{GhsOptions, Polarization, PolarizationFactor};
 
 const UM: f64 = 1e6;
 
@@ -82,6 +82,14 @@ pub enum Family {
     GhsSsa,
     /// Full GHS of the K-correlation fit.
     Ghs,
+    /// Full GHS of the K-correlation fit with the Rayleigh–Rice polarisation factor Q in
+    /// place of the scalar Fresnel R (unpolarised).
+    GhsQ,
+    /// Rayleigh–Rice (first-order vector perturbation theory) of the K-correlation fit,
+    /// unpolarised.
+    RayleighRice,
+    /// Full GHS of an anisotropic K-correlation surface (scans flagged anisotropic).
+    GhsAniso,
     /// Full GHS of the measured PSD.
     MeasuredPsd,
     /// Two-scale at one split of the surface.
@@ -90,12 +98,15 @@ pub enum Family {
 
 impl Family {
     /// Every recipe, in report order.
-    pub const ALL: [Family; 7] = [
+    pub const ALL: [Family; 10] = [
         Family::Ggx,
         Family::Beckmann,
         Family::GgxKc,
         Family::GhsSsa,
         Family::Ghs,
+        Family::GhsQ,
+        Family::RayleighRice,
+        Family::GhsAniso,
         Family::MeasuredPsd,
         Family::TwoScale,
     ];
@@ -104,6 +115,7 @@ impl Family {
     pub fn name(self) -> &'static str {
         match self {
             Family::GgxKc => "ggx_kc",
+            Family::GhsQ => "ghs_q",
             f => f.model().name(),
         }
     }
@@ -114,7 +126,9 @@ impl Family {
             Family::Ggx | Family::GgxKc => ModelKind::Ggx,
             Family::Beckmann => ModelKind::Beckmann,
             Family::GhsSsa => ModelKind::GhsSsa,
-            Family::Ghs => ModelKind::Ghs,
+            Family::Ghs | Family::GhsQ => ModelKind::Ghs,
+            Family::RayleighRice => ModelKind::RayleighRice,
+            Family::GhsAniso => ModelKind::GhsAniso,
             Family::MeasuredPsd => ModelKind::MeasuredPsd,
             Family::TwoScale => ModelKind::TwoScale,
         }
@@ -132,6 +146,15 @@ impl Family {
             }
             Family::GhsSsa => "Gaussian heights, KC spectrum, smooth-surface (first-order) lobe",
             Family::Ghs => "Gaussian heights, KC spectrum, all orders",
+            Family::GhsQ => {
+                "Gaussian heights, KC spectrum, all orders, Rayleigh–Rice polarisation factor Q for R"
+            }
+            Family::RayleighRice => {
+                "first-order vector perturbation theory (Rayleigh–Rice), KC spectrum, unpolarised"
+            }
+            Family::GhsAniso => {
+                "Gaussian heights, KC spectrum stretched along the principal slope axes, all orders"
+            }
             Family::MeasuredPsd => "Gaussian heights, measured isotropic PSD, all orders",
             Family::TwoScale => "exponential NDF above the cutoff period, KC diffraction below it",
         }
@@ -147,6 +170,9 @@ pub fn candidates(a: &Analysis, fresnel: &FresnelSpec) -> Vec<Candidate> {
         ggx_kc(a, fresnel),
         kc_model(a, fresnel, Family::GhsSsa),
         kc_model(a, fresnel, Family::Ghs),
+        kc_model(a, fresnel, Family::GhsQ),
+        kc_model(a, fresnel, Family::RayleighRice),
+        ghs_aniso(a, fresnel),
         measured_psd(a, fresnel),
     ];
     out.extend(a.two_scale.iter().map(|t| two_scale(t, fresnel)));
@@ -243,23 +269,36 @@ fn ggx_kc(a: &Analysis, fresnel: &FresnelSpec) -> Candidate {
     c
 }
 
-/// GHS SSA or full GHS with the K-correlation fit as it is.
+/// A wave-optical model of the K-correlation fit as it is: GHS SSA, full GHS (with R or Q)
+/// or Rayleigh–Rice.
 fn kc_model(a: &Analysis, fresnel: &FresnelSpec, family: Family) -> Candidate {
     let (surface, problems) = kc_surface(a);
-    let name = if family == Family::Ghs {
-        "full GHS"
-    } else {
-        "GHS SSA"
+    let options = GhsOptions::default();
+    let (name, model) = match family {
+        Family::Ghs => ("full GHS", ModelSpec::Ghs { surface, options }),
+        Family::GhsQ => (
+            "full GHS with Q",
+            ModelSpec::Ghs {
+                surface,
+                options: GhsOptions {
+                    polarization_factor: PolarizationFactor::Q,
+                    ..options
+                },
+            },
+        ),
+        Family::RayleighRice => (
+            "Rayleigh–Rice",
+            ModelSpec::RayleighRice {
+                surface: RrSurface::Kc(surface),
+                polarization: Polarization::Unpolarized,
+            },
+        ),
+        _ => ("GHS SSA", ModelSpec::GhsSsa { surface, options }),
     };
     let mut c = blank(family, format!("{name}, KC fit"));
     c.problems = problems;
-    let options = GhsOptions::default();
     let spec = MaterialSpec {
-        model: if family == Family::Ghs {
-            ModelSpec::Ghs { surface, options }
-        } else {
-            ModelSpec::GhsSsa { surface, options }
-        },
+        model,
         fresnel: fresnel.clone(),
     };
     // The full GHS needs γ ≥ 1.05 (its series spans more decades than f64 holds below).
@@ -267,6 +306,54 @@ fn kc_model(a: &Analysis, fresnel: &FresnelSpec, family: Family) -> Candidate {
         Ok(()) => c.spec = Some(spec),
         Err(e) => c.problems.push(e.to_string()),
     }
+    c
+}
+
+/// Full GHS of an anisotropic K-correlation surface, for a scan flagged anisotropic: σ and γ
+/// of the isotropic fit, and correlation lengths along the steepest slope and across it in
+/// the inverse ratio of the principal rms slopes (stretching an isotropic surface scales
+/// its slope along each axis as 1/L), their geometric mean the isotropic Lc.
+fn ghs_aniso(a: &Analysis, fresnel: &FresnelSpec) -> Candidate {
+    let (surface, mut problems) = kc_surface(a);
+    let mut c = blank(Family::GhsAniso, "full GHS, anisotropic KC".into());
+    let Some(an) = a.anisotropy.as_ref().filter(|an| an.anisotropic) else {
+        problems.push(
+            "the scan is not flagged anisotropic (principal rms slopes within a factor 1.5)".into(),
+        );
+        c.problems = problems;
+        return c;
+    };
+    let (steep, across) = an.principal;
+    let shrink = (across / steep).sqrt();
+    if !(shrink.is_finite() && shrink > 0.0) {
+        problems.push(format!(
+            "principal rms slopes {steep:.4e} and {across:.4e} give no axis ratio"
+        ));
+        c.problems = problems;
+        return c;
+    }
+    c.label = format!(
+        "full GHS, anisotropic KC (Lc ratio {:.2})",
+        1.0 / (shrink * shrink)
+    );
+    let spec = MaterialSpec {
+        model: ModelSpec::GhsAniso {
+            surface: AnisoSpec {
+                sigma_um: surface.sigma_um,
+                lx_um: surface.lc_um * shrink,
+                ly_um: surface.lc_um / shrink,
+                angle_deg: an.slope_direction_deg,
+                gamma: surface.gamma,
+            },
+            options: GhsOptions::default(),
+        },
+        fresnel: fresnel.clone(),
+    };
+    match spec.validate() {
+        Ok(()) => c.spec = Some(spec),
+        Err(e) => problems.push(e.to_string()),
+    }
+    c.problems = problems;
     c
 }
 

@@ -164,6 +164,12 @@ fn material_desc(metal: &str, cands: &[Candidate], aniso: Option<&Anisotropy>) -
         .and_then(|c| c.spec.as_ref())
         .and_then(|s| s.model.surface());
     let axes = aniso.filter(|t| t.anisotropic).map(|t| t.alpha_ggx);
+    let stretched = find(Family::GhsAniso)
+        .and_then(|c| c.spec.as_ref())
+        .and_then(|s| match &s.model {
+            ModelSpec::GhsAniso { surface, .. } => Some(*surface),
+            _ => None,
+        });
     MaterialDesc {
         metal: Some(metal.to_string()),
         sigma_um: surface.map(|s| s.sigma_um),
@@ -173,6 +179,9 @@ fn material_desc(metal: &str, cands: &[Candidate], aniso: Option<&Anisotropy>) -
         alpha_beckmann: find(Family::Beckmann).and_then(alpha_of),
         alpha_x: axes.map(|a| a[0]),
         alpha_y: axes.map(|a| a[1]),
+        lx_um: stretched.map(|s| s.lx_um),
+        ly_um: stretched.map(|s| s.ly_um),
+        angle_deg: stretched.map(|s| s.angle_deg),
         ..MaterialDesc::default()
     }
 }

@@ -11,8 +11,11 @@
 //! assumes, so the differences between rows price the assumptions: Gaussian heights (the
 //! explicit BRDF of a Gaussian surrogate with the map's own spectrum, `fit::surrogate`),
 //! the K-correlation shape (full GHS with the KC fit against full GHS with the measured
-//! PSD), first-order truncation (SSA against full GHS), the two-scale split, and
-//! microfacet geometric optics.
+//! PSD), first-order truncation (SSA against full GHS), the two-scale split, microfacet
+//! geometric optics, and the polarisation factor (full GHS with the Rayleigh–Rice Q
+//! against the scalar Fresnel R, and first-order Rayleigh–Rice against it). The
+//! explicit reference is a scalar theory: only against a measured `--reference` does
+//! the Q row price the polarisation itself.
 //!
 //! Geometry: the plane of incidence is the scan's x axis; i = (sinθi, 0, cosθi), the
 //! in-plane slice has φo = 180° on the specular side (signed θo > 0) and 0° on the

@@ -135,6 +135,16 @@ impl Report<'_> {
                 best.as_str(),
             ),
             (
+                "scalar Fresnel R instead of the polarisation factor Q (full GHS)",
+                Family::GhsQ.name(),
+                Family::Ghs.name(),
+            ),
+            (
+                "first-order Rayleigh–Rice instead of the full GHS with Q",
+                Family::GhsQ.name(),
+                Family::RayleighRice.name(),
+            ),
+            (
                 "microfacet GGX (NDF fit) instead of full GHS",
                 Family::Ghs.name(),
                 Family::Ggx.name(),

@@ -118,8 +118,9 @@ impl Offer {
 
 impl MaterialFile {
     /// Every material the file offers: its own model, GGX, Beckmann, GHS SSA, the full GHS
-    /// where γ ≥ 1.05 (below, its series is not representable), the measured PSD when the
-    /// table is usable, and two-scale at each split.
+    /// where γ ≥ 1.05 (below, its series is not representable), the anisotropic full GHS
+    /// where the file has the two correlation lengths, the measured PSD when the table is
+    /// usable, and two-scale at each split.
     pub fn offered(&self) -> Vec<Offer> {
         let offer = |m: ModelKind, cutoff: Option<&str>| Offer {
             name: match cutoff {
@@ -148,6 +149,9 @@ impl MaterialFile {
             if m != ModelKind::Ghs || full_ok {
                 out.push(offer(m, None));
             }
+        }
+        if full_ok && self.material.lx_um.is_some() && self.material.ly_um.is_some() {
+            out.push(offer(ModelKind::GhsAniso, None));
         }
         if self.psd.as_ref().is_some_and(|p| p.usable) {
             out.push(offer(ModelKind::MeasuredPsd, None));

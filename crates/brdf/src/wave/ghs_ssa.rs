@@ -208,6 +208,30 @@ impl GhsCommon {
         }))
     }
 
+    /// A sample of a first-order lobe (the SSA, Rayleigh–Rice), whose glossy directions
+    /// follow the PSD's radial CDF in u = |ζ|L: the delta lobe with its probability, else a
+    /// direction drawn from `psd` and its `(f, pdf)` from `eval_pdf`.
+    #[inline]
+    pub fn sample_first_order(
+        &self,
+        psd: &impl RadialPsd,
+        wi: DVec3,
+        lambda_nm: f64,
+        u: [f64; 3],
+        eval_pdf: impl Fn(DVec3) -> (f64, f64),
+    ) -> Option<BxdfSample> {
+        if !(wi.z > 0.0) {
+            return None;
+        }
+        if let LobeChoice::Delta(s) = self.choose_lobe(wi, lambda_nm, u[0]) {
+            return s;
+        }
+        let kl = wavenumber(lambda_nm) * self.length;
+        let uu = psd.sample_u(u[1]);
+        let wo = direction_from_u(wi, kl, uu, 2.0 * core::f64::consts::PI * u[2])?;
+        super::glossy_sample(wo, eval_pdf(wo))
+    }
+
     /// (specular weight R_s A_s, delta probability, g_s).
     pub fn specular_and_choice(&self, ci: f64, lambda_nm: f64) -> (f64, f64, f64) {
         let (p, a_s, gs) = self.choice_coherent(ci, lambda_nm);
@@ -382,16 +406,10 @@ impl<P: RadialPsd> Bxdf for GhsSsa<P> {
     }
 
     fn sample(&self, wi: DVec3, lambda_nm: f64, u: [f64; 3]) -> Option<BxdfSample> {
-        if !(wi.z > 0.0) {
-            return None;
-        }
-        if let LobeChoice::Delta(s) = self.common.choose_lobe(wi, lambda_nm, u[0]) {
-            return s;
-        }
-        let kl = wavenumber(lambda_nm) * self.common.length;
-        let uu = self.psd.sample_u(u[1]);
-        let wo = direction_from_u(wi, kl, uu, 2.0 * core::f64::consts::PI * u[2])?;
-        super::glossy_sample(wo, self.eval_pdf(wi, wo, lambda_nm))
+        self.common
+            .sample_first_order(&self.psd, wi, lambda_nm, u, |wo| {
+                self.eval_pdf(wi, wo, lambda_nm)
+            })
     }
 
     fn specular(&self, wi: DVec3, lambda_nm: f64) -> Specular {

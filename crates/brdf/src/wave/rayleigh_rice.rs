@@ -26,9 +26,9 @@
 use glam::DVec3;
 
 use super::energy::GhsOptions;
-use super::ghs_ssa::{GhsCommon, LobeChoice};
+use super::ghs_ssa::GhsCommon;
 use super::polarization::{Medium, Polarization};
-use super::{Geometry, direction_from_u, wavenumber};
+use super::Geometry;
 use crate::BrdfError;
 use crate::fresnel::Fresnel;
 use crate::model::{Bxdf, BxdfSample, Specular, WAVELENGTH_MAX_NM, WAVELENGTH_MIN_NM};
@@ -111,16 +111,10 @@ impl<P: RadialPsd> Bxdf for RayleighRice<P> {
     }
 
     fn sample(&self, wi: DVec3, lambda_nm: f64, u: [f64; 3]) -> Option<BxdfSample> {
-        if !(wi.z > 0.0) {
-            return None;
-        }
-        if let LobeChoice::Delta(s) = self.common.choose_lobe(wi, lambda_nm, u[0]) {
-            return s;
-        }
-        let kl = wavenumber(lambda_nm) * self.common.length;
-        let uu = self.psd.sample_u(u[1]);
-        let wo = direction_from_u(wi, kl, uu, 2.0 * core::f64::consts::PI * u[2])?;
-        super::glossy_sample(wo, self.eval_pdf_impl(wi, wo, lambda_nm))
+        self.common
+            .sample_first_order(&self.psd, wi, lambda_nm, u, |wo| {
+                self.eval_pdf_impl(wi, wo, lambda_nm)
+            })
     }
 
     fn specular(&self, wi: DVec3, lambda_nm: f64) -> Specular {
