@@ -25,10 +25,10 @@
 
 use glam::DVec3;
 
+use super::Geometry;
 use super::energy::GhsOptions;
 use super::ghs_ssa::GhsCommon;
 use super::polarization::{Medium, Polarization};
-use super::Geometry;
 use crate::BrdfError;
 use crate::fresnel::Fresnel;
 use crate::model::{Bxdf, BxdfSample, Specular, WAVELENGTH_MAX_NM, WAVELENGTH_MIN_NM};
