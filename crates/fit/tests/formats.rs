@@ -504,11 +504,6 @@ fn known_but_unread_formats_are_named() {
             b"\x89HDF\r\n\x1a\n\0\0\0\0",
             &["NetCDF-4", "NETCDF3"],
         ),
-        (
-            "a.lext",
-            b"II*\0\x08\0\0\0\0\0\0\0",
-            &["Olympus LEXT", "not read yet"],
-        ),
     ];
     for (name, bytes, needles) in cases {
         let e = open_bytes(name, bytes, &o).unwrap_err();

@@ -16,6 +16,7 @@ pub mod gsf;
 pub mod gwy;
 pub mod ibw;
 pub mod jpk;
+pub mod lext;
 pub mod matrix;
 pub mod md5;
 pub mod metropro;

@@ -114,8 +114,8 @@ impl Format {
 }
 
 use super::{
-    al3d, bcr, dektak, frt, gsf, gwy, ibw, jpk, matrix, metropro, mi, mnt, nanoscope, netcdf, nid,
-    nms, npy, opd, opdx, park, plu, sdf, sur, tmd, vk4, wsxm, x3p, xyz, zmg, zon,
+    al3d, bcr, dektak, frt, gsf, gwy, ibw, jpk, lext, matrix, metropro, mi, mnt, nanoscope, netcdf,
+    nid, nms, npy, opd, opdx, park, plu, sdf, sur, tmd, vk4, wsxm, x3p, xyz, zmg, zon,
 };
 
 /// `Magic` when the file starts with any of `magics`: some formats have variants (ASCII
@@ -345,6 +345,23 @@ pub static READERS: &[Reader] = &[
         read: park::read,
     },
     Reader {
+        name: "lext",
+        aliases: &["olympus", "ols4000", "ols5000"],
+        description: "Olympus LEXT .lext (OLS4000/OLS5000 laser confocal; TIFF with XML)",
+        extensions: &["lext"],
+        binary: true,
+        signature: Some(Signature {
+            offset: 0,
+            describe: "a TIFF byte-order mark (`II*\\0` or `MM\\0*`)",
+            present: super::tiff::is_tiff,
+        }),
+        // Any TIFF could be one (its first directory may lie past the sniffed head): the
+        // .lext extension then breaks the tie; other TIFFs go to JPK's and Park's readers,
+        // listed first.
+        sniff: lext::sniff,
+        read: lext::read,
+    },
+    Reader {
         name: "mi",
         aliases: &["picoview", "keysight"],
         description: "Keysight/Agilent PicoView .mi (multi-channel)",
@@ -552,7 +569,7 @@ pub fn unread_format(name: &str, bytes: &[u8]) -> Option<(String, String)> {
         return not_yet(what, fix);
     }
     match ext.as_str() {
-        "lext" | "poir" | "oir" => not_yet("Olympus LEXT/OIR", EXPORT),
+        "poir" | "oir" => not_yet("Olympus OIR", EXPORT),
         "plux" => not_yet(
             "Sensofar .plux",
             "export it from SensoSCAN as .plu, X3P or SDF",

@@ -1,0 +1,128 @@
+"""Write the synthetic instrument files of this folder from the public descriptions of
+their formats (named in each reader's module docs in crates/fit/src/io/), for formats of
+which no real sample could be obtained. Each holds the same kind of rough surface: a
+random-phase power-law spectrum (seeded, so the files are reproducible byte for byte).
+
+Run: python3 make_synthetic.py  (numpy; h5py for the DATX files; zstandard for KPK1).
+SurfaceTopography's reading of the files is recorded in ../reference/statistics.json by
+../reference/st_statistics.py like every other file here.
+"""
+import os
+import struct
+
+import numpy as np
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+
+
+def rough(nx, ny, seed, rms=1.0):
+    """A (ny, nx) random-phase surface with a power-law spectrum, Sq = rms."""
+    rng = np.random.default_rng(seed)
+    kx = np.fft.fftfreq(nx)[None, :]
+    ky = np.fft.fftfreq(ny)[:, None]
+    k = np.hypot(kx, ky)
+    k[0, 0] = 1.0
+    amp = k ** -1.6
+    amp[0, 0] = 0.0
+    phase = np.exp(2j * np.pi * rng.random((ny, nx)))
+    h = np.real(np.fft.ifft2(amp * phase))
+    return h / h.std() * rms
+
+
+# --- Olympus LEXT ---------------------------------------------------------------------
+
+def tiff_ifd(base, entries, next_ifd=0):
+    """A little-endian TIFF directory placed at byte `base`, its long values after it.
+    entries: (tag, type, count, value bytes)."""
+    entries = sorted(entries)
+    n = len(entries)
+    extra_at = base + 2 + 12 * n + 4
+    head = struct.pack("<H", n)
+    extra = b""
+    for tag, kind, count, value in entries:
+        head += struct.pack("<HHI", tag, kind, count)
+        if len(value) <= 4:
+            head += value.ljust(4, b"\0")
+        else:
+            head += struct.pack("<I", extra_at + len(extra))
+            extra += value + (b"\0" if len(value) % 2 else b"")
+    head += struct.pack("<I", next_ifd)
+    return head + extra
+
+
+def short(v):
+    return (3, 1, struct.pack("<H", v))
+
+
+def long(v):
+    return (4, 1, struct.pack("<I", v))
+
+
+def ascii(s):
+    b = s.encode() + b"\0"
+    return (2, len(b), b)
+
+
+def lext(name, nx, ny, seed):
+    # 0.125 µm × 0.13 µm pixels, calibrations of +2, -1 and -2 per mille, 1 pm per count.
+    desc = (
+        '<?xml version="1.0" encoding="UTF-8"?><TiffTagDescData version="1.0">'
+        "<HeightInfo><HeightDataPerPixelX>125000</HeightDataPerPixelX>"
+        "<HeightDataPerPixelY>130000</HeightDataPerPixelY>"
+        "<HeightDataPerPixelZ>1</HeightDataPerPixelZ>"
+        "<HeightDataUnitX>2</HeightDataUnitX><HeightDataUnitY>2</HeightDataUnitY>"
+        "<HeightDataUnitZ>2</HeightDataUnitZ></HeightInfo></TiffTagDescData>"
+    )
+    exif_xml = (
+        '<?xml version="1.0" encoding="UTF-8"?><ExifTagDescData version="1.0">'
+        "<ImageCommonSettingsInfo><MakerCalibrationValueX>1002000</MakerCalibrationValueX>"
+        "<MakerCalibrationValueY>999000</MakerCalibrationValueY>"
+        "<MakerCalibrationValueZ>998000</MakerCalibrationValueZ>"
+        "</ImageCommonSettingsInfo></ExifTagDescData>"
+    ).encode() + b"\0"
+    h = rough(nx, ny, seed, rms=2.0e5) + 1.0e6  # counts of 1 pm
+    heights = np.round(h).astype("<u4").tobytes()
+    rgb = (np.arange(nx * ny * 3) % 251).astype(np.uint8).tobytes()
+    out = bytearray(b"II*\0\0\0\0\0")
+    # Strips first, then the Exif directory, then the pages (each pointing to the next).
+    rgb_at = len(out)
+    out += rgb
+    h_at = len(out)
+    out += heights
+    exif_at = len(out)
+    # As ASCII: SurfaceTopography 1.27.1 drops the tag's value when it is UNDEFINED bytes.
+    out += tiff_ifd(exif_at, [(41995, 2, len(exif_xml), exif_xml)])
+    common = lambda: [(256, *long(nx)), (257, *long(ny)), (259, *short(1)), (278, *long(ny))]
+    page0 = common() + [
+        (258, 3, 3, struct.pack("<HHH", 8, 8, 8)),
+        (262, *short(2)),
+        (270, *ascii(desc)),
+        (273, *long(rgb_at)),
+        (277, *short(3)),
+        (279, *long(len(rgb))),
+        (34665, *long(exif_at)),
+    ]
+    page1 = common() + [
+        (258, *short(32)),
+        (262, *short(1)),
+        (270, *ascii("HEIGHT")),
+        (273, *long(h_at)),
+        (277, *short(1)),
+        (279, *long(len(heights))),
+        (339, *short(1)),
+    ]
+    if len(out) % 2:
+        out += b"\0"
+    p0_at = len(out)
+    p0_len = len(tiff_ifd(p0_at, page0))
+    p1_at = p0_at + p0_len + (p0_len % 2)
+    out += tiff_ifd(p0_at, page0, p1_at)
+    out += b"\0" * (p1_at - len(out))
+    out += tiff_ifd(p1_at, page1)
+    struct.pack_into("<I", out, 4, p0_at)
+    with open(os.path.join(HERE, name), "wb") as f:
+        f.write(out)
+
+
+if __name__ == "__main__":
+    lext("lext-synth.lext", 96, 64, 36)
