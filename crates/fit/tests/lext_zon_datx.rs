@@ -327,3 +327,174 @@ proptest! {
         }
     }
 }
+
+// ---------------------------------------------------------------------------------------
+// Keyence ZON
+
+/// A ZON array entry: width, height, element size, row bytes (rows padded by 4 bytes).
+fn zon_array(w: usize, h: usize, elem: usize, values: &[u8]) -> Vec<u8> {
+    let row = w * elem + 4;
+    let mut out = vec![];
+    for v in [w, h, elem, row] {
+        out.extend((v as i32).to_le_bytes());
+    }
+    for line in values.chunks(w * elem) {
+        out.extend(line);
+        out.extend([0xEE; 4]);
+    }
+    out
+}
+
+/// A Keyence ZON file from the description in `fit::io::zon`: `KPK1` entries are zstd
+/// frames (compressed here by `ruzstd`'s encoder), with an optional validity mask.
+fn zon(kpk1: bool, w: usize, h: usize, counts: &[i32], flags: Option<&[u8]>) -> Vec<u8> {
+    use std::io::Write;
+    let pack = |b: Vec<u8>| {
+        if kpk1 {
+            ruzstd::encoding::compress_to_vec(&b[..], ruzstd::encoding::CompressionLevel::Fastest)
+        } else {
+            b
+        }
+    };
+    let mut zw = zip::ZipWriter::new(std::io::Cursor::new(Vec::new()));
+    let o = zip::write::SimpleFileOptions::default();
+    let xml = b"<?xml version=\"1.0\"?><Calibration><XYCalibration><MeterPerPixel>2.5e-7\
+                </MeterPerPixel></XYCalibration><ZCalibration><MeterPerUnit>1e-9</MeterPerUnit>\
+                </ZCalibration></Calibration>";
+    zw.start_file("686613b8-27b5-4a29-8ffc-438c2780873e", o)
+        .unwrap();
+    zw.write_all(&pack(xml.to_vec())).unwrap();
+    let bytes: Vec<u8> = counts.iter().flat_map(|c| c.to_le_bytes()).collect();
+    zw.start_file("4cdb0c75-5706-48cc-a9a1-adf395d609ae", o)
+        .unwrap();
+    zw.write_all(&pack(zon_array(w, h, 4, &bytes))).unwrap();
+    if let Some(f) = flags {
+        zw.start_file("9e7ca6dd-0e6a-4d7b-8986-f0a7b773c916", o)
+            .unwrap();
+        zw.write_all(&pack(zon_array(w, h, 1, f))).unwrap();
+    }
+    let zipped = zw.finish().unwrap().into_inner();
+    let mut b = if kpk1 { b"KPK1" } else { b"KPK0" }.to_vec();
+    b.extend(6u32.to_le_bytes());
+    b.extend(b"BM\0\0\0\0");
+    b.extend(zipped);
+    b
+}
+
+#[test]
+fn zon_kpk1_reads_as_kpk0_with_its_validity_flags() {
+    let (w, h) = (6, 4);
+    let counts: Vec<i32> = (0..24).map(|i| i * 1000 - 9000).collect();
+    let mut flags = vec![0u8; 24];
+    flags[3] = 1;
+    flags[10] = 2;
+    flags[17] = 4; // not one of the two "not measured" bits
+    let plain = read_bytes(
+        "a.zon",
+        &zon(false, w, h, &counts, None),
+        &ReadOptions::default(),
+    )
+    .unwrap();
+    let packed = zon(true, w, h, &counts, Some(&flags));
+    assert_eq!(&packed[..4], b"KPK1");
+    let t = read_bytes("b.zon", &packed, &ReadOptions::default()).unwrap();
+    assert_eq!((t.nx, t.ny), (6, 4));
+    assert!(rel(t.dx, 2.5e-7) < 1e-12);
+    for (i, (h, c)) in t.heights.iter().zip(&counts).enumerate() {
+        if [3, 10].contains(&i) {
+            assert!(h.is_nan(), "{i}");
+        } else {
+            assert_eq!(*h, plain.heights[i], "{i}");
+            assert!((h - f64::from(*c) * 1e-9).abs() < 1e-18);
+        }
+    }
+    // A mask of another size is refused by name.
+    let wrong = zon(true, w, h, &counts, Some(&[0u8; 12]));
+    let e = read_bytes("c.zon", &wrong, &ReadOptions::default());
+    assert!(e.is_err());
+}
+
+/// A zstd frame header declaring `size` bytes of content (8-byte content size; a 1 KiB
+/// window, or the single-segment form whose window is the content), then garbage.
+fn zstd_claiming(size: u64, single_segment: bool) -> Vec<u8> {
+    let mut f = vec![0x28, 0xB5, 0x2F, 0xFD];
+    if single_segment {
+        f.push(0xE0);
+    } else {
+        f.extend([0xC0, 0x00]);
+    }
+    f.extend(size.to_le_bytes());
+    f.extend([0u8; 16]);
+    f
+}
+
+/// A KPK1 file with these (already compressed) calibration and height entries.
+fn kpk1_with(units: &[u8], heights: Option<&[u8]>) -> Vec<u8> {
+    use std::io::Write;
+    let mut zw = zip::ZipWriter::new(std::io::Cursor::new(Vec::new()));
+    let o = zip::write::SimpleFileOptions::default();
+    zw.start_file("686613b8-27b5-4a29-8ffc-438c2780873e", o)
+        .unwrap();
+    zw.write_all(units).unwrap();
+    if let Some(h) = heights {
+        zw.start_file("4cdb0c75-5706-48cc-a9a1-adf395d609ae", o)
+            .unwrap();
+        zw.write_all(h).unwrap();
+    }
+    let mut b = b"KPK1\0\0\0\0".to_vec();
+    b.extend(zw.finish().unwrap().into_inner());
+    b
+}
+
+fn zstd(b: &[u8]) -> Vec<u8> {
+    ruzstd::encoding::compress_to_vec(b, ruzstd::encoding::CompressionLevel::Fastest)
+}
+
+#[test]
+fn zon_kpk1_huge_claims_are_refused_before_decompressing() {
+    let o = ReadOptions::default();
+    // A frame declaring 1 TB of content: refused from its header.
+    let e = read_bytes(
+        "d.zon",
+        &kpk1_with(&zstd_claiming(1 << 40, false), None),
+        &o,
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(e.contains("declares 1099511627776 bytes"), "{e}");
+    // As one segment its window is the content: ruzstd's window limit refuses it.
+    let e = read_bytes("d.zon", &kpk1_with(&zstd_claiming(1 << 40, true), None), &o)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("unit calibration") && e.contains("zstd"), "{e}");
+    // A height header declaring 65536 rows of 1 MB is refused from its 16 bytes.
+    let xml = zstd(
+        b"<C><XYCalibration><MeterPerPixel>1e-6</MeterPerPixel></XYCalibration>\
+          <ZCalibration><MeterPerUnit>1e-9</MeterPerUnit></ZCalibration></C>",
+    );
+    let mut head = vec![];
+    for v in [1i32 << 18, 1 << 16, 4, 1 << 20] {
+        head.extend(v.to_le_bytes());
+    }
+    let e = read_bytes("e.zon", &kpk1_with(&xml, Some(&zstd(&head))), &o)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("larger than the supported"), "{e}");
+    // The same header over a few real rows: the rows it declares are missing.
+    head.extend([0u8; 4096]);
+    let e = read_bytes("f.zon", &kpk1_with(&xml, Some(&zstd(&head))), &o)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("height data"), "{e}");
+}
+
+#[test]
+fn zon_kpk1_survives_hostile_input() {
+    let (w, h) = (40, 30);
+    let counts: Vec<i32> = (0..w * h)
+        .map(|i| ((i * 7919) % 20011) as i32 - 10000)
+        .collect();
+    let flags: Vec<u8> = (0..w * h).map(|i| u8::from(i % 97 == 0)).collect();
+    let b = zon(true, w, h, &counts, Some(&flags));
+    torture("t.zon", &b, 37, 400);
+}

@@ -124,5 +124,54 @@ def lext(name, nx, ny, seed):
         f.write(out)
 
 
+# --- Keyence ZON ----------------------------------------------------------------------
+
+def zon_array(values, elem):
+    """The 16-byte header (width, height, element size, row bytes) and the rows, each
+    padded with 8 bytes."""
+    ny, nx = values.shape
+    row = nx * elem + 8
+    out = struct.pack("<iiii", nx, ny, elem, row)
+    for line in values:
+        out += line.tobytes() + b"\xee" * 8
+    return out
+
+
+def zon(name, nx, ny, seed):
+    import io
+    import zipfile
+
+    import zstandard
+
+    h = np.round(rough(nx, ny, seed, rms=4000.0)).astype("<i4")  # counts of 0.1 nm
+    valid = np.zeros((ny, nx), dtype=np.uint8)
+    valid[3:6, 10:14] = 1  # not measured
+    valid[20, 5] = 2
+    valid[7, 7] = 4  # another flag bit: measured
+    entries = {
+        "cbc1d39b-215f-4d56-a20e-cf8e5f570755":
+            b"<?xml version='1.0'?><Device><DeviceModelName>VR-5000</DeviceModelName>"
+            b"<DeviceSerialId>0</DeviceSerialId></Device>",
+        "1d35862b-3b48-4df2-9235-833ef590b043":
+            b"<?xml version='1.0'?><Scan><ScanDateTime>2024-01-02T03:04:05</ScanDateTime></Scan>",
+        "686613b8-27b5-4a29-8ffc-438c2780873e":
+            b"<?xml version='1.0'?><Calibration><XYCalibration><MeterPerPixel>2.35e-6"
+            b"</MeterPerPixel></XYCalibration><ZCalibration><MeterPerUnit>1e-10</MeterPerUnit>"
+            b"</ZCalibration></Calibration>",
+        "4cdb0c75-5706-48cc-a9a1-adf395d609ae": zon_array(h, 4),
+        "9e7ca6dd-0e6a-4d7b-8986-f0a7b773c916": zon_array(valid, 1),
+    }
+    z = io.BytesIO()
+    zc = zstandard.ZstdCompressor(level=3, write_content_size=True)
+    with zipfile.ZipFile(z, "w", zipfile.ZIP_STORED) as archive:
+        for uuid, content in entries.items():
+            info = zipfile.ZipInfo(uuid, date_time=(2024, 1, 2, 3, 4, 6))
+            archive.writestr(info, zc.compress(content))
+    bmp = b"BM" + b"\0" * 60
+    with open(os.path.join(HERE, name), "wb") as f:
+        f.write(b"KPK1" + struct.pack("<I", len(bmp)) + bmp + z.getvalue())
+
+
 if __name__ == "__main__":
     lext("lext-synth.lext", 96, 64, 36)
+    zon("zon-kpk1-synth.zon", 80, 72, 37)

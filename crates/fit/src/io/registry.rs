@@ -414,7 +414,7 @@ pub static READERS: &[Reader] = &[
     Reader {
         name: "zon",
         aliases: &["keyence-zon"],
-        description: "Keyence VR .zon (KPK0)",
+        description: "Keyence VR .zon (KPK0, and KPK1 with zstd entries)",
         extensions: &["zon"],
         binary: true,
         signature: prefix!("`KPK0` or `KPK1`", zon::MAGICS),
