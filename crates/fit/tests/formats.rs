@@ -490,11 +490,6 @@ fn known_but_unread_formats_are_named() {
             &["JPEG image, not a height map"],
         ),
         (
-            "a.datx",
-            b"\x89HDF\r\n\x1a\n\0\0\0\0",
-            &["Zygo DATX", "not read yet"],
-        ),
-        (
             "a.nc",
             b"\x89HDF\r\n\x1a\n\0\0\0\0",
             &["NetCDF-4", "NETCDF3"],

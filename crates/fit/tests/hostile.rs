@@ -683,6 +683,7 @@ fn samples() -> Vec<(&'static str, String, Vec<u8>)> {
         ("zon", "a.zon".into(), zon_sample()),
         ("jpk", "a.jpk".into(), jpk_sample()),
         ("lext", "lext-synth.lext".into(), formats("lext-synth.lext")),
+        ("datx", "datx-synth.datx".into(), formats("datx-synth.datx")),
     ];
     // Every reader of the registry has a sample.
     for f in Format::all() {

@@ -498,3 +498,114 @@ fn zon_kpk1_survives_hostile_input() {
     let b = zon(true, w, h, &counts, Some(&flags));
     torture("t.zon", &b, 37, 400);
 }
+
+// ---------------------------------------------------------------------------------------
+// Zygo DATX
+
+fn formats(name: &str) -> Vec<u8> {
+    std::fs::read(
+        std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+            .join("../../data/surfaces/formats")
+            .join(name),
+    )
+    .unwrap()
+}
+
+/// Both synthetic files (HDF5's oldest structures with chunked, shuffled, deflated data;
+/// its newest with contiguous data) give the grid, spacing and unmeasured points
+/// `make_synthetic.py` wrote; their statistics are compared with SurfaceTopography's in
+/// `formats.rs`.
+#[test]
+fn datx_old_and_new_hdf5_structures_read_as_written() {
+    for (name, nx, ny) in [
+        ("datx-synth.datx", 70, 50),
+        ("datx-synth-latest.datx", 40, 30),
+    ] {
+        let s = open_bytes(name, &formats(name), &ReadOptions::default()).unwrap();
+        assert_eq!(s.format.name(), "datx");
+        let t = s.topo;
+        assert_eq!((t.nx, t.ny), (nx, ny), "{name}");
+        assert!(
+            rel(t.dx, 1.25e-6) < 1e-12 && rel(t.dy, 1.5e-6) < 1e-12,
+            "{name}"
+        );
+        let invalid: Vec<usize> = (0..t.heights.len())
+            .filter(|&i| t.heights[i].is_nan())
+            .collect();
+        let mut want: Vec<usize> = (2..4)
+            .flat_map(|y| (5..9).map(move |x| y * nx + x))
+            .collect();
+        want.push((ny - 1) * nx);
+        assert_eq!(invalid, want, "{name}");
+        // Heights in µm of Sq 0.05 µm: metres of that order.
+        let max = t
+            .heights
+            .iter()
+            .filter(|h| h.is_finite())
+            .fold(0.0f64, |m, h| m.max(h.abs()));
+        assert!(max > 0.05e-6 && max < 1e-6, "{name}: {max}");
+    }
+}
+
+/// An HDF5 file that is no DATX, and the NetCDF-4 named for what it is.
+#[test]
+fn other_hdf5_files_are_named() {
+    let b = formats("datx-synth-latest.datx");
+    let e = open_bytes("x.nc", &b, &ReadOptions::default())
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("NetCDF-4"), "{e}");
+    // The surface renamed: the metadata's path leads nowhere, nor does the default one.
+    let mut r = b.clone();
+    for (from, to) in [(&b"Surface"[..], &b"Surfacf"[..])] {
+        let mut i = 0;
+        while let Some(p) = r[i..].windows(from.len()).position(|w| w == from) {
+            r[i + p..i + p + from.len()].copy_from_slice(to);
+            i += p + 1;
+        }
+    }
+    let e = read_bytes("r.datx", &r, &ReadOptions::default())
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("not a Zygo DATX measurement"), "{e}");
+}
+
+/// Dimensions patched to huge values are refused before anything is allocated.
+#[test]
+fn datx_huge_dimensions_are_refused() {
+    for name in ["datx-synth.datx", "datx-synth-latest.datx"] {
+        let b = formats(name);
+        let (nx, ny) = if name == "datx-synth.datx" {
+            (70u64, 50u64)
+        } else {
+            (40, 30)
+        };
+        let mut dims = ny.to_le_bytes().to_vec();
+        dims.extend(nx.to_le_bytes());
+        let at: Vec<usize> = (0..b.len() - 16)
+            .filter(|&i| b[i..i + 16] == dims[..])
+            .collect();
+        assert!(!at.is_empty(), "{name}: dataspace not found");
+        for huge in [1u64 << 40, u64::MAX, 1 << 20] {
+            let mut h = b.clone();
+            for &p in &at {
+                h[p..p + 8].copy_from_slice(&huge.to_le_bytes());
+            }
+            let e = read_bytes(name, &h, &ReadOptions::default())
+                .unwrap_err()
+                .to_string();
+            assert!(
+                ["larger than the supported", "too few", "needed"]
+                    .iter()
+                    .any(|n| e.contains(n)),
+                "{name} {huge}: {e}"
+            );
+        }
+    }
+}
+
+#[test]
+fn datx_survives_hostile_input() {
+    torture("a.datx", &formats("datx-synth.datx"), 38, 600);
+    torture("b.datx", &formats("datx-synth-latest.datx"), 39, 600);
+}

@@ -172,6 +172,48 @@ def zon(name, nx, ny, seed):
         f.write(b"KPK1" + struct.pack("<I", len(bmp)) + bmp + z.getvalue())
 
 
+# --- Zygo DATX -------------------------------------------------------------------------
+
+def datx(name, nx, ny, seed, latest):
+    """A DATX file: /MetaData (category, key, value) naming the surface's path, and
+    /Measurement/Surface, float64 heights in µm stored (rows = y, columns = x), with the
+    `Unit`, `No Data` and X/Y/Z converter attributes. `latest`: HDF5's newest structures
+    (superblock 3, version 2 object headers, link messages, contiguous data); otherwise the
+    oldest (superblock 0, symbol-table groups) with chunked, shuffled, deflated data."""
+    import h5py
+
+    h = rough(nx, ny, seed, rms=0.05)  # µm
+    no_data = 1.0e38
+    h[2:4, 5:9] = no_data
+    h[ny - 1, 0] = np.nan
+    s = h5py.string_dtype()
+    conv = np.dtype([("Category", s), ("BaseUnit", s), ("DisplayUnit", s), ("Parameters", "<f8", (4,))])
+    meta = np.array(
+        [
+            (b"Root", b"Measurement", b"{m}"),
+            (b"{m}", b"Surface", b"{s}"),
+            (b"{s}", b"Path", b"/Measurement/Surface"),
+        ],
+        dtype=[("Category", s), ("Key", s), ("Value", s)],
+    )
+    libver = ("latest", "latest") if latest else ("earliest", "latest")
+    with h5py.File(os.path.join(HERE, name), "w", libver=libver, track_order=False) as f:
+        f.create_dataset("MetaData", data=meta, track_times=False)
+        g = f.create_group("Measurement")
+        g.attrs["Comment"] = "synthetic, written by make_synthetic.py"
+        if latest:
+            d = g.create_dataset("Surface", data=h, track_times=False)
+        else:
+            d = g.create_dataset("Surface", data=h, chunks=(16, 16), compression="gzip", shuffle=True, track_times=False)
+        d.attrs["Unit"] = np.array([b"MicroMeters"], dtype=s)
+        d.attrs["No Data"] = np.array([no_data])
+        d.attrs["X Converter"] = np.array([("LateralCat", "Pixels", "MicroMeters", [0.0, 1.25e-6, 0.0, 0.0])], dtype=conv)
+        d.attrs["Y Converter"] = np.array([("LateralCat", "Pixels", "MicroMeters", [0.0, 1.5e-6, 0.0, 0.0])], dtype=conv)
+        d.attrs["Z Converter"] = np.array([("HeightCat", "MicroMeters", "NanoMeters", [633e-9, 1.0, 0.0, 0.0])], dtype=conv)
+
+
 if __name__ == "__main__":
     lext("lext-synth.lext", 96, 64, 36)
     zon("zon-kpk1-synth.zon", 80, 72, 37)
+    datx("datx-synth.datx", 70, 50, 38, latest=False)
+    datx("datx-synth-latest.datx", 40, 30, 39, latest=True)

@@ -114,8 +114,8 @@ impl Format {
 }
 
 use super::{
-    al3d, bcr, dektak, frt, gsf, gwy, ibw, jpk, lext, matrix, metropro, mi, mnt, nanoscope, netcdf,
-    nid, nms, npy, opd, opdx, park, plu, sdf, sur, tmd, vk4, wsxm, x3p, xyz, zmg, zon,
+    al3d, bcr, datx, dektak, frt, gsf, gwy, ibw, jpk, lext, matrix, metropro, mi, mnt, nanoscope,
+    netcdf, nid, nms, npy, opd, opdx, park, plu, sdf, sur, tmd, vk4, wsxm, x3p, xyz, zmg, zon,
 };
 
 /// `Magic` when the file starts with any of `magics`: some formats have variants (ASCII
@@ -147,6 +147,7 @@ const NPY: &[&[u8]] = &[npy::MAGIC];
 const GWY: &[&[u8]] = &[gwy::MAGIC, b"GWYO"];
 const NETCDF: &[&[u8]] = &[b"CDF\x01", b"CDF\x02", b"CDF\x05"];
 const OPDX: &[&[u8]] = &[opdx::MAGIC];
+const HDF5: &[u8] = b"\x89HDF\r\n\x1a\n";
 
 /// `Magic` when any of `magics` stands at byte `offset`.
 fn magic_at(bytes: &[u8], offset: usize, magics: &[&[u8]]) -> Sniff {
@@ -422,6 +423,23 @@ pub static READERS: &[Reader] = &[
         read: zon::read,
     },
     Reader {
+        name: "datx",
+        aliases: &["zygo-datx", "mx"],
+        description: "Zygo Mx .datx (HDF5)",
+        extensions: &["datx"],
+        binary: true,
+        signature: prefix!("`\\x89HDF\\r\\n\\x1a\\n` (an HDF5 file)", &[HDF5]),
+        // Any HDF5 file could be one: the extension, or the reader's own check, decides.
+        sniff: |b| {
+            if starts(b, &[HDF5]) == Sniff::Magic {
+                Sniff::Maybe
+            } else {
+                Sniff::No
+            }
+        },
+        read: datx::read,
+    },
+    Reader {
         name: "zmg",
         aliases: &["zeta", "kla"],
         description: "KLA Zeta .zmg (optical profiler)",
@@ -522,12 +540,9 @@ pub fn unread_format(name: &str, bytes: &[u8]) -> Option<(String, String)> {
         |what: &str, fix: &str| Some((format!("{what} is not read yet"), fix.to_string()));
     const EXPORT: &str = "export the scan from the instrument software as X3P, SDF or a \
                           text matrix (all read here)";
-    if bytes.starts_with(b"\x89HDF\r\n\x1a\n") {
+    if bytes.starts_with(HDF5) {
         return match ext.as_str() {
-            "datx" => not_yet(
-                "Zygo DATX (an HDF5 container)",
-                "export it from Mx as MetroPro .dat, X3P or SDF",
-            ),
+            "datx" => None,
             "nc" => not_yet(
                 "NetCDF-4 (an HDF5 container)",
                 "write it as NetCDF classic (format NETCDF3_64BIT_OFFSET), which is read",
