@@ -174,12 +174,13 @@ def zon(name, nx, ny, seed):
 
 # --- Zygo DATX -------------------------------------------------------------------------
 
-def datx(name, nx, ny, seed, latest):
+def datx(name, nx, ny, seed, latest, chunks=None):
     """A DATX file: /MetaData (category, key, value) naming the surface's path, and
     /Measurement/Surface, float64 heights in µm stored (rows = y, columns = x), with the
     `Unit`, `No Data` and X/Y/Z converter attributes. `latest`: HDF5's newest structures
-    (superblock 3, version 2 object headers, link messages, contiguous data); otherwise the
-    oldest (superblock 0, symbol-table groups) with chunked, shuffled, deflated data."""
+    (superblock 3, version 2 object headers, link messages; data contiguous, or in `chunks`
+    indexed as HDF5 1.10 does); otherwise the oldest (superblock 0, symbol-table groups)
+    with chunked data (version 1 B-tree). Chunked data are shuffled and deflated."""
     import h5py
 
     h = rough(nx, ny, seed, rms=0.05)  # µm
@@ -196,15 +197,22 @@ def datx(name, nx, ny, seed, latest):
         ],
         dtype=[("Category", s), ("Key", s), ("Value", s)],
     )
-    libver = ("latest", "latest") if latest else ("earliest", "latest")
+    # Chunked data as HDF5 1.10 writes them (layout version 4; h5py's own library would
+    # write version 5 with "latest", which this reader refuses by name).
+    if latest and chunks is not None:
+        libver = ("v110", "v110")
+    elif latest:
+        libver = ("latest", "latest")
+    else:
+        libver = ("earliest", "latest")
     with h5py.File(os.path.join(HERE, name), "w", libver=libver, track_order=False) as f:
         f.create_dataset("MetaData", data=meta, track_times=False)
         g = f.create_group("Measurement")
         g.attrs["Comment"] = "synthetic, written by make_synthetic.py"
-        if latest:
+        if latest and chunks is None:
             d = g.create_dataset("Surface", data=h, track_times=False)
         else:
-            d = g.create_dataset("Surface", data=h, chunks=(16, 16), compression="gzip", shuffle=True, track_times=False)
+            d = g.create_dataset("Surface", data=h, chunks=chunks or (16, 16), compression="gzip", shuffle=True, track_times=False)
         d.attrs["Unit"] = np.array([b"MicroMeters"], dtype=s)
         d.attrs["No Data"] = np.array([no_data])
         d.attrs["X Converter"] = np.array([("LateralCat", "Pixels", "MicroMeters", [0.0, 1.25e-6, 0.0, 0.0])], dtype=conv)
@@ -217,3 +225,6 @@ if __name__ == "__main__":
     zon("zon-kpk1-synth.zon", 80, 72, 37)
     datx("datx-synth.datx", 70, 50, 38, latest=False)
     datx("datx-synth-latest.datx", 40, 30, 39, latest=True)
+    # HDF5 1.10's fixed-array (8 × 8 chunks) and single-chunk indexes.
+    datx("datx-synth-fixed-array.datx", 36, 28, 40, latest=True, chunks=(8, 8))
+    datx("datx-synth-single-chunk.datx", 24, 20, 41, latest=True, chunks=(20, 24))

@@ -2,15 +2,17 @@
 //! offset, length and count checked before it is used: superblocks version 0–3 (8-byte
 //! offsets and lengths), object headers version 1 and 2 with their continuation blocks,
 //! groups as symbol tables (version 1 B-tree and local heap) or as link messages (compact
-//! storage), datasets with contiguous, compact or chunked layout (a version 1 B-tree
-//! index, or a single chunk) and the deflate and shuffle filters, and attributes with
+//! storage), datasets with contiguous, compact or chunked layout (indexed by a version 1
+//! B-tree, or by HDF5 1.10's single chunk, implicit index or unpaged fixed array) and the
+//! deflate and shuffle filters, and attributes with
 //! fixed-point, floating-point, string (fixed or variable length, from the global heap),
 //! compound and array types.
 //!
-//! Not read, and refused naming what it is: dense link or attribute storage (fractal
-//! heaps), chunk indexes other than the B-tree and the single chunk (fixed and extensible
-//! arrays, version 2 B-trees), other filters (szip, LZF, …), offsets or lengths other than
-//! 8 bytes, a superblock past byte 0.
+//! Not read, and refused naming what it is: dense link and attribute storage (fractal
+//! heaps), shared (committed) datatypes, the
+//! extensible-array, version 2 B-tree and paged fixed-array chunk indexes, other filters
+//! (szip, LZF, …), offsets or lengths other than 8 bytes, a superblock past byte 0.
+//! Checksums are not verified.
 //!
 //! Sources: the HDF5 File Format Specification version 3.0 (The HDF Group; public), and
 //! files written by h5py 3.16 (HDF5 library) to check the reading against.
@@ -85,6 +87,8 @@ pub enum Value {
 
 struct Message<'a> {
     kind: u16,
+    /// Bit 1: the message is shared (stored elsewhere; only a reference here).
+    flags: u8,
     data: &'a [u8],
 }
 
@@ -209,10 +213,12 @@ impl<'a> File<'a> {
             let mut p = 0usize;
             let head = if v2 { 4 + usize::from(order) * 2 } else { 8 };
             while p + head <= block.len() {
-                let (kind, size, data_at) = if v2 {
-                    (le(block, p, 1)?, le(block, p + 1, 2)? as usize, p + head)
+                let (kind, size, flags, data_at) = if v2 {
+                    let (k, n, f) = (le(block, p, 1)?, le(block, p + 1, 2)?, le(block, p + 3, 1)?);
+                    (k, n as usize, f as u8, p + head)
                 } else {
-                    (le(block, p, 2)?, le(block, p + 2, 2)? as usize, p + 8)
+                    let (k, n, f) = (le(block, p, 2)?, le(block, p + 2, 2)?, le(block, p + 4, 1)?);
+                    (k, n as usize, f as u8, p + 8)
                 };
                 let data = block
                     .get(data_at..data_at + size)
@@ -230,6 +236,7 @@ impl<'a> File<'a> {
                 } else if kind != 0 {
                     out.push(Message {
                         kind: kind as u16,
+                        flags,
                         data,
                     });
                 }
@@ -470,6 +477,11 @@ impl<'a> File<'a> {
     /// The dataset at `path`.
     pub fn dataset(&self, path: &str) -> R<Dataset<'a>> {
         let messages = self.messages(self.lookup(path)?)?;
+        if messages.iter().any(|m| m.flags & 2 != 0 && m.kind != 0x0C) {
+            return Err(
+                "the dataset shares a message (a committed datatype), which is not read".into(),
+            );
+        }
         let find = |k: u16| messages.iter().find(|m| m.kind == k).map(|m| m.data);
         let dims = dataspace(find(0x01).ok_or("the dataset has no dataspace")?)?;
         let (dtype, _) = dtype(find(0x03).ok_or("the dataset has no datatype")?, 8)?;
@@ -508,6 +520,11 @@ impl<'a> File<'a> {
             if n != name {
                 continue;
             }
+            if version >= 2 && le(b, 1, 1)? & 3 != 0 {
+                return Err(format!(
+                    "attribute `{name}` has a shared (committed) type or space, which is not read"
+                ));
+            }
             let (t, _) = dtype(b.get(p..p + tl).ok_or("an attribute is truncated")?, 8)?;
             p += pad(tl);
             let dims = dataspace(b.get(p..p + sl).ok_or("an attribute is truncated")?)?;
@@ -540,6 +557,18 @@ impl<'a> File<'a> {
             } else {
                 values.into_iter().next().unwrap_or(Value::Other)
             }));
+        }
+        for m in d.messages.iter().filter(|m| m.kind == 0x15) {
+            let heap = le(
+                m.data,
+                2 + if le(m.data, 1, 1)? & 1 != 0 { 2 } else { 0 },
+                8,
+            )?;
+            if heap != UNDEFINED {
+                return Err(format!(
+                    "attribute `{name}` may be stored densely (fractal heap), which is not read"
+                ));
+            }
         }
         Ok(None)
     }
@@ -680,9 +709,37 @@ impl<'a> File<'a> {
                 let rank = le(l, 2, 1)? as usize;
                 let at = le(l, 3, 8)?;
                 let chunk: Vec<u64> = (0..rank).map(|i| le(l, 11 + 4 * i, 4)).collect::<R<_>>()?;
-                self.chunked(d, at, &chunk, bytes)
+                self.chunked(d, Index::BTree(at), &chunk, bytes)
             }
-            2 => Err("a version 4 chunk index (HDF5 1.10 and later) is not read".into()),
+            2 => {
+                let (flags, rank, enc) = (le(l, 2, 1)?, le(l, 3, 1)? as usize, le(l, 4, 1)?);
+                if !(1..=8).contains(&enc) {
+                    return Err(format!("chunk dimensions encoded in {enc} bytes"));
+                }
+                let enc = enc as usize;
+                let chunk: Vec<u64> = (0..rank)
+                    .map(|i| le(l, 5 + enc * i, enc))
+                    .collect::<R<_>>()?;
+                let p = 5 + enc * rank;
+                let index = match le(l, p, 1)? {
+                    1 if flags & 2 != 0 => Index::Single {
+                        size: Some(le(l, p + 1, 8)?),
+                        mask: le(l, p + 9, 4)?,
+                        at: le(l, p + 13, 8)?,
+                    },
+                    1 => Index::Single {
+                        size: None,
+                        mask: 0,
+                        at: le(l, p + 1, 8)?,
+                    },
+                    2 => Index::Implicit(le(l, p + 1, 8)?),
+                    3 => Index::FixedArray(le(l, p + 2, 8)?),
+                    4 => return Err("an extensible-array chunk index is not read".into()),
+                    5 => return Err("a version 2 B-tree chunk index is not read".into()),
+                    t => return Err(format!("chunk index type {t} is not known")),
+                };
+                self.chunked(d, index, &chunk, bytes)
+            }
             c => Err(format!("data layout class {c} is not known")),
         }
     }
@@ -741,6 +798,22 @@ fn number(t: &Dtype, e: &[u8]) -> R<f64> {
     })
 }
 
+/// Where a chunked dataset lists its chunks.
+enum Index {
+    /// A version 1 B-tree (node type 1) at this address.
+    BTree(u64),
+    /// One chunk (its stored size and filter mask when filtered).
+    Single {
+        at: u64,
+        size: Option<u64>,
+        mask: u64,
+    },
+    /// Unfiltered chunks back to back from this address, in chunk order.
+    Implicit(u64),
+    /// A fixed array (its header's address), one entry per chunk in chunk order.
+    FixedArray(u64),
+}
+
 /// A chunk: its offsets (elements, per dimension), stored size, filter mask, address.
 struct Chunk {
     offsets: Vec<u64>,
@@ -752,7 +825,7 @@ struct Chunk {
 impl<'a> File<'a> {
     /// A chunked dataset through its version 1 B-tree (node type 1); `chunk` holds the
     /// chunk's dimensions and, last, the element size.
-    fn chunked(&self, d: &Dataset<'a>, btree: u64, chunk: &[u64], bytes: u64) -> R<Vec<u8>> {
+    fn chunked(&self, d: &Dataset<'a>, index: Index, chunk: &[u64], bytes: u64) -> R<Vec<u8>> {
         let rank = d.dims.len();
         let esize = d.dtype.size() as u64;
         if chunk.len() != rank + 1 || chunk[rank] != esize || rank == 0 {
@@ -767,19 +840,7 @@ impl<'a> File<'a> {
             .filter(|&n| n > 0 && n <= MAX_ELEMENTS)
             .ok_or("a chunk's dimensions are zero or too large")?;
         let chunk_bytes = elems * esize;
-        let mut chunks = vec![];
-        self.btree((btree, 1, 8 + 8 * (rank as u64 + 1)), &mut |key, at| {
-            if chunks.len() >= MAX_VISITS * 16 {
-                return Err("too many chunks".into());
-            }
-            chunks.push(Chunk {
-                size: le(key, 0, 4)?,
-                mask: le(key, 4, 4)?,
-                offsets: (0..rank).map(|i| le(key, 8 + 8 * i, 8)).collect::<R<_>>()?,
-                at,
-            });
-            Ok(())
-        })?;
+        let chunks = self.chunk_list(d, index, &chunk[..rank], chunk_bytes)?;
         for &f in &d.filters {
             if f != 1 && f != 2 {
                 return Err(format!(
@@ -811,6 +872,117 @@ impl<'a> File<'a> {
             )?;
         }
         Ok(out)
+    }
+
+    /// The chunks `index` lists: their element offsets, stored sizes and addresses.
+    fn chunk_list(
+        &self,
+        d: &Dataset<'a>,
+        index: Index,
+        chunk: &[u64],
+        chunk_bytes: u64,
+    ) -> R<Vec<Chunk>> {
+        let rank = chunk.len();
+        // Chunks along each dimension, and their number, for the indexes in chunk order.
+        let across: Vec<u64> = d
+            .dims
+            .iter()
+            .zip(chunk)
+            .map(|(n, c)| n.div_ceil(*c))
+            .collect();
+        let count = across
+            .iter()
+            .try_fold(1u64, |a, &c| a.checked_mul(c))
+            .filter(|&n| n <= MAX_ELEMENTS)
+            .ok_or("too many chunks")?;
+        let offsets = |mut i: u64| {
+            let mut o = vec![0u64; rank];
+            for k in (0..rank).rev() {
+                o[k] = (i % across[k]) * chunk[k];
+                i /= across[k];
+            }
+            o
+        };
+        let mut chunks = vec![];
+        match index {
+            Index::BTree(at) => {
+                self.btree((at, 1, 8 + 8 * (rank as u64 + 1)), &mut |key, at| {
+                    if chunks.len() as u64 >= count {
+                        return Err("the chunk B-tree lists more chunks than the data has".into());
+                    }
+                    chunks.push(Chunk {
+                        size: le(key, 0, 4)?,
+                        mask: le(key, 4, 4)?,
+                        offsets: (0..rank).map(|i| le(key, 8 + 8 * i, 8)).collect::<R<_>>()?,
+                        at,
+                    });
+                    Ok(())
+                })?;
+            }
+            Index::Single { at, size, mask } => chunks.push(Chunk {
+                offsets: vec![0; rank],
+                size: size.unwrap_or(chunk_bytes),
+                mask,
+                at,
+            }),
+            Index::Implicit(at) => {
+                if !d.filters.is_empty() {
+                    return Err("an implicit chunk index with filters".into());
+                }
+                take(self.b, at, count.saturating_mul(chunk_bytes))?;
+                for i in 0..count {
+                    chunks.push(Chunk {
+                        offsets: offsets(i),
+                        size: chunk_bytes,
+                        mask: 0,
+                        at: at + i * chunk_bytes,
+                    });
+                }
+            }
+            Index::FixedArray(at) => {
+                let h = take(self.b, at, 28)?;
+                if &h[..4] != b"FAHD" {
+                    return Err("a fixed-array chunk index lacks its FAHD signature".into());
+                }
+                let (filtered, entry, page_bits) = (h[5] == 1, usize::from(h[6]), h[7]);
+                let (n, block) = (le(h, 8, 8)?, le(h, 16, 8)?);
+                if n != count {
+                    return Err(format!(
+                        "the chunk index lists {n} chunks, the data has {count}"
+                    ));
+                }
+                if page_bits < 64 && n > 1u64 << page_bits {
+                    return Err("a paged fixed-array chunk index is not read".into());
+                }
+                let want = if filtered { 13 } else { 8 };
+                if entry < want {
+                    return Err(format!("chunk index entries of {entry} bytes"));
+                }
+                let b = take(self.b, block, 14 + n * entry as u64)?;
+                if &b[..4] != b"FADB" {
+                    return Err("a fixed-array data block lacks its FADB signature".into());
+                }
+                for i in 0..n as usize {
+                    let e = &b[14 + i * entry..14 + (i + 1) * entry];
+                    let at = le(e, 0, 8)?;
+                    if at == UNDEFINED {
+                        continue;
+                    }
+                    let (size, mask) = if filtered {
+                        (le(e, 8, entry - 12)?, le(e, entry - 4, 4)?)
+                    } else {
+                        (chunk_bytes, 0)
+                    };
+                    chunks.push(Chunk {
+                        offsets: offsets(i as u64),
+                        size,
+                        mask,
+                        at,
+                    });
+                }
+            }
+        }
+        Ok(chunks)
     }
 
     /// A chunk's bytes with its filters undone (last applied first).
