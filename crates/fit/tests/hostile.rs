@@ -682,6 +682,8 @@ fn samples() -> Vec<(&'static str, String, Vec<u8>)> {
         ("zmg", "a.zmg".into(), zmg_sample()),
         ("zon", "a.zon".into(), zon_sample()),
         ("jpk", "a.jpk".into(), jpk_sample()),
+        ("lext", "lext-synth.lext".into(), formats("lext-synth.lext")),
+        ("datx", "datx-synth.datx".into(), formats("datx-synth.datx")),
     ];
     // Every reader of the registry has a sample.
     for f in Format::all() {

@@ -1,7 +1,8 @@
 """Reference statistics of every real file in data/surfaces (top level, corpus/, formats/)
 from SurfaceTopography, written to statistics.json beside this script.
 
-Run: python3 st_statistics.py  (SurfaceTopography 1.27.1, numpy; see README.md here).
+Run: python3 st_statistics.py [FILE ...]  (SurfaceTopography 1.27.1, numpy; see README.md
+here); with FILEs (paths relative to data/surfaces) only their entries are remade.
 
 Each readable file is opened with SurfaceTopography's open_topography (unitless files in
 their own numbers, as corpus/REFERENCE.json), its undefined points filled with
@@ -173,15 +174,26 @@ def stats(path):
 
 
 def main():
+    # With file arguments (relative to data/surfaces), only their entries are remade and
+    # the others kept as they are.
+    only = set(sys.argv[1:])
+    previous = {}
+    if only:
+        with open(os.path.join(HERE, "statistics.json")) as f:
+            previous = {e["file"]: e for e in json.load(f)["files"]}
     out = []
     for set_name, folder in SETS:
         for name in sorted(os.listdir(folder)):
             path = os.path.join(folder, name)
             if not os.path.isfile(path) or name.endswith((".md", ".json", ".py")):
                 continue
+            rel = os.path.join(set_name, name) if set_name else name
+            if only and rel not in only:
+                if rel in previous:
+                    out.append(previous[rel])
+                continue
             with open(path, "rb") as f:
                 sha = hashlib.sha256(f.read()).hexdigest()
-            rel = os.path.join(set_name, name) if set_name else name
             try:
                 e = stats(path)
             except Exception as exc:  # noqa: BLE001 - recorded as SurfaceTopography's refusal

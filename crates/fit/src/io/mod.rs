@@ -10,12 +10,15 @@
 pub mod al3d;
 pub mod bcr;
 pub mod binary;
+pub mod datx;
 pub mod dektak;
 pub mod frt;
 pub mod gsf;
 pub mod gwy;
+pub mod hdf5;
 pub mod ibw;
 pub mod jpk;
+pub mod lext;
 pub mod matrix;
 pub mod md5;
 pub mod metropro;

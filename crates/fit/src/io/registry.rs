@@ -114,8 +114,8 @@ impl Format {
 }
 
 use super::{
-    al3d, bcr, dektak, frt, gsf, gwy, ibw, jpk, matrix, metropro, mi, mnt, nanoscope, netcdf, nid,
-    nms, npy, opd, opdx, park, plu, sdf, sur, tmd, vk4, wsxm, x3p, xyz, zmg, zon,
+    al3d, bcr, datx, dektak, frt, gsf, gwy, ibw, jpk, lext, matrix, metropro, mi, mnt, nanoscope,
+    netcdf, nid, nms, npy, opd, opdx, park, plu, sdf, sur, tmd, vk4, wsxm, x3p, xyz, zmg, zon,
 };
 
 /// `Magic` when the file starts with any of `magics`: some formats have variants (ASCII
@@ -147,6 +147,7 @@ const NPY: &[&[u8]] = &[npy::MAGIC];
 const GWY: &[&[u8]] = &[gwy::MAGIC, b"GWYO"];
 const NETCDF: &[&[u8]] = &[b"CDF\x01", b"CDF\x02", b"CDF\x05"];
 const OPDX: &[&[u8]] = &[opdx::MAGIC];
+const HDF5: &[u8] = b"\x89HDF\r\n\x1a\n";
 
 /// `Magic` when any of `magics` stands at byte `offset`.
 fn magic_at(bytes: &[u8], offset: usize, magics: &[&[u8]]) -> Sniff {
@@ -345,6 +346,23 @@ pub static READERS: &[Reader] = &[
         read: park::read,
     },
     Reader {
+        name: "lext",
+        aliases: &["olympus", "ols4000", "ols5000"],
+        description: "Olympus LEXT .lext (OLS4000/OLS5000 laser confocal; TIFF with XML)",
+        extensions: &["lext"],
+        binary: true,
+        signature: Some(Signature {
+            offset: 0,
+            describe: "a TIFF byte-order mark (`II*\\0` or `MM\\0*`)",
+            present: super::tiff::is_tiff,
+        }),
+        // Any TIFF could be one (its first directory may lie past the sniffed head): the
+        // .lext extension then breaks the tie; other TIFFs go to JPK's and Park's readers,
+        // listed first.
+        sniff: lext::sniff,
+        read: lext::read,
+    },
+    Reader {
         name: "mi",
         aliases: &["picoview", "keysight"],
         description: "Keysight/Agilent PicoView .mi (multi-channel)",
@@ -397,12 +415,29 @@ pub static READERS: &[Reader] = &[
     Reader {
         name: "zon",
         aliases: &["keyence-zon"],
-        description: "Keyence VR .zon (KPK0)",
+        description: "Keyence VR .zon (KPK0, and KPK1 with zstd entries)",
         extensions: &["zon"],
         binary: true,
         signature: prefix!("`KPK0` or `KPK1`", zon::MAGICS),
         sniff: |b| starts(b, zon::MAGICS),
         read: zon::read,
+    },
+    Reader {
+        name: "datx",
+        aliases: &["zygo-datx", "mx"],
+        description: "Zygo Mx .datx (HDF5)",
+        extensions: &["datx"],
+        binary: true,
+        signature: prefix!("`\\x89HDF\\r\\n\\x1a\\n` (an HDF5 file)", &[HDF5]),
+        // Any HDF5 file could be one: the extension, or the reader's own check, decides.
+        sniff: |b| {
+            if starts(b, &[HDF5]) == Sniff::Magic {
+                Sniff::Maybe
+            } else {
+                Sniff::No
+            }
+        },
+        read: datx::read,
     },
     Reader {
         name: "zmg",
@@ -505,12 +540,9 @@ pub fn unread_format(name: &str, bytes: &[u8]) -> Option<(String, String)> {
         |what: &str, fix: &str| Some((format!("{what} is not read yet"), fix.to_string()));
     const EXPORT: &str = "export the scan from the instrument software as X3P, SDF or a \
                           text matrix (all read here)";
-    if bytes.starts_with(b"\x89HDF\r\n\x1a\n") {
+    if bytes.starts_with(HDF5) {
         return match ext.as_str() {
-            "datx" => not_yet(
-                "Zygo DATX (an HDF5 container)",
-                "export it from Mx as MetroPro .dat, X3P or SDF",
-            ),
+            "datx" => None,
             "nc" => not_yet(
                 "NetCDF-4 (an HDF5 container)",
                 "write it as NetCDF classic (format NETCDF3_64BIT_OFFSET), which is read",
@@ -552,7 +584,7 @@ pub fn unread_format(name: &str, bytes: &[u8]) -> Option<(String, String)> {
         return not_yet(what, fix);
     }
     match ext.as_str() {
-        "lext" | "poir" | "oir" => not_yet("Olympus LEXT/OIR", EXPORT),
+        "poir" | "oir" => not_yet("Olympus OIR", EXPORT),
         "plux" => not_yet(
             "Sensofar .plux",
             "export it from SensoSCAN as .plu, X3P or SDF",
