@@ -248,7 +248,7 @@ fn parse_line(line: &str) -> Result<Map<String, Value>, QueryError> {
     }
 }
 
-/// Reads the files a query names (`nk_csv`, `psd_csv`), relative to the
+/// Reads the files a query names (`nk_csv`, `psd_csv`, `reflectance_csv`), relative to the
 /// working directory.
 struct EvalFiles;
 
@@ -272,6 +272,12 @@ impl FileLoader for EvalFiles {
     }
     fn psd_table(&mut self, path: &str) -> Result<(Vec<f64>, Vec<f64>), String> {
         Ok(read_csv(path, 2)?.into_iter().map(|r| (r[0], r[1])).unzip())
+    }
+    fn reflectance_table(&mut self, path: &str) -> Result<Vec<[f64; 2]>, String> {
+        Ok(read_csv(path, 2)?
+            .into_iter()
+            .map(|r| [r[0], r[1]])
+            .collect())
     }
 }
 
