@@ -74,12 +74,77 @@ fn gl01<const H: usize>() -> impl Iterator<Item = (f64, f64)> {
     })
 }
 
-/// ∫∫_[0,1]² f(u) du by the tensor product of two n-point rules (n = 2H).
+/// ∫∫_[0,1]² f(u) du by the tensor product of two n-point rules (n = 2H)
+/// after the change of variables u = 3s² − 2s³ in each coordinate. The
+/// visible-normal map has square-root endpoint singularities in u (at
+/// normal incidence the sampled slope grows as 1/√(1 − u)), which cost a
+/// plain Gauss–Legendre rule its accuracy (2 % in R_in(1) at α 0.1); the
+/// map's vanishing derivative at both ends makes the integrand smooth in s.
 fn integrate_unit_square<const H: usize>(mut f: impl FnMut([f64; 2]) -> f64) -> f64 {
+    let smooth = |(s, w): (f64, f64)| (s * s * (3.0 - 2.0 * s), w * 6.0 * s * (1.0 - s));
     let mut sum = 0.0;
-    for (u0, w0) in gl01::<H>() {
-        for (u1, w1) in gl01::<H>() {
+    for (u0, w0) in gl01::<H>().map(smooth) {
+        for (u1, w1) in gl01::<H>().map(smooth) {
             sum += w0 * w1 * f([u0, u1]);
+        }
+    }
+    sum
+}
+
+/// ∫∫_[0,1]² f(u) du for an f with kinks along the zero lines of the two
+/// functions `kinks` returns (total reflection setting in, the reflected
+/// direction crossing the horizon). For each Gauss–Legendre node in u[0]
+/// the zeros in u[1] are located (a coarse scan, then bisection), and each
+/// piece between them is integrated by a 32-point rule with the endpoint
+/// map of [`integrate_unit_square`]: the kinks lie in a band of u[1] a few
+/// thousandths wide at near-normal incidence, which a fixed rule does not
+/// resolve (R_in(1) 1.6 % low at α 0.1).
+fn integrate_with_kinks(
+    mut f: impl FnMut([f64; 2]) -> f64,
+    mut kinks: impl FnMut([f64; 2]) -> [f64; 2],
+) -> f64 {
+    const SCAN: usize = 32;
+    const MAX_EDGES: usize = 10;
+    let smooth = |s: f64| s * s * (3.0 - 2.0 * s);
+    let mut sum = 0.0;
+    for (u0, w0) in gl01::<16>() {
+        let mut edges = [0.0; MAX_EDGES];
+        let mut n = 1;
+        let mut prev = kinks([u0, 0.0]);
+        let mut prev_u = 0.0;
+        for k in 1..=SCAN {
+            let u1 = smooth(k as f64 / SCAN as f64);
+            let cur = kinks([u0, u1]);
+            for j in 0..2 {
+                if (prev[j] > 0.0) != (cur[j] > 0.0) && n < MAX_EDGES - 1 {
+                    let (mut lo, mut hi) = (prev_u, u1);
+                    for _ in 0..50 {
+                        let mid = 0.5 * (lo + hi);
+                        if (kinks([u0, mid])[j] > 0.0) == (prev[j] > 0.0) {
+                            lo = mid;
+                        } else {
+                            hi = mid;
+                        }
+                    }
+                    edges[n] = 0.5 * (lo + hi);
+                    n += 1;
+                }
+            }
+            prev = cur;
+            prev_u = u1;
+        }
+        edges[n] = 1.0;
+        n += 1;
+        edges[..n].sort_unstable_by(f64::total_cmp);
+        for e in edges[..n].windows(2) {
+            let (a, b) = (e[0], e[1]);
+            if b <= a {
+                continue;
+            }
+            for (s, w1) in gl01::<16>() {
+                let u1 = a + (b - a) * smooth(s);
+                sum += w0 * w1 * (b - a) * 6.0 * s * (1.0 - s) * f([u0, u1]);
+            }
         }
     }
     sum
@@ -92,8 +157,8 @@ fn direction(mu: f64) -> DVec3 {
 }
 
 impl RoughPlastic {
-    /// Validates the parameters and tabulates t(μ) and R_i (about 64 × 32² +
-    /// 32 × 64² interface samples).
+    /// Validates the parameters and tabulates t(μ) and R_i (about 64 × 32²
+    /// and 48 × 32 × 200 interface samples).
     pub fn new(p: RoughPlasticParams) -> Result<RoughPlastic, BrdfError> {
         let dist = Distribution::ggx(p.alpha, p.alpha)?;
         check_range("int_ior", p.int_ior, 1.0, 4.0, "1 ≤ int_ior ≤ 4")?;
@@ -118,12 +183,19 @@ impl RoughPlastic {
             let mu = (j as f64 / (TRANSMITTANCE_NODES - 1) as f64).max(1e-6);
             m.transmittance[j] = m.transmittance_at(mu);
         }
-        // ∫₀¹ 2μ R_in(μ) dμ; R_in has a kink at the critical angle, hence
-        // more nodes in μ than across the visible normals.
-        m.internal_reflectance = gl01::<16>()
-            .map(|(mu, w)| w * 2.0 * mu * m.internal_reflectance_at(mu))
-            .sum::<f64>()
-            .clamp(0.0, 1.0 - 1e-12);
+        // ∫₀¹ 2μ R_in(μ) dμ: R_in steps up to 1 (total reflection) at the
+        // critical cosine, smoothed over a width of about α, so the two sides
+        // are integrated apart, with nodes drawn towards the step.
+        let mu_c = libm::sqrt(1.0 - 1.0 / (m.eta * m.eta));
+        let mut ri = 0.0;
+        for (a, b) in [(0.0, mu_c), (mu_c, 1.0)] {
+            for (s, w) in gl01::<12>() {
+                let mu = a + (b - a) * s * s * (3.0 - 2.0 * s);
+                let jac = (b - a) * 6.0 * s * (1.0 - s);
+                ri += w * jac * 2.0 * mu * m.internal_reflectance_at(mu);
+            }
+        }
+        m.internal_reflectance = ri.clamp(0.0, 1.0 - 1e-12);
         Ok(m)
     }
 
@@ -189,15 +261,24 @@ impl RoughPlastic {
         if !(wi.z > 0.0) {
             return 0.0;
         }
-        integrate_unit_square::<32>(|u| {
-            let m = self.dist.sample_visible(wi, u);
-            let c = wi.dot(m);
-            let wo = 2.0 * c * m - wi;
-            if wo.z <= 0.0 || c <= 0.0 {
-                return 0.0;
-            }
-            dielectric_reflectance(c, 1.0 / self.eta).0 * self.dist.g1(wo)
-        })
+        // Total reflection for wi·m below the critical cosine.
+        let cos_critical = libm::sqrt(1.0 - 1.0 / (self.eta * self.eta));
+        integrate_with_kinks(
+            |u| {
+                let m = self.dist.sample_visible(wi, u);
+                let c = wi.dot(m);
+                let wo = 2.0 * c * m - wi;
+                if wo.z <= 0.0 || c <= 0.0 {
+                    return 0.0;
+                }
+                dielectric_reflectance(c, 1.0 / self.eta).0 * self.dist.g1(wo)
+            },
+            |u| {
+                let m = self.dist.sample_visible(wi, u);
+                let c = wi.dot(m);
+                [c - cos_critical, 2.0 * c * m.z - wi.z]
+            },
+        )
         .clamp(0.0, 1.0)
     }
 
