@@ -68,6 +68,8 @@ impl Reflectance {
     /// ρ at `lambda_nm`.
     #[inline]
     pub fn at(&self, lambda_nm: f64) -> f64 {
+        // Read only by tables (`alloc`).
+        let _ = lambda_nm;
         match self {
             Reflectance::Constant(r) => *r,
             #[cfg(feature = "alloc")]
