@@ -666,9 +666,10 @@ impl MaterialDesc {
 }
 
 impl MaterialSpec {
-    /// The flat form. Tabulated data (a measured PSD, an n,k table) is
-    /// not representable as keys: `psd_csv` / `nk_csv` are left unset
-    /// and the caller writes the data next to the description.
+    /// The flat form. Tabulated data (a measured PSD, an n,k table, a
+    /// reflectance spectrum) is not representable as keys: `psd_csv` /
+    /// `nk_csv` / `reflectance_csv` are left unset and the caller writes the
+    /// data next to the description.
     pub fn to_desc(&self) -> MaterialDesc {
         let mut d = MaterialDesc {
             model: Some(self.model.kind()),
