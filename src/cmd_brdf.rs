@@ -248,7 +248,7 @@ fn parse_line(line: &str) -> Result<Map<String, Value>, QueryError> {
     }
 }
 
-/// Reads the files a query names (`nk_csv`, `psd_csv`), relative to the
+/// Reads the files a query names (`nk_csv`, `psd_csv`, `reflectance_csv`), relative to the
 /// working directory.
 struct EvalFiles;
 
@@ -272,6 +272,12 @@ impl FileLoader for EvalFiles {
     }
     fn psd_table(&mut self, path: &str) -> Result<(Vec<f64>, Vec<f64>), String> {
         Ok(read_csv(path, 2)?.into_iter().map(|r| (r[0], r[1])).unzip())
+    }
+    fn reflectance_table(&mut self, path: &str) -> Result<Vec<[f64; 2]>, String> {
+        Ok(read_csv(path, 2)?
+            .into_iter()
+            .map(|r| [r[0], r[1]])
+            .collect())
     }
 }
 
@@ -310,9 +316,16 @@ pub(crate) fn material_spec(keys: &Map<String, Value>) -> Result<MaterialSpec, Q
         q.remove("fresnel");
         q.insert("metal".into(), Value::String(f));
     }
-    if !["fresnel", "metal", "nk", "nk_csv"]
-        .iter()
-        .any(|k| q.contains_key(*k))
+    // The models without a conductor Fresnel term (diffuse, roughplastic) take
+    // no index; brdf::spec refuses one given to them.
+    let conductor = match q.get("model").and_then(Value::as_str) {
+        Some(name) => ModelKind::from_name(name).is_none_or(ModelKind::conductor),
+        None => true,
+    };
+    if conductor
+        && !["fresnel", "metal", "nk", "nk_csv"]
+            .iter()
+            .any(|k| q.contains_key(*k))
     {
         return Err(QueryError::new(
             "fresnel",
@@ -682,6 +695,30 @@ mod tests {
         let b = run(&input, &mut big);
         assert_eq!(big.model_builds, 4);
         assert_eq!(a, b);
+    }
+
+    /// The models without a conductor Fresnel term need no `fresnel` and
+    /// refuse an index, naming it.
+    #[test]
+    fn diffuse_and_roughplastic_take_no_index() {
+        let geometry =
+            "\"lambda_nm\": 550, \"theta_i_deg\": 30, \"theta_o_deg\": 40, \"phi_o_deg\": 180";
+        let mut cache = ModelCache::default();
+        let out = run(
+            &format!(
+                "{{\"model\": \"diffuse\", \"reflectance\": 0.5, {geometry}}}\n\
+                 {{\"model\": \"roughplastic\", \"alpha\": 0.2, {geometry}}}\n\
+                 {{\"model\": \"diffuse\", \"reflectance\": 0.5, \"fresnel\": \"cu\", {geometry}}}\n\
+                 {{\"model\": \"roughplastic\", \"alpha\": 0.2, \"nk\": [1, 2], {geometry}}}\n\
+                 {{\"model\": \"ggx\", \"alpha\": 0.2, {geometry}}}\n"
+            ),
+            &mut cache,
+        );
+        assert!((out[0]["f"].as_f64().unwrap() - 0.5 / std::f64::consts::PI).abs() < 1e-15);
+        assert!(out[1]["f"].as_f64().unwrap() > 0.0, "{}", out[1]);
+        assert_eq!(out[2]["field"], "metal", "{}", out[2]);
+        assert_eq!(out[3]["field"], "nk", "{}", out[3]);
+        assert_eq!(out[4]["field"], "fresnel", "{}", out[4]);
     }
 
     #[test]

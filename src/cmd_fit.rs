@@ -158,7 +158,7 @@ pub struct MaterialArgs {
 fn model_names() -> clap::builder::PossibleValuesParser {
     use brdf::spec::ModelKind;
     let drawable = (ModelKind::ALL.iter())
-        .filter(|m| !matches!(m, ModelKind::GhsSsaAniso | ModelKind::GhsAniso))
+        .filter(|m| m.conductor() && !matches!(m, ModelKind::GhsSsaAniso | ModelKind::GhsAniso))
         .map(|m| m.name());
     let names = std::iter::once("auto").chain(drawable);
     clap::builder::PossibleValuesParser::new(names.collect::<Vec<_>>())

@@ -202,6 +202,33 @@ fn conductor_reflectance_ratio_pair(num: f64, den: f64, n: [f64; 2], k: [f64; 2]
     ]
 }
 
+/// Exact unpolarised Fresnel reflectance of a dielectric interface,
+/// R = ½(r_s² + r_p²), for incidence cosine `cos_i` (clamped to [0, 1]) and
+/// relative index `eta` = n_transmitted / n_incident (> 0), with the cosine of
+/// the refracted direction: `(R, cosθt)`. Beyond the critical angle (η < 1)
+/// the reflection is total: `(1, 0)`.
+#[inline]
+pub fn dielectric_reflectance(cos_i: f64, eta: f64) -> (f64, f64) {
+    let ci = clamp_cos(cos_i);
+    let sin2_t = (1.0 - ci * ci) / (eta * eta);
+    // Total reflection, or a NaN η.
+    if sin2_t >= 1.0 || sin2_t.is_nan() {
+        return (1.0, 0.0);
+    }
+    let ct = libm::sqrt(1.0 - sin2_t);
+    let rs = (ci - eta * ct) / (ci + eta * ct);
+    let rp = (eta * ci - ct) / (eta * ci + ct);
+    let r = 0.5 * (rs * rs + rp * rp);
+    (
+        if r.is_finite() {
+            r.clamp(0.0, 1.0)
+        } else {
+            1.0
+        },
+        ct,
+    )
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

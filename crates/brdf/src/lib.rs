@@ -5,7 +5,9 @@
 //!
 //! * microfacet conductors: GGX (Trowbridge–Reitz) and Beckmann, isotropic and
 //!   anisotropic, height-correlated Smith shadowing, visible-normal sampling;
-//! * exact unpolarised conductor Fresnel with measured n + ik spectra.
+//! * exact unpolarised conductor Fresnel with measured n + ik spectra;
+//! * for the scene around a sample: a Lambertian reflector ([`Diffuse`]) and a
+//!   rough dielectric coat over one ([`RoughPlastic`]).
 //! * wave-optical models ([`wave`]: GHS, two-scale) driven by surface statistics
 //!   ([`statistics`]: K-correlation and tabulated PSDs, the exponential NDF), on
 //!   the transforms and quadratures of [`numerics`].
@@ -28,6 +30,7 @@ extern crate std;
 
 pub use glam::DVec3;
 
+pub mod diffuse;
 mod error;
 pub mod frame;
 pub mod fresnel;
@@ -40,6 +43,7 @@ pub mod numerics;
 pub mod paper;
 #[cfg(feature = "alloc")]
 mod parallel;
+pub mod roughplastic;
 #[cfg(feature = "alloc")]
 pub mod spec;
 pub mod statistics;
@@ -47,11 +51,13 @@ pub mod statistics;
 pub mod testing;
 pub mod wave;
 
+pub use diffuse::{Diffuse, Reflectance};
 pub use error::BrdfError;
 pub use fresnel::Fresnel;
 pub use ior::{Ior, Metal};
 pub use microfacet::{Distribution, MicrofacetConductor, NdfKind, SmoothConductor};
 pub use model::{Bxdf, BxdfSample, Specular, WAVELENGTH_MAX_NM, WAVELENGTH_MIN_NM};
+pub use roughplastic::{RoughPlastic, RoughPlasticParams};
 
 /// Used by the `nostd-check` crate so that the linker keeps a whole model
 /// evaluation path. Evaluates a copper GGX (α = 0.2) BRDF in the plane of

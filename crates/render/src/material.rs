@@ -37,7 +37,7 @@ pub struct FresnelOnly {
     pub unit: DynBxdf,
 }
 
-/// Reads `nk_csv` / `psd_csv` relative to the scene file through `inputs`.
+/// Reads `nk_csv` / `psd_csv` / `reflectance_csv` relative to the scene file through `inputs`.
 struct SceneFiles<'a> {
     base_dir: &'a Path,
     inputs: &'a mut Inputs,
@@ -56,6 +56,15 @@ impl FileLoader for SceneFiles<'_> {
         let text = self.inputs.read_text(&full, "psd_csv", MAX_CSV_BYTES)?;
         let rows = parse_csv_rows(&text, 2).map_err(|e| format!("{}: {e}", full.display()))?;
         Ok(rows.into_iter().map(|r| (r[0], r[1])).unzip())
+    }
+
+    fn reflectance_table(&mut self, path: &str) -> Result<Vec<[f64; 2]>, String> {
+        let full = self.base_dir.join(path);
+        let text = self
+            .inputs
+            .read_text(&full, "reflectance_csv", MAX_CSV_BYTES)?;
+        let rows = parse_csv_rows(&text, 2).map_err(|e| format!("{}: {e}", full.display()))?;
+        Ok(rows.into_iter().map(|r| [r[0], r[1]]).collect())
     }
 }
 
@@ -129,9 +138,13 @@ fn read_include(
     })?;
     // The include's own relative paths are relative to the include.
     let inc_dir = Path::new(inc).parent().unwrap_or(Path::new(""));
-    for p in [&mut file.material.nk_csv, &mut file.material.psd_csv]
-        .into_iter()
-        .flatten()
+    for p in [
+        &mut file.material.nk_csv,
+        &mut file.material.psd_csv,
+        &mut file.material.reflectance_csv,
+    ]
+    .into_iter()
+    .flatten()
     {
         *p = inc_dir.join(&*p).to_string_lossy().into_owned();
     }

@@ -116,7 +116,7 @@ material_keys! {
     /// `conductor` (default) or `one`.
     fresnel: FresnelKind, Index, [];
     /// Isotropic microfacet roughness.
-    alpha: f64, Roughness, [Ggx, Beckmann];
+    alpha: f64, Roughness, [Ggx, Beckmann, RoughPlastic];
     /// Roughness along the surface tangent.
     alpha_x: f64, Roughness, [Ggx, Beckmann];
     /// Roughness along the bitangent.
@@ -151,6 +151,16 @@ material_keys! {
     beta: f64, Own, [TwoScale];
     /// Two-scale coherent part.
     coherent: CoherentPart, Own, [TwoScale];
+    /// A constant reflectance ρ ∈ [0, 1] (of a diffuse surface or base).
+    reflectance: f64, Own, [Diffuse, RoughPlastic];
+    /// A CSV `wavelength_nm,reflectance` (resolved by the caller).
+    reflectance_csv: String, Own, [Diffuse, RoughPlastic];
+    /// Index of a dielectric coat (default 1.49, polypropylene).
+    int_ior: f64, Own, [RoughPlastic];
+    /// Index of the medium above a dielectric coat (default 1.0).
+    ext_ior: f64, Own, [RoughPlastic];
+    /// Whether internal scattering is tinted by the base (default false).
+    nonlinear: bool, Own, [RoughPlastic];
     /// A `lustre fit` material file (resolved by the caller).
     include: String, NotInherited, [];
     /// Which two-scale split of the included file.
@@ -194,6 +204,8 @@ pub trait FileLoader {
     fn nk_table(&mut self, path: &str) -> Result<Vec<[f64; 3]>, String>;
     /// `(ζ rad/µm, P µm⁴)` samples of a `psd_csv` file.
     fn psd_table(&mut self, path: &str) -> Result<(Vec<f64>, Vec<f64>), String>;
+    /// Rows `(λ nm, ρ)` of a `reflectance_csv` file.
+    fn reflectance_table(&mut self, path: &str) -> Result<Vec<[f64; 2]>, String>;
 }
 
 /// A loader for descriptions that must not refer to files.
@@ -207,6 +219,27 @@ impl FileLoader for NoFiles {
     }
     fn psd_table(&mut self, path: &str) -> Result<(Vec<f64>, Vec<f64>), String> {
         Err(format!("cannot read {path:?} here"))
+    }
+    fn reflectance_table(&mut self, path: &str) -> Result<Vec<[f64; 2]>, String> {
+        Err(format!(
+            "cannot read {path:?} here: give `reflectance` (a constant) instead"
+        ))
+    }
+}
+
+/// `roughplastic`'s coat index when `int_ior` is not given (polypropylene, as Mitsuba).
+pub const ROUGHPLASTIC_INT_IOR: f64 = 1.49;
+/// `roughplastic`'s outer index when `ext_ior` is not given.
+pub const ROUGHPLASTIC_EXT_IOR: f64 = 1.0;
+/// `roughplastic`'s base reflectance when neither `reflectance` nor
+/// `reflectance_csv` is given (Mitsuba's default `diffuse_reflectance`).
+pub const ROUGHPLASTIC_REFLECTANCE: f64 = 0.5;
+
+/// A constant reflectance as its key; a table is left for the caller to write
+/// next to the description (as an n,k table is).
+fn set_reflectance(d: &mut MaterialDesc, r: &ReflectanceSpec) {
+    if let ReflectanceSpec::Constant(v) = r {
+        d.reflectance = Some(*v);
     }
 }
 
@@ -353,6 +386,7 @@ impl MaterialDesc {
             )
         })?;
         self.check_used(model)?;
+        self.check_index_used(model)?;
         if model == ModelKind::RayleighRice && merged.psd_csv.is_some() {
             // The table is the whole PSD (σ included): K-correlation keys set here
             // would be ignored (included ones are, as for measured_psd).
@@ -408,12 +442,85 @@ impl MaterialDesc {
         }
     }
 
+    /// Refuses a conductor index (`metal`, `nk`, `nk_csv`, `fresnel`) set here
+    /// on a model without a conductor Fresnel term (one inherited from an
+    /// included fit file is ignored, as its other unused keys are).
+    fn check_index_used(&self, model: ModelKind) -> Result<(), SpecError> {
+        if model.conductor() {
+            return Ok(());
+        }
+        let given = [
+            ("metal", self.metal.is_some()),
+            ("nk", self.nk.is_some()),
+            ("nk_csv", self.nk_csv.is_some()),
+            ("fresnel", self.fresnel.is_some()),
+        ];
+        match given.iter().find(|(_, set)| *set) {
+            None => Ok(()),
+            Some((key, _)) => Err(SpecError::new(
+                key,
+                format!(
+                    "model `{}` has no conductor Fresnel term, so `{key}` would be ignored; \
+                     its colour is `reflectance = ρ` or `reflectance_csv = \"file.csv\"`{}",
+                    model.name(),
+                    if model == ModelKind::RoughPlastic {
+                        " and its coat's Fresnel term comes from `int_ior` and `ext_ior`"
+                    } else {
+                        ""
+                    }
+                ),
+            )),
+        }
+    }
+
+    /// The reflectance of a diffuse surface or base: `reflectance` or
+    /// `reflectance_csv` (exactly one; `default` when neither is set).
+    fn reflectance_spec(
+        &self,
+        model: ModelKind,
+        default: Option<f64>,
+        files: &mut dyn FileLoader,
+    ) -> Result<ReflectanceSpec, SpecError> {
+        match (self.reflectance, &self.reflectance_csv) {
+            (Some(_), Some(_)) => Err(SpecError::new(
+                "reflectance",
+                "give `reflectance` (a constant) or `reflectance_csv` (a spectrum), not both",
+            )),
+            (Some(r), None) => {
+                Reflectance::constant(r)?;
+                Ok(ReflectanceSpec::Constant(r))
+            }
+            (None, Some(path)) => {
+                let rows = files
+                    .reflectance_table(path)
+                    .map_err(|e| SpecError::new("reflectance_csv", e))?;
+                Reflectance::table(rows.clone())
+                    .map_err(|e| SpecError::new("reflectance_csv", format!("{path}: {e}")))?;
+                Ok(ReflectanceSpec::Table(rows))
+            }
+            (None, None) => default.map(ReflectanceSpec::Constant).ok_or_else(|| {
+                SpecError::new(
+                    "reflectance",
+                    format!(
+                        "model `{}` needs `reflectance = ρ` (0 ≤ ρ ≤ 1) or \
+                         `reflectance_csv = \"file.csv\"` (wavelength_nm,reflectance)",
+                        model.name()
+                    ),
+                )
+            }),
+        }
+    }
+
     fn build_spec(
         &self,
         model: ModelKind,
         files: &mut dyn FileLoader,
     ) -> Result<MaterialSpec, SpecError> {
-        let fresnel = self.fresnel_spec(files)?;
+        let fresnel = if model.conductor() {
+            self.fresnel_spec(files)?
+        } else {
+            FresnelSpec::One
+        };
         let kc = |m| -> Result<KcSpec, SpecError> {
             Ok(KcSpec {
                 sigma_um: need(self.sigma_um, "sigma_um", m)?,
@@ -503,6 +610,16 @@ impl MaterialDesc {
                 surface: aniso(model)?,
                 options,
             },
+            ModelKind::Diffuse => ModelSpec::Diffuse {
+                reflectance: self.reflectance_spec(model, None, files)?,
+            },
+            ModelKind::RoughPlastic => ModelSpec::RoughPlastic {
+                alpha: need(self.alpha, "alpha", model)?,
+                int_ior: self.int_ior.unwrap_or(ROUGHPLASTIC_INT_IOR),
+                ext_ior: self.ext_ior.unwrap_or(ROUGHPLASTIC_EXT_IOR),
+                reflectance: self.reflectance_spec(model, Some(ROUGHPLASTIC_REFLECTANCE), files)?,
+                nonlinear: self.nonlinear.unwrap_or(false),
+            },
         };
         let spec = MaterialSpec {
             model: spec,
@@ -581,15 +698,18 @@ impl MaterialDesc {
 }
 
 impl MaterialSpec {
-    /// The flat form. Tabulated data (a measured PSD, an n,k table) is
-    /// not representable as keys: `psd_csv` / `nk_csv` are left unset
-    /// and the caller writes the data next to the description.
+    /// The flat form. Tabulated data (a measured PSD, an n,k table, a
+    /// reflectance spectrum) is not representable as keys: `psd_csv` /
+    /// `nk_csv` / `reflectance_csv` are left unset and the caller writes the
+    /// data next to the description.
     pub fn to_desc(&self) -> MaterialDesc {
         let mut d = MaterialDesc {
             model: Some(self.model.kind()),
             ..MaterialDesc::default()
         };
         match &self.fresnel {
+            // Implied by the models without a conductor Fresnel term.
+            FresnelSpec::One if !self.model.kind().conductor() => {}
             FresnelSpec::One => d.fresnel = Some(FresnelKind::One),
             FresnelSpec::Metal(m) => d.metal = Some(m.name().to_string()),
             FresnelSpec::Constant { n, k } => d.nk = Some([*n, *k]),
@@ -651,6 +771,20 @@ impl MaterialSpec {
                 d.angle_deg = Some(surface.angle_deg);
                 d.gamma = Some(surface.gamma);
                 set_opts(&mut d, options);
+            }
+            ModelSpec::Diffuse { reflectance } => set_reflectance(&mut d, reflectance),
+            ModelSpec::RoughPlastic {
+                alpha,
+                int_ior,
+                ext_ior,
+                reflectance,
+                nonlinear,
+            } => {
+                d.alpha = Some(*alpha);
+                d.int_ior = Some(*int_ior);
+                d.ext_ior = Some(*ext_ior);
+                set_reflectance(&mut d, reflectance);
+                d.nonlinear = Some(*nonlinear);
             }
         }
         d

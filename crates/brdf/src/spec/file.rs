@@ -181,6 +181,9 @@ impl FileLoader for WithOwnPsd<'_> {
             _ => self.files.psd_table(path),
         }
     }
+    fn reflectance_table(&mut self, path: &str) -> Result<Vec<[f64; 2]>, String> {
+        self.files.reflectance_table(path)
+    }
 }
 
 /// A `lustre fit` material file.

@@ -13,10 +13,12 @@
 //!
 //! | key | models | meaning |
 //! |---|---|---|
-//! | `model` | all | `ggx`, `beckmann`, `smooth`, `ghs_ssa`, `ghs`, `two_scale`, `measured_psd`, `rayleigh_rice`, `ghs_ssa_aniso`, `ghs_aniso` |
-//! | `metal` / `nk` / `nk_csv` | all | built-in metal, constant `[n, k]`, or a CSV `wavelength_nm,n,k` |
-//! | `fresnel` | all | `conductor` (default) or `one` (R ≡ 1; alias `none`) |
-//! | `alpha`, or `alpha_x` + `alpha_y` | ggx, beckmann | roughness (x along the surface tangent) |
+//! | `model` | all | `ggx`, `beckmann`, `smooth`, `ghs_ssa`, `ghs`, `two_scale`, `measured_psd`, `rayleigh_rice`, `ghs_ssa_aniso`, `ghs_aniso`, `diffuse`, `roughplastic` |
+//! | `metal` / `nk` / `nk_csv` | all but diffuse, roughplastic | built-in metal, constant `[n, k]`, or a CSV `wavelength_nm,n,k` |
+//! | `fresnel` | all but diffuse, roughplastic | `conductor` (default) or `one` (R ≡ 1; alias `none`) |
+//! | `alpha`, or `alpha_x` + `alpha_y` | ggx, beckmann (roughplastic: `alpha` only) | roughness (x along the surface tangent) |
+//! | `reflectance` or `reflectance_csv` | diffuse, roughplastic | the (base's) reflectance ρ ∈ [0, 1]: a constant, or a CSV `wavelength_nm,reflectance` |
+//! | `int_ior`, `ext_ior`, `nonlinear` | roughplastic | the coat's index (default 1.49) and the medium's (default 1.0); whether internal scattering tints (`ρ/(1 − ρR_i)`) or not (`ρ/(1 − R_i)`, default `false`) |
 //! | `alpha_beckmann` | beckmann | used in preference to `alpha` (a fit file serves both models) |
 //! | `sigma_um`, `lc_um`, `gamma` | ghs_ssa, ghs, two_scale, rayleigh_rice | K-correlation σ (µm), Lc (µm), γ |
 //! | `sigma_um`, `lx_um`, `ly_um`, `angle_deg`, `gamma` | ghs_ssa_aniso, ghs_aniso | anisotropic K-correlation: Lx along the axis at `angle_deg` (from the tangent x towards y; default 0), Ly across it |
@@ -74,7 +76,8 @@ use crate::statistics::kc::KcPsd;
 use crate::wave::two_scale::{CoherentPart, TableResolution, TwoScale, TwoScaleParams};
 use crate::wave::{GhsAnisotropic, GhsFull, GhsOptions, GhsSsa, Polarization, RayleighRice};
 use crate::{
-    BrdfError, Bxdf, Distribution, Fresnel, Ior, Metal, MicrofacetConductor, SmoothConductor,
+    BrdfError, Bxdf, Diffuse, Distribution, Fresnel, Ior, Metal, MicrofacetConductor, Reflectance,
+    RoughPlastic, RoughPlasticParams, SmoothConductor,
 };
 
 /// A built model, shareable across threads.
@@ -139,11 +142,16 @@ pub enum ModelKind {
     GhsSsaAniso,
     /// Full GHS of an anisotropic K-correlation surface.
     GhsAniso,
+    /// Lambertian reflector (no Fresnel term).
+    Diffuse,
+    /// GGX dielectric coat over a Lambertian base (Mitsuba's `roughplastic`).
+    #[cfg_attr(feature = "serde", serde(rename = "roughplastic"))]
+    RoughPlastic,
 }
 
 impl ModelKind {
     /// Every model, in the order the documentation lists them.
-    pub const ALL: [ModelKind; 10] = [
+    pub const ALL: [ModelKind; 12] = [
         ModelKind::Ggx,
         ModelKind::Beckmann,
         ModelKind::Smooth,
@@ -154,6 +162,8 @@ impl ModelKind {
         ModelKind::RayleighRice,
         ModelKind::GhsSsaAniso,
         ModelKind::GhsAniso,
+        ModelKind::Diffuse,
+        ModelKind::RoughPlastic,
     ];
 
     /// The name used in files.
@@ -169,6 +179,8 @@ impl ModelKind {
             ModelKind::RayleighRice => "rayleigh_rice",
             ModelKind::GhsSsaAniso => "ghs_ssa_aniso",
             ModelKind::GhsAniso => "ghs_aniso",
+            ModelKind::Diffuse => "diffuse",
+            ModelKind::RoughPlastic => "roughplastic",
         }
     }
 
@@ -191,6 +203,14 @@ impl ModelKind {
             self,
             ModelKind::Ggx | ModelKind::Beckmann | ModelKind::Smooth
         )
+    }
+
+    /// Whether the model's reflectance is a conductor's Fresnel factor (its
+    /// [`MaterialSpec::fresnel`] is read). False for `diffuse` and
+    /// `roughplastic`, whose reflectance is their own parameter: their
+    /// [`MaterialSpec::fresnel`] must be [`FresnelSpec::One`].
+    pub fn conductor(self) -> bool {
+        !matches!(self, ModelKind::Diffuse | ModelKind::RoughPlastic)
     }
 
     /// `ggx, beckmann, …` for error messages.
@@ -261,6 +281,26 @@ pub enum RrSurface {
         /// PSD values P(ζ), µm⁴.
         psd_um4: Vec<f64>,
     },
+}
+
+/// A reflectance ρ(λ) ∈ [0, 1] of a diffuse surface or base.
+#[derive(Clone, Debug, PartialEq)]
+pub enum ReflectanceSpec {
+    /// The same at every wavelength.
+    Constant(f64),
+    /// Rows `[λ nm, ρ]`, λ strictly increasing.
+    Table(Vec<[f64; 2]>),
+}
+
+impl ReflectanceSpec {
+    /// The reflectance, or the error naming what is wrong.
+    pub fn build(&self) -> Result<Reflectance, SpecError> {
+        match self {
+            ReflectanceSpec::Constant(r) => Ok(Reflectance::constant(*r)?),
+            ReflectanceSpec::Table(rows) => Reflectance::table(rows.clone())
+                .map_err(|e| SpecError::new("reflectance_csv", e.to_string())),
+        }
+    }
 }
 
 /// A model and its parameters.
@@ -335,6 +375,24 @@ pub enum ModelSpec {
         /// Options (energy `raw` only).
         options: GhsOptions,
     },
+    /// A Lambertian reflector.
+    Diffuse {
+        /// Its reflectance.
+        reflectance: ReflectanceSpec,
+    },
+    /// A GGX dielectric coat over a Lambertian base.
+    RoughPlastic {
+        /// The coat's GGX roughness.
+        alpha: f64,
+        /// The coat's index.
+        int_ior: f64,
+        /// The index of the medium above.
+        ext_ior: f64,
+        /// The base's reflectance.
+        reflectance: ReflectanceSpec,
+        /// ρ/(1 − ρR_i) (true) or ρ/(1 − R_i) (false, Mitsuba's default).
+        nonlinear: bool,
+    },
 }
 
 impl ModelSpec {
@@ -351,6 +409,8 @@ impl ModelSpec {
             ModelSpec::RayleighRice { .. } => ModelKind::RayleighRice,
             ModelSpec::GhsSsaAniso { .. } => ModelKind::GhsSsaAniso,
             ModelSpec::GhsAniso { .. } => ModelKind::GhsAniso,
+            ModelSpec::Diffuse { .. } => ModelKind::Diffuse,
+            ModelSpec::RoughPlastic { .. } => ModelKind::RoughPlastic,
         }
     }
 
@@ -413,6 +473,16 @@ impl MaterialSpec {
     /// building tables (cheap: what `lustre fit` runs on what it writes).
     pub fn validate(&self) -> Result<(), SpecError> {
         self.fresnel.build()?;
+        if !self.model.kind().conductor() && self.fresnel != FresnelSpec::One {
+            return Err(SpecError::new(
+                "metal",
+                format!(
+                    "model `{}` has no conductor Fresnel term (its reflectance is its own \
+                     parameter); give it no `metal`, `nk`, `nk_csv` or `fresnel`",
+                    self.model.kind().name()
+                ),
+            ));
+        }
         match &self.model {
             ModelSpec::Ggx { alpha_x, alpha_y } => {
                 Distribution::ggx(*alpha_x, *alpha_y)?;
@@ -485,10 +555,54 @@ impl MaterialSpec {
                     ));
                 }
             }
+            ModelSpec::Diffuse { reflectance } => {
+                reflectance.build()?;
+            }
+            ModelSpec::RoughPlastic {
+                alpha,
+                int_ior,
+                ext_ior,
+                reflectance,
+                nonlinear,
+            } => {
+                rough_plastic(*alpha, *int_ior, *ext_ior, reflectance, *nonlinear)?;
+            }
         }
         Ok(())
     }
+}
 
+/// The parameters of a `roughplastic` material, checked (its tables are built
+/// by [`RoughPlastic::new`]).
+fn rough_plastic(
+    alpha: f64,
+    int_ior: f64,
+    ext_ior: f64,
+    reflectance: &ReflectanceSpec,
+    nonlinear: bool,
+) -> Result<RoughPlasticParams, SpecError> {
+    Distribution::ggx(alpha, alpha)?;
+    crate::error::check_range("int_ior", int_ior, 1.0, 4.0, "1 ≤ int_ior ≤ 4")?;
+    crate::error::check_range("ext_ior", ext_ior, 1.0, 4.0, "1 ≤ ext_ior ≤ 4")?;
+    if int_ior <= ext_ior {
+        return Err(SpecError::new(
+            "int_ior",
+            format!(
+                "int_ior = {int_ior} must exceed ext_ior = {ext_ior} (a coat denser than \
+                     the medium above it)"
+            ),
+        ));
+    }
+    Ok(RoughPlasticParams {
+        alpha,
+        int_ior,
+        ext_ior,
+        reflectance: reflectance.build()?,
+        nonlinear,
+    })
+}
+
+impl MaterialSpec {
     /// Builds the model (tables included: tens of ms for the wave models).
     pub fn build(&self) -> Result<DynBxdf, SpecError> {
         self.validate()?;
@@ -559,6 +673,20 @@ impl MaterialSpec {
             ModelSpec::GhsAniso { surface, options } => {
                 Box::new(GhsAnisotropic::full(surface.psd()?, fresnel, *options)?)
             }
+            ModelSpec::Diffuse { reflectance } => Box::new(Diffuse::new(reflectance.build()?)),
+            ModelSpec::RoughPlastic {
+                alpha,
+                int_ior,
+                ext_ior,
+                reflectance,
+                nonlinear,
+            } => Box::new(RoughPlastic::new(rough_plastic(
+                *alpha,
+                *int_ior,
+                *ext_ior,
+                reflectance,
+                *nonlinear,
+            )?)?),
         })
     }
 }
@@ -605,6 +733,8 @@ impl MaterialSpec {
                 1.0 / (k * surface.lx_um.max(surface.ly_um))
             }
             ModelSpec::Smooth => 1e-3,
+            ModelSpec::Diffuse { .. } => 1.0,
+            ModelSpec::RoughPlastic { alpha, .. } => *alpha,
         };
         if rho.is_finite() && rho > 0.0 {
             rho.clamp(1e-6, 1.0)
@@ -628,7 +758,10 @@ impl MaterialSpec {
 }
 
 #[cfg(feature = "serde")]
-pub use desc::{FileLoader, FresnelKind, KeyDoc, MaterialDesc, NoFiles};
+pub use desc::{
+    FileLoader, FresnelKind, KeyDoc, MaterialDesc, NoFiles, ROUGHPLASTIC_EXT_IOR,
+    ROUGHPLASTIC_INT_IOR, ROUGHPLASTIC_REFLECTANCE,
+};
 #[cfg(feature = "serde")]
 pub mod file;
 #[cfg(feature = "serde")]
@@ -752,6 +885,149 @@ mod tests {
             }
             fn psd_table(&mut self, _: &str) -> Result<(Vec<f64>, Vec<f64>), String> {
                 Err("no".to_string())
+            }
+            fn reflectance_table(&mut self, path: &str) -> Result<Vec<[f64; 2]>, String> {
+                match path {
+                    "grey.csv" => Ok(alloc::vec![[400.0, 0.3], [700.0, 0.5]]),
+                    "bright.csv" => Ok(alloc::vec![[400.0, 0.3], [700.0, 1.5]]),
+                    _ => Err(format!("{path}: no such file")),
+                }
+            }
+        }
+
+        #[test]
+        fn diffuse_and_roughplastic_parse_refuse_an_index_and_round_trip() {
+            let d = desc(r#"{"model": "diffuse", "reflectance": 0.25}"#).unwrap();
+            let s = d.into_spec(&mut NoFiles).unwrap();
+            assert_eq!(
+                s.model,
+                ModelSpec::Diffuse {
+                    reflectance: ReflectanceSpec::Constant(0.25)
+                }
+            );
+            assert_eq!(s.fresnel, FresnelSpec::One);
+            assert_eq!(s.to_desc(), d);
+            let d = desc(r#"{"model": "diffuse", "reflectance_csv": "grey.csv"}"#).unwrap();
+            let s = d.into_spec(&mut Files).unwrap();
+            assert!(matches!(
+                s.model,
+                ModelSpec::Diffuse {
+                    reflectance: ReflectanceSpec::Table(ref r)
+                } if r.len() == 2
+            ));
+            let d = desc(r#"{"model": "roughplastic", "alpha": 0.2}"#).unwrap();
+            let s = d.into_spec(&mut NoFiles).unwrap();
+            assert_eq!(
+                s.model,
+                ModelSpec::RoughPlastic {
+                    alpha: 0.2,
+                    int_ior: 1.49,
+                    ext_ior: 1.0,
+                    reflectance: ReflectanceSpec::Constant(0.5),
+                    nonlinear: false
+                }
+            );
+            assert_eq!(s.to_desc().into_spec(&mut NoFiles).unwrap(), s);
+            for model in ["diffuse", "roughplastic"] {
+                assert!(!ModelKind::from_name(model).unwrap().fresnel_only());
+                for (key, value) in [
+                    ("metal", r#""cu""#),
+                    ("nk", "[0.2, 3.0]"),
+                    ("nk_csv", r#""cu.csv""#),
+                    ("fresnel", r#""one""#),
+                ] {
+                    let json = format!(
+                        r#"{{"model": "{model}", "alpha": 0.1, "reflectance": 0.5, "{key}": {value}}}"#
+                    );
+                    let json = json.replace(
+                        r#""alpha": 0.1, "#,
+                        if model == "diffuse" {
+                            ""
+                        } else {
+                            r#""alpha": 0.1, "#
+                        },
+                    );
+                    let e = desc(&json).unwrap().into_spec(&mut Files).unwrap_err();
+                    assert_eq!(e.field, key, "{json}: {e}");
+                    assert!(e.message.contains("no conductor Fresnel"), "{e}");
+                }
+                // A typed spec with a conductor index is refused too.
+                let mut s = desc(&format!(r#"{{"model": "{model}", "alpha": 0.1}}"#).replace(
+                    r#", "alpha": 0.1"#,
+                    if model == "diffuse" {
+                        r#", "reflectance": 1"#
+                    } else {
+                        r#", "alpha": 0.1"#
+                    },
+                ))
+                .unwrap()
+                .into_spec(&mut NoFiles)
+                .unwrap();
+                s.fresnel = FresnelSpec::Metal(Metal::Cu);
+                assert!(
+                    s.validate()
+                        .unwrap_err()
+                        .message
+                        .contains("no conductor Fresnel")
+                );
+            }
+            // An included fit file's metal is not this model's concern.
+            let base = desc(r#"{"model": "ggx", "metal": "cu", "alpha": 0.2}"#).unwrap();
+            let own = desc(r#"{"model": "diffuse", "reflectance": 0.4}"#).unwrap();
+            assert_eq!(
+                own.resolve(Some(&base), &mut NoFiles).unwrap().fresnel,
+                FresnelSpec::One
+            );
+            for (json, field) in [
+                (r#"{"model": "diffuse"}"#, "reflectance"),
+                (
+                    r#"{"model": "diffuse", "reflectance": 1.01}"#,
+                    "reflectance",
+                ),
+                (
+                    r#"{"model": "diffuse", "reflectance": 0.5, "reflectance_csv": "grey.csv"}"#,
+                    "reflectance",
+                ),
+                (
+                    r#"{"model": "diffuse", "reflectance_csv": "bright.csv"}"#,
+                    "reflectance_csv",
+                ),
+                (
+                    r#"{"model": "diffuse", "reflectance_csv": "missing.csv"}"#,
+                    "reflectance_csv",
+                ),
+                (
+                    r#"{"model": "diffuse", "reflectance": 0.5, "alpha": 0.1}"#,
+                    "alpha",
+                ),
+                (r#"{"model": "roughplastic", "reflectance": 0.5}"#, "alpha"),
+                (
+                    r#"{"model": "roughplastic", "alpha": 0.1, "int_ior": 1.0}"#,
+                    "int_ior",
+                ),
+                (
+                    r#"{"model": "roughplastic", "alpha": 0.1, "int_ior": 9}"#,
+                    "int_ior",
+                ),
+                (
+                    r#"{"model": "roughplastic", "alpha": 0.1, "ext_ior": 0.5}"#,
+                    "ext_ior",
+                ),
+                (
+                    r#"{"model": "roughplastic", "alpha": 0.1, "alpha_x": 0.1, "alpha_y": 0.2}"#,
+                    "alpha",
+                ),
+                (
+                    r#"{"model": "roughplastic", "alpha_x": 0.1, "alpha_y": 0.2}"#,
+                    "alpha_x",
+                ),
+                (
+                    r#"{"model": "ggx", "metal": "cu", "alpha": 0.1, "reflectance": 0.2}"#,
+                    "reflectance",
+                ),
+            ] {
+                let e = desc(json).unwrap().into_spec(&mut Files).unwrap_err();
+                assert_eq!(e.field, field, "{json}: {e}");
             }
         }
 
