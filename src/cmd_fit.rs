@@ -153,8 +153,9 @@ pub struct MaterialArgs {
     pub checks: CheckArgs,
 }
 
-/// `auto` and every model a fit file can draw (the anisotropic GHS needs correlation
-/// lengths along two axes, which the fit does not measure), for `--model`.
+/// `auto` and every model a fit file can recommend for any scan, for `--model`: the
+/// conductor models but the anisotropic ones (their two correlation lengths exist only for
+/// a scan flagged anisotropic, where the file offers `ghs_aniso` beside its own model).
 fn model_names() -> clap::builder::PossibleValuesParser {
     use brdf::spec::ModelKind;
     let drawable = (ModelKind::ALL.iter())
