@@ -37,8 +37,8 @@ pub const ESTIMATOR: &str = "lustre estimator 10";
 /// The share of a scene-with-bands' wavelength density spread uniformly
 /// over its emission range ([`Scene::set_spectral_bands`]): with 256 bands a
 /// band at either end of 360–830 nm gets ≥ 1/5 of a uniform density's
-/// wavelengths, against ~10⁻⁴ of the peak density without, at the cost of
-/// colour noise that 1/(1 − ⅕) more samples remove.
+/// wavelengths, against ~10⁻⁴ of the peak density without; the second
+/// moment of a colour estimate grows by at most 1/(1 − ⅕).
 pub const BAND_UNIFORM_SHARE: f64 = 0.2;
 
 /// Render settings from `[film]` and `[integrator]`.
