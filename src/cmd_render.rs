@@ -371,8 +371,12 @@ pub fn render(args: RenderArgs) -> anyhow::Result<()> {
     let time_limit = args.time_limit.as_deref().map(parse_duration).transpose()?;
     let checkpoint_every = parse_checkpoint_every(&args.checkpoint_every)?;
     let threads = crate::flags::thread_count(args.threads, args.quiet)?;
-    render::memory::check_fits(scene.camera.width, scene.camera.height)
-        .map_err(|m| anyhow::anyhow!("{}: {m}", scene_path.display()))?;
+    render::memory::check_fits_with_bands(
+        scene.camera.width,
+        scene.camera.height,
+        scene.settings.spectral_bands,
+    )
+    .map_err(|m| anyhow::anyhow!("{}: {m}", scene_path.display()))?;
     let mut film = scene.film().map_err(anyhow::Error::msg)?;
     let todo = if args.resume {
         resume(&mut film, film_path, out.target.clone(), args.quiet)?

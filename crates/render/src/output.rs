@@ -79,23 +79,26 @@ pub fn write_exr_spectral(
             FlatSamples::F32(v),
         ));
     }
+    // One custom attribute per map: the writer emits a map in its (random)
+    // iteration order, and the file must not depend on the process.
+    let text = |v: &str| AttributeValue::Text(Text::from(v));
     let mut attributes = LayerAttributes::default();
-    for (k, v) in [
-        ("spectralLayoutVersion", "1.0"),
-        ("emissiveUnits", "W.m^-2.sr^-1"),
-    ] {
-        attributes
-            .other
-            .insert(Text::from(k), AttributeValue::Text(Text::from(v)));
-    }
+    attributes
+        .other
+        .insert(Text::from("emissiveUnits"), text("W.m^-2.sr^-1"));
     let layer = Layer::new(
         (width as usize, height as usize),
         attributes,
         Encoding::default(),
         AnyChannels::sort(list),
     );
+    let mut image = Image::from_layer(layer);
+    image
+        .attributes
+        .other
+        .insert(Text::from("spectralLayoutVersion"), text("1.0"));
     let mut bytes = std::io::Cursor::new(Vec::new());
-    Image::from_layer(layer)
+    image
         .write()
         .to_buffered(&mut bytes)
         .map_err(|e| image_error(e.to_string()))?;
