@@ -33,6 +33,11 @@ pub struct RenderArgs {
     /// EXR output (overrides the scene's `film.exr`).
     #[arg(long)]
     pub exr: Option<PathBuf>,
+    /// Also write N spectral bands of equal width over 360–830 nm (1..=256) as EXR channels
+    /// named as pbrt-v4's SpectralFilm names them (`S0.374,688nm`), each the mean spectral
+    /// radiance in its band (overrides the scene's `film.spectral_bands`).
+    #[arg(long, value_name = "N")]
+    pub spectral: Option<usize>,
     /// PNG output (overrides the scene's `film.png`).
     #[arg(long)]
     pub png: Option<PathBuf>,
@@ -194,7 +199,20 @@ fn write_images(
 ) -> anyhow::Result<()> {
     let rgb = film.rgb();
     if let Some(p) = exr {
-        render::output::write_exr(p, film.width(), film.height(), &rgb)?;
+        match film.band_layout() {
+            None => render::output::write_exr(p, film.width(), film.height(), &rgb)?,
+            Some(layout) => {
+                let bands: Vec<f32> = film.band_means().iter().map(|&v| v as f32).collect();
+                render::output::write_exr_spectral(
+                    p,
+                    film.width(),
+                    film.height(),
+                    &rgb,
+                    &layout,
+                    &bands,
+                )?
+            }
+        }
         if !quiet {
             eprintln!("wrote {}", p.display());
         }
@@ -312,11 +330,22 @@ fn resume(
 pub fn render(args: RenderArgs) -> anyhow::Result<()> {
     let scene_path = args.scene.clone().unwrap_or_else(default_scene);
     let mut scene: Scene = render::load_scene(&scene_path)?;
-    if !args.quiet {
-        eprintln!("{}", scene.prepared);
-    }
     if let Some(seed) = args.seed {
         scene.settings.seed = seed;
+    }
+    if let Some(n) = args.spectral {
+        if n == 0 || n > render::film::MAX_BANDS {
+            bail!(
+                "--spectral {n}: expected 1..={} bands",
+                render::film::MAX_BANDS
+            );
+        }
+        scene
+            .set_spectral_bands(n)
+            .map_err(|m| anyhow::anyhow!("--spectral {n}: {m}"))?;
+    }
+    if !args.quiet {
+        eprintln!("{}", scene.prepared);
     }
     let spp = args.spp.unwrap_or(scene.settings.spp);
     if spp == 0 || spp > render::scene::MAX_SPP {
@@ -342,8 +371,12 @@ pub fn render(args: RenderArgs) -> anyhow::Result<()> {
     let time_limit = args.time_limit.as_deref().map(parse_duration).transpose()?;
     let checkpoint_every = parse_checkpoint_every(&args.checkpoint_every)?;
     let threads = crate::flags::thread_count(args.threads, args.quiet)?;
-    render::memory::check_fits(scene.camera.width, scene.camera.height)
-        .map_err(|m| anyhow::anyhow!("{}: {m}", scene_path.display()))?;
+    render::memory::check_fits_with_bands(
+        scene.camera.width,
+        scene.camera.height,
+        scene.settings.spectral_bands,
+    )
+    .map_err(|m| anyhow::anyhow!("{}: {m}", scene_path.display()))?;
     let mut film = scene.film().map_err(anyhow::Error::msg)?;
     let todo = if args.resume {
         resume(&mut film, film_path, out.target.clone(), args.quiet)?
@@ -459,6 +492,16 @@ pub fn merge(args: MergeArgs) -> anyhow::Result<()> {
     let mut film = Film::load(first)?;
     for p in inputs {
         let f = Film::load(p)?;
+        if f.bands() != film.bands() {
+            bail!(
+                "{}: cannot merge: it holds {} spectral bands and {} holds {}; render the shards \
+                 with the same `--spectral`",
+                p.display(),
+                f.bands(),
+                first.display(),
+                film.bands()
+            );
+        }
         film.merge(&f)
             .map_err(|m| anyhow::anyhow!("{}: cannot merge: {m}", p.display()))?;
     }

@@ -6,8 +6,8 @@
 //! pass in flight, costing at most one pass (sized to about two seconds).
 
 use crate::error::RenderError;
-use crate::film::{Dropped, Film, TileSums};
-use crate::integrator::sample_pixel_checked;
+use crate::film::{BandLayout, Dropped, Film, TileSums};
+use crate::integrator::{sample_pixel_bands, sample_pixel_checked};
 use crate::scene::Scene;
 pub use rayon::ThreadPool;
 use rayon::prelude::*;
@@ -141,6 +141,11 @@ fn render_tile(
     range: &Range<u64>,
     stop: &AtomicBool,
 ) -> Option<TileSums> {
+    // Decided once per tile: a render without bands runs the loop below
+    // with no per-sample work for them.
+    if let Ok(layout) = BandLayout::new(scene.settings.spectral_bands) {
+        return render_tile_bands(scene, tile, range, stop, &layout);
+    }
     let mut sums = TileSums::new(tile.x0, tile.y0, tile.x1, tile.y1);
     for y in tile.y0..tile.y1 {
         if stop.load(Ordering::Relaxed) {
@@ -151,6 +156,28 @@ fn render_tile(
                 .clone()
                 .map(|s| (s, sample_pixel_checked(scene, x, y, s)));
             sums.add_pixel(x, y, samples);
+        }
+    }
+    Some(sums)
+}
+
+/// [`render_tile`] for a film with spectral bands.
+fn render_tile_bands(
+    scene: &Scene,
+    tile: Tile,
+    range: &Range<u64>,
+    stop: &AtomicBool,
+    layout: &BandLayout,
+) -> Option<TileSums> {
+    let mut sums = TileSums::with_bands(tile.x0, tile.y0, tile.x1, tile.y1, layout.len());
+    for y in tile.y0..tile.y1 {
+        if stop.load(Ordering::Relaxed) {
+            return None;
+        }
+        for x in tile.x0..tile.x1 {
+            sums.add_pixel_bands(x, y, range.clone(), |s, bands| {
+                sample_pixel_bands(scene, x, y, s, layout, bands)
+            });
         }
     }
     Some(sums)

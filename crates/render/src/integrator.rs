@@ -22,7 +22,9 @@
 //! symmetric in which wavelength was the hero, which makes hero sampling
 //! unbiased.
 
-use crate::film::{BadSample, CameraSample, SampleRadiance, sample_xyz};
+use crate::film::{
+    BadSample, BandLayout, CameraSample, SampleRadiance, sample_xyz, sample_xyz_bands,
+};
 use crate::geometry::Ray;
 use crate::light::{Emission, LightSample, Lights};
 use crate::sampler::{Reserved2d, Sampler};
@@ -294,6 +296,25 @@ pub fn sample_pixel_checked(
     sample: u64,
 ) -> Result<[f64; 3], BadSample> {
     sample_xyz(traced(scene, x, y, sample), scene.signed_radiance)
+}
+
+/// [`sample_pixel_checked`] with the sample's spectral band values written
+/// to `bands` ([`sample_xyz_bands`]).
+#[inline]
+pub fn sample_pixel_bands(
+    scene: &Scene,
+    x: u32,
+    y: u32,
+    sample: u64,
+    layout: &BandLayout,
+    bands: &mut [f64],
+) -> Result<[f64; 3], BadSample> {
+    sample_xyz_bands(
+        traced(scene, x, y, sample),
+        scene.signed_radiance,
+        layout,
+        bands,
+    )
 }
 
 /// A path vertex on a reflecting surface, seen from the ray that reached it.

@@ -8,9 +8,24 @@
 /// buffer (6). The film is written to disk streamed, without a second copy.
 pub const PEAK_BYTES_PER_PIXEL: u64 = 48 + 12 + 12 + 6;
 
+/// Bytes per spectral band and pixel at the peak of a render with bands:
+/// the film's fixed-point sum (16), its mean in f64 (8), the f32 values
+/// (4), the EXR channel (4) and the encoded EXR (4).
+pub const PEAK_BYTES_PER_BAND: u64 = 16 + 8 + 4 + 4 + 4;
+
 /// Bytes a `width × height` render holds at its peak.
 pub fn needed_bytes(width: u32, height: u32) -> u64 {
     width as u64 * height as u64 * PEAK_BYTES_PER_PIXEL
+}
+
+/// Bytes a `width × height` render with `bands` spectral bands holds at its peak.
+pub fn needed_bytes_with_bands(width: u32, height: u32, bands: usize) -> u64 {
+    let pixels = width as u64 * height as u64;
+    needed_bytes(width, height).saturating_add(
+        pixels
+            .saturating_mul(bands as u64)
+            .saturating_mul(PEAK_BYTES_PER_BAND),
+    )
 }
 
 /// Memory this process may still take: the smaller of the system's available
@@ -56,16 +71,22 @@ fn address_space_limit(text: &str) -> Option<u64> {
 /// Refuses a `width × height` render that needs more memory than this
 /// process can get, naming both numbers and the fix.
 pub fn check_fits(width: u32, height: u32) -> Result<(), String> {
-    let need = needed_bytes(width, height);
+    check_fits_with_bands(width, height, 0)
+}
+
+/// [`check_fits`] for a render with `bands` spectral bands per pixel.
+pub fn check_fits_with_bands(width: u32, height: u32, bands: usize) -> Result<(), String> {
+    let need = needed_bytes_with_bands(width, height, bands);
+    let per_pixel = PEAK_BYTES_PER_PIXEL + bands as u64 * PEAK_BYTES_PER_BAND;
     match available_bytes() {
         Some(have) if need > have => Err(format!(
             "a {width}×{height} render needs about {} of memory at its peak ({} bytes per \
              pixel: film sums and output images), and this process can get {}: lower the \
-             resolution (at most about {} pixels fit here)",
+             resolution or the spectral bands (at most about {} pixels fit here)",
             gib(need),
-            PEAK_BYTES_PER_PIXEL,
+            per_pixel,
             gib(have),
-            have / PEAK_BYTES_PER_PIXEL
+            have / per_pixel
         )),
         _ => Ok(()),
     }
@@ -92,5 +113,11 @@ mod tests {
         assert_eq!(needed_bytes(32768, 1024), (1 << 25) * PEAK_BYTES_PER_PIXEL);
         // A one-pixel render always fits.
         assert!(check_fits(1, 1).is_ok());
+        assert!(check_fits_with_bands(1, 1, 256).is_ok());
+        assert_eq!(needed_bytes_with_bands(40, 30, 0), needed_bytes(40, 30));
+        assert_eq!(
+            needed_bytes_with_bands(40, 30, 16) - needed_bytes(40, 30),
+            1200 * 16 * PEAK_BYTES_PER_BAND
+        );
     }
 }

@@ -4,6 +4,7 @@
 
 use crate::color::to_u8;
 use crate::error::RenderError;
+use crate::film::BandLayout;
 use std::path::Path;
 
 /// Writes `bytes` to `path` atomically (temporary file, sync, rename),
@@ -35,6 +36,72 @@ pub fn write_exr(
             path: path.to_path_buf(),
             message: e.to_string(),
         })?;
+    write_atomic(path, bytes.get_ref())
+}
+
+/// Writes a linear-sRGB float EXR with spectral bands: channels R, G, B
+/// (f32, `rgb`) and one f32 channel per band of `layout` named as pbrt-v4's
+/// `SpectralFilm` names them (`S0.374,688nm`, [`BandLayout::channel_name`]),
+/// `bands` holding the pixels' band values band by band within a pixel,
+/// pixels row-major. The header carries pbrt's `spectralLayoutVersion` "1.0"
+/// and `emissiveUnits` "W.m^-2.sr^-1" (the OpenEXR spectral layout); the
+/// bands are in the unit of the scene's radiance per nm.
+pub fn write_exr_spectral(
+    path: &Path,
+    width: u32,
+    height: u32,
+    rgb: &[[f32; 3]],
+    layout: &BandLayout,
+    bands: &[f32],
+) -> Result<(), RenderError> {
+    use exr::prelude::*;
+    let n = layout.len();
+    let image_error = |message: String| RenderError::Image {
+        path: path.to_path_buf(),
+        message,
+    };
+    if rgb.len() as u64 != width as u64 * height as u64 || bands.len() != rgb.len() * n {
+        return Err(image_error(format!(
+            "{} RGB and {} band values for {width}×{height} pixels × {n} bands",
+            rgb.len(),
+            bands.len()
+        )));
+    }
+    let mut list: SmallVec<[AnyChannel<FlatSamples>; 4]> = SmallVec::new();
+    for (c, name) in ["R", "G", "B"].into_iter().enumerate() {
+        let v = rgb.iter().map(|p| p[c]).collect();
+        list.push(AnyChannel::new(name, FlatSamples::F32(v)));
+    }
+    for b in 0..n {
+        let v = bands.iter().skip(b).step_by(n).copied().collect();
+        list.push(AnyChannel::new(
+            layout.channel_name(b).as_str(),
+            FlatSamples::F32(v),
+        ));
+    }
+    // One custom attribute per map: the writer emits a map in its (random)
+    // iteration order, and the file must not depend on the process.
+    let text = |v: &str| AttributeValue::Text(Text::from(v));
+    let mut attributes = LayerAttributes::default();
+    attributes
+        .other
+        .insert(Text::from("emissiveUnits"), text("W.m^-2.sr^-1"));
+    let layer = Layer::new(
+        (width as usize, height as usize),
+        attributes,
+        Encoding::default(),
+        AnyChannels::sort(list),
+    );
+    let mut image = Image::from_layer(layer);
+    image
+        .attributes
+        .other
+        .insert(Text::from("spectralLayoutVersion"), text("1.0"));
+    let mut bytes = std::io::Cursor::new(Vec::new());
+    image
+        .write()
+        .to_buffered(&mut bytes)
+        .map_err(|e| image_error(e.to_string()))?;
     write_atomic(path, bytes.get_ref())
 }
 

@@ -79,6 +79,15 @@ pub struct WavelengthSampler {
 impl WavelengthSampler {
     /// Builds the distribution over `[lo, hi]` ⊂ [360, 830] nm.
     pub fn new(lo: f64, hi: f64) -> WavelengthSampler {
+        WavelengthSampler::with_uniform_share(lo, hi, 0.0)
+    }
+
+    /// The distribution with `share` ∈ [0, 1) of its probability spread
+    /// uniformly over `[lo, hi]`: a film with spectral bands needs
+    /// wavelengths in every band, including the far ends of the range where
+    /// the colour-matching functions (and so the density of [`Self::new`])
+    /// are ~10⁻⁴ of their peak.
+    pub fn with_uniform_share(lo: f64, hi: f64, share: f64) -> WavelengthSampler {
         let cie = Cie::get();
         let n = ((4.0 * (hi - lo)).ceil() as usize).clamp(64, 4096);
         // Bin indices and the WALK flag share a u16.
@@ -91,6 +100,12 @@ impl WavelengthSampler {
                 rgb.iter().map(|c| c.abs()).sum::<f64>() + 1e-4
             })
             .collect();
+        let weights = if share > 0.0 {
+            let floor = weights.iter().sum::<f64>() / n as f64 * share / (1.0 - share);
+            weights.iter().map(|w| w + floor).collect()
+        } else {
+            weights
+        };
         let dist = Distribution1D::new(&weights);
         let cdf = dist.cdf();
         let bins = (0..n)

@@ -375,3 +375,136 @@ fn resume_adopts_a_prefix_and_leaves_the_film_unchanged_otherwise() {
     let e = refused(gaps, 0..64);
     assert!(e.to_string().contains("not a prefix of 0..64"), "{e}");
 }
+
+/// `sample_film` with three spectral bands holding distinct sums (a band
+/// may be negative under a signed sky).
+fn banded_film() -> Film {
+    let mut p = sample_film().with_bands(3).unwrap().into_parts();
+    for (k, v) in p.band_sums.iter_mut().enumerate() {
+        *v = (k as i128 - 20) * 1_000_000_007;
+    }
+    Film::from_parts(p).unwrap()
+}
+
+#[test]
+fn banded_films_round_trip_and_every_damage_is_detected() {
+    let f = banded_film();
+    let bytes = f.to_bytes();
+    assert_eq!(&bytes[..12], b"LUSTREFILM3\n");
+    assert_eq!(
+        bytes.len(),
+        sample_film().to_bytes().len() + 4 + 15 * 3 * 16
+    );
+    assert_eq!(Film::from_bytes(&bytes).unwrap(), f);
+    for len in 0..bytes.len() {
+        assert!(Film::from_bytes(&bytes[..len]).is_err(), "cut to {len}");
+    }
+    for bit in 0..bytes.len() * 8 {
+        let mut b = bytes.clone();
+        b[bit / 8] ^= 1 << (bit % 8);
+        assert!(Film::from_bytes(&b).is_err(), "bit {bit}");
+    }
+}
+
+#[test]
+fn crafted_band_data_with_valid_checksums_is_refused() {
+    let good = banded_film().to_bytes();
+    let plain = sample_film().to_bytes();
+    // The band count sits where format 2's sums begin.
+    let off_ranges = OFF_INPUT_COUNT + 4 + (4 + 10 + 16) + (4 + 18 + 16);
+    let off_bands = off_ranges + 4 + 32;
+    assert_eq!(
+        u32::from_le_bytes(good[off_bands..off_bands + 4].try_into().unwrap()),
+        3
+    );
+    let mut cases: Vec<(&str, Vec<u8>, &str)> = Vec::new();
+    for (n, why) in [
+        (0, "0 spectral bands"),
+        (257, "257 spectral bands"),
+        (u32::MAX, "spectral bands"),
+        (2, "bytes of sums"),
+        (4, "bytes of sums"),
+    ] {
+        let mut b = good.clone();
+        b[off_bands..off_bands + 4].copy_from_slice(&n.to_le_bytes());
+        cases.push(("band count", reseal(b), why));
+    }
+    // Format 3's magic on format 2's body and the other way round.
+    let mut b = plain.clone();
+    b[..12].copy_from_slice(b"LUSTREFILM3\n");
+    cases.push(("v3 magic on v2", reseal(b), "corrupt film"));
+    let mut b = good.clone();
+    b[..12].copy_from_slice(b"LUSTREFILM2\n");
+    cases.push(("v2 magic on v3", reseal(b), "bytes of sums"));
+    // Band sums no 192 samples can produce, in the first and last pixel.
+    let band_at = |b: &mut Vec<u8>, px: usize, k: usize, v: i128| {
+        let o = off_bands + 4 + px * (48 + 48) + 48 + 16 * k;
+        b[o..o + 16].copy_from_slice(&v.to_le_bytes());
+    };
+    for (px, k, v, at) in [
+        (0, 0, i128::MAX, "pixel (0, 0) band 0"),
+        (14, 2, i128::MIN, "pixel (4, 2) band 2"),
+        (7, 1, -(i128::MAX / 2), "pixel (2, 1) band 1"),
+    ] {
+        let mut b = good.clone();
+        band_at(&mut b, px, k, v);
+        cases.push(("band sum", reseal(b), at));
+    }
+    for (what, bytes, why) in &cases {
+        match Film::from_bytes(bytes) {
+            Ok(_) => panic!("crafted {what}: accepted"),
+            Err(e) => assert!(e.contains(why), "{what}: {e}"),
+        }
+    }
+    // A 2²⁵-pixel film with 256 bands claims 128 GiB of band sums: refused
+    // by count before anything is allocated.
+    let mut b = good.clone();
+    put_dims(&mut b, 1 << 13, 1 << 12);
+    b[off_bands..off_bands + 4].copy_from_slice(&256u32.to_le_bytes());
+    let e = Film::from_bytes(&reseal(b)).unwrap_err();
+    assert!(e.contains("more band sums than a film holds"), "{e}");
+}
+
+fn put_dims(b: &mut [u8], w: u32, h: u32) {
+    b[OFF_WIDTH..OFF_WIDTH + 4].copy_from_slice(&w.to_le_bytes());
+    b[OFF_HEIGHT..OFF_HEIGHT + 4].copy_from_slice(&h.to_le_bytes());
+}
+
+#[test]
+fn band_parts_are_checked_and_band_counts_must_agree() {
+    let good = banded_film().into_parts();
+    let refuse = |edit: &dyn Fn(&mut render::film::FilmParts), what: &str| {
+        let mut p = good.clone();
+        edit(&mut p);
+        let e = Film::from_parts(p).unwrap_err();
+        assert!(e.contains(what), "{what}: {e}");
+    };
+    refuse(
+        &|p| p.band_sums.pop().map(drop).unwrap_or(()),
+        "band sums for",
+    );
+    refuse(&|p| p.bands = 4, "band sums for");
+    refuse(&|p| p.bands = 300, "300 spectral bands");
+    refuse(&|p| p.band_sums[44] = i128::MIN, "pixel (4, 2) band 2");
+    assert!(sample_film().with_bands(257).is_err());
+    let e = Film::new(1 << 13, 1 << 12, 0, 0, 0.0)
+        .unwrap()
+        .with_bands(256)
+        .unwrap_err();
+    assert!(e.contains("more than a film holds"), "{e}");
+
+    let banded = banded_film();
+    let mut plain = sample_film();
+    let e = plain.merge(&banded).unwrap_err();
+    assert!(e.contains("3 spectral bands differ from 0"), "{e}");
+    assert_eq!(
+        plain,
+        sample_film(),
+        "a refused merge leaves the film unchanged"
+    );
+    let mut fresh = Film::new(5, 3, banded.fingerprint(), 42, 0.0).unwrap();
+    assert!(matches!(
+        fresh.resume(banded, 0..512),
+        Err(ResumeError::Incompatible(m)) if m.contains("spectral bands")
+    ));
+}

@@ -220,13 +220,15 @@ fn scene() -> impl Strategy<Value = SceneDesc> {
         proptest::option::of(text()),
         proptest::option::of(text()),
         finite(),
+        proptest::option::of(0..=300u32),
     )
-        .prop_map(|(spp, seed, exr, png, exposure)| FilmDesc {
+        .prop_map(|(spp, seed, exr, png, exposure, bands)| FilmDesc {
             spp: spanless(spp % (i64::MAX as u64)),
             seed,
             exr: exr.map(Into::into),
             png: png.map(Into::into),
             exposure: spanless(exposure),
+            spectral_bands: bands.map(spanless),
         });
     (
         camera,

@@ -10,19 +10,26 @@
 //! width·height·3 i128 sums (X, Y, Z per pixel, row-major from the top); and
 //! last a CRC-32 of everything before it.
 //!
+//! Format 3 is written by films with spectral bands ([`super::bands`]) and
+//! differs from format 2 only in its magic `LUSTREFILM3\n`, a u32 band count
+//! N (1..=256) after the sample ranges, and N i128 band sums after each
+//! pixel's X, Y, Z (pixel by pixel: X, Y, Z, band 0 … band N − 1). A film
+//! without bands is written in format 2, byte for byte as before.
+//!
 //! Reading trusts nothing: the checksum is verified first, then every count
 //! and length is checked against the bytes that remain before anything is
 //! allocated, so a corrupt or crafted film is an error naming the file,
 //! never a panic or an attempt to allocate what the header claims.
 
 use super::sample::{Dropped, DroppedAt};
-use super::{Film, FilmParts, MAX_PIXELS, PIXEL_BYTES, check_resolution};
+use super::{Film, FilmParts, MAX_BAND_SUMS, MAX_BANDS, MAX_PIXELS, PIXEL_BYTES, check_resolution};
 use crate::error::RenderError;
 use crate::inputs::InputFile;
 use std::ops::Range;
 use std::path::Path;
 
 const MAGIC: &[u8; 12] = b"LUSTREFILM2\n";
+const MAGIC_V3: &[u8; 12] = b"LUSTREFILM3\n";
 const MAGIC_V1: &[u8; 12] = b"LUSTREFILM1\n";
 /// Most input files a film records.
 const MAX_INPUTS: usize = 1 << 16;
@@ -30,7 +37,7 @@ const MAX_INPUTS: usize = 1 << 16;
 const MAX_NAME: usize = 4096;
 /// Largest film file read: the sums of [`MAX_PIXELS`] pixels and room for the
 /// largest input and range records.
-pub const MAX_FILM_BYTES: u64 = MAX_PIXELS * PIXEL_BYTES as u64 + (1 << 30);
+pub const MAX_FILM_BYTES: u64 = MAX_PIXELS * PIXEL_BYTES as u64 + MAX_BAND_SUMS * 16 + (1 << 30);
 
 /// A writer that passes bytes on and keeps their CRC-32.
 struct Crc32Writer<'a> {
@@ -48,7 +55,8 @@ impl Crc32Writer<'_> {
 impl Film {
     /// Serialises the film.
     pub fn to_bytes(&self) -> Vec<u8> {
-        let mut out = Vec::with_capacity(128 + self.p.sums.len() * 48);
+        let mut out =
+            Vec::with_capacity(128 + self.p.sums.len() * 48 + self.p.band_sums.len() * 16);
         self.write_to(&mut out)
             .expect("writing to memory cannot fail");
         out
@@ -61,7 +69,8 @@ impl Film {
             inner: w,
             crc: crc32fast::Hasher::new(),
         };
-        out.put(MAGIC)?;
+        let bands = self.p.bands;
+        out.put(if bands > 0 { MAGIC_V3 } else { MAGIC })?;
         out.put(&self.p.width.to_le_bytes())?;
         out.put(&self.p.height.to_le_bytes())?;
         out.put(&self.p.fingerprint.to_le_bytes())?;
@@ -95,8 +104,14 @@ impl Film {
             out.put(&r.start.to_le_bytes())?;
             out.put(&r.end.to_le_bytes())?;
         }
-        for s in &self.p.sums {
+        if bands > 0 {
+            out.put(&(bands as u32).to_le_bytes())?;
+        }
+        for (i, s) in self.p.sums.iter().enumerate() {
             for v in s {
+                out.put(&v.to_le_bytes())?;
+            }
+            for v in &self.p.band_sums[i * bands..(i + 1) * bands] {
                 out.put(&v.to_le_bytes())?;
             }
         }
@@ -119,9 +134,10 @@ impl Film {
                     .into(),
             );
         }
-        if magic != MAGIC {
+        if magic != MAGIC && magic != MAGIC_V3 {
             return Err(NOT_A_FILM.into());
         }
+        let v3 = magic == MAGIC_V3;
         let Some(body_len) = bytes.len().checked_sub(4).filter(|&n| n >= 12) else {
             return Err("truncated film: no checksum".into());
         };
@@ -185,20 +201,42 @@ impl Film {
             let b = u64::from_le_bytes(r.array()?);
             ranges.push(a..b);
         }
-        let want = pixels as u128 * PIXEL_BYTES;
+        let bands = if v3 {
+            let n = u32::from_le_bytes(r.array()?) as usize;
+            if !(1..=MAX_BANDS).contains(&n) {
+                return Err(format!(
+                    "corrupt film: {n} spectral bands (a film of format 3 holds 1..={MAX_BANDS})"
+                ));
+            }
+            if pixels * n as u64 > MAX_BAND_SUMS {
+                return Err(format!(
+                    "corrupt film: {width}×{height} pixels × {n} bands is more band sums than \
+                     a film holds ({MAX_BAND_SUMS})"
+                ));
+            }
+            n
+        } else {
+            0
+        };
+        let want = pixels as u128 * (PIXEL_BYTES + 16 * bands as u128);
         if r.remaining() as u128 != want {
             return Err(format!(
-                "corrupt film: {} bytes of sums for {width}×{height} pixels (expected {want})",
+                "corrupt film: {} bytes of sums for {width}×{height} pixels with {bands} spectral \
+                 bands (expected {want})",
                 r.remaining()
             ));
         }
         let mut sums = Vec::with_capacity(pixels as usize);
+        let mut band_sums = Vec::with_capacity(pixels as usize * bands);
         for _ in 0..pixels {
             let mut px = [0i128; 3];
             for v in px.iter_mut() {
                 *v = i128::from_le_bytes(r.array()?);
             }
             sums.push(px);
+            for _ in 0..bands {
+                band_sums.push(i128::from_le_bytes(r.array()?));
+            }
         }
         Film::from_parts(FilmParts {
             width,
@@ -214,6 +252,8 @@ impl Film {
             },
             ranges,
             sums,
+            bands,
+            band_sums,
         })
         .map_err(|m| format!("corrupt film: {m}"))
     }

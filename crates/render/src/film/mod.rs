@@ -12,17 +12,19 @@
 //! A film knows nothing of scenes: it is made from plain values (resolution,
 //! the fingerprint of the inputs, seed, exposure, the input records).
 
+pub mod bands;
 pub mod file;
 pub mod sample;
 
 use crate::color::xyz_to_srgb;
 use crate::inputs::{InputFile, describe_differences};
 use crate::spectrum::Cie;
+pub use bands::{BandLayout, MAX_BAND_SUMS, MAX_BANDS};
 pub use file::MAX_FILM_BYTES;
 use sample::SCALE;
 pub use sample::{
     BadSample, CameraSample, Dropped, DroppedAt, MAX_SAMPLE_XYZ, SampleRadiance, TileSums,
-    sample_xyz, to_fixed,
+    sample_xyz, sample_xyz_bands, to_fixed,
 };
 use std::fmt;
 use std::ops::Range;
@@ -134,6 +136,44 @@ fn check_sums(sums: &[[i128; 3]], width: u32, spp: u64) -> Result<(), String> {
     }
 }
 
+/// Band sums a render can produce: as [`check_sums`]'s bound for X and Z
+/// (a band's value may be negative under a signed sky).
+fn check_band_sums(band_sums: &[i128], bands: usize, width: u32, spp: u64) -> Result<(), String> {
+    let bound = sample::MAX_SAMPLE_FIXED.saturating_mul(spp as i128);
+    match band_sums
+        .iter()
+        .position(|v| v.unsigned_abs() > bound.unsigned_abs())
+    {
+        None => Ok(()),
+        Some(k) => {
+            let i = (k / bands) as u64;
+            let (x, y) = (i % width as u64, i / width as u64);
+            Err(format!(
+                "pixel ({x}, {y}) band {} holds the sum {}, which {spp} samples cannot produce \
+                 (every band within {spp} × {MAX_SAMPLE_XYZ:e})",
+                k % bands,
+                band_sums[k]
+            ))
+        }
+    }
+}
+
+/// The number of band sums of a `width` × `height` film with `bands` bands,
+/// or why it cannot hold them.
+fn check_bands(width: u32, height: u32, bands: usize) -> Result<u64, String> {
+    if bands > MAX_BANDS {
+        return Err(format!("{bands} spectral bands (expected 0..={MAX_BANDS})"));
+    }
+    let n = width as u64 * height as u64 * bands as u64;
+    if n > MAX_BAND_SUMS {
+        return Err(format!(
+            "{width}×{height} pixels × {bands} spectral bands is {n} band sums, more than a film \
+             holds ({MAX_BAND_SUMS}, 2 GiB): use fewer bands or render the image in crops"
+        ));
+    }
+    Ok(n)
+}
+
 /// Bytes per pixel: three i128 sums.
 const PIXEL_BYTES: u128 = 48;
 
@@ -173,6 +213,11 @@ pub struct FilmParts {
     pub ranges: Vec<Range<u64>>,
     /// Fixed-point X, Y, Z sums per pixel (see [`to_fixed`]), row-major from the top.
     pub sums: Vec<[i128; 3]>,
+    /// Spectral bands per pixel over 360–830 nm (0: none; see [`bands`]).
+    pub bands: usize,
+    /// Fixed-point band sums, `bands` per pixel, pixels row-major from the
+    /// top (empty without bands).
+    pub band_sums: Vec<i128>,
 }
 
 /// Why a checkpoint cannot be resumed.
@@ -240,8 +285,31 @@ impl Film {
                 dropped: Dropped::default(),
                 ranges: Vec::new(),
                 sums,
+                bands: 0,
+                band_sums: Vec::new(),
             },
         })
+    }
+
+    /// The film with `bands` spectral bands (0: none) of zero sums; the
+    /// band count must be within [`MAX_BANDS`] and the sums within
+    /// [`MAX_BAND_SUMS`], and memory the sums cannot get is an error.
+    pub fn with_bands(mut self, bands: usize) -> Result<Film, String> {
+        let n = check_bands(self.p.width, self.p.height, bands)? as usize;
+        let mut sums = Vec::new();
+        sums.try_reserve_exact(n).map_err(|_| {
+            format!(
+                "cannot allocate the film's {} MiB of band sums for {}×{} pixels × {bands} \
+                 bands: use fewer bands",
+                (n as u128 * 16) >> 20,
+                self.p.width,
+                self.p.height
+            )
+        })?;
+        sums.resize(n, 0);
+        self.p.bands = bands;
+        self.p.band_sums = sums;
+        Ok(self)
     }
 
     /// The film with `inputs` recorded as the files its scene was built from.
@@ -270,6 +338,17 @@ impl Film {
         let spp: u64 = p.ranges.iter().map(|r| r.end - r.start).sum();
         check_dropped(&p.dropped, p.width, p.height, spp)?;
         check_sums(&p.sums, p.width, spp)?;
+        let n_bands = check_bands(p.width, p.height, p.bands)?;
+        if p.band_sums.len() as u64 != n_bands {
+            return Err(format!(
+                "{} band sums for {}×{} pixels × {} bands",
+                p.band_sums.len(),
+                p.width,
+                p.height,
+                p.bands
+            ));
+        }
+        check_band_sums(&p.band_sums, p.bands, p.width, spp)?;
         Ok(Film { p })
     }
 
@@ -279,10 +358,15 @@ impl Film {
     /// image, a range that overlaps the film's) the film is unchanged.
     pub fn add_pass(&mut self, pass: Range<u64>, tiles: &[TileSums]) -> Result<Dropped, String> {
         let (w, h) = (self.p.width, self.p.height);
-        if let Some(t) = tiles.iter().find(|t| !t.fits(w, h)) {
+        let bands = self.p.bands;
+        if let Some(t) = tiles.iter().find(|t| !t.fits(w, h) || t.bands() != bands) {
             return Err(format!(
-                "tile {}..{} × {}..{} does not fit the {w}×{h} film",
-                t.x0, t.x1, t.y0, t.y1
+                "tile {}..{} × {}..{} with {} bands does not fit the {w}×{h} film with {bands}",
+                t.x0,
+                t.x1,
+                t.y0,
+                t.y1,
+                t.bands()
             ));
         }
         self.add_range(pass)?;
@@ -295,6 +379,13 @@ impl Film {
                     let px = &mut self.p.sums[(y * w + x) as usize];
                     for (p, v) in px.iter_mut().zip(&t.sums()[k]) {
                         *p = p.saturating_add(*v);
+                    }
+                    if bands > 0 {
+                        let at = (y * w + x) as usize * bands;
+                        let film = &mut self.p.band_sums[at..at + bands];
+                        for (p, v) in film.iter_mut().zip(&t.band_sums()[k * bands..]) {
+                            *p = p.saturating_add(*v);
+                        }
                     }
                     k += 1;
                 }
@@ -363,6 +454,34 @@ impl Film {
         &self.p.sums
     }
 
+    /// Spectral bands per pixel (0: none).
+    pub fn bands(&self) -> usize {
+        self.p.bands
+    }
+
+    /// How the bands divide 360–830 nm (`None` without bands).
+    pub fn band_layout(&self) -> Option<BandLayout> {
+        BandLayout::new(self.p.bands).ok()
+    }
+
+    /// Fixed-point band sums, [`Film::bands`] per pixel, row-major from the top.
+    pub fn band_sums(&self) -> &[i128] {
+        &self.p.band_sums
+    }
+
+    /// The mean spectral radiance of every band of every pixel, band by
+    /// band within a pixel, pixels row-major (see [`bands`] for the unit):
+    /// the band sums / (2⁴⁰ · spp). No exposure is applied: the bands are
+    /// for comparing with measurements.
+    pub fn band_means(&self) -> Vec<f64> {
+        let n = self.spp();
+        if n == 0 {
+            return vec![0.0; self.p.band_sums.len()];
+        }
+        let k = 1.0 / (SCALE * n as f64);
+        self.p.band_sums.iter().map(|&s| s as f64 * k).collect()
+    }
+
     /// Total samples per pixel accumulated.
     pub fn spp(&self) -> u64 {
         self.p
@@ -406,6 +525,15 @@ impl Film {
                 other.p.width, other.p.height, self.p.width, self.p.height
             ));
         }
+        // Before the fingerprint: a film with bands samples λ at every
+        // bounce, so its samples are another estimator's, and the band
+        // count is the clearer reason.
+        if self.p.bands != other.p.bands {
+            return Err(format!(
+                "{} spectral bands differ from {} (`--spectral` / `spectral_bands` must agree)",
+                other.p.bands, self.p.bands
+            ));
+        }
         if self.p.fingerprint != other.p.fingerprint {
             let diff = describe_differences(&other.p.inputs, &self.p.inputs);
             return Err(if diff.is_empty() {
@@ -436,7 +564,10 @@ impl Film {
         }
         let overflow = (self.p.sums.iter().zip(&other.p.sums))
             .position(|(a, b)| (0..3).any(|k| a[k].checked_add(b[k]).is_none()));
-        if let Some(i) = overflow {
+        let band_overflow = (self.p.band_sums.iter().zip(&other.p.band_sums))
+            .position(|(a, b)| a.checked_add(*b).is_none())
+            .map(|k| k / self.p.bands.max(1));
+        if let Some(i) = overflow.or(band_overflow) {
             let w = self.p.width as usize;
             return Err(format!(
                 "the sums of pixel ({}, {}) overflow when added",
@@ -448,6 +579,9 @@ impl Film {
             for k in 0..3 {
                 a[k] += b[k];
             }
+        }
+        for (a, b) in self.p.band_sums.iter_mut().zip(&other.p.band_sums) {
+            *a += b;
         }
         self.p.ranges = ranges;
         self.p.dropped.add(&other.p.dropped);
@@ -479,6 +613,7 @@ impl Film {
         let todo = done_end.min(target.end)..target.end;
         self.p.ranges = checkpoint.p.ranges;
         self.p.sums = checkpoint.p.sums;
+        self.p.band_sums = checkpoint.p.band_sums;
         self.p.dropped = checkpoint.p.dropped;
         Ok(todo)
     }

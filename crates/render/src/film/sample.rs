@@ -9,6 +9,7 @@
 //! is 10⁻⁹ of a unit radiance, far below Monte Carlo noise, and overflow
 //! needs ~10²⁶ in one pixel.
 
+use super::bands::{self, BandLayout};
 use crate::spectrum::Cie;
 use crate::wavelength::{MAX_WAVELENGTHS, SampledWavelengths};
 use std::fmt;
@@ -107,6 +108,35 @@ pub fn sample_xyz(radiance: SampleRadiance, signed: bool) -> Result<[f64; 3], Ba
     }
 }
 
+/// [`sample_xyz`], and the sample's band values in `bands` (cleared first;
+/// one per band of `layout`, see [`super::bands`]). Only renders with bands
+/// call it, so a render without pays nothing for them. A sample whose band
+/// value leaves the film's range is dropped like one whose XYZ does.
+/// Contributions integrated over λ exactly carry no spectrum, so a scene
+/// with bands samples every wavelength ([`crate::Scene::set_spectral_bands`]
+/// leaves no exact tables): an `Xyz` sample there adds its XYZ and no band.
+#[inline]
+pub fn sample_xyz_bands(
+    radiance: SampleRadiance,
+    signed: bool,
+    layout: &BandLayout,
+    bands: &mut [f64],
+) -> Result<[f64; 3], BadSample> {
+    bands.fill(0.0);
+    let cs = match radiance {
+        SampleRadiance::Spectral(cs) => cs,
+        other => return sample_xyz(other, signed),
+    };
+    let xyz = sample_xyz(SampleRadiance::Spectral(cs), signed)?;
+    let n = cs.wavelengths.len();
+    bands::add_sample(layout, cs.wavelengths.lambdas(), &cs.radiance[..n], bands);
+    if bands.iter().all(|v| in_film_range(*v)) {
+        Ok(xyz)
+    } else {
+        Err(BadSample::NonFinite)
+    }
+}
+
 /// Whether a sample's XYZ component can be added to the film: finite and
 /// within [`MAX_SAMPLE_XYZ`] (false for NaN).
 #[inline(always)]
@@ -128,6 +158,9 @@ pub struct TileSums {
     /// One past the last row.
     pub y1: u32,
     sums: Vec<[i128; 3]>,
+    /// Band sums, `bands` per pixel after each other (empty without bands).
+    band_sums: Vec<i128>,
+    bands: usize,
     dropped: Dropped,
 }
 
@@ -141,8 +174,60 @@ impl TileSums {
             x1,
             y1,
             sums: Vec::with_capacity(pixels),
+            band_sums: Vec::new(),
+            bands: 0,
             dropped: Dropped::default(),
         }
+    }
+
+    /// Empty sums of columns `x0..x1` and rows `y0..y1` with `bands`
+    /// spectral bands per pixel (filled by [`TileSums::add_pixel_bands`]).
+    pub fn with_bands(x0: u32, y0: u32, x1: u32, y1: u32, bands: usize) -> TileSums {
+        let mut t = TileSums::new(x0, y0, x1, y1);
+        t.bands = bands;
+        t.band_sums = Vec::with_capacity(t.sums.capacity() * bands);
+        t
+    }
+
+    /// Adds pixel (`x`, `y`), the tile's next in row-major order, from the
+    /// samples `samples`: `sample(s, bands)` is what [`sample_xyz_bands`]
+    /// makes of sample `s`, its band values written to `bands`.
+    pub fn add_pixel_bands(
+        &mut self,
+        x: u32,
+        y: u32,
+        samples: std::ops::Range<u64>,
+        mut sample: impl FnMut(u64, &mut [f64]) -> Result<[f64; 3], BadSample>,
+    ) {
+        let mut acc = [0i128; 3];
+        let start = self.band_sums.len();
+        self.band_sums.resize(start + self.bands, 0);
+        let mut values = vec![0.0; self.bands];
+        for s in samples {
+            match sample(s, &mut values) {
+                Ok(xyz) => {
+                    let f = to_fixed(xyz);
+                    for k in 0..3 {
+                        acc[k] = acc[k].saturating_add(f[k]);
+                    }
+                    for (a, v) in self.band_sums[start..].iter_mut().zip(&values) {
+                        *a = a.saturating_add(fixed_one(*v));
+                    }
+                }
+                Err(why) => self.dropped.record(why, x, y, s),
+            }
+        }
+        self.sums.push(acc);
+    }
+
+    /// Bands per pixel (0 without bands).
+    pub fn bands(&self) -> usize {
+        self.bands
+    }
+
+    /// The pixels' band sums so far, row-major, [`TileSums::bands`] per pixel.
+    pub fn band_sums(&self) -> &[i128] {
+        &self.band_sums
     }
 
     /// Adds pixel (`x`, `y`), the tile's next in row-major order, from its
@@ -196,6 +281,7 @@ impl TileSums {
             && self.x1 <= width
             && self.y1 <= height
             && self.sums.len() as u64 == (self.x1 - self.x0) as u64 * (self.y1 - self.y0) as u64
+            && self.band_sums.len() == self.sums.len() * self.bands
     }
 }
 
@@ -214,7 +300,7 @@ pub fn to_fixed(xyz: [f64; 3]) -> [i128; 3] {
 /// |frac| ≥ ½ → step away from zero reproduces `round`'s ties-away rule
 /// exactly. Larger values take the general i128 path.
 #[inline]
-fn fixed_one(v: f64) -> i128 {
+pub(super) fn fixed_one(v: f64) -> i128 {
     const I64_RANGE: f64 = 9_223_372_036_854_775_808.0; // 2⁶³
     let w = v * SCALE;
     if w.abs() < I64_RANGE {

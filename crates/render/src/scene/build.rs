@@ -50,6 +50,9 @@ pub(super) fn build(path: &Path, text: &str, desc: &SceneDesc) -> Result<Scene, 
         ));
     };
     let wavelengths = WavelengthSampler::new(lo, hi);
+    // Applied once the scene stands (`Scene::set_spectral_bands`).
+    let mut settings = settings;
+    let bands = std::mem::take(&mut settings.spectral_bands);
     let n_tris: usize = shapes.meshes.iter().map(|m| m.triangles.len()).sum();
     let shapes = Shapes {
         planars: shapes.planars,
@@ -57,7 +60,6 @@ pub(super) fn build(path: &Path, text: &str, desc: &SceneDesc) -> Result<Scene, 
         mesh: (!shapes.meshes.is_empty()).then(|| MeshAccel::build(shapes.meshes)),
     };
     let (materials, inputs) = (b.materials, b.inputs.into_files());
-    let mut settings = settings;
     let conductors = materials.iter().all(|m| {
         matches!(
             m.model,
@@ -138,7 +140,7 @@ pub(super) fn build(path: &Path, text: &str, desc: &SceneDesc) -> Result<Scene, 
         start.elapsed().as_secs_f64() * 1e3
     );
 
-    Ok(Scene {
+    let mut scene = Scene {
         path: path.to_path_buf(),
         camera,
         settings,
@@ -151,7 +153,13 @@ pub(super) fn build(path: &Path, text: &str, desc: &SceneDesc) -> Result<Scene, 
         inputs,
         prepared,
         signed_radiance,
-    })
+    };
+    if bands > 0 {
+        scene
+            .set_spectral_bands(bands)
+            .map_err(|m| SceneError::new(path, format!("[film]: {m}")))?;
+    }
+    Ok(scene)
 }
 
 /// Shapes as the shape and light stages collect them (meshes not yet in a BVH).
@@ -322,8 +330,24 @@ impl<'a> Builder<'a> {
             None if integrator.sampler == SamplerKind::Independent => Some(1.0),
             None => None,
         };
+        let spectral_bands = match &film.spectral_bands {
+            Some(n) if *n.get_ref() as usize > crate::film::MAX_BANDS => {
+                return Err(self.at(
+                    n.span(),
+                    format!(
+                        "[film]: spectral_bands = {} is invalid: expected 1..={} (0 or unset: \
+                         no bands)",
+                        n.get_ref(),
+                        crate::film::MAX_BANDS
+                    ),
+                ));
+            }
+            Some(n) => *n.get_ref() as usize,
+            None => 0,
+        };
         Ok(Settings {
             spp: *film.spp.get_ref(),
+            spectral_bands,
             seed: film.seed,
             max_depth,
             rr_depth: integrator.rr_depth,
@@ -631,11 +655,14 @@ impl<'a> Builder<'a> {
 }
 
 /// The scene text without the keys that do not change sample values
-/// (`[film]` spp, exr, png, exposure), as hashed into the fingerprint.
+/// (`[film]` spp, exr, png, exposure, spectral_bands), as hashed into the fingerprint.
 fn normalised_text(text: &str) -> String {
     let mut table: toml::Table = toml::from_str(text).unwrap_or_default();
     if let Some(toml::Value::Table(film)) = table.get_mut("film") {
-        for k in ["spp", "exr", "png", "exposure"] {
+        // The band count is checked on its own (films refuse to merge or
+        // resume across band counts, naming both), so that `--spectral N`
+        // and `spectral_bands = N` give the same fingerprint.
+        for k in ["spp", "exr", "png", "exposure", "spectral_bands"] {
             film.remove(k);
         }
     }

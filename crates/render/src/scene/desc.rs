@@ -160,6 +160,10 @@ pub struct FilmDesc {
     /// [`MAX_EXPOSURE_STOPS`](super::MAX_EXPOSURE_STOPS) either way).
     #[serde(default = "zero_stops", skip_serializing_if = "is_zero_stops")]
     pub exposure: Spanned<f64>,
+    /// Spectral bands of equal width over 360–830 nm written beside RGB
+    /// (1..=[`MAX_BANDS`](crate::film::MAX_BANDS); unset or 0: none).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub spectral_bands: Option<Spanned<u32>>,
 }
 
 /// How wavelengths are sampled per camera path.

@@ -126,6 +126,7 @@ fn film(spp: u64, outputs: &Option<(PathBuf, PathBuf)>, exposure: f64) -> FilmDe
         exr: outputs.as_ref().map(|o| o.0.clone()),
         png: outputs.as_ref().map(|o| o.1.clone()),
         exposure: spanless(exposure),
+        spectral_bands: None,
     }
 }
 
