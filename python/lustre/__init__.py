@@ -393,13 +393,26 @@ def render(
     seed: int | None = None,
     threads: int | None = None,
     base_dir: str | os.PathLike[str] = ".",
-) -> np.ndarray:
+    spectral: int | None = None,
+) -> Any:
     """Renders a scene as ``lustre render`` does: (H, W, 3) float32 linear sRGB.
 
     ``scene``: a scene file, or the same scene as a dict (the TOML's tables as nested
     dicts; its relative file names are read relative to ``base_dir``). ``spp`` defaults
     to the scene's; ``threads`` to every core. Nothing is written to disk.
+
+    ``spectral=N`` (as ``lustre render --spectral N``, 1..=256) returns
+    ``(rgb, bands, bounds_nm)``: ``bands`` (H, W, N) float64, the mean spectral radiance
+    in each of N equal bands over 360–830 nm (no exposure applied), ``bounds_nm`` their
+    N + 1 edges. A render with bands samples its wavelengths at every bounce, so its RGB
+    differs from a render without (by noise only).
     """
     if isinstance(scene, Mapping):
-        return _lustre.render(None, _toml(scene), os.fspath(base_dir), spp, seed, threads)
-    return _lustre.render(os.fspath(scene), None, os.fspath(base_dir), spp, seed, threads)
+        path, text = None, _toml(scene)
+    else:
+        path, text = os.fspath(scene), None
+    rgb, bands = _lustre.render(path, text, os.fspath(base_dir), spp, seed, threads, spectral)
+    if spectral is None:
+        return rgb
+    cube, bounds = bands
+    return rgb, cube, bounds

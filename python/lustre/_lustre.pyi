@@ -103,4 +103,8 @@ def render(
     spp: int | None = None,
     seed: int | None = None,
     threads: int | None = None,
-) -> npt.NDArray[np.float32]: ...
+    spectral: int | None = None,
+) -> tuple[
+    npt.NDArray[np.float32],
+    tuple[npt.NDArray[np.float64], npt.NDArray[np.float64]] | None,
+]: ...

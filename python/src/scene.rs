@@ -3,16 +3,23 @@
 use std::path::{Path, PathBuf};
 
 use numpy::ndarray::Array3;
-use numpy::{IntoPyArray, PyArray3};
+use numpy::{IntoPyArray, PyArray1, PyArray3};
 use pyo3::prelude::*;
 
 use crate::{os_error, value_error};
 
 /// Renders the scene at `path`, or the scene `toml` (whose relative file names are read
 /// relative to `base_dir`), with `spp` samples per pixel (default: the scene's) into an
-/// `(height, width, 3)` float32 linear sRGB image, as `lustre render` renders it.
+/// `(height, width, 3)` float32 linear sRGB image, as `lustre render` renders it; with
+/// `spectral = N` (as `--spectral N`) also the `(height, width, N)` mean spectral radiance
+/// of N equal bands over 360–830 nm and the bands' bounds `(N + 1,)` in nm.
+// One parameter per keyword argument of `lustre.render`.
+#[allow(clippy::too_many_arguments)]
 #[pyfunction]
-#[pyo3(name = "render", signature = (path, toml, base_dir, spp=None, seed=None, threads=None))]
+#[pyo3(
+    name = "render",
+    signature = (path, toml, base_dir, spp=None, seed=None, threads=None, spectral=None)
+)]
 pub fn render_scene<'py>(
     py: Python<'py>,
     path: Option<PathBuf>,
@@ -21,8 +28,9 @@ pub fn render_scene<'py>(
     spp: Option<u64>,
     seed: Option<u64>,
     threads: Option<usize>,
-) -> PyResult<Bound<'py, PyArray3<f32>>> {
-    let (w, h, rgb) = py.detach(|| -> PyResult<_> {
+    spectral: Option<usize>,
+) -> PyResult<Rendered<'py>> {
+    let (w, h, rgb, bands) = py.detach(|| -> PyResult<_> {
         let mut scene = match (&path, &toml) {
             (Some(p), None) => {
                 if !p.is_file() {
@@ -38,6 +46,11 @@ pub fn render_scene<'py>(
         let name = path.as_deref().unwrap_or(Path::new("<dict>")).display();
         if let Some(s) = seed {
             scene.settings.seed = s;
+        }
+        if let Some(n) = spectral {
+            scene
+                .set_spectral_bands(n)
+                .map_err(|m| value_error(format!("spectral = {n}: {m}")))?;
         }
         let spp = spp.unwrap_or(scene.settings.spp);
         if spp == 0 || spp > render::scene::MAX_SPP {
@@ -57,9 +70,30 @@ pub fn render_scene<'py>(
             ..render::RenderOptions::default()
         };
         render::render_range(&scene, &mut film, 0..spp, &opts).map_err(value_error)?;
-        Ok((film.width(), film.height(), film.rgb()))
+        let bands = film.band_layout().map(|layout| {
+            let bounds: Vec<f64> = (0..layout.len())
+                .map(|i| layout.bounds_nm(i).0)
+                .chain(std::iter::once(layout.bounds_nm(layout.len() - 1).1))
+                .collect();
+            (film.band_means(), layout.len(), bounds)
+        });
+        Ok((film.width(), film.height(), film.rgb(), bands))
     })?;
     let flat: Vec<f32> = rgb.into_iter().flatten().collect();
     let img = Array3::from_shape_vec((h as usize, w as usize, 3), flat).map_err(value_error)?;
-    Ok(img.into_pyarray(py))
+    let bands = match bands {
+        Some((means, n, bounds)) => {
+            let cube =
+                Array3::from_shape_vec((h as usize, w as usize, n), means).map_err(value_error)?;
+            Some((cube.into_pyarray(py), PyArray1::from_vec(py, bounds)))
+        }
+        None => None,
+    };
+    Ok((img.into_pyarray(py), bands))
 }
+
+/// The image, and with bands their radiance cube and bounds.
+type Rendered<'py> = (
+    Bound<'py, PyArray3<f32>>,
+    Option<(Bound<'py, PyArray3<f64>>, Bound<'py, PyArray1<f64>>)>,
+);
