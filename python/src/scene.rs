@@ -48,6 +48,12 @@ pub fn render_scene<'py>(
             scene.settings.seed = s;
         }
         if let Some(n) = spectral {
+            if n == 0 || n > render::film::MAX_BANDS {
+                return Err(value_error(format!(
+                    "spectral = {n}: expected 1..={} bands",
+                    render::film::MAX_BANDS
+                )));
+            }
             scene
                 .set_spectral_bands(n)
                 .map_err(|m| value_error(format!("spectral = {n}: {m}")))?;
