@@ -36,6 +36,21 @@ impl Sample {
     pub fn is_float(self) -> bool {
         matches!(self, Sample::F32 | Sample::F64)
     }
+
+    /// The type of a TIFF image's samples from its `SampleFormat` (tag 339: 1 unsigned,
+    /// 2 signed, 3 IEEE) and `BitsPerSample` (tag 258); `None` for what no reader takes.
+    pub fn from_tiff(format: u64, bits: u64) -> Option<Sample> {
+        Some(match (format, bits) {
+            (1, 8) => Sample::U8,
+            (1, 16) => Sample::U16,
+            (1, 32) => Sample::U32,
+            (2, 16) => Sample::I16,
+            (2, 32) => Sample::I32,
+            (3, 32) => Sample::F32,
+            (3, 64) => Sample::F64,
+            _ => return None,
+        })
+    }
 }
 
 /// Decode `count` samples from the start of `data`. Returns `None` if `data` is too short.

@@ -164,21 +164,12 @@ fn decode(
     }
     let bits = p.uint(258).unwrap_or(0);
     let format = p.uint(339).unwrap_or(1);
-    let kind = match (format, bits) {
-        (1, 8) => binary::Sample::U8,
-        (1, 16) => binary::Sample::U16,
-        (1, 32) => binary::Sample::U32,
-        (2, 16) => binary::Sample::I16,
-        (2, 32) => binary::Sample::I32,
-        (3, 32) => binary::Sample::F32,
-        (3, 64) => binary::Sample::F64,
-        (f, b) => {
-            return Err(ctx.err(
-                "BitsPerSample",
-                format!("{b}-bit samples of format {f}"),
-                CORRUPT,
-            ));
-        }
+    let Some(kind) = binary::Sample::from_tiff(u64::from(format), u64::from(bits)) else {
+        return Err(ctx.err(
+            "BitsPerSample",
+            format!("{bits}-bit samples of format {format}"),
+            CORRUPT,
+        ));
     };
     let (nx, ny) = (info.nx as u64, info.ny as u64);
     let offsets = p.uints(273).unwrap_or_default();
