@@ -276,6 +276,20 @@ fn writers() -> Vec<Writer> {
             },
         },
         Writer {
+            name: "brdf export -o",
+            target: "out.binary",
+            input: Some("mat.toml"),
+            args: |t| {
+                let line = ["brdf", "export", "mat.toml", "--model", "ggx"];
+                [
+                    s(&line),
+                    s(&["--check-samples", "4", "-q", "-o"]),
+                    vec![p(t)],
+                ]
+                .concat()
+            },
+        },
+        Writer {
             name: "scenes --out",
             target: "psd/s138_kc.csv",
             input: None,
