@@ -3,35 +3,11 @@
 //! or a run that finishes (a capped value says so) — never a panic, an abort
 //! on an allocation, or a run without end.
 
+mod common;
+
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
-
-const SCENE: &str = r#"[camera]
-look_from = [0.0, 1.0, 2.0]
-look_at = [0.0, 0.0, 0.0]
-fov_deg = 40.0
-resolution = [4, 3]
-
-[film]
-spp = 1
-
-[materials.m]
-model = "ggx"
-metal = "brass"
-alpha = 0.2
-
-[[shapes]]
-type = "rectangle"
-size = [1.0, 1.0]
-material = "m"
-transform = { rotate_deg = [-90.0, 0.0, 0.0] }
-
-[[lights]]
-type = "point"
-position = [0.0, 1.0, 0.0]
-intensity = 1.0
-"#;
 
 const VALUES: [&str; 8] = [
     "0",
@@ -233,7 +209,7 @@ fn fixture() -> PathBuf {
     let d = std::env::temp_dir().join(format!("lustre-flags-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&d);
     std::fs::create_dir_all(&d).unwrap();
-    std::fs::write(d.join("s.toml"), SCENE).unwrap();
+    std::fs::write(d.join("s.toml"), common::TINY_SCENE).unwrap();
     std::fs::copy(
         concat!(env!("CARGO_MANIFEST_DIR"), "/data/surfaces/matrix-3.txt"),
         d.join("scan.txt"),

@@ -7,35 +7,11 @@
 
 #![cfg(unix)]
 
+mod common;
+
 use std::os::unix::fs::FileTypeExt;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
-
-const SCENE: &str = r#"[camera]
-look_from = [0.0, 1.0, 2.0]
-look_at = [0.0, 0.0, 0.0]
-fov_deg = 40.0
-resolution = [4, 3]
-
-[film]
-spp = 1
-
-[materials.m]
-model = "ggx"
-metal = "brass"
-alpha = 0.2
-
-[[shapes]]
-type = "rectangle"
-size = [1.0, 1.0]
-material = "m"
-transform = { rotate_deg = [-90.0, 0.0, 0.0] }
-
-[[lights]]
-type = "point"
-position = [0.0, 1.0, 0.0]
-intensity = 1.0
-"#;
 
 fn lustre(dir: &Path, args: &[String]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_lustre"))
@@ -305,7 +281,7 @@ fn writers() -> Vec<Writer> {
 /// material fitted to it.
 fn fixture() -> PathBuf {
     let d = scratch("fixture");
-    std::fs::write(d.join("s.toml"), SCENE).unwrap();
+    std::fs::write(d.join("s.toml"), common::TINY_SCENE).unwrap();
     std::fs::write(d.join("scan.txt"), scan_text()).unwrap();
     for args in [
         s(&["render", "s.toml", "-q", "--film", "shard.film"]),
@@ -399,7 +375,7 @@ fn no_writer_replaces_a_device_a_fifo_a_directory_or_its_input() {
 #[test]
 fn a_fifo_with_a_reader_receives_the_output() {
     let d = scratch("fifo-reader");
-    std::fs::write(d.join("s.toml"), SCENE).unwrap();
+    std::fs::write(d.join("s.toml"), common::TINY_SCENE).unwrap();
     let fifo = d.join("out.png");
     assert!(make(Kind::Fifo, &fifo, &fifo));
     let reader = {
