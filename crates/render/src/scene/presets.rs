@@ -200,15 +200,20 @@ pub struct PreviewScene {
 impl PreviewScene {
     /// The scene, with comments on the floor and the lights.
     pub fn file(&self) -> SceneFile {
-        let floor = |metal: Option<&str>, nk: Option<[f64; 2]>, alpha: f64| {
-            spanless(MaterialDesc {
-                model: Some(ModelKind::Ggx),
-                metal: metal.map(String::from),
-                nk,
-                alpha: Some(alpha),
-                ..MaterialDesc::default()
-            })
-        };
+        // A white Lambertian square and a dark glossy plastic one, as a studio's
+        // checkerboard: what the object reflects and what it is lit by through
+        // the floor is then a known, colourless surround.
+        let light_square = spanless(MaterialDesc {
+            model: Some(ModelKind::Diffuse),
+            reflectance: Some(0.8),
+            ..MaterialDesc::default()
+        });
+        let dark_square = spanless(MaterialDesc {
+            model: Some(ModelKind::RoughPlastic),
+            reflectance: Some(0.05),
+            alpha: Some(0.25),
+            ..MaterialDesc::default()
+        });
         let mesh = |file: &str, material: &str| {
             spanless(ShapeDesc::Mesh {
                 file: format!("{}/{file}", self.assets).into(),
@@ -220,13 +225,13 @@ impl PreviewScene {
             materials: BTreeMap::from([
                 (
                     "floor_dark".to_string(),
-                    "The floor's dark squares: a glossy dielectric-like conductor (n = 1.5,\n\
-                     k = 0: 4 % Fresnel reflection, no diffuse part)."
+                    "The floor's dark squares: a dark rough plastic (GGX coat, α 0.25, over\n\
+                     a 5 % diffuse base)."
                         .to_string(),
                 ),
                 (
                     "floor_light".to_string(),
-                    "The floor's light squares: rough aluminium.".to_string(),
+                    "The floor's light squares: white Lambertian (ρ = 0.8).".to_string(),
                 ),
             ]),
             ..Comments::default()
@@ -245,11 +250,8 @@ impl PreviewScene {
             integrator: IntegratorDesc::default(),
             materials: BTreeMap::from([
                 ("object".to_string(), spanless(self.material.clone())),
-                ("floor_light".to_string(), floor(Some("al"), None, 0.6)),
-                (
-                    "floor_dark".to_string(),
-                    floor(None, Some([1.5, 0.0]), 0.25),
-                ),
+                ("floor_light".to_string(), light_square),
+                ("floor_dark".to_string(), dark_square),
             ]),
             shapes: vec![
                 mesh(PREVIEW_OBJECT_OBJ, "object"),
