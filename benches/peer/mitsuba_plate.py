@@ -82,6 +82,14 @@ def die(msg: str) -> None:
     sys.exit(2)
 
 
+def absolute_csv_paths(sc: dict, folder: Path) -> None:
+    """Makes a material's `reflectance_csv` absolute (it is relative to the scene file), so
+    the Mitsuba translation and the lustre scene written into a temporary folder both find it."""
+    for m in sc.get("materials", {}).values():
+        if isinstance(m, dict) and isinstance(m.get("reflectance_csv"), str):
+            m["reflectance_csv"] = str((folder / m["reflectance_csv"]).resolve())
+
+
 def load_scenes(path: Path) -> list[dict]:
     try:
         with open(path, "rb") as f:
@@ -94,6 +102,8 @@ def load_scenes(path: Path) -> list[dict]:
     names = [s.get("name") for s in scenes]
     if len(set(names)) != len(names) or None in names:
         die(f"{path}: every [[scene]] needs a unique `name` (got {names})")
+    for sc in scenes:
+        absolute_csv_paths(sc, path.parent)
     return scenes
 
 
@@ -144,6 +154,44 @@ def spectrum(name: str, value: float, where: str, y_fix: float = 1.0) -> dict:
                       "here (use 'constant' or 'd65')")
 
 
+def reflectance(sc: dict, m: dict, where: str) -> dict:
+    """A diffuse reflectance: `reflectance = ρ` (Mitsuba's uniform spectrum) or
+    `reflectance_csv` (rows wavelength_nm,ρ beside the scene file: an irregular spectrum, which
+    Mitsuba interpolates linearly as lustre does). lustre's default base is Mitsuba's 0.5."""
+    if "reflectance_csv" in m:
+        path = Path(m["reflectance_csv"])  # absolute: `absolute_csv_paths` at load
+        rows = []
+        try:
+            with open(path) as f:
+                for line in f:
+                    parts = line.strip().split(",")
+                    try:
+                        rows.append((float(parts[0]), float(parts[1])))
+                    except (ValueError, IndexError):
+                        pass  # header or comment
+        except OSError as e:
+            raise Unsupported(f"{where}: cannot read reflectance_csv {path}: {e}")
+        if len(rows) < 2:
+            raise Unsupported(f"{where}: {path}: fewer than two wavelength_nm,reflectance rows")
+        return {"type": "irregular", "wavelengths": ", ".join(repr(r[0]) for r in rows),
+                "values": ", ".join(repr(r[1]) for r in rows)}
+    return {"type": "uniform", "value": float(m.get("reflectance", 0.5))}
+
+
+def roughplastic(sc: dict, m: dict, where: str) -> dict:
+    """lustre's roughplastic is Mitsuba's (GGX coat over a Lambertian base, same keys); they
+    differ by the documented amounts (physics.md §17: height-correlated G2 against Mitsuba's
+    separable one; the internal reflectance R_i a converged integral where Mitsuba's 64-node
+    rule is up to 1.6 % low)."""
+    alpha = m.get("alpha", 0.1)
+    if not isinstance(alpha, (int, float)) or not 1e-4 <= alpha <= 1.0:
+        raise Unsupported(f"{where}: alpha must be a number in [1e-4, 1], got {alpha!r}")
+    return {"type": "roughplastic", "distribution": "ggx", "alpha": float(alpha),
+            "int_ior": float(m.get("int_ior", 1.49)), "ext_ior": float(m.get("ext_ior", 1.0)),
+            "nonlinear": bool(m.get("nonlinear", False)), "sample_visible": True,
+            "diffuse_reflectance": reflectance(sc, m, where)}
+
+
 def material(sc: dict, mname: str) -> dict:
     where = f"scene {sc['name']}, materials.{mname}"
     m = sc.get("materials", {}).get(mname)
@@ -152,8 +200,13 @@ def material(sc: dict, mname: str) -> dict:
     if "include" in m:
         raise Unsupported(f"{where}: `include` (fitted material files) not supported by the peer script")
     model = m.get("model")
+    if model == "diffuse":
+        return {"type": "diffuse", "reflectance": reflectance(sc, m, where)}
+    if model == "roughplastic":
+        return roughplastic(sc, m, where)
     if model not in ("ggx", "beckmann"):
-        raise Unsupported(f"{where}: model {model!r}: Mitsuba has only ggx and beckmann microfacets")
+        raise Unsupported(f"{where}: model {model!r}: Mitsuba has only ggx and beckmann microfacets, "
+                          "diffuse and roughplastic")
     alpha = m.get("alpha_beckmann", m.get("alpha")) if model == "beckmann" else m.get("alpha")
     if not isinstance(alpha, (int, float)) or not 1e-4 <= alpha <= 1.0:
         raise Unsupported(f"{where}: alpha must be a number in [1e-4, 1] (anisotropic alpha_x/alpha_y "
@@ -398,6 +451,7 @@ def main() -> None:
             except (OSError, tomllib.TOMLDecodeError) as e:
                 die(f"cannot read lustre scene {p}: {e}")
             sc["name"] = p.stem
+            absolute_csv_paths(sc, p.parent)
             sc.setdefault("integrator", {}).setdefault("max_depth", 8)
             scenes.append(sc)
     else:
