@@ -162,6 +162,19 @@ impl Planar {
         })
     }
 
+    /// Texture coordinates of a point on the shape, as Mitsuba's: a rectangle's
+    /// (u, v) run from 0 to 1 along its `u` and `v` axes; a disk's are (r/R, φ/2π),
+    /// φ from `u` towards `v` in [0, 2π).
+    pub fn uv(&self, p: DVec3) -> [f64; 2] {
+        let r = p - self.center;
+        let (a, b) = (r.dot(self.u), r.dot(self.v));
+        if self.disk {
+            [a.hypot(b) / self.half.0, turn_fraction(b.atan2(a))]
+        } else {
+            [0.5 * (a / self.half.0 + 1.0), 0.5 * (b / self.half.1 + 1.0)]
+        }
+    }
+
     /// A uniformly distributed point on the shape.
     pub fn sample_point(&self, u: [f64; 2]) -> DVec3 {
         if self.disk {
@@ -184,6 +197,16 @@ impl Planar {
                 + (2.0 * u[0] - 1.0) * self.half.0 * self.u
                 + (2.0 * u[1] - 1.0) * self.half.1 * self.v
         }
+    }
+}
+
+/// An angle from `atan2` (in [−π, π]) as a fraction of a turn in [0, 1).
+fn turn_fraction(phi: f64) -> f64 {
+    let f = phi / std::f64::consts::TAU;
+    if f < 0.0 {
+        (f + 1.0).min(1.0 - f64::EPSILON)
+    } else {
+        f
     }
 }
 
@@ -216,6 +239,14 @@ impl Sphere {
             .try_normalize()
             .unwrap_or(DVec3::X);
         SurfacePoint { t, p, n, tangent }
+    }
+
+    /// Texture coordinates of a point on the sphere, as Mitsuba's: (φ/2π, θ/π) with θ
+    /// from the +z axis through the centre and φ from +x towards +y in [0, 2π).
+    pub fn uv(&self, p: DVec3) -> [f64; 2] {
+        let d = (p - self.center) / self.radius;
+        let theta = d.z.clamp(-1.0, 1.0).acos();
+        [turn_fraction(d.y.atan2(d.x)), theta / std::f64::consts::PI]
     }
 
     /// The `t` of [`Sphere::intersect`] alone (no point, normal or tangent):
@@ -253,6 +284,37 @@ impl Sphere {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn texture_coordinates_follow_mitsubas_shapes() {
+        let close =
+            |a: [f64; 2], b: [f64; 2]| (a[0] - b[0]).abs() < 1e-12 && (a[1] - b[1]).abs() < 1e-12;
+        // A 2 × 1 rectangle turned 90° about z: its u axis is +y, v is −x.
+        let xf = Transform::new([0.0, 0.0, 90.0], 1.0, [1.0, 2.0, 3.0]);
+        let r = Planar::rectangle([2.0, 1.0], &xf);
+        let at = |a: f64, b: f64| xf.translation + a * r.u + b * r.v;
+        assert!(close(r.uv(at(-1.0, -0.5)), [0.0, 0.0]));
+        assert!(close(r.uv(at(1.0, 0.5)), [1.0, 1.0]));
+        assert!(close(r.uv(at(0.5, 0.0)), [0.75, 0.5]));
+        assert!((r.u - DVec3::Y).length() < 1e-12);
+        // A disk: (r/R, φ/2π), φ from u towards v.
+        let d = Planar::disk(2.0, &Transform::new([0.0; 3], 1.0, [0.0; 3]));
+        assert!(close(d.uv(DVec3::new(1.0, 0.0, 0.0)), [0.5, 0.0]));
+        assert!(close(d.uv(DVec3::new(0.0, 2.0, 0.0)), [1.0, 0.25]));
+        assert!(close(d.uv(DVec3::new(0.0, -1.0, 0.0)), [0.5, 0.75]));
+        // A sphere: (φ/2π, θ/π) about +z through its centre.
+        let s = Sphere {
+            center: DVec3::new(0.0, 0.0, 1.0),
+            radius: 2.0,
+        };
+        assert!(close(s.uv(DVec3::new(0.0, 0.0, 3.0)), [0.0, 0.0]));
+        assert!(close(s.uv(DVec3::new(-2.0, 0.0, 1.0)), [0.5, 0.5]));
+        assert!(close(s.uv(DVec3::new(0.0, -2.0, 1.0)), [0.75, 0.5]));
+        assert!(close(s.uv(DVec3::new(0.0, 0.0, -1.0)), [0.0, 1.0]));
+        // Just below the −x axis the turn is just below 1, never 1 or above.
+        let u = s.uv(DVec3::new(-2.0, -1e-300, 1.0))[0];
+        assert!((0.5..1.0).contains(&u), "{u}");
+    }
 
     #[test]
     fn rectangle_hit_and_miss() {

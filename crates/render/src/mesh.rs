@@ -32,9 +32,17 @@ pub struct MeshSource {
     pub triangles: Vec<[DVec3; 3]>,
     /// Unit vertex normals in world space, per triangle, where the file has them.
     pub normals: Vec<Option<[DVec3; 3]>>,
+    /// Texture coordinates (OBJ `vt`) of each triangle's vertices, when the file has
+    /// them; `None`: a triangle's (u, v) are its barycentric coordinates (Mitsuba's
+    /// rule for meshes without them).
+    pub uvs: Option<Vec<[[f64; 2]; 3]>>,
     /// Surface id given to every triangle of this mesh.
     pub surface: u32,
 }
+
+/// The (u, v) of the vertices of a triangle without texture coordinates: its
+/// barycentric coordinates (w₁, w₂) then come out as (u, v).
+const BARYCENTRIC_UV: [[f64; 2]; 3] = [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]];
 
 /// Every model of an OBJ file, from the file's bytes (`path` for messages),
 /// as triangles transformed to world space. `mtllib`
@@ -56,6 +64,8 @@ pub fn obj_from_bytes(
     .map_err(|e| format!("cannot parse OBJ file {}: {e}", path.display()))?;
     let mut triangles = Vec::new();
     let mut normals = Vec::new();
+    let has_uv = models.iter().any(|m| !m.mesh.texcoords.is_empty());
+    let mut uvs = Vec::new();
     // Triangles with area in the file: if none survive the transform, it is
     // the transform's fault, and the message says so.
     let mut proper_in_file = 0usize;
@@ -69,6 +79,13 @@ pub fn obj_from_bytes(
             let v = nrm.get(i..i + 3)?;
             xf.direction(DVec3::new(v[0] as f64, v[1] as f64, v[2] as f64))
                 .try_normalize()
+        };
+        // single_index: texture coordinates (when present) share them too.
+        let tc = &m.mesh.texcoords;
+        let uv = |i: u32| -> Option<[f64; 2]> {
+            let i = 2 * i as usize;
+            let t = tc.get(i..i + 2)?;
+            Some([t[0] as f64, t[1] as f64])
         };
         let local = |i: u32| -> Option<DVec3> {
             let i = 3 * i as usize;
@@ -114,6 +131,12 @@ pub fn obj_from_bytes(
                     (Some(x), Some(y), Some(z)) => Some([x, y, z]),
                     _ => None,
                 });
+                if has_uv {
+                    uvs.push(match (uv(tri[0]), uv(tri[1]), uv(tri[2])) {
+                        (Some(x), Some(y), Some(z)) => [x, y, z],
+                        _ => BARYCENTRIC_UV,
+                    });
+                }
             }
         }
     }
@@ -135,8 +158,18 @@ pub fn obj_from_bytes(
     Ok(MeshSource {
         triangles,
         normals,
+        uvs: has_uv.then_some(uvs),
         surface,
     })
+}
+
+/// Barycentric coordinates of `p` (in the triangle's plane) from sub-triangle areas.
+fn barycentric([a, b, c]: [DVec3; 3], p: DVec3) -> [f64; 3] {
+    let area = (b - a).cross(c - a);
+    let inv = 1.0 / area.length_squared();
+    let w1 = (p - a).cross(c - a).dot(area) * inv;
+    let w2 = (b - a).cross(p - a).dot(area) * inv;
+    [1.0 - w1 - w2, w1, w2]
 }
 
 /// A coordinate for messages: plain where that is short, else in e-notation.
@@ -154,6 +187,8 @@ pub struct MeshAccel {
     rt: Vec<RtTriangle>,
     tris: Vec<[DVec3; 3]>,
     normals: Vec<Option<[DVec3; 3]>>,
+    /// Per triangle, when some source has texture coordinates; else empty.
+    uvs: Vec<[[f64; 2]; 3]>,
     surface: Vec<u32>,
 }
 
@@ -167,10 +202,19 @@ impl MeshAccel {
         let mut tris = Vec::new();
         let mut normals = Vec::new();
         let mut surface = Vec::new();
+        let mut uvs = Vec::new();
+        let any_uv = sources.iter().any(|s| s.uvs.is_some());
         for s in sources {
-            surface.extend(std::iter::repeat_n(s.surface, s.triangles.len()));
+            let n = s.triangles.len();
+            surface.extend(std::iter::repeat_n(s.surface, n));
             tris.extend(s.triangles);
             normals.extend(s.normals);
+            if any_uv {
+                match s.uvs {
+                    Some(t) => uvs.extend(t),
+                    None => uvs.extend(std::iter::repeat_n(BARYCENTRIC_UV, n)),
+                }
+            }
         }
         let f32_tris: Vec<Triangle> = tris
             .iter()
@@ -194,11 +238,17 @@ impl MeshAccel {
         let tris_leaf = order.iter().map(|&i| tris[i]).collect();
         let surface_leaf = order.iter().map(|&i| surface[i]).collect();
         let normals_leaf = order.iter().map(|&i| normals[i]).collect();
+        let uvs_leaf = if any_uv {
+            order.iter().map(|&i| uvs[i]).collect()
+        } else {
+            Vec::new()
+        };
         MeshAccel {
             bvh,
             rt,
             tris: tris_leaf,
             normals: normals_leaf,
+            uvs: uvs_leaf,
             surface: surface_leaf,
         }
     }
@@ -222,14 +272,15 @@ impl MeshAccel {
         BvhRay::new(to_f32(ray.o), to_f32(ray.d), t_min as f32, t_max)
     }
 
-    /// Nearest hit in `(t_min, t_max)`, its surface id and, for triangles
-    /// with vertex normals, the interpolated unit shading normal.
+    /// Nearest hit in `(t_min, t_max)`, its surface id, for triangles with
+    /// vertex normals the interpolated unit shading normal, and the triangle
+    /// (for [`MeshAccel::uv`]).
     pub fn intersect(
         &self,
         ray: &Ray,
         t_min: f64,
         t_max: f64,
-    ) -> Option<(SurfacePoint, u32, Option<DVec3>)> {
+    ) -> Option<(SurfacePoint, u32, Option<DVec3>, usize)> {
         let mut hit = RayHit::none();
         let r = Self::bvh_ray(ray, t_min, t_max);
         if !self
@@ -256,15 +307,29 @@ impl MeshAccel {
         let tangent = (b - a).normalize();
         let p = ray.at(t);
         let shading = self.normals[id].and_then(|[na, nb, nc]| {
-            // Barycentrics of p from sub-triangle areas (p lies in the plane).
-            let area = (b - a).cross(c - a);
-            let inv = 1.0 / area.length_squared();
-            let w1 = (p - a).cross(c - a).dot(area) * inv;
-            let w2 = (b - a).cross(p - a).dot(area) * inv;
-            let w0 = 1.0 - w1 - w2;
+            let [w0, w1, w2] = barycentric([a, b, c], p);
             (w0 * na + w1 * nb + w2 * nc).try_normalize()
         });
-        Some((SurfacePoint { t, p, n, tangent }, self.surface[id], shading))
+        Some((
+            SurfacePoint { t, p, n, tangent },
+            self.surface[id],
+            shading,
+            id,
+        ))
+    }
+
+    /// Texture coordinates of point `p` of triangle `id` (an id from
+    /// [`MeshAccel::intersect`]): its vertices' `vt` interpolated, or its
+    /// barycentric coordinates (w₁, w₂) where the file has no `vt`.
+    pub fn uv(&self, id: usize, p: DVec3) -> [f64; 2] {
+        let [w0, w1, w2] = barycentric(self.tris[id], p);
+        match self.uvs.get(id) {
+            Some([ua, ub, uc]) => [
+                w0 * ua[0] + w1 * ub[0] + w2 * uc[0],
+                w0 * ua[1] + w1 * ub[1] + w2 * uc[1],
+            ],
+            None => [w1, w2],
+        }
     }
 
     /// Whether anything blocks the segment `(t_min, t_max)` of `ray`.
@@ -283,6 +348,32 @@ mod tests {
 
     const QUAD: &[u8] =
         b"v -0.5 0 -0.5\nv 0.5 0 -0.5\nv 0.5 0 0.5\nv -0.5 0 0.5\nf 1 3 2\nf 1 4 3\n";
+
+    #[test]
+    fn texture_coordinates_are_the_files_or_barycentric() {
+        let with_vt = b"v 0 0 0\nv 2 0 0\nv 0 0 -2\nvt 0.1 0.2\nvt 0.9 0.2\nvt 0.1 0.6\n\
+            f 1/1 2/2 3/3\n";
+        let without = b"v 0 1 0\nv 2 1 0\nv 0 1 -2\nf 1 2 3\n";
+        let (a, b) = (
+            load(with_vt, 1.0, [0.0; 3]).unwrap(),
+            load(without, 1.0, [0.0; 3]).unwrap(),
+        );
+        assert!(a.uvs.is_some() && b.uvs.is_none());
+        let accel = MeshAccel::build(vec![a, b]);
+        for (y, want) in [(0.0, [0.3, 0.3]), (1.0, [0.25, 0.25])] {
+            // The point (0.5, y, −0.5): barycentric (0.5, 0.25, 0.25).
+            let ray = Ray {
+                o: DVec3::new(0.5, y + 1.0 - 1e-3, -0.5),
+                d: DVec3::NEG_Y,
+            };
+            let (h, _, _, id) = accel.intersect(&ray, 0.0, 1.0).unwrap();
+            let uv = accel.uv(id, h.p);
+            assert!(
+                (uv[0] - want[0]).abs() < 1e-6 && (uv[1] - want[1]).abs() < 1e-6,
+                "y {y}: {uv:?}"
+            ); // vt are f32
+        }
+    }
 
     fn load(bytes: &[u8], scale: f64, translate: [f64; 3]) -> Result<MeshSource, String> {
         let xf = Transform::new([0.0; 3], scale, translate);
@@ -331,7 +422,7 @@ mod tests {
             DVec3::new(-9.9e11, 1e12, 9.9e11),
         ] {
             let ray = Ray { o, d: DVec3::NEG_Y };
-            let (h, _, _) = accel.intersect(&ray, 0.0, f64::INFINITY).unwrap();
+            let (h, _, _, _) = accel.intersect(&ray, 0.0, f64::INFINITY).unwrap();
             assert!((h.t / 1e12 - 1.0).abs() < 1e-9, "{}", h.t);
         }
     }
@@ -373,11 +464,13 @@ mod tests {
             MeshSource {
                 triangles: quad(0.0),
                 normals: vec![None; 2],
+                uvs: None,
                 surface: 7,
             },
             MeshSource {
                 triangles: far,
                 normals: far_normals,
+                uvs: None,
                 surface: 9,
             },
         ]);
@@ -386,13 +479,13 @@ mod tests {
             o: DVec3::new(0.3, 0.2, 5.0),
             d: DVec3::NEG_Z,
         };
-        let (h, s, shading) = accel.intersect(&ray, 1e-6, f64::INFINITY).unwrap();
+        let (h, s, shading, _) = accel.intersect(&ray, 1e-6, f64::INFINITY).unwrap();
         assert_eq!(s, 7);
         assert_eq!(shading, None);
         assert!((h.t - 5.0).abs() < 1e-9 && (h.n.z.abs() - 1.0).abs() < 1e-12);
         assert!(accel.occluded(&ray, 1e-6, 6.0));
         assert!(!accel.occluded(&ray, 1e-6, 4.9));
-        let (h2, s2, shading2) = accel.intersect(&ray, 5.5, f64::INFINITY).unwrap();
+        let (h2, s2, shading2, _) = accel.intersect(&ray, 5.5, f64::INFINITY).unwrap();
         assert_eq!(s2, 9);
         assert!((h2.t - 7.0).abs() < 1e-9);
         let want = field(DVec3::new(0.3, 0.2, -2.0)).normalize();

@@ -41,6 +41,28 @@ impl Hit {
     }
 }
 
+/// A checkerboard over a shape's texture coordinates: a shape given material
+/// `m` (the ρ1 squares) shows material `color0` on the squares (i, j) =
+/// (⌊u·tiles₀⌋, ⌊v·tiles₁⌋) with i + j odd
+/// ([`brdf::spec::MaterialDesc::checker_split`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Checker {
+    /// Squares across the (u, v) unit square, along u and v.
+    pub tiles: [f64; 2],
+    /// Material index of the ρ0 squares.
+    pub color0: u32,
+}
+
+impl Checker {
+    /// Whether (u, v) lies on a ρ0 square.
+    #[inline]
+    pub fn color0_at(&self, uv: [f64; 2]) -> bool {
+        let i = (uv[0] * self.tiles[0]).floor();
+        let j = (uv[1] * self.tiles[1]).floor();
+        (i + j).rem_euclid(2.0) == 1.0
+    }
+}
+
 /// Everything a ray can hit: analytic shapes tested one by one (a scene
 /// has a handful) and, only when the scene has meshes, one BVH over all
 /// their triangles.
@@ -51,6 +73,17 @@ pub struct Shapes {
     pub spheres: Vec<(Sphere, Surface)>,
     /// Mesh triangles (only when the scene has any).
     pub mesh: Option<MeshAccel>,
+    /// Per material index, its checkerboard if it has one; empty when no
+    /// material has one (then no hit computes texture coordinates).
+    pub checkers: Vec<Option<Checker>>,
+}
+
+/// Which shape a hit is on, for its texture coordinates.
+#[derive(Clone, Copy)]
+enum Struck {
+    Planar(usize),
+    Sphere(usize),
+    Triangle(usize),
 }
 
 impl Shapes {
@@ -62,12 +95,12 @@ impl Shapes {
     /// Nearest hit along `ray` in `(0, t_max)`.
     #[inline]
     pub fn intersect(&self, ray: &Ray, t_max: f64) -> Option<Hit> {
-        let mut best: Option<Hit> = None;
+        let mut best: Option<(Hit, Struck)> = None;
         let mut t_max = t_max;
-        for (p, s) in &self.planars {
+        for (k, (p, s)) in self.planars.iter().enumerate() {
             if let Some(g) = p.intersect(ray, 0.0, t_max) {
                 t_max = g.t;
-                best = Some(Hit::analytic(g, *s));
+                best = Some((Hit::analytic(g, *s), Struck::Planar(k)));
             }
         }
         // The nearest sphere by distance alone; its point, normal and tangent
@@ -81,19 +114,40 @@ impl Shapes {
         }
         if let Some(i) = nearest_sphere {
             let (sp, s) = &self.spheres[i];
-            best = Some(Hit::analytic(sp.point_at(ray, t_max), *s));
+            best = Some((
+                Hit::analytic(sp.point_at(ray, t_max), *s),
+                Struck::Sphere(i),
+            ));
         }
         if let Some(m) = &self.mesh
-            && let Some((g, mat, shading_n)) = m.intersect(ray, 0.0, t_max)
+            && let Some((g, mat, shading_n, id)) = m.intersect(ray, 0.0, t_max)
         {
-            best = Some(Hit {
+            let hit = Hit {
                 geo: g,
                 surface: Surface::Material(mat),
                 mesh: true,
                 shading_n,
-            });
+            };
+            best = Some((hit, Struck::Triangle(id)));
         }
-        best
+        let (mut hit, struck) = best?;
+        if !self.checkers.is_empty()
+            && let Surface::Material(m) = hit.surface
+            && let Some(Some(c)) = self.checkers.get(m as usize)
+            && c.color0_at(self.uv(struck, hit.geo.p))
+        {
+            hit.surface = Surface::Material(c.color0);
+        }
+        Some(hit)
+    }
+
+    /// Texture coordinates of point `p` on the struck shape.
+    fn uv(&self, struck: Struck, p: DVec3) -> [f64; 2] {
+        match struck {
+            Struck::Planar(k) => self.planars[k].0.uv(p),
+            Struck::Sphere(k) => self.spheres[k].0.uv(p),
+            Struck::Triangle(id) => self.mesh.as_ref().map_or([0.0; 2], |m| m.uv(id, p)),
+        }
     }
 
     /// Whether anything lies on `ray` within `(0, t_max)`, not testing the
@@ -144,6 +198,7 @@ mod tests {
             planars: vec![(rect, Surface::Emitter(1)), (blocker, Surface::Material(0))],
             spheres: vec![(sphere, Surface::Emitter(0))],
             mesh: None,
+            checkers: Vec::new(),
         };
         let lights = Lights {
             lights: vec![

@@ -155,6 +155,16 @@ material_keys! {
     reflectance: f64, Own, [Diffuse, RoughPlastic];
     /// A CSV `wavelength_nm,reflectance` (resolved by the caller).
     reflectance_csv: String, Own, [Diffuse, RoughPlastic];
+    /// A checkerboard of two constant reflectances `[ρ0, ρ1]` over a shape's (u, v), as
+    /// Mitsuba's `checkerboard` texture (ρ0 on the squares where exactly one of the two
+    /// square indices is odd); only a scene's shapes have a (u, v): elsewhere give
+    /// `reflectance`.
+    #[serde(deserialize_with = "exact_checker")]
+    checker_reflectance: [f64; 2], Own, [Diffuse, RoughPlastic];
+    /// Squares of the checkerboard across the (u, v) unit square, `[along u, along v]`
+    /// (default `[2, 2]`, Mitsuba's checkerboard).
+    #[serde(deserialize_with = "exact_tiles")]
+    checker_tiles: [f64; 2], Own, [Diffuse, RoughPlastic];
     /// Index of a dielectric coat (default 1.49, polypropylene).
     int_ior: f64, Own, [RoughPlastic];
     /// Index of the medium above a dielectric coat (default 1.0).
@@ -171,12 +181,32 @@ material_keys! {
 /// two and formats such as TOML do not complain about the rest, so
 /// `nk = [0.2, 3.5, 9]` would otherwise pass as `[0.2, 3.5]`.
 fn exact_nk<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Option<[f64; 2]>, D::Error> {
+    exact_pair(d, "an array of exactly two numbers [n, k]")
+}
+
+/// `checker_reflectance = [ρ0, ρ1]` from exactly two numbers (as `nk`).
+fn exact_checker<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Option<[f64; 2]>, D::Error> {
+    exact_pair(d, "an array of exactly two reflectances [ρ0, ρ1]")
+}
+
+/// `checker_tiles = [along u, along v]` from exactly two numbers (as `nk`).
+fn exact_tiles<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Option<[f64; 2]>, D::Error> {
+    exact_pair(
+        d,
+        "an array of exactly two square counts [along u, along v]",
+    )
+}
+
+fn exact_pair<'de, D: serde::Deserializer<'de>>(
+    d: D,
+    what: &'static str,
+) -> Result<Option<[f64; 2]>, D::Error> {
     use serde::de::{Error, IgnoredAny, SeqAccess, Visitor};
-    struct Nk;
+    struct Nk(&'static str);
     impl<'de> Visitor<'de> for Nk {
         type Value = [f64; 2];
         fn expecting(&self, f: &mut core::fmt::Formatter) -> core::fmt::Result {
-            f.write_str("an array of exactly two numbers [n, k]")
+            f.write_str(self.0)
         }
         fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> Result<[f64; 2], A::Error> {
             let n = seq
@@ -195,7 +225,7 @@ fn exact_nk<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Option<[f64; 2]>, 
             Ok([n, k])
         }
     }
-    d.deserialize_seq(Nk).map(Some)
+    d.deserialize_seq(Nk(what)).map(Some)
 }
 
 /// Reads the files a description refers to (this crate does no I/O).
@@ -247,7 +277,82 @@ fn need(v: Option<f64>, key: &'static str, model: ModelKind) -> Result<f64, Spec
     v.ok_or_else(|| SpecError::new(key, format!("model `{}` needs `{key}`", model.name())))
 }
 
+/// A checkerboard material split into its two squares (see
+/// [`MaterialDesc::checker_split`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct CheckerSquares {
+    /// Squares across the (u, v) unit square, `[along u, along v]`.
+    pub tiles: [f64; 2],
+    /// The material of the ρ0 squares and of the ρ1 squares: this description with
+    /// `reflectance = ρ0` / `ρ1` and no checker keys.
+    pub squares: [MaterialDesc; 2],
+}
+
+/// Most squares a checkerboard may have along u or v: finer than any image
+/// resolves, and far from where f64 loses the parity of u·tiles.
+const MAX_CHECKER_TILES: f64 = 1e6;
+
 impl MaterialDesc {
+    /// The two materials of a checkerboard (`checker_reflectance`, `checker_tiles`),
+    /// or `None` when the description has no checkerboard. A renderer builds both and
+    /// picks one per surface point: square (i, j) = (⌊u·tiles₀⌋, ⌊v·tiles₁⌋) takes
+    /// `squares[0]` when i + j is odd, `squares[1]` when it is even (Mitsuba's
+    /// `checkerboard` with `color0`, `color1` and `to_uv` scaled by tiles/2).
+    pub fn checker_split(&self) -> Result<Option<CheckerSquares>, SpecError> {
+        let Some(rho) = self.checker_reflectance else {
+            return match self.checker_tiles {
+                None => Ok(None),
+                Some(_) => Err(SpecError::new(
+                    "checker_tiles",
+                    "`checker_tiles` sets the squares of a `checker_reflectance = [ρ0, ρ1]` \
+                     texture, which is not set: add it, or remove `checker_tiles`",
+                )),
+            };
+        };
+        if let Some(model) = self.model {
+            self.check_used(model)?;
+        }
+        if self.reflectance.is_some() || self.reflectance_csv.is_some() {
+            return Err(SpecError::new(
+                "checker_reflectance",
+                "give `checker_reflectance` (a checkerboard) or `reflectance`/`reflectance_csv` \
+                 (one colour), not both",
+            ));
+        }
+        for r in rho {
+            if !(r.is_finite() && (0.0..=1.0).contains(&r)) {
+                return Err(SpecError::new(
+                    "checker_reflectance",
+                    format!("each reflectance must lie in [0, 1], got {r}"),
+                ));
+            }
+        }
+        let tiles = self.checker_tiles.unwrap_or([2.0, 2.0]);
+        if tiles
+            .iter()
+            .any(|t| !(t.is_finite() && *t > 0.0 && *t <= MAX_CHECKER_TILES))
+        {
+            return Err(SpecError::new(
+                "checker_tiles",
+                format!(
+                    "each of `checker_tiles = [along u, along v]` must be a number of squares \
+                     in (0, {MAX_CHECKER_TILES:e}], got [{}, {}]",
+                    tiles[0], tiles[1]
+                ),
+            ));
+        }
+        let square = |r: f64| MaterialDesc {
+            checker_reflectance: None,
+            checker_tiles: None,
+            reflectance: Some(r),
+            ..self.clone()
+        };
+        Ok(Some(CheckerSquares {
+            tiles,
+            squares: [square(rho[0]), square(rho[1])],
+        }))
+    }
+
     /// Fills every key this description leaves unset from `base` (an
     /// included file): keys set here win.
     ///
@@ -481,6 +586,14 @@ impl MaterialDesc {
         default: Option<f64>,
         files: &mut dyn FileLoader,
     ) -> Result<ReflectanceSpec, SpecError> {
+        if self.checker_reflectance.is_some() || self.checker_tiles.is_some() {
+            return Err(SpecError::new(
+                "checker_reflectance",
+                "a checkerboard varies over a shape's surface, so only a scene's shapes read \
+                 `checker_reflectance`/`checker_tiles` (through `MaterialDesc::checker_split`); \
+                 here, with no surface position, give `reflectance = ρ`",
+            ));
+        }
         match (self.reflectance, &self.reflectance_csv) {
             (Some(_), Some(_)) => Err(SpecError::new(
                 "reflectance",

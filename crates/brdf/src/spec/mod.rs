@@ -759,7 +759,7 @@ impl MaterialSpec {
 
 #[cfg(feature = "serde")]
 pub use desc::{
-    FileLoader, FresnelKind, KeyDoc, MaterialDesc, NoFiles, ROUGHPLASTIC_EXT_IOR,
+    CheckerSquares, FileLoader, FresnelKind, KeyDoc, MaterialDesc, NoFiles, ROUGHPLASTIC_EXT_IOR,
     ROUGHPLASTIC_INT_IOR, ROUGHPLASTIC_REFLECTANCE,
 };
 #[cfg(feature = "serde")]

@@ -16,7 +16,7 @@ use crate::inputs::{self, Inputs};
 use crate::light::{EnvMap, Environment, LightKind, Lights};
 use crate::material::{Material, build_material};
 use crate::mesh::{MeshAccel, MeshSource, obj_from_bytes};
-use crate::shapes::{Shapes, Surface};
+use crate::shapes::{Checker, Shapes, Surface};
 use crate::sky::{Sky, SkyParams};
 use crate::spectral_table::SpectralTables;
 use crate::spectrum::{LAMBDA_MAX, LAMBDA_MIN, Spectrum, parse_spectrum_with};
@@ -58,6 +58,11 @@ pub(super) fn build(path: &Path, text: &str, desc: &SceneDesc) -> Result<Scene, 
         planars: shapes.planars,
         spheres: shapes.spheres,
         mesh: (!shapes.meshes.is_empty()).then(|| MeshAccel::build(shapes.meshes)),
+        checkers: if b.checkers.iter().any(Option::is_some) {
+            std::mem::take(&mut b.checkers)
+        } else {
+            Vec::new()
+        },
     };
     let (materials, inputs) = (b.materials, b.inputs.into_files());
     let conductors = materials.iter().all(|m| {
@@ -178,6 +183,8 @@ struct Builder<'a> {
     base: PathBuf,
     inputs: Inputs,
     materials: Vec<Material>,
+    /// Per material index, its checkerboard (the ρ1 squares' material holds it).
+    checkers: Vec<Option<Checker>>,
     material_index: HashMap<String, u32>,
 }
 
@@ -204,6 +211,7 @@ impl<'a> Builder<'a> {
             base,
             inputs,
             materials: Vec::new(),
+            checkers: Vec::new(),
             material_index: HashMap::new(),
         }
     }
@@ -383,12 +391,35 @@ impl<'a> Builder<'a> {
                 ),
             ));
         };
+        let fail = |b: &Self, e: String| b.at(m.span(), format!("[materials.{name}]: {e}"));
         self.check_material(m.get_ref())
-            .map_err(|e| self.at(m.span(), format!("[materials.{name}]: {e}")))?;
-        let built = build_material(name, m.get_ref(), &self.base, &mut self.inputs)
-            .map_err(|e| self.at(m.span(), format!("[materials.{name}]: {e}")))?;
+            .map_err(|e| fail(self, e))?;
+        let checker = m
+            .get_ref()
+            .checker_split()
+            .map_err(|e| fail(self, e.to_string()))?;
         let i = self.materials.len() as u32;
-        self.materials.push(built);
+        match checker {
+            None => {
+                let built = build_material(name, m.get_ref(), &self.base, &mut self.inputs)
+                    .map_err(|e| fail(self, e))?;
+                self.materials.push(built);
+                self.checkers.push(None);
+            }
+            Some(c) => {
+                // Index i (what shapes are given) is the ρ1 squares; i + 1 the ρ0 squares.
+                for d in [&c.squares[1], &c.squares[0]] {
+                    let built = build_material(name, d, &self.base, &mut self.inputs)
+                        .map_err(|e| fail(self, e))?;
+                    self.materials.push(built);
+                }
+                self.checkers.push(Some(Checker {
+                    tiles: c.tiles,
+                    color0: i + 1,
+                }));
+                self.checkers.push(None);
+            }
+        }
         self.material_index.insert(name.to_string(), i);
         Ok(i)
     }
