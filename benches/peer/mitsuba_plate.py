@@ -158,6 +158,14 @@ def reflectance(sc: dict, m: dict, where: str) -> dict:
     """A diffuse reflectance: `reflectance = ρ` (Mitsuba's uniform spectrum) or
     `reflectance_csv` (rows wavelength_nm,ρ beside the scene file: an irregular spectrum, which
     Mitsuba interpolates linearly as lustre does). lustre's default base is Mitsuba's 0.5."""
+    if "checker_reflectance" in m:
+        # lustre's ρ0 squares are where i + j is even: Mitsuba 3's color0 (its spectral eval).
+        import mitsuba as mi  # the caller has set the variant
+        t = m.get("checker_tiles", [2.0, 2.0])
+        r0, r1 = (float(v) for v in m["checker_reflectance"])
+        return {"type": "checkerboard", "color0": {"type": "uniform", "value": r0},
+                "color1": {"type": "uniform", "value": r1},
+                "to_uv": mi.ScalarTransform4f().scale([t[0] / 2, t[1] / 2, 1.0])}
     if "reflectance_csv" in m:
         path = Path(m["reflectance_csv"])  # absolute: `absolute_csv_paths` at load
         rows = []

@@ -43,7 +43,7 @@ impl Hit {
 
 /// A checkerboard over a shape's texture coordinates: a shape given material
 /// `m` (the ρ1 squares) shows material `color0` on the squares (i, j) =
-/// (⌊u·tiles₀⌋, ⌊v·tiles₁⌋) with i + j odd
+/// (⌊u·tiles₀⌋, ⌊v·tiles₁⌋) with i + j even
 /// ([`brdf::spec::MaterialDesc::checker_split`]).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Checker {
@@ -59,7 +59,7 @@ impl Checker {
     pub fn color0_at(&self, uv: [f64; 2]) -> bool {
         let i = (uv[0] * self.tiles[0]).floor();
         let j = (uv[1] * self.tiles[1]).floor();
-        (i + j).rem_euclid(2.0) == 1.0
+        (i + j).rem_euclid(2.0) == 0.0
     }
 }
 

@@ -65,7 +65,7 @@ fn floor_uv(col: usize, row: usize) -> [f64; 2] {
 }
 
 /// Checks every pixel whose footprint lies inside one square of a
-/// `tiles` checkerboard (ρ0 where ⌊u·t₀⌋ + ⌊v·t₁⌋ is odd) against that ρ;
+/// `tiles` checkerboard (ρ0 where ⌊u·t₀⌋ + ⌊v·t₁⌋ is even) against that ρ;
 /// returns how many pixels were checked.
 fn check_squares(y: &[f64], tiles: [f64; 2], rho: [f64; 2]) -> usize {
     // A pixel spans 3·2·tan 7.5°/40 ≈ 0.02 in u and v.
@@ -83,7 +83,7 @@ fn check_squares(y: &[f64], tiles: [f64; 2], rho: [f64; 2]) -> usize {
                 continue;
             }
             let odd = (su.floor() + sv.floor()).rem_euclid(2.0) == 1.0;
-            let want = if odd { rho[0] } else { rho[1] };
+            let want = if odd { rho[1] } else { rho[0] };
             let got = y[row * 40 + col];
             assert!(
                 (got / want - 1.0).abs() < 0.15,
@@ -108,8 +108,8 @@ fn quadrant(y: &[f64], right: bool, bottom: bool) -> f64 {
 }
 
 #[test]
-fn a_two_by_two_checkerboard_puts_rho0_where_one_index_is_odd() {
-    // Top-left square (i, j) = (0, 1) is odd: ρ0; bottom-left (0, 0) is ρ1.
+fn a_two_by_two_checkerboard_puts_rho0_where_both_indices_are_even_or_odd() {
+    // Bottom-left square (i, j) = (0, 0) is even: ρ0; top-left (0, 1) is ρ1.
     let y = luminance(&floor_scene(
         "model = \"diffuse\"\nchecker_reflectance = [0.8, 0.1]",
     ));
@@ -118,10 +118,10 @@ fn a_two_by_two_checkerboard_puts_rho0_where_one_index_is_odd() {
     let (tl, tr) = (quadrant(&y, false, false), quadrant(&y, true, false));
     let (bl, br) = (quadrant(&y, false, true), quadrant(&y, true, true));
     for (name, got, want) in [
-        ("TL", tl, 0.8),
-        ("TR", tr, 0.1),
-        ("BL", bl, 0.1),
-        ("BR", br, 0.8),
+        ("TL", tl, 0.1),
+        ("TR", tr, 0.8),
+        ("BL", bl, 0.8),
+        ("BR", br, 0.1),
     ] {
         assert!(
             (got / want - 1.0).abs() < 0.02,
@@ -169,9 +169,9 @@ fn roughplastic_takes_a_checkerboard_base() {
             }
             let odd = ((2.0 * u).floor() + (2.0 * v).floor()).rem_euclid(2.0) == 1.0;
             let want = if odd {
-                a[row * 40 + col]
-            } else {
                 b[row * 40 + col]
+            } else {
+                a[row * 40 + col]
             };
             let got = checker[row * 40 + col];
             assert!(

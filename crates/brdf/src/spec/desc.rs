@@ -156,8 +156,8 @@ material_keys! {
     /// A CSV `wavelength_nm,reflectance` (resolved by the caller).
     reflectance_csv: String, Own, [Diffuse, RoughPlastic];
     /// A checkerboard of two constant reflectances `[ρ0, ρ1]` over a shape's (u, v), as
-    /// Mitsuba's `checkerboard` texture (ρ0 on the squares where exactly one of the two
-    /// square indices is odd); only a scene's shapes have a (u, v): elsewhere give
+    /// Mitsuba 3's `checkerboard` texture (ρ0 on the squares whose two indices are both
+    /// even or both odd); only a scene's shapes have a (u, v): elsewhere give
     /// `reflectance`.
     #[serde(deserialize_with = "exact_checker")]
     checker_reflectance: [f64; 2], Own, [Diffuse, RoughPlastic];
@@ -296,8 +296,8 @@ impl MaterialDesc {
     /// The two materials of a checkerboard (`checker_reflectance`, `checker_tiles`),
     /// or `None` when the description has no checkerboard. A renderer builds both and
     /// picks one per surface point: square (i, j) = (⌊u·tiles₀⌋, ⌊v·tiles₁⌋) takes
-    /// `squares[0]` when i + j is odd, `squares[1]` when it is even (Mitsuba's
-    /// `checkerboard` with `color0`, `color1` and `to_uv` scaled by tiles/2).
+    /// `squares[0]` when i + j is even, `squares[1]` when it is odd (Mitsuba 3's
+    /// `checkerboard` spectrum with `color0`, `color1` and `to_uv` scaled by tiles/2).
     pub fn checker_split(&self) -> Result<Option<CheckerSquares>, SpecError> {
         let Some(rho) = self.checker_reflectance else {
             return match self.checker_tiles {
