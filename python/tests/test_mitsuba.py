@@ -202,8 +202,9 @@ def test_chi2_rejects_the_pdf_with_the_lobe_choice_left_in():
 
 @needs_llvm
 def test_chi2_rejects_the_pdf_at_another_wavelength():
-    # Directions drawn at λ₀ ≈ 424 nm, pdf at ≈ 686 nm: the lobe's g differs by 2.6×.
-    sample, pdf, _, _ = spectral_adapter(GHS, direction(0.0), 0.1, ctx=glossy_context(), pdf_u_lambda=0.9)
+    # Directions drawn at λ₀ ≈ 424 nm, pdf at ≈ 686 nm (each passes alone at 30°, above):
+    # the lobe's g differs by 2.6×.
+    sample, pdf, _, _ = spectral_adapter(GHS, direction(30.0), 0.1, ctx=glossy_context(), pdf_u_lambda=0.9)
     test = chi2(sample, pdf, ires=12)
     assert not test.run(quiet=True), test.messages
 
