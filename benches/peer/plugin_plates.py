@@ -225,7 +225,8 @@ def main() -> int:
             a, ta = render_lustre(sc, args.res, args.spp, seeds)
             _, hit = plate_points(mi, mi.load_dict(d), args.res)
             label = base.replace("ggx", "ghs")
-            print(f"\n[{label}] full GHS σ 0.138 µm, Lc 2 µm, γ 2, Cu: lustre {ta:.1f} s, Mitsuba plugin {tb:.1f} s (wall)")
+            print(f"\n[{label}] full GHS σ 0.138 µm, Lc 2 µm, γ 2, Cu: lustre {ta:.1f} s, "
+                  f"Mitsuba plugin {tb:.1f} s (wall)")
             ok &= compare(f"{label}: Mitsuba plugin vs lustre render", a, b, None, hit)
             # Without the luminance constant's fix the emitter, and so (direct light only)
             # every pixel, is 1/y_fix brighter: shows the check resolves it.
