@@ -163,6 +163,28 @@ def test_scalar_spectral_eval_is_material_eval_times_cosine():
     assert np.all(np.array(b.eval(delta_only, si, mi.Vector3f(*wo))) == 0.0)
 
 
+@pytest.mark.parametrize("u1", [0.01, 0.6], ids=["delta", "glossy"])
+def test_scalar_spectral_sample_is_material_sample(u1):
+    # GHS at 70°, 450 nm: p_δ = 0.18, so sample1 = 0.01 draws the delta lobe, 0.6 the glossy one.
+    mi.set_variant("scalar_spectral")
+    lustre.mitsuba.register()
+    b = mi.load_dict(GHS)
+    si = mi.SurfaceInteraction3f()
+    si.wi = mi.Vector3f(direction(70.0))
+    lam = [450.0, 520.0, 600.0, 700.0]
+    si.wavelengths = mi.Spectrum(*lam)
+    bs, weight = b.sample(mi.BSDFContext(), si, u1, mi.Point2f(0.3, 0.7))
+    m = material(GHS)
+    wi = np.array([direction(70.0)])
+    wo, pdf, w0, is_delta = m.sample(wi, lam[0], [u1, 0.3, 0.7])
+    assert bool(is_delta[0]) == (u1 < 0.1)
+    assert int(bs.sampled_type) == int(mi.BSDFFlags.DeltaReflection if is_delta[0] else mi.BSDFFlags.GlossyReflection)
+    np.testing.assert_allclose(np.array(bs.wo), wo[0], atol=1e-6)
+    assert float(bs.pdf) == pytest.approx(pdf[0], rel=1e-6)
+    f = [m.specular(wi, x)[0] if is_delta[0] else m.eval(wi, wo, x)[0][0] * wo[0, 2] for x in lam]
+    np.testing.assert_allclose(np.array(weight), np.array(f) / pdf[0], rtol=1e-5)
+
+
 def test_components_are_reported_as_mitsubas_multi_lobe_bsdfs_do():
     mi.set_variant("scalar_spectral")
     lustre.mitsuba.register()
