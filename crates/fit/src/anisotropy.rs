@@ -8,6 +8,11 @@
 //! steepest direction. A Beckmann surface with roughness `(α₁, α₂)` has per-axis slope
 //! variance `αᵢ²/2`, so `αᵢ = √2·sᵢ`; GGX has no finite slope variance, so its isotropic
 //! NDF fit `α` is split in the same proportion: `αᵢ = α·sᵢ/√((s₁² + s₂²)/2)`.
+//!
+//! The slope covariance only flags a map: at the pixel scale it is dominated by what a
+//! scanning instrument adds there (line glitches, the first rows of a scan), so the axes
+//! and lengths of the anisotropic wave-optical model come from the stretched
+//! K-correlation fitted to the 2-D PSD in the band ([`crate::kc2d`]), done for flagged maps.
 
 use crate::kc2d::{self, AnisoKcFit};
 use crate::psd::{self, Psd1d, WelchOptions};

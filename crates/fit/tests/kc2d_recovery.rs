@@ -157,3 +157,24 @@ fn corpus_scans_flagged_anisotropic() {
         assert!(f.rms_log_residual <= f.rms_log_residual_isotropic + 1e-9);
     }
 }
+
+/// What flags nid-1: the slope covariance of the whole map against that of the map
+/// without its first 16 rows (a 40 nm artefact where the scan starts).
+#[test]
+fn nid1_slope_ratio_comes_from_its_first_rows() {
+    let path = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../../data/surfaces/corpus/nid-1.nid");
+    let t = fit::io::read_path(&path, &Default::default()).unwrap();
+    let ratio = |t: fit::Topography| {
+        let (t, _) = fit::pipeline::prepare(t).unwrap();
+        let psd = fit::psd::welch(&t, &Default::default()).unwrap();
+        let an = fit::anisotropy::analyse(&t, psd).unwrap();
+        (an.ratio, an.slope_direction_deg)
+    };
+    let mut cut = t.clone();
+    cut.heights.drain(..16 * t.nx);
+    cut.ny -= 16;
+    let (whole, cropped) = (ratio(t), ratio(cut));
+    eprintln!("nid-1 slope ratio {whole:?}, without the first 16 rows {cropped:?}");
+    assert!(whole.0 > 5.0 && cropped.0 < 0.5 * whole.0);
+}
