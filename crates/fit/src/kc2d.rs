@@ -136,6 +136,18 @@ pub fn periodogram(t: &Topography) -> Result<(Vec<f64>, f64, f64), FitError> {
     let (nx, ny) = (t.nx, t.ny);
     let (wx, wy) = (hann(nx), hann(ny));
     let mean = t.heights.iter().sum::<f64>() / (nx * ny) as f64;
+    let spread = t
+        .heights
+        .iter()
+        .map(|h| (h - mean).abs())
+        .fold(0.0, f64::max);
+    let scale = t.heights.iter().map(|h| h.abs()).fold(0.0, f64::max);
+    if spread <= 1e-12 * scale || spread == 0.0 {
+        return Err(FitError::data(
+            "anisotropic K-correlation fit",
+            "the map's heights are constant (to rounding): there is no spectrum to fit",
+        ));
+    }
     let w2 = wx.iter().map(|w| w * w).sum::<f64>() / nx as f64
         * wy.iter().map(|w| w * w).sum::<f64>()
         / ny as f64;

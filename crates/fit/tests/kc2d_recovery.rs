@@ -178,3 +178,38 @@ fn nid1_slope_ratio_comes_from_its_first_rows() {
     eprintln!("nid-1 slope ratio {whole:?}, without the first 16 rows {cropped:?}");
     assert!(whole.0 > 5.0 && cropped.0 < 0.5 * whole.0);
 }
+
+/// Maps the fit cannot use are refused with an error naming the fit, never a panic.
+#[test]
+fn unusable_maps_are_refused() {
+    let map = |nx: usize, ny: usize, h: f64| fit::Topography {
+        nx,
+        ny,
+        dx: UM,
+        dy: UM,
+        heights: vec![h; nx * ny],
+        channel: "test".into(),
+        format: "synthetic",
+    };
+    let mut nan = kc2d::synth_surface(64, 64, UM, isotropic(), 1);
+    nan.heights[100] = f64::NAN;
+    for (what, t) in [
+        ("profile", map(512, 1, 0.0)),
+        ("tiny", map(8, 8, 0.0)),
+        ("flat", map(64, 64, 1e-9)),
+        ("invalid points", nan),
+    ] {
+        let e = kc2d::fit(&t, 0.0).expect_err(what).to_string();
+        assert!(e.contains("anisotropic K-correlation fit"), "{what}: {e}");
+    }
+}
+
+fn isotropic() -> AnisoKcParams {
+    AnisoKcParams {
+        sigma: 0.05 * UM,
+        lx: 4.0 * UM,
+        ly: 4.0 * UM,
+        angle_rad: 0.0,
+        gamma: 2.5,
+    }
+}
