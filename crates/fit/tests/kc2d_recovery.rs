@@ -87,6 +87,19 @@ fn recovers_ratios_and_angles() {
     {
         check(ratio, angle, gamma, 11 + i as u64);
     }
+    // A map longer along x than along y.
+    let truth = AnisoKcParams {
+        sigma: 0.05 * UM,
+        lx: 1.5 * UM,
+        ly: 4.5 * UM,
+        angle_rad: 60f64.to_radians(),
+        gamma: 3.0,
+    };
+    let t = kc2d::synth_surface(512, 256, UM, truth, 21);
+    let p = kc2d::fit(&t, 0.0).unwrap().params;
+    eprintln!("512 × 256: {p:?}");
+    assert!(angle_err_deg(p.angle_rad, truth.angle_rad) < 3.0, "{p:?}");
+    assert!((p.ratio() / 3.0 - 1.0).abs() < 0.1, "{p:?}");
 }
 
 #[test]
