@@ -8,7 +8,13 @@
 //! steepest direction. A Beckmann surface with roughness `(α₁, α₂)` has per-axis slope
 //! variance `αᵢ²/2`, so `αᵢ = √2·sᵢ`; GGX has no finite slope variance, so its isotropic
 //! NDF fit `α` is split in the same proportion: `αᵢ = α·sᵢ/√((s₁² + s₂²)/2)`.
+//!
+//! The slope covariance only flags a map: at the pixel scale it is dominated by what a
+//! scanning instrument adds there (line glitches, the first rows of a scan), so the axes
+//! and lengths of the anisotropic wave-optical model come from the stretched
+//! K-correlation fitted to the 2-D PSD in the band ([`crate::kc2d`]), done for flagged maps.
 
+use crate::kc2d::{self, AnisoKcFit};
 use crate::psd::{self, Psd1d, WelchOptions};
 use crate::{FitError, Topography};
 
@@ -38,6 +44,9 @@ pub struct Anisotropy {
     pub psd_slopes: (f64, f64),
     /// True when `ratio > ANISOTROPY_THRESHOLD`.
     pub anisotropic: bool,
+    /// The stretched K-correlation fitted to the 2-D PSD ([`crate::kc2d`]), for maps
+    /// flagged anisotropic; the error in words when the fit failed.
+    pub kc: Option<Result<AnisoKcFit, String>>,
 }
 
 impl Anisotropy {
@@ -152,6 +161,8 @@ pub fn analyse(t: &Topography, psd_x: Psd1d) -> Result<Anisotropy, FitError> {
     };
     let psd_y = psd::welch(&transpose(t), &WelchOptions::default())?;
     let psd_slopes = (slope_rms(&psd_x), slope_rms(&psd_y));
+    let anisotropic = ratio > ANISOTROPY_THRESHOLD;
+    let kc = anisotropic.then(|| kc2d::fit(t, theta).map_err(|e| e.to_string()));
     Ok(Anisotropy {
         rms_slope_x: sx,
         rms_slope_y: sy,
@@ -166,6 +177,7 @@ pub fn analyse(t: &Topography, psd_x: Psd1d) -> Result<Anisotropy, FitError> {
         psd_x,
         psd_y,
         psd_slopes,
-        anisotropic: ratio > ANISOTROPY_THRESHOLD,
+        anisotropic,
+        kc,
     })
 }

@@ -309,41 +309,48 @@ fn kc_model(a: &Analysis, fresnel: &FresnelSpec, family: Family) -> Candidate {
     c
 }
 
-/// Full GHS of an anisotropic K-correlation surface, for a scan flagged anisotropic: σ and γ
-/// of the isotropic fit, and correlation lengths along the steepest slope and across it in
-/// the inverse ratio of the principal rms slopes (stretching an isotropic surface scales
-/// its slope along each axis as 1/L), their geometric mean the isotropic Lc.
+/// Full GHS of an anisotropic K-correlation surface, for a scan flagged anisotropic: the
+/// stretched K-correlation (σ, Lx, Ly, φ₀, γ) fitted to the map's 2-D PSD
+/// ([`crate::kc2d`]), in the map's axes, which are the renderer's tangent axes.
 fn ghs_aniso(a: &Analysis, fresnel: &FresnelSpec) -> Candidate {
-    let (surface, mut problems) = kc_surface(a);
     let mut c = blank(Family::GhsAniso, "full GHS, anisotropic KC".into());
     let Some(an) = a.anisotropy.as_ref().filter(|an| an.anisotropic) else {
-        problems.push(
+        c.problems.push(
             "the scan is not flagged anisotropic (principal rms slopes within a factor 1.5)".into(),
         );
-        c.problems = problems;
         return c;
     };
-    let (steep, across) = an.principal;
-    let shrink = (across / steep).sqrt();
-    if !(shrink.is_finite() && shrink > 0.0) {
-        problems.push(format!(
-            "principal rms slopes {steep:.4e} and {across:.4e} give no axis ratio"
-        ));
-        c.problems = problems;
-        return c;
+    let fit = match &an.kc {
+        Some(Ok(f)) => f,
+        Some(Err(e)) => {
+            c.problems
+                .push(format!("anisotropic K-correlation fit: {e}"));
+            return c;
+        }
+        None => {
+            c.problems
+                .push("no anisotropic K-correlation fit of the 2-D PSD".into());
+            return c;
+        }
+    };
+    if let Some(p) = &fit.problem {
+        c.problems
+            .push(format!("anisotropic K-correlation fit: {p}"));
     }
+    let p = &fit.params;
     c.label = format!(
-        "full GHS, anisotropic KC (Lc ratio {:.2})",
-        1.0 / (shrink * shrink)
+        "full GHS, anisotropic KC fit (Ly/Lx {:.2}, φ₀ {:.1}°)",
+        p.ratio(),
+        p.angle_rad.to_degrees()
     );
     let spec = MaterialSpec {
         model: ModelSpec::GhsAniso {
             surface: AnisoSpec {
-                sigma_um: surface.sigma_um,
-                lx_um: surface.lc_um * shrink,
-                ly_um: surface.lc_um / shrink,
-                angle_deg: an.slope_direction_deg,
-                gamma: surface.gamma,
+                sigma_um: p.sigma * UM,
+                lx_um: p.lx * UM,
+                ly_um: p.ly * UM,
+                angle_deg: p.angle_rad.to_degrees(),
+                gamma: p.gamma,
             },
             options: GhsOptions::default(),
         },
@@ -351,9 +358,8 @@ fn ghs_aniso(a: &Analysis, fresnel: &FresnelSpec) -> Candidate {
     };
     match spec.validate() {
         Ok(()) => c.spec = Some(spec),
-        Err(e) => problems.push(e.to_string()),
+        Err(e) => c.problems.push(e.to_string()),
     }
-    c.problems = problems;
     c
 }
 

@@ -22,6 +22,7 @@ pub mod field_spectrum;
 pub mod fill;
 pub mod io;
 pub mod kc;
+pub mod kc2d;
 pub mod level;
 pub mod material_file;
 pub mod ndf;
