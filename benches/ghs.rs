@@ -11,16 +11,28 @@
 //!   against freshly transformed rows (midway between rows, quarter points
 //!   between columns, values ≥ 1e−9 of the peak) and the mean eval time.
 //!
+//! * criterion group `new_surface`: building what a new surface needs, each
+//!   iteration from scratch: the full-GHS S̃ table of S138 (σ 0.138 µm,
+//!   Lc 2 µm, γ 2, rows up to the g it reaches) and of S280, the whole
+//!   full-GHS model of S138 (table and energy tables), and the two-scale
+//!   model of S138 split at 100λ (its D̃_eff table). Targets (issue 34):
+//!   full-GHS table ≤ 2 ms, two-scale ≤ 5 ms. The builders spread rows over
+//!   the cores the process may use, so `taskset -c 0 cargo bench --bench ghs
+//!   -- new_surface` gives one core's time and the plain run the wall time on
+//!   all cores.
+//!
 //! Run: `cargo bench --bench ghs`.
 
 use std::hint::black_box;
 use std::time::{Duration, Instant};
 
 use brdf::microfacet::{Distribution, MicrofacetConductor};
+use brdf::paper::{find_sample, two_scale_beta};
 use brdf::statistics::KcPsd;
 use brdf::statistics::matern::Matern;
-use brdf::wave::ghs::hemisphere_u_max;
+use brdf::wave::ghs::{TableSource, hemisphere_g_max, hemisphere_u_max};
 use brdf::wave::ghs_table::{GhsTable, TableResolution};
+use brdf::wave::two_scale::{TwoScale, TwoScaleParams};
 use brdf::wave::{GhsFull, GhsOptions, GhsSsa};
 use brdf::{Bxdf, Fresnel, Ior, Metal};
 use criterion::{Criterion, criterion_group, criterion_main};
@@ -142,6 +154,45 @@ fn models(c: &mut Criterion) {
     bench_model(c, "ghs_ssa_cu", &ssa);
 }
 
+/// A new surface's full-GHS table, as `GhsFull::new` builds it.
+fn new_ghs_table(psd: &KcPsd) -> GhsTable {
+    psd.build_table(
+        hemisphere_u_max(psd.lc_um()),
+        hemisphere_g_max(psd.sigma_um()),
+        TableResolution::default(),
+    )
+    .unwrap()
+}
+
+fn new_surfaces(c: &mut Criterion) {
+    let s138 = KcPsd::new(0.138, 2.0, 2.0).unwrap();
+    let mut g = c.benchmark_group("new_surface");
+    g.sample_size(20);
+    g.bench_function("ghs_table_s138", |b| {
+        b.iter(|| new_ghs_table(black_box(&s138)))
+    });
+    g.bench_function("ghs_table_s280", |b| {
+        b.iter(|| new_ghs_table(black_box(&s280())))
+    });
+    g.bench_function("ghs_full_model_s138", |b| {
+        b.iter(|| GhsFull::new(black_box(s138), cu()).unwrap())
+    });
+    let sample = find_sample("S138").unwrap();
+    let params = TwoScaleParams {
+        beta: two_scale_beta(&sample.surface, 100.0 * 0.55),
+        sigma_um: sample.surface.sigma_um,
+        lc_um: sample.surface.lc_um,
+        gamma: sample.surface.gamma,
+        fresnel: cu(),
+        coherent: Default::default(),
+        resolution: Default::default(),
+    };
+    g.bench_function("two_scale_s138", |b| {
+        b.iter(|| TwoScale::new(black_box(params.clone())).unwrap())
+    });
+    g.finish();
+}
+
 fn config() -> Criterion {
     Criterion::default()
         .sample_size(30)
@@ -149,5 +200,5 @@ fn config() -> Criterion {
         .measurement_time(Duration::from_secs(2))
 }
 
-criterion_group! { name = benches; config = config(); targets = models }
+criterion_group! { name = benches; config = config(); targets = new_surfaces, models }
 criterion_main!(benches);

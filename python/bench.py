@@ -10,11 +10,20 @@ The numbers of record are in docs/python.md.
 import argparse
 import math
 import os
+import sys
 import time
 
 import numpy as np
 
-import lustre
+# `python python/bench.py` puts python/ first on the path, and its source folder lustre/
+# (no compiled extension in it) would shadow the installed package.
+_here = os.path.dirname(os.path.abspath(__file__))
+sys.path[:] = [p for p in sys.path if os.path.abspath(p or os.curdir) != _here]
+
+try:
+    import lustre
+except ImportError as e:
+    sys.exit(f"bench.py measures the installed package: `pip install ./python` first ({e})")
 
 
 def directions(n: int, seed: int) -> np.ndarray:

@@ -33,6 +33,26 @@ fn fill<T: Send>(out: &mut [T], f: impl Fn(usize) -> T + Sync) {
     }
 }
 
+/// `(a[i], b[i]) = f(i)` for every row, written straight into the two output arrays
+/// (no array of pairs to split afterwards), over rayon's threads when there are many rows.
+fn fill_pair(a: &mut [f64], b: &mut [f64], f: impl Fn(usize) -> (f64, f64) + Sync) {
+    let row = |i: usize, x: &mut f64, y: &mut f64| (*x, *y) = f(i);
+    if a.len() < PARALLEL_MIN_ROWS {
+        for (i, (x, y)) in a.iter_mut().zip(b.iter_mut()).enumerate() {
+            row(i, x, y);
+        }
+    } else {
+        a.par_chunks_mut(CHUNK_ROWS)
+            .zip(b.par_chunks_mut(CHUNK_ROWS))
+            .enumerate()
+            .for_each(|(c, (ca, cb))| {
+                for (j, (x, y)) in ca.iter_mut().zip(cb.iter_mut()).enumerate() {
+                    row(c * CHUNK_ROWS + j, x, y);
+                }
+            });
+    }
+}
+
 /// An `(n, 3)` array of rows (one row is broadcast to every output row).
 struct Rows<'a> {
     data: &'a [f64],
@@ -54,11 +74,13 @@ impl<'a> Rows<'a> {
         Ok(Rows { data, n: shape[0] })
     }
 
+    #[inline]
     fn at(&self, i: usize) -> [f64; 3] {
         let k = if self.n == 1 { 0 } else { 3 * i };
         [self.data[k], self.data[k + 1], self.data[k + 2]]
     }
 
+    #[inline]
     fn dir(&self, i: usize) -> DVec3 {
         DVec3::from_array(self.at(i))
     }
@@ -90,6 +112,7 @@ impl<'a> Lambdas<'a> {
         self.0.len()
     }
 
+    #[inline]
     fn at(&self, i: usize) -> f64 {
         if self.0.len() == 1 {
             self.0[0]
@@ -176,15 +199,16 @@ impl Material {
         let lambda = Lambdas::new(&lambda_nm)?;
         let n = row_count(&[("wi", wi.n), ("wo", wo.n), ("lambda_nm", lambda.n())])?;
         let model = &self.model;
-        let out = py.detach(|| {
-            let mut out = vec![(0.0, 0.0); n];
-            fill(&mut out, |i| {
+        let (f, pdf) = py.detach(|| {
+            let (mut f, mut pdf) = (vec![0.0; n], vec![0.0; n]);
+            // `eval` and `pdf` separately, as `lustre brdf eval` calls them: a model's
+            // `eval_pdf` may round its pdf differently, and the values must be the CLI's.
+            fill_pair(&mut f, &mut pdf, |i| {
                 let (a, b, l) = (wi.dir(i), wo.dir(i), lambda.at(i));
                 (model.eval(a, b, l), model.pdf(a, b, l))
             });
-            out
+            (f, pdf)
         });
-        let (f, pdf): (Vec<f64>, Vec<f64>) = out.into_iter().unzip();
         Ok((array1(py, f), array1(py, pdf)))
     }
 

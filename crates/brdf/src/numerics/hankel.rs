@@ -56,18 +56,6 @@ pub(crate) fn kernel<C: Correlation + ?Sized>(c: &C, x: f64, g: f64) -> f64 {
     }
 }
 
-#[cfg(feature = "alloc")]
-/// [`kernel`] from M(x) and 1 − M(x) already at hand (the table builder
-/// evaluates them once per point of a lattice shared by all its rows).
-#[inline]
-pub(crate) fn kernel_from(m: f64, one_minus_m: f64, g: f64) -> f64 {
-    if g < 1.0 {
-        kernel_small_g(m, g)
-    } else {
-        kernel_large_g(one_minus_m, g)
-    }
-}
-
 #[inline]
 fn kernel_small_g(m: f64, g: f64) -> f64 {
     crate::numerics::math::exp(-g) * libm::expm1(g * m)
@@ -79,16 +67,47 @@ fn kernel_large_g(one_minus_m: f64, g: f64) -> f64 {
 }
 
 #[cfg(feature = "alloc")]
-/// e^{−g}·(e^{gM} − 1 − gM): the kernel without its first diffraction order
-/// e^{−g} g M, whose transform g e^{−g} p(u) is known exactly. The series
-/// below gM = ½ keeps full relative accuracy where the two nearly cancel.
-#[inline]
-pub(crate) fn kernel_without_first_order(m: f64, one_minus_m: f64, g: f64) -> f64 {
-    let t = g * m;
-    if t < 0.5 {
-        crate::numerics::math::exp(-g) * exp_minus_1_minus_x(t)
-    } else {
-        kernel_from(m, one_minus_m, g) - crate::numerics::math::exp(-g) * t
+/// [`kernel`] at one g from M(x) and 1 − M(x) already at hand (the table
+/// builder evaluates them once per point of a lattice shared by all its
+/// rows), with e^{−g} computed once per row instead of once per point (the
+/// same value, so the same bits as [`kernel`]).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct KernelAtG {
+    g: f64,
+    e_neg_g: f64,
+}
+
+#[cfg(feature = "alloc")]
+impl KernelAtG {
+    pub(crate) fn new(g: f64) -> Self {
+        KernelAtG {
+            g,
+            e_neg_g: crate::numerics::math::exp(-g),
+        }
+    }
+
+    /// h = e^{−g(1−M)} − e^{−g}.
+    #[inline]
+    pub(crate) fn h(&self, m: f64, one_minus_m: f64) -> f64 {
+        if self.g < 1.0 {
+            self.e_neg_g * libm::expm1(self.g * m)
+        } else {
+            crate::numerics::math::exp(-self.g * one_minus_m) - self.e_neg_g
+        }
+    }
+
+    /// e^{−g}·(e^{gM} − 1 − gM): the kernel without its first diffraction
+    /// order e^{−g} g M, whose transform g e^{−g} p(u) is known exactly. The
+    /// series below gM = ½ keeps full relative accuracy where the two nearly
+    /// cancel.
+    #[inline]
+    pub(crate) fn h_without_first_order(&self, m: f64, one_minus_m: f64) -> f64 {
+        let t = self.g * m;
+        if t < 0.5 {
+            self.e_neg_g * exp_minus_1_minus_x(t)
+        } else {
+            self.h(m, one_minus_m) - self.e_neg_g * t
+        }
     }
 }
 
@@ -297,6 +316,25 @@ mod fftlog {
                 }
             }
             let mut len = 2;
+            if n >= 4 {
+                // The first two stages (twiddles 1 and −i) as one radix-4
+                // pass: as general stages their blocks of one and two
+                // butterflies cost more in loop overhead than in arithmetic.
+                for (r, i) in re.chunks_exact_mut(4).zip(im.chunks_exact_mut(4)) {
+                    let (a0r, a0i, a1r, a1i) = (r[0] + r[1], i[0] + i[1], r[0] - r[1], i[0] - i[1]);
+                    let (a2r, a2i, a3r, a3i) = (r[2] + r[3], i[2] + i[3], r[2] - r[3], i[2] - i[3]);
+                    r[0] = a0r + a2r;
+                    i[0] = a0i + a2i;
+                    r[2] = a0r - a2r;
+                    i[2] = a0i - a2i;
+                    // (a3r + i a3i)·(−i) = a3i − i a3r
+                    r[1] = a1r + a3i;
+                    i[1] = a1i - a3r;
+                    r[3] = a1r - a3i;
+                    i[3] = a1i + a3r;
+                }
+                len = 8;
+            }
             while len <= n {
                 let half = len / 2;
                 let tw = &self.twiddle[half - 1..len - 1];
