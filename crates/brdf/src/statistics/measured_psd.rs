@@ -468,7 +468,14 @@ impl RadialPsd for TabulatedPsd {
 /// over 44 decades) and interpolated (cubic in ln x); where the remainder
 /// is below 1e−6 its quadratic small-x form x²m₂/4 is used instead:
 /// 1 − M = c(1 − M_ν(x)) + [(1 − c) − M_r(x)]. Beyond the last separation
-/// where |M| > 1e−6 (×2) M is set to 0, removing the transform's noise floor.
+/// where |M| > 1e−6, M is faded smoothly to 0 over a factor 2 in x, removing
+/// the transform's noise floor. The transforms of the full GHS subtract the
+/// cusp with the Matérn part alone (its transform is exact), and stop
+/// integrating where an envelope of |M| has decayed (M goes negative).
+///
+/// The first order of S̃ is p itself, added exactly by the table and the
+/// direct transform, because this M reproduces p to only ~2e−3 near the
+/// band's low end, where P changes slope fastest.
 #[derive(Clone, Debug)]
 pub struct TabulatedCorrelation {
     p: TabulatedPsd,
