@@ -9,6 +9,9 @@
 //! transform is checked against a plain quadrature without its cusp subtraction, and the
 //! covariance M both use against a quadrature of P itself.
 
+// `!(x <= y)` on purpose: a NaN error must count as a failure.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
 use std::f64::consts::PI;
 use std::path::Path;
 
@@ -162,8 +165,10 @@ fn tables() -> Vec<(String, TabulatedPsd)> {
         .collect()
 }
 
+/// Diagnostic: the tabulated covariance M against a quadrature of P itself, per table
+/// (`ONLY=name,… VERBOSE=1` to choose tables and print every point).
 #[test]
-#[ignore]
+#[ignore = "diagnostic, prints"]
 fn diagnose_covariance() {
     for (name, t) in tables() {
         let c = TabulatedCorrelation::new(&t);
@@ -202,8 +207,10 @@ fn diagnose_covariance() {
     }
 }
 
+/// Diagnostic: the worst point of each table with the table, the direct transform and the
+/// plain quadrature side by side (`ONLY`, `VERBOSE` as above).
 #[test]
-#[ignore]
+#[ignore = "diagnostic, prints"]
 fn diagnose_table() {
     for (name, t) in tables() {
         let c = TabulatedCorrelation::new(&t);
@@ -342,7 +349,7 @@ fn the_direct_transform_agrees_with_plain_quadrature() {
                 let b = brute(&c, u, g);
                 let e = (d / b - 1.0).abs();
                 worst = worst.max(e);
-                assert!(e < 1e-5, "{name}: g {g} u {u}: direct {d:e} plain {b:e}");
+                assert!(e < 1e-6, "{name}: g {g} u {u}: direct {d:e} plain {b:e}");
             }
         }
     }
