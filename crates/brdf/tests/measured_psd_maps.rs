@@ -308,9 +308,9 @@ fn check_all(prefix: &str, tol: f64) {
         if !(e <= tol) {
             bad.push(line.clone());
         }
+        eprintln!("{line}");
         lines.push(line);
     }
-    println!("{}", lines.join("\n"));
     assert!(!lines.is_empty(), "no tables under tests/data/measured_psd");
     assert!(bad.is_empty(), "{bad:#?}");
 }
@@ -320,7 +320,11 @@ fn synthetic_map_tables_agree_with_the_direct_transform() {
     check_all("kc_", 1e-3);
 }
 
+/// Slow (the direct transform of a scan whose band reaches far below 1/L integrates the
+/// covariance out to where its envelope has decayed, at panels of π/u up to u ~ 2kL):
+/// more than 15 min for the 20 tables on the shared 2-core machine.
 #[test]
+#[ignore = "slow: run with --ignored"]
 fn real_scan_tables_agree_with_the_direct_transform() {
     check_all("scan_", 1e-3);
 }
