@@ -322,7 +322,7 @@ fn synthetic_map_tables_agree_with_the_direct_transform() {
 
 /// Slow (the direct transform of a scan whose band reaches far below 1/L integrates the
 /// covariance out to where its envelope has decayed, at panels of π/u up to u ~ 2kL):
-/// more than 15 min for the 20 tables on the shared 2-core machine.
+/// more than 15 min for the 19 tables on the shared 2-core machine.
 #[test]
 #[ignore = "slow: run with --ignored"]
 fn real_scan_tables_agree_with_the_direct_transform() {
