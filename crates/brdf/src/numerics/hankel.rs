@@ -39,6 +39,59 @@ pub trait Correlation {
     fn separate_first_order(&self) -> bool {
         self.cusp_nu() < FIRST_ORDER_APART_BELOW_NU
     }
+    /// An upper bound of |M(y)| over all y ≥ x, non-increasing in x: where
+    /// the transforms may stop integrating. The default, M itself, holds for
+    /// a covariance that falls monotonically to 0 (the K-correlation's
+    /// Matérn); a measured spectrum's covariance oscillates and goes
+    /// negative, and stopping at its first zero drops the lobes beyond it.
+    fn m_envelope(&self, x: f64) -> f64 {
+        self.m(x)
+    }
+    /// The function K the transforms subtract, as A·K(x/ε), to remove the
+    /// cusp: K(0) = 1 and 1 − M = w(1 − K) + (terms smoother than the cusp),
+    /// w = [`Correlation::cusp_weight`]. Its transform
+    /// [`Correlation::cusp_psd_u`] is added back exactly, so the two must be
+    /// an exact pair: the default, M itself with p, is for covariances known
+    /// in closed form; a measured spectrum's M is a numerical transform of p,
+    /// and the difference, multiplied by A ε² p(0) ≫ S̃ at large g, would
+    /// swamp the result.
+    fn cusp_m(&self, x: f64) -> f64 {
+        self.m(x)
+    }
+    /// The transform of [`Correlation::cusp_m`] in the unit-mass convention of
+    /// [`Correlation::unit_psd_u`].
+    fn cusp_psd_u(&self, u: f64) -> f64 {
+        self.unit_psd_u(u)
+    }
+    /// [`Correlation::m_envelope`] for [`Correlation::cusp_m`].
+    fn cusp_m_envelope(&self, x: f64) -> f64 {
+        self.m_envelope(x)
+    }
+    /// The weight w of [`Correlation::cusp_m`] in 1 − M's leading
+    /// non-analytic term.
+    fn cusp_weight(&self) -> f64 {
+        1.0
+    }
+}
+
+/// An upper bound of |h(y)| over all y ≥ x for the GHS kernel h (or, with
+/// `without_first_order`, the kernel less its first order), from
+/// [`Correlation::m_envelope`]: |e^{gM} − 1| ≤ e^{g|M|} − 1 and
+/// |e^{t} − 1 − t| ≤ e^{|t|} − 1 − |t|, so the bound is the kernel at the
+/// envelope, and non-increasing with it.
+#[inline]
+pub(crate) fn kernel_envelope<C: Correlation + ?Sized>(
+    c: &C,
+    x: f64,
+    g: f64,
+    without_first_order: bool,
+) -> f64 {
+    let m = c.m_envelope(x).clamp(0.0, 1.0);
+    if without_first_order {
+        kernel_without_first_order(m, 1.0 - m, g)
+    } else {
+        kernel_from(m, 1.0 - m, g)
+    }
 }
 
 /// Below this tail exponent ν a KC table leaves the first order out (see
@@ -56,6 +109,12 @@ pub(crate) fn kernel<C: Correlation + ?Sized>(c: &C, x: f64, g: f64) -> f64 {
     }
 }
 
+/// [`kernel`] from M(x) and 1 − M(x) already at hand.
+#[inline]
+pub(crate) fn kernel_from(m: f64, one_minus_m: f64, g: f64) -> f64 {
+    KernelAtG::new(g).h(m, one_minus_m)
+}
+
 #[inline]
 fn kernel_small_g(m: f64, g: f64) -> f64 {
     crate::numerics::math::exp(-g) * libm::expm1(g * m)
@@ -66,7 +125,6 @@ fn kernel_large_g(one_minus_m: f64, g: f64) -> f64 {
     crate::numerics::math::exp(-g * one_minus_m) - crate::numerics::math::exp(-g)
 }
 
-#[cfg(feature = "alloc")]
 /// [`kernel`] at one g from M(x) and 1 − M(x) already at hand (the table
 /// builder evaluates them once per point of a lattice shared by all its
 /// rows), with e^{−g} computed once per row instead of once per point (the
@@ -77,7 +135,6 @@ pub(crate) struct KernelAtG {
     e_neg_g: f64,
 }
 
-#[cfg(feature = "alloc")]
 impl KernelAtG {
     pub(crate) fn new(g: f64) -> Self {
         KernelAtG {
@@ -111,7 +168,13 @@ impl KernelAtG {
     }
 }
 
-#[cfg(feature = "alloc")]
+/// The kernel without its first diffraction order
+/// ([`KernelAtG::h_without_first_order`]) at one point.
+#[inline]
+pub(crate) fn kernel_without_first_order(m: f64, one_minus_m: f64, g: f64) -> f64 {
+    KernelAtG::new(g).h_without_first_order(m, one_minus_m)
+}
+
 /// e^t − 1 − t for |t| ≤ ½, by its Taylor series (relative error < 1e−16).
 #[inline]
 fn exp_minus_1_minus_x(t: f64) -> f64 {
@@ -126,28 +189,29 @@ fn exp_minus_1_minus_x(t: f64) -> f64 {
     sum
 }
 
-#[cfg(feature = "alloc")]
 /// Cusp-subtraction parameters (A', ε') for the kernel without its first
 /// order: its value at 0 is A' = 1 − e^{−g} − g e^{−g} and its leading
-/// non-analytic term −g(1 − e^{−g}) a x^{2ν}, so A' M(x/ε') matches both with
-/// ε'^{2ν} = A'/(g(1 − e^{−g})).
+/// non-analytic term −g(1 − e^{−g}) a x^{2ν}, so A' K(x/ε') matches both with
+/// ε'^{2ν} = A'/(g(1 − e^{−g})w), for the subtracted K of weight w
+/// ([`Correlation::cusp_weight`]).
 #[inline]
-pub(crate) fn cusp_params_without_first_order(nu: f64, g: f64) -> (f64, f64) {
+pub(crate) fn cusp_params_without_first_order(nu: f64, w: f64, g: f64) -> (f64, f64) {
     let b = -libm::expm1(-g);
     let a = if g < 0.5 {
         crate::numerics::math::exp(-g) * exp_minus_1_minus_x(g)
     } else {
         b - g * crate::numerics::math::exp(-g)
     };
-    let eps = crate::numerics::math::exp(crate::numerics::math::ln(a / (g * b)) / (2.0 * nu));
+    let eps = crate::numerics::math::exp(crate::numerics::math::ln(a / (g * b * w)) / (2.0 * nu));
     (a, eps)
 }
 
-/// Cusp-subtraction parameters (A, ε) for this g.
+/// Cusp-subtraction parameters (A, ε) for this g and a subtracted K of
+/// weight w ([`Correlation::cusp_weight`]): ε^{2ν} = A/(g w).
 #[inline]
-pub(crate) fn cusp_params(nu: f64, g: f64) -> (f64, f64) {
+pub(crate) fn cusp_params(nu: f64, w: f64, g: f64) -> (f64, f64) {
     let a = -libm::expm1(-g);
-    let eps = crate::numerics::math::exp(crate::numerics::math::ln(a / g) / (2.0 * nu));
+    let eps = crate::numerics::math::exp(crate::numerics::math::ln(a / (g * w)) / (2.0 * nu));
     (a, eps)
 }
 
@@ -212,19 +276,43 @@ fn crossing(f: impl Fn(f64) -> f64, x0: f64, level: f64) -> f64 {
 
 /// S̃(u; g) by the direct, cusp-subtracted Hankel transform: the reference
 /// generator (~1e−12 relative where S̃ is above the round-off floor of
-/// ~1e−18·A absolute). Costs O(u·x_c) kernel evaluations.
+/// ~1e−18·A absolute). Costs O(u·x_c) kernel evaluations. Where the
+/// correlation asks for it ([`Correlation::separate_first_order`]: heavy
+/// tails, measured spectra) the first order g e^{−g} p(u) is added exactly
+/// and only the rest transformed (physics.md §4.1): a measured spectrum's M
+/// is itself a numerical transform of p, good to ~1e−3 of p at the band's
+/// low end, and the first order is most of S̃ at small g.
 pub fn s_tilde_direct<C: Correlation + ?Sized>(c: &C, u: f64, g: f64) -> f64 {
     if !(g > 0.0) || !(u >= 0.0) || !u.is_finite() {
         return 0.0;
     }
     let nu = c.cusp_nu();
-    let (a, eps) = cusp_params(nu, g);
-    let analytic = a * eps * eps * c.unit_psd_u(eps * u);
+    let apart = c.separate_first_order();
+    let (a, eps) = if apart {
+        cusp_params_without_first_order(nu, c.cusp_weight(), g)
+    } else {
+        cusp_params(nu, c.cusp_weight(), g)
+    };
+    let first = if apart {
+        g * crate::numerics::math::exp(-g) * c.unit_psd_u(u)
+    } else {
+        0.0
+    };
+    let analytic = a * eps * eps * c.cusp_psd_u(eps * u) + first;
     let xs = kernel_width(c, g).min(1.0);
     let xw = xs.min(eps);
-    let rem = |x: f64| kernel(c, x, g) - a * c.m(x / eps);
-    let xh = crossing(|x| kernel(c, x, g), xs, 1e-19 * a);
-    let xe = eps * crossing(|x| c.m(x), 1.0, 1e-19);
+    let h = |x: f64| {
+        if apart {
+            kernel_without_first_order(c.m(x), c.one_minus_m(x), g)
+        } else {
+            kernel(c, x, g)
+        }
+    };
+    let rem = |x: f64| h(x) - a * c.cusp_m(x / eps);
+    // Where the kernel and the subtracted M(x/ε) have decayed for good (their
+    // envelopes: a measured covariance crosses zero long before it has).
+    let xh = crossing(|x| kernel_envelope(c, x, g, apart), xs, 1e-19 * a);
+    let xe = eps * crossing(|x| c.cusp_m_envelope(x), 1.0, 1e-19);
     let xc = xh.max(xe);
     let (gx, gw) = gauss_legendre::<8>();
     let integrate = |lo: f64, hi: f64| {

@@ -40,7 +40,7 @@ use core::f64::consts::PI;
 
 use crate::BrdfError;
 use crate::numerics::hankel::{
-    Correlation, FftLog, KernelAtG, cusp_params, cusp_params_without_first_order, kernel,
+    Correlation, FftLog, KernelAtG, cusp_params, cusp_params_without_first_order, kernel_envelope,
     kernel_width,
 };
 use crate::numerics::interp::lagrange4;
@@ -161,9 +161,9 @@ impl RowPlan {
         let nu = c.cusp_nu();
         let apart = first_order_apart(c);
         let (a, eps) = if apart {
-            cusp_params_without_first_order(nu, g)
+            cusp_params_without_first_order(nu, c.cusp_weight(), g)
         } else {
-            cusp_params(nu, g)
+            cusp_params(nu, c.cusp_weight(), g)
         };
         let xs = kernel_width(c, g);
         let w = if xs.is_finite() {
@@ -178,19 +178,10 @@ impl RowPlan {
         let t0 = j0 as f64 * dt;
         // Past these points the kernel and the subtracted Matérn are below
         // 1e−25 of A: treat as zero.
-        let x_h = if apart {
-            let h = KernelAtG::new(g);
-            first_below(
-                |x| h.h_without_first_order(c.m(x), c.one_minus_m(x)),
-                1e-25 * a,
-                t0,
-                dt,
-                n,
-            )
-        } else {
-            first_below(|x| kernel(c, x, g), 1e-25 * a, t0, dt, n)
-        };
-        let x_e = first_below(|x| c.m(x / eps), 1e-25, t0, dt, n);
+        // Envelopes, not the functions: a measured covariance crosses zero
+        // long before it has decayed.
+        let x_h = first_below(|x| kernel_envelope(c, x, g, apart), 1e-25 * a, t0, dt, n);
+        let x_e = first_below(|x| c.cusp_m_envelope(x / eps), 1e-25, t0, dt, n);
         RowPlan {
             g,
             apart,
@@ -332,7 +323,11 @@ impl Row {
             } else {
                 kernel.h(m, omm)
             };
-            let s = if i < rp.x_e { a * c.m(x / eps) } else { 0.0 };
+            let s = if i < rp.x_e {
+                a * c.cusp_m(x / eps)
+            } else {
+                0.0
+            };
             m0 += h * x * x;
             m2 += h * x * x * x * x;
             *slot = h - s;
@@ -372,7 +367,7 @@ impl Row {
     /// remainder at u. Far in the tail the analytic part alone is S̃'s
     /// leading asymptote g·p(u) (A ε^{−2ν} = g).
     fn parts<C: Correlation + ?Sized>(&self, c: &C, u: f64) -> (f64, f64) {
-        let analytic = self.a * self.eps * self.eps * c.unit_psd_u(self.eps * u);
+        let analytic = self.a * self.eps * self.eps * c.cusp_psd_u(self.eps * u);
         // Far below 1/ℓ the output F·u^q is at round-off and dividing by u^q
         // amplifies it; S̃ is flat there to O(u²ℓ²) < 1e−12, so hold the value.
         let pos = (crate::numerics::math::ln(u.max(1e-6 / self.ell)) - self.s0) / self.dt;
