@@ -7,31 +7,12 @@
 use std::path::Path;
 use std::process::{Command, Output};
 
-const SCENE: &str = r#"[camera]
-look_from = [0.0, 1.0, 2.0]
-look_at = [0.0, 0.0, 0.0]
-fov_deg = 40.0
-resolution = [4, 3]
+mod common;
 
-[film]
-spp = 2
-
-[materials.m]
-model = "ggx"
-metal = "brass"
-alpha = 0.2
-
-[[shapes]]
-type = "rectangle"
-size = [1.0, 1.0]
-material = "m"
-transform = { rotate_deg = [-90.0, 0.0, 0.0] }
-
-[[lights]]
-type = "point"
-position = [0.0, 1.0, 0.0]
-intensity = 1.0
-"#;
+/// The shared tiny scene at 2 spp (a resumable film needs more than one sample).
+fn scene() -> String {
+    common::TINY_SCENE.replace("spp = 1", "spp = 2")
+}
 
 fn lustre(dir: &Path, args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_lustre"))
@@ -52,7 +33,7 @@ fn tempdir(tag: &str) -> std::path::PathBuf {
     let d = std::env::temp_dir().join(format!("lustre-hostile-cli-{tag}-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&d);
     std::fs::create_dir_all(&d).unwrap();
-    std::fs::write(d.join("s.toml"), SCENE).unwrap();
+    std::fs::write(d.join("s.toml"), scene()).unwrap();
     d
 }
 
@@ -259,8 +240,8 @@ fn no_film_and_shard_films_named_after_their_range() {
 #[test]
 fn resolution_limit_and_memory_are_checked_before_allocating() {
     let d = tempdir("resolution");
-    let at_limit = SCENE.replace("resolution = [4, 3]", "resolution = [32768, 1024]");
-    let over = SCENE.replace("resolution = [4, 3]", "resolution = [32768, 1025]");
+    let at_limit = scene().replace("resolution = [4, 3]", "resolution = [32768, 1024]");
+    let over = scene().replace("resolution = [4, 3]", "resolution = [32768, 1025]");
     std::fs::write(d.join("limit.toml"), &at_limit).unwrap();
     std::fs::write(d.join("over.toml"), &over).unwrap();
     render::load_str(&d.join("limit.toml"), &at_limit).unwrap();
