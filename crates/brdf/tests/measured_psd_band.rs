@@ -139,8 +139,15 @@ fn a_bounded_direct_transform_is_the_direct_transform_or_none() {
     let corr = TabulatedCorrelation::new(&band(&kc, 0.245, 31.4, 120));
     for (u, g) in [(0.0, 0.5), (20.0, 2.0), (200.0, 30.0)] {
         let full = hankel::s_tilde_direct(&corr, u, g);
-        assert_eq!(hankel::s_tilde_direct_within(&corr, u, g, f64::INFINITY), Some(full));
+        assert_eq!(
+            hankel::s_tilde_direct_within(&corr, u, g, f64::INFINITY),
+            Some(full)
+        );
         assert_eq!(hankel::s_tilde_direct_within(&corr, u, g, 1e8), Some(full));
-        assert_eq!(hankel::s_tilde_direct_within(&corr, u, g, 0.0), None, "u {u}, g {g}");
+        assert_eq!(
+            hankel::s_tilde_direct_within(&corr, u, g, 0.0),
+            None,
+            "u {u}, g {g}"
+        );
     }
 }
