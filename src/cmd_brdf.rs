@@ -438,8 +438,9 @@ fn answer(line: &str, cache: &mut ModelCache) -> Result<Value, QueryError> {
     };
     let wi = direction(theta_i, 0.0);
     let wo = direction(theta_o, phi_o);
-    let f = model.eval(wi, wo, lambda_nm);
-    let pdf = model.pdf(wi, wo, lambda_nm);
+    // Together, as the renderer's light sampling and the Python package's arrays
+    // evaluate them (a model's `eval_pdf` may round its pdf differently from `pdf`).
+    let (f, pdf) = model.eval_pdf(wi, wo, lambda_nm);
     let spec = model.specular(wi, lambda_nm).weight;
     Ok(json!({"f": f, "specular_weight": spec, "pdf": pdf}))
 }
@@ -664,8 +665,11 @@ mod tests {
         let got = run(&q, &mut cache).remove(0);
         let wi = direction(25.0, 0.0);
         let wo = direction(35.0, 170.0);
-        assert_eq!(got["f"].as_f64().unwrap(), direct.eval(wi, wo, 500.0));
-        assert_eq!(got["pdf"].as_f64().unwrap(), direct.pdf(wi, wo, 500.0));
+        assert_eq!(got["f"].as_f64().unwrap(), direct.eval_pdf(wi, wo, 500.0).0);
+        assert_eq!(
+            got["pdf"].as_f64().unwrap(),
+            direct.eval_pdf(wi, wo, 500.0).1
+        );
     }
 
     /// A cache smaller than the working set evicts the least recently used

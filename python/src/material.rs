@@ -33,23 +33,49 @@ fn fill<T: Send>(out: &mut [T], f: impl Fn(usize) -> T + Sync) {
     }
 }
 
-/// `(a[i], b[i]) = f(i)` for every row, written straight into the two output arrays
-/// (no array of pairs to split afterwards), over rayon's threads when there are many rows.
-fn fill_pair(a: &mut [f64], b: &mut [f64], f: impl Fn(usize) -> (f64, f64) + Sync) {
-    let row = |i: usize, x: &mut f64, y: &mut f64| (*x, *y) = f(i);
+/// `f(start, a_block, b_block)` over consecutive blocks of the two output arrays (rows
+/// `start..start + len`), written in place, over rayon's threads when there are many rows.
+fn fill_pair_blocks(
+    a: &mut [f64],
+    b: &mut [f64],
+    f: impl Fn(usize, &mut [f64], &mut [f64]) + Sync,
+) {
     if a.len() < PARALLEL_MIN_ROWS {
-        for (i, (x, y)) in a.iter_mut().zip(b.iter_mut()).enumerate() {
-            row(i, x, y);
-        }
+        f(0, a, b);
     } else {
         a.par_chunks_mut(CHUNK_ROWS)
             .zip(b.par_chunks_mut(CHUNK_ROWS))
             .enumerate()
-            .for_each(|(c, (ca, cb))| {
-                for (j, (x, y)) in ca.iter_mut().zip(cb.iter_mut()).enumerate() {
-                    row(c * CHUNK_ROWS + j, x, y);
-                }
-            });
+            .for_each(|(c, (ca, cb))| f(c * CHUNK_ROWS, ca, cb));
+    }
+}
+
+/// Rows gathered per call of `Bxdf::eval_pdf_rows` (on the stack: 14 KiB).
+const GATHER_ROWS: usize = 256;
+
+/// `(f, pdf)` of rows `start..start + f.len()` through `Bxdf::eval_pdf_rows`, the rows
+/// gathered from the input arrays (a broadcast row repeated) in blocks.
+fn eval_block(
+    model: &DynBxdf,
+    (wi, wo, lambda): (&Rows, &Rows, &Lambdas),
+    start: usize,
+    f: &mut [f64],
+    pdf: &mut [f64],
+) {
+    let mut a = [DVec3::ZERO; GATHER_ROWS];
+    let mut b = [DVec3::ZERO; GATHER_ROWS];
+    let mut l = [0.0; GATHER_ROWS];
+    for (k, (fc, pc)) in f
+        .chunks_mut(GATHER_ROWS)
+        .zip(pdf.chunks_mut(GATHER_ROWS))
+        .enumerate()
+    {
+        let first = start + k * GATHER_ROWS;
+        let m = fc.len();
+        for j in 0..m {
+            (a[j], b[j], l[j]) = (wi.dir(first + j), wo.dir(first + j), lambda.at(first + j));
+        }
+        model.eval_pdf_rows(&a[..m], &b[..m], &l[..m], fc, pc);
     }
 }
 
@@ -201,11 +227,10 @@ impl Material {
         let model = &self.model;
         let (f, pdf) = py.detach(|| {
             let (mut f, mut pdf) = (vec![0.0; n], vec![0.0; n]);
-            // `eval` and `pdf` separately, as `lustre brdf eval` calls them: a model's
-            // `eval_pdf` may round its pdf differently, and the values must be the CLI's.
-            fill_pair(&mut f, &mut pdf, |i| {
-                let (a, b, l) = (wi.dir(i), wo.dir(i), lambda.at(i));
-                (model.eval(a, b, l), model.pdf(a, b, l))
+            // `eval_pdf_rows` is bit-identical to `eval_pdf`, which `lustre brdf eval`
+            // calls: the values are the CLI's.
+            fill_pair_blocks(&mut f, &mut pdf, |start, f, pdf| {
+                eval_block(model, (&wi, &wo, &lambda), start, f, pdf)
             });
             (f, pdf)
         });

@@ -142,6 +142,45 @@ pub fn conductor_reflectance_ratio(num: f64, den: f64, n: f64, k: f64) -> f64 {
     }
 }
 
+/// [`conductor_reflectance_ratio`] for four (cos²θ, index) lanes with one
+/// shared `den`: the same operations in the same order on each lane, so each
+/// is bit-identical to the scalar call; written as element-wise loops over
+/// fixed-length arrays, which compile to packed instructions.
+#[inline(always)]
+pub(crate) fn conductor_reflectance_ratio_lanes(
+    num: [f64; 4],
+    den: f64,
+    n: [f64; 4],
+    k: [f64; 4],
+) -> [f64; 4] {
+    use crate::numerics::math::sqrt_lanes;
+    fn each(f: impl FnMut(usize) -> f64) -> [f64; 4] {
+        core::array::from_fn(f)
+    }
+    let c = each(|j| num[j].max(0.0));
+    let s = each(|j| (den - c[j]).max(0.0));
+    let n2 = each(|j| n[j] * n[j]);
+    let e = each(|j| n2[j] - k[j] * k[j] - 1.0);
+    let nk4 = each(|j| 4.0 * n2[j] * (k[j] * k[j]));
+    let t0 = each(|j| e[j] * den + c[j]);
+    let a2b2 = sqrt_lanes(each(|j| t0[j] * t0[j] + nk4[j] * (den * den)));
+    let t2_sq = each(|j| 2.0 * c[j] * (a2b2[j] + t0[j]));
+    let t2 = sqrt_lanes(t2_sq);
+    let t1 = each(|j| a2b2[j] + c[j]);
+    let t3 = each(|j| c[j] * a2b2[j] + s[j] * s[j]);
+    let r = each(|j| {
+        (t1[j] * t3[j] - t2[j] * t3[j])
+            / (t1[j] * t3[j] + s[j] * t2_sq[j] + t2[j] * (t1[j] * s[j] + t3[j]))
+    });
+    each(|j| {
+        if r[j].is_finite() {
+            r[j].clamp(0.0, 1.0)
+        } else {
+            0.0
+        }
+    })
+}
+
 /// [`conductor_reflectance_ratio`] for two indices at one angle, with the
 /// same operations in the same order on each lane (so bit-identical to two
 /// scalar calls): SSE2 is part of every x86-64, and its packed square root

@@ -68,6 +68,31 @@ pub trait Bxdf {
         }
     }
 
+    /// [`Bxdf::eval_pdf`] over rows: `(f[i], pdf[i]) = eval_pdf(wi[i], wo[i],
+    /// lambda_nm[i])` for `i` below the shortest of the five lengths,
+    /// bit-identical to it. Array front ends (the Python package) evaluate
+    /// millions of unrelated rows; models whose arithmetic has no branches
+    /// worth keeping (GGX) override this to evaluate several rows per SIMD
+    /// instruction.
+    #[inline]
+    fn eval_pdf_rows(
+        &self,
+        wi: &[DVec3],
+        wo: &[DVec3],
+        lambda_nm: &[f64],
+        f: &mut [f64],
+        pdf: &mut [f64],
+    ) {
+        let rows = wi
+            .iter()
+            .zip(wo)
+            .zip(lambda_nm)
+            .zip(f.iter_mut().zip(pdf.iter_mut()));
+        for (((&a, &b), &l), (f, p)) in rows {
+            (*f, *p) = self.eval_pdf(a, b, l);
+        }
+    }
+
     /// Draws an outgoing direction from three uniform numbers in [0, 1).
     /// Returns `None` when the sample carries no energy (below the horizon,
     /// evanescent, or zero weight).
@@ -115,6 +140,16 @@ macro_rules! forward_bxdf {
             }
             fn eval_pdf_many(&self, wi: DVec3, wo: DVec3, lambdas: &[f64], out: &mut [(f64, f64)]) {
                 (**self).eval_pdf_many(wi, wo, lambdas, out)
+            }
+            fn eval_pdf_rows(
+                &self,
+                wi: &[DVec3],
+                wo: &[DVec3],
+                lambda_nm: &[f64],
+                f: &mut [f64],
+                pdf: &mut [f64],
+            ) {
+                (**self).eval_pdf_rows(wi, wo, lambda_nm, f, pdf)
             }
             fn sample(&self, wi: DVec3, lambda_nm: f64, u: [f64; 3]) -> Option<BxdfSample> {
                 (**self).sample(wi, lambda_nm, u)

@@ -155,6 +155,32 @@ impl Bxdf for MicrofacetConductor {
         }
     }
 
+    fn eval_pdf_rows(
+        &self,
+        wi: &[DVec3],
+        wo: &[DVec3],
+        lambda_nm: &[f64],
+        f: &mut [f64],
+        pdf: &mut [f64],
+    ) {
+        match self.dist.kind() {
+            NdfKind::Ggx => super::rows::ggx_eval_pdf_rows(
+                &self.dist,
+                &self.fresnel,
+                (wi, wo, lambda_nm),
+                (f, pdf),
+                |a, b, l| self.eval_pdf(a, b, l),
+            ),
+            // Beckmann's Λ branches between 0 and erfc: row by row.
+            NdfKind::Beckmann => {
+                let rows = wi.iter().zip(wo).zip(lambda_nm);
+                for (((&a, &b), &l), (f, p)) in rows.zip(f.iter_mut().zip(pdf.iter_mut())) {
+                    (*f, *p) = self.eval_pdf(a, b, l);
+                }
+            }
+        }
+    }
+
     #[inline]
     fn sample(&self, wi: DVec3, lambda_nm: f64, u: [f64; 3]) -> Option<BxdfSample> {
         let d = &self.dist;

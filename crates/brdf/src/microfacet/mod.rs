@@ -8,6 +8,7 @@
 mod beckmann;
 mod conductor;
 mod ggx;
+mod rows;
 
 pub use conductor::{MicrofacetConductor, SmoothConductor};
 
