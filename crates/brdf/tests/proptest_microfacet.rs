@@ -124,9 +124,15 @@ fn any_fresnel() -> impl Strategy<Value = Fresnel> {
     prop_oneof![
         Just(Fresnel::One),
         (0..Metal::ALL.len()).prop_map(|m| Fresnel::conductor(Ior::metal(Metal::ALL[m]))),
-        (0.05f64..4.0, 0.0f64..8.0).prop_map(|(n, k)| Fresnel::conductor(Ior::constant(n, k).unwrap())),
+        (0.05f64..4.0, 0.0f64..8.0)
+            .prop_map(|(n, k)| Fresnel::conductor(Ior::constant(n, k).unwrap())),
         (0.05f64..4.0, 0.0f64..8.0).prop_map(|(n, k)| Fresnel::conductor(
-            Ior::table(vec![[300.0, n, k], [600.0, n + 0.5, 0.5 * k], [900.0, 1.0, k]]).unwrap()
+            Ior::table(vec![
+                [300.0, n, k],
+                [600.0, n + 0.5, 0.5 * k],
+                [900.0, 1.0, k]
+            ])
+            .unwrap()
         )),
     ]
 }

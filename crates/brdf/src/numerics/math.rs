@@ -110,6 +110,41 @@ pub fn sincos_2pi(u: f64) -> (f64, f64) {
     (f64::from_bits(a ^ neg_sin), f64::from_bits(b ^ neg_cos))
 }
 
+/// √x of four lanes at once (correctly rounded, so each lane equals
+/// `libm::sqrt` of it): one packed instruction where the target has AVX, two
+/// SSE2 ones on any other x86-64, four scalar roots elsewhere.
+#[inline(always)]
+pub fn sqrt_lanes(x: [f64; 4]) -> [f64; 4] {
+    #[cfg(all(target_arch = "x86_64", target_feature = "avx"))]
+    {
+        use core::arch::x86_64::{_mm256_loadu_pd, _mm256_sqrt_pd, _mm256_storeu_pd};
+        let mut r = [0.0; 4];
+        // SAFETY: AVX is enabled for this build (the cfg above); the load and
+        // store touch exactly the four f64 of `x` and `r`.
+        unsafe { _mm256_storeu_pd(r.as_mut_ptr(), _mm256_sqrt_pd(_mm256_loadu_pd(x.as_ptr()))) };
+        r
+    }
+    #[cfg(all(target_arch = "x86_64", not(target_feature = "avx")))]
+    {
+        use core::arch::x86_64::{_mm_loadu_pd, _mm_sqrt_pd, _mm_storeu_pd};
+        let mut r = [0.0; 4];
+        // SAFETY: SSE2 is part of every x86-64; each load and store touches two
+        // f64 inside `x` and `r`.
+        unsafe {
+            _mm_storeu_pd(r.as_mut_ptr(), _mm_sqrt_pd(_mm_loadu_pd(x.as_ptr())));
+            _mm_storeu_pd(
+                r.as_mut_ptr().add(2),
+                _mm_sqrt_pd(_mm_loadu_pd(x.as_ptr().add(2))),
+            );
+        }
+        r
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        x.map(libm::sqrt)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -165,40 +200,5 @@ mod tests {
             assert!((s * s + c * c - 1.0).abs() < 1e-15, "u = {u}");
         }
         assert!(worst < 2.5e-16, "worst |Δ| = {worst:e}");
-    }
-}
-
-/// √x of four lanes at once (correctly rounded, so each lane equals
-/// `libm::sqrt` of it): one packed instruction where the target has AVX, two
-/// SSE2 ones on any other x86-64, four scalar roots elsewhere.
-#[inline(always)]
-pub fn sqrt_lanes(x: [f64; 4]) -> [f64; 4] {
-    #[cfg(all(target_arch = "x86_64", target_feature = "avx"))]
-    {
-        use core::arch::x86_64::{_mm256_loadu_pd, _mm256_sqrt_pd, _mm256_storeu_pd};
-        let mut r = [0.0; 4];
-        // SAFETY: AVX is enabled for this build (the cfg above); the load and
-        // store touch exactly the four f64 of `x` and `r`.
-        unsafe { _mm256_storeu_pd(r.as_mut_ptr(), _mm256_sqrt_pd(_mm256_loadu_pd(x.as_ptr()))) };
-        r
-    }
-    #[cfg(all(target_arch = "x86_64", not(target_feature = "avx")))]
-    {
-        use core::arch::x86_64::{_mm_loadu_pd, _mm_sqrt_pd, _mm_storeu_pd};
-        let mut r = [0.0; 4];
-        // SAFETY: SSE2 is part of every x86-64; each load and store touches two
-        // f64 inside `x` and `r`.
-        unsafe {
-            _mm_storeu_pd(r.as_mut_ptr(), _mm_sqrt_pd(_mm_loadu_pd(x.as_ptr())));
-            _mm_storeu_pd(
-                r.as_mut_ptr().add(2),
-                _mm_sqrt_pd(_mm_loadu_pd(x.as_ptr().add(2))),
-            );
-        }
-        r
-    }
-    #[cfg(not(target_arch = "x86_64"))]
-    {
-        x.map(libm::sqrt)
     }
 }
