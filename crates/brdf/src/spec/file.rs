@@ -422,6 +422,10 @@ pub struct Reliability {
     /// What `model = "measured_psd"` assumes outside the band the `[psd]` table covers
     /// (the renderer continues it there; see `crate::statistics::TabulatedPsd`).
     pub psd_extrapolation: String,
+    /// The `[psd.destretched]` table for `model = "measured_psd_aniso"`: `"ok"`, why it
+    /// should not be trusted (e.g. a 2-D PSD that is not constant on ellipses), or why it
+    /// was not written.
+    pub psd_destretched: String,
     /// The two-scale tables.
     pub two_scale: String,
     /// Form left in the residual after levelling.
@@ -483,7 +487,7 @@ pub struct Anisotropy {
     pub lay_direction_deg: f64,
     /// Rms slopes along x and y from the x- and y-PSDs.
     pub psd_rms_slopes: [f64; 2],
-    /// True when `ratio > 1.5`.
+    /// True when the 2-D PSD fit's Ly/Lx exceeds 1.5 (where that fit is sound; else `ratio`).
     pub anisotropic: bool,
     /// GGX α along the principal axes.
     pub alpha_ggx: [f64; 2],

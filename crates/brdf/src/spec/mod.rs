@@ -222,6 +222,19 @@ impl ModelKind {
         !matches!(self, ModelKind::Diffuse | ModelKind::RoughPlastic)
     }
 
+    /// Whether the model describes a surface stretched along two axes (`ghs_ssa_aniso`,
+    /// `ghs_aniso`, `measured_psd_ssa_aniso`, `measured_psd_aniso`): its axes exist only
+    /// for a scan `lustre fit` flags anisotropic.
+    pub fn stretched(self) -> bool {
+        matches!(
+            self,
+            ModelKind::GhsSsaAniso
+                | ModelKind::GhsAniso
+                | ModelKind::MeasuredPsdSsaAniso
+                | ModelKind::MeasuredPsdAniso
+        )
+    }
+
     /// `ggx, beckmann, …` for error messages.
     pub fn names() -> String {
         let names: Vec<&str> = ModelKind::ALL.iter().map(|m| m.name()).collect();
