@@ -8,8 +8,10 @@
 mod beckmann;
 mod conductor;
 mod ggx;
+mod rotated;
 
 pub use conductor::{MicrofacetConductor, SmoothConductor};
+pub use rotated::Rotated;
 
 use crate::error::{BrdfError, check_range};
 use glam::DVec3;
