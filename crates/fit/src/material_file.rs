@@ -139,6 +139,7 @@ pub fn build(a: &Analysis, prov: &Provenance<'_>) -> MaterialFile {
         form: a.form.warning(),
         anisotropy: aniso.as_ref().and_then(|t| t.warning.clone()),
         non_elliptical: aniso_fit.and_then(crate::candidates::non_elliptical),
+        flagged: a.anisotropy.as_ref().is_some_and(|an| an.anisotropic),
         variance,
         split_problems,
         quality: &a.quality,
@@ -258,6 +259,8 @@ struct Flags<'a> {
     anisotropy: Option<String>,
     /// The 2-D PSD is not constant on ellipses ([`crate::candidates::non_elliptical`]).
     non_elliptical: Option<String>,
+    /// The scan is flagged anisotropic.
+    flagged: bool,
     variance: Option<String>,
     split_problems: Vec<String>,
     quality: &'a crate::pipeline::Quality,
@@ -279,9 +282,7 @@ fn reliability(f: &Flags<'_>) -> Reliability {
     let psd = problems(&[Family::MeasuredPsd]);
     // Only a scan flagged anisotropic has the table; for the others the candidate's one
     // problem says so, which is not a fault of the scan.
-    let flagged = (f.cands.iter())
-        .find(|c| c.family == Family::MeasuredPsdAniso)
-        .is_some_and(|c| c.spec.is_some());
+    let flagged = f.flagged;
     let psd_destretched = problems(&[Family::MeasuredPsdAniso])
         .into_iter()
         .chain(f.non_elliptical.clone())
