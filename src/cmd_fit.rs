@@ -155,11 +155,12 @@ pub struct MaterialArgs {
 
 /// `auto` and every model a fit file can recommend for any scan, for `--model`: the
 /// conductor models but the anisotropic ones (their two correlation lengths exist only for
-/// a scan flagged anisotropic, where the file offers `ghs_aniso` beside its own model).
+/// a scan flagged anisotropic, where the file offers `ghs_aniso` and `measured_psd_aniso`
+/// beside its own model).
 fn model_names() -> clap::builder::PossibleValuesParser {
     use brdf::spec::ModelKind;
     let drawable = (ModelKind::ALL.iter())
-        .filter(|m| m.conductor() && !matches!(m, ModelKind::GhsSsaAniso | ModelKind::GhsAniso))
+        .filter(|m| m.conductor() && !m.stretched())
         .map(|m| m.name());
     let names = std::iter::once("auto").chain(drawable);
     clap::builder::PossibleValuesParser::new(names.collect::<Vec<_>>())

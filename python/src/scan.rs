@@ -284,12 +284,7 @@ pub fn fit_scan(
     stylus: Option<&Scan>,
     stylus_segments: usize,
 ) -> PyResult<String> {
-    let drawable = brdf::spec::ModelKind::from_name(model).is_some_and(|m| {
-        !matches!(
-            m,
-            brdf::spec::ModelKind::GhsSsaAniso | brdf::spec::ModelKind::GhsAniso
-        )
-    });
+    let drawable = brdf::spec::ModelKind::from_name(model).is_some_and(|m| !m.stretched());
     if model != "auto" && !drawable {
         return Err(value_error(format!(
             "model = {model:?}: use \"auto\" or a model a fit can draw (not the anisotropic ones): {}",

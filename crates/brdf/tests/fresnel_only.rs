@@ -6,7 +6,11 @@
 //! directions and wavelengths; and the models it excludes must really break
 //! the factorisation somewhere, or the predicate would hide a cheaper path.
 
-use brdf::spec::{AnisoSpec, FresnelSpec, KcSpec, MaterialSpec, ModelKind, ModelSpec, RrSurface};
+use brdf::spec::{
+    AnisoSpec, FresnelSpec, KcSpec, MaterialSpec, MeasuredAnisoSpec, ModelKind, ModelSpec,
+    RrSurface,
+};
+use brdf::statistics::KcPsd;
 use brdf::wave::two_scale::CoherentPart;
 use brdf::wave::{GhsOptions, Polarization};
 use brdf::{Bxdf, Metal, frame};
@@ -76,7 +80,33 @@ fn models() -> Vec<ModelSpec> {
             surface: aniso(),
             options: GhsOptions::default(),
         },
+        ModelSpec::MeasuredPsdSsaAniso {
+            surface: measured_aniso(),
+            options: GhsOptions::default(),
+        },
     ]
+}
+
+/// A stretched tabulated PSD (the KC of `kc()` sampled over a scan's band).
+fn measured_aniso() -> MeasuredAnisoSpec {
+    let k = kc();
+    let zeta: Vec<f64> = (0..60).map(|i| 0.05 * 1.12f64.powi(i)).collect();
+    let psd_um4 = zeta
+        .iter()
+        .map(|z| {
+            KcPsd::new(k.sigma_um, k.lc_um, k.gamma)
+                .unwrap()
+                .p1(k.lc_um * z)
+                * (k.sigma_um * k.lc_um).powi(2)
+        })
+        .collect();
+    MeasuredAnisoSpec {
+        zeta_rad_per_um: zeta,
+        psd_um4,
+        lx_um: 1.0,
+        ly_um: 4.0,
+        angle_deg: -35.0,
+    }
 }
 
 fn aniso() -> AnisoSpec {
@@ -194,7 +224,10 @@ fn fresnel_only_models_factor_and_the_others_do_not() {
     for kind in ModelKind::ALL {
         let covered = models().iter().any(|m| m.kind() == kind);
         assert!(
-            covered || kind == ModelKind::MeasuredPsd || !kind.conductor(),
+            // The full measured models: slow tables, the same λ dependence as the SSA's.
+            covered
+                || matches!(kind, ModelKind::MeasuredPsd | ModelKind::MeasuredPsdAniso)
+                || !kind.conductor(),
             "{kind:?} untested"
         );
         if !kind.conductor() {

@@ -9,16 +9,29 @@
 //! variance `αᵢ²/2`, so `αᵢ = √2·sᵢ`; GGX has no finite slope variance, so its isotropic
 //! NDF fit `α` is split in the same proportion: `αᵢ = α·sᵢ/√((s₁² + s₂²)/2)`.
 //!
-//! The slope covariance only flags a map: at the pixel scale it is dominated by what a
-//! scanning instrument adds there (line glitches, the first rows of a scan), so the axes
-//! and lengths of the anisotropic wave-optical model come from the stretched
-//! K-correlation fitted to the 2-D PSD in the band ([`crate::kc2d`]), done for flagged maps.
+//! At the pixel scale the slope covariance is dominated by what a scanning instrument adds
+//! there (line glitches, the first rows of a scan), so the axes and lengths of the
+//! anisotropic wave-optical models come from the stretched K-correlation fitted to the 2-D
+//! PSD in the band ([`crate::kc2d`], fitted on every map), and so does the flag where that
+//! fit is sound: a map is anisotropic when its fitted Ly/Lx exceeds
+//! [`ANISOTROPY_THRESHOLD`]. For a stretched surface of finite slope variance the principal
+//! slope ratio is Ly/Lx itself, so the threshold means the same on both measures: a lobe
+//! 1.5× wider across the lay than along it, well above the fit's own scatter on isotropic
+//! maps (Ly/Lx within 7 % of the truth, physics.md §15). Where the fit fails, is flagged
+//! (a map too small, a degenerate γ, a floor above the band) or does not describe the
+//! periodogram (cell residual above [`FLAG_FIT_RESIDUAL_MAX`]), the slope ratio decides.
 
 use crate::kc2d::{self, AnisoKcFit};
 use crate::psd::{self, Psd1d, WelchOptions};
 use crate::{FitError, Topography};
 
-/// Principal-slope ratio above which a surface is treated as anisotropic.
+/// Largest rms ln cell residual of the 2-D PSD fit for its Ly/Lx to decide the flag: the
+/// cells of a stretched K-correlation map scatter by 0.22–0.26 (sampling), those of a
+/// terraced film by 1.1, those of pure grooves (a line in the ζ plane) by 6.
+pub const FLAG_FIT_RESIDUAL_MAX: f64 = 1.0;
+
+/// Ly/Lx of a sound 2-D PSD fit (else the principal-slope ratio) above which a surface is
+/// treated as anisotropic.
 pub const ANISOTROPY_THRESHOLD: f64 = 1.5;
 
 /// Direction-resolved roughness of a map.
@@ -42,10 +55,13 @@ pub struct Anisotropy {
     pub psd_y: Psd1d,
     /// Rms slope along x and y integrated from the two PSDs, `√∫(2πf)²P df`.
     pub psd_slopes: (f64, f64),
-    /// True when `ratio > ANISOTROPY_THRESHOLD`.
+    /// True when the sound 2-D PSD fit's Ly/Lx (else `ratio`) exceeds
+    /// [`ANISOTROPY_THRESHOLD`].
     pub anisotropic: bool,
-    /// The stretched K-correlation fitted to the 2-D PSD ([`crate::kc2d`]), for maps
-    /// flagged anisotropic; the error in words when the fit failed.
+    /// What decided `anisotropic`, in words (the measure and its value).
+    pub flag_source: String,
+    /// The stretched K-correlation fitted to the 2-D PSD ([`crate::kc2d`]) of every map of
+    /// at least 16 × 16 points; the error in words when the fit failed.
     pub kc: Option<Result<AnisoKcFit, String>>,
 }
 
@@ -161,8 +177,8 @@ pub fn analyse(t: &Topography, psd_x: Psd1d) -> Result<Anisotropy, FitError> {
     };
     let psd_y = psd::welch(&transpose(t), &WelchOptions::default())?;
     let psd_slopes = (slope_rms(&psd_x), slope_rms(&psd_y));
-    let anisotropic = ratio > ANISOTROPY_THRESHOLD;
-    let kc = anisotropic.then(|| kc2d::fit(t, theta).map_err(|e| e.to_string()));
+    let kc = (t.nx >= 16 && t.ny >= 16).then(|| kc2d::fit(t, theta).map_err(|e| e.to_string()));
+    let (anisotropic, flag_source) = flag(ratio, kc.as_ref());
     Ok(Anisotropy {
         rms_slope_x: sx,
         rms_slope_y: sy,
@@ -178,6 +194,46 @@ pub fn analyse(t: &Topography, psd_x: Psd1d) -> Result<Anisotropy, FitError> {
         psd_y,
         psd_slopes,
         anisotropic,
+        flag_source,
         kc,
     })
+}
+
+/// Whether the map is anisotropic, and what decided it: the 2-D PSD fit's Ly/Lx where that
+/// fit is sound, else the principal slope ratio.
+fn flag(slope_ratio: f64, kc: Option<&Result<AnisoKcFit, String>>) -> (bool, String) {
+    match kc {
+        Some(Ok(f)) if f.problem.is_none() && f.rms_log_residual <= FLAG_FIT_RESIDUAL_MAX => (
+            f.params.ratio() > ANISOTROPY_THRESHOLD,
+            format!(
+                "Ly/Lx {:.2} of the 2-D PSD fit (threshold {ANISOTROPY_THRESHOLD})",
+                f.params.ratio()
+            ),
+        ),
+        other => {
+            let why = match other {
+                Some(Ok(f)) => f.problem.clone().unwrap_or_else(|| {
+                    format!(
+                        "its cells scatter by {:.2} in ln about the ellipse (> \
+                         {FLAG_FIT_RESIDUAL_MAX}: the PSD is not a stretched K-correlation)",
+                        f.rms_log_residual
+                    )
+                }),
+                Some(Err(e)) => e.clone(),
+                None => "the map is smaller than 16 × 16".into(),
+            };
+            let ratio = if slope_ratio.is_finite() {
+                format!("{slope_ratio:.2}")
+            } else {
+                "∞".into()
+            };
+            (
+                slope_ratio > ANISOTROPY_THRESHOLD,
+                format!(
+                    "principal slope ratio {ratio} (threshold {ANISOTROPY_THRESHOLD}; the 2-D \
+                     PSD fit is not used: {why})"
+                ),
+            )
+        }
+    }
 }

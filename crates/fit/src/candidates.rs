@@ -10,7 +10,10 @@ use crate::kc::KcParams;
 use crate::pipeline::Analysis;
 use crate::two_scale::BetaSource;
 use brdf::paper::{REFERENCE_LAMBDA_NM, short};
-use brdf::spec::{AnisoSpec, FresnelSpec, KcSpec, MaterialSpec, ModelKind, ModelSpec, RrSurface};
+use brdf::spec::{
+    AnisoSpec, FresnelSpec, KcSpec, MaterialSpec, MeasuredAnisoSpec, ModelKind, ModelSpec,
+    RrSurface,
+};
 use brdf::statistics::{TabulatedPsd, epd, kc};
 use brdf::wave::two_scale::CoherentPart;
 use brdf::wave::wavenumber;
@@ -92,13 +95,16 @@ pub enum Family {
     GhsAniso,
     /// Full GHS of the measured PSD.
     MeasuredPsd,
+    /// Full GHS of the measured PSD of the de-stretched frame, stretched along the axes of
+    /// the anisotropic K-correlation fit (scans flagged anisotropic).
+    MeasuredPsdAniso,
     /// Two-scale at one split of the surface.
     TwoScale,
 }
 
 impl Family {
     /// Every recipe, in report order.
-    pub const ALL: [Family; 10] = [
+    pub const ALL: [Family; 11] = [
         Family::Ggx,
         Family::Beckmann,
         Family::GgxKc,
@@ -108,6 +114,7 @@ impl Family {
         Family::RayleighRice,
         Family::GhsAniso,
         Family::MeasuredPsd,
+        Family::MeasuredPsdAniso,
         Family::TwoScale,
     ];
 
@@ -130,6 +137,7 @@ impl Family {
             Family::RayleighRice => ModelKind::RayleighRice,
             Family::GhsAniso => ModelKind::GhsAniso,
             Family::MeasuredPsd => ModelKind::MeasuredPsd,
+            Family::MeasuredPsdAniso => ModelKind::MeasuredPsdAniso,
             Family::TwoScale => ModelKind::TwoScale,
         }
     }
@@ -156,6 +164,9 @@ impl Family {
                 "Gaussian heights, KC spectrum stretched along the principal slope axes, all orders"
             }
             Family::MeasuredPsd => "Gaussian heights, measured isotropic PSD, all orders",
+            Family::MeasuredPsdAniso => {
+                "Gaussian heights, measured PSD constant on ellipses (one lay direction), all orders"
+            }
             Family::TwoScale => "exponential NDF above the cutoff period, KC diffraction below it",
         }
     }
@@ -174,6 +185,7 @@ pub fn candidates(a: &Analysis, fresnel: &FresnelSpec) -> Vec<Candidate> {
         kc_model(a, fresnel, Family::RayleighRice),
         ghs_aniso(a, fresnel),
         measured_psd(a, fresnel),
+        measured_psd_aniso(a, fresnel),
     ];
     out.extend(a.two_scale.iter().map(|t| two_scale(t, fresnel)));
     out
@@ -309,34 +321,46 @@ fn kc_model(a: &Analysis, fresnel: &FresnelSpec, family: Family) -> Candidate {
     c
 }
 
-/// Full GHS of an anisotropic K-correlation surface, for a scan flagged anisotropic: the
-/// stretched K-correlation (σ, Lx, Ly, φ₀, γ) fitted to the map's 2-D PSD
-/// ([`crate::kc2d`]), in the map's axes, which are the renderer's tangent axes.
-fn ghs_aniso(a: &Analysis, fresnel: &FresnelSpec) -> Candidate {
-    let mut c = blank(Family::GhsAniso, "full GHS, anisotropic KC".into());
+/// The anisotropic K-correlation fit of a scan flagged anisotropic, or the candidate's
+/// problem.
+fn aniso_fit<'a>(a: &'a Analysis, c: &mut Candidate) -> Option<&'a crate::kc2d::AnisoKcFit> {
     let Some(an) = a.anisotropy.as_ref().filter(|an| an.anisotropic) else {
-        c.problems.push(
-            "the scan is not flagged anisotropic (principal rms slopes within a factor 1.5)".into(),
+        let why = a.anisotropy.as_ref().map_or_else(
+            || "no anisotropy analysis (a profile)".to_string(),
+            |an| an.flag_source.clone(),
         );
-        return c;
+        c.problems
+            .push(format!("the scan is not flagged anisotropic: {why}"));
+        return None;
     };
     let fit = match &an.kc {
         Some(Ok(f)) => f,
         Some(Err(e)) => {
             c.problems
                 .push(format!("anisotropic K-correlation fit: {e}"));
-            return c;
+            return None;
         }
         None => {
             c.problems
                 .push("no anisotropic K-correlation fit of the 2-D PSD".into());
-            return c;
+            return None;
         }
     };
     if let Some(p) = &fit.problem {
         c.problems
             .push(format!("anisotropic K-correlation fit: {p}"));
     }
+    Some(fit)
+}
+
+/// Full GHS of an anisotropic K-correlation surface, for a scan flagged anisotropic: the
+/// stretched K-correlation (σ, Lx, Ly, φ₀, γ) fitted to the map's 2-D PSD
+/// ([`crate::kc2d`]), in the map's axes, which are the renderer's tangent axes.
+fn ghs_aniso(a: &Analysis, fresnel: &FresnelSpec) -> Candidate {
+    let mut c = blank(Family::GhsAniso, "full GHS, anisotropic KC".into());
+    let Some(fit) = aniso_fit(a, &mut c) else {
+        return c;
+    };
     let p = &fit.params;
     c.label = format!(
         "full GHS, anisotropic KC fit (Ly/Lx {:.2}, φ₀ {:.1}°)",
@@ -361,6 +385,82 @@ fn ghs_aniso(a: &Analysis, fresnel: &FresnelSpec) -> Candidate {
         Err(e) => c.problems.push(e.to_string()),
     }
     c
+}
+
+/// Rms ln residual of the elliptical measured model against the 2-D periodogram's polar
+/// cells above which the map's PSD is called not elliptical: on stretched synthetic maps it
+/// is the sampling scatter of the cells, 0.2–0.3 (physics.md §15.2).
+pub const NON_ELLIPTICAL_LOG_RESIDUAL: f64 = 0.5;
+
+/// Full GHS of the measured PSD of the de-stretched frame ([`crate::kc2d::destretched_radial`]),
+/// stretched back along the axes of the anisotropic K-correlation fit, for a scan flagged
+/// anisotropic.
+fn measured_psd_aniso(a: &Analysis, fresnel: &FresnelSpec) -> Candidate {
+    let mut c = blank(
+        Family::MeasuredPsdAniso,
+        "full GHS, measured PSD on ellipses".into(),
+    );
+    let Some(fit) = aniso_fit(a, &mut c) else {
+        return c;
+    };
+    let p = &fit.params;
+    // A 2-D PSD that is not elliptical is stated in `[reliability].psd_destretched` and
+    // in the label, not made a problem: the model is then an approximation to rank, as the
+    // isotropic models are on an anisotropic scan.
+    let (ratio, angle_deg) = (p.ratio(), p.angle_rad.to_degrees());
+    c.label = format!(
+        "full GHS, measured PSD on ellipses (Ly/Lx {ratio:.2}, φ₀ {angle_deg:.1}°, ellipse \
+         residual {:.2} ln)",
+        fit.rms_log_residual_elliptical
+    );
+    let (zeta, psd, info) = match smoothed_table(&fit.destretched, DESTRETCHED_SOURCE) {
+        Ok(t) => t,
+        Err(e) => {
+            c.problems.push(format!("de-stretched PSD: {e}"));
+            return c;
+        }
+    };
+    c.table = Some(info);
+    let spec = MaterialSpec {
+        model: ModelSpec::MeasuredPsdAniso {
+            surface: MeasuredAnisoSpec {
+                zeta_rad_per_um: zeta,
+                psd_um4: psd,
+                // The stretched K-correlation's axes (only their ratio is read), so that
+                // `[material]` holds one set for both stretched models.
+                lx_um: p.lx * UM,
+                ly_um: p.ly * UM,
+                angle_deg,
+            },
+            options: GhsOptions::default(),
+        },
+        fresnel: fresnel.clone(),
+    };
+    match spec.validate() {
+        Ok(()) => c.spec = Some(spec),
+        Err(e) => c.problems.push(e.to_string()),
+    }
+    c
+}
+
+/// How the de-stretched table is made (`[psd.destretched].source`).
+pub const DESTRETCHED_SOURCE: &str = "2D periodogram of the map averaged over the ellipses of \
+     the anisotropic K-correlation fit's axes (areas kept)";
+
+/// The problem when the map's 2-D PSD is not constant on ellipses: the elliptical model's
+/// cell residual above [`NON_ELLIPTICAL_LOG_RESIDUAL`].
+pub fn non_elliptical(fit: &crate::kc2d::AnisoKcFit) -> Option<String> {
+    let r = fit.rms_log_residual_elliptical;
+    if r.is_finite() && r <= NON_ELLIPTICAL_LOG_RESIDUAL {
+        return None;
+    }
+    Some(format!(
+        "the 2-D PSD is not constant on ellipses: the elliptical measured model misses the \
+         periodogram's polar cells by {r:.2} in ln (rms; sampling scatter 0.2–0.3, isotropic \
+         measured table {:.2}, stretched K-correlation {:.2}): more than one lay, or streaks \
+         (straight edges, scan-line artefacts), which no elliptical model holds",
+        fit.rms_log_residual_radial, fit.rms_log_residual
+    ))
 }
 
 /// Full GHS with the measured PSD, as [`measured_table`] tabulates it.
@@ -394,7 +494,16 @@ pub const PSD_NODES: usize = 120;
 /// least-squares slope of the top third of the table, clamped to [−8, −2.5] (finite σ; no
 /// scan resolves a steeper tail), carried by one extra point at 1.5× the last frequency.
 pub fn measured_table(a: &Analysis) -> Result<(Vec<f64>, Vec<f64>, TableInfo), String> {
-    let pts: Vec<(f64, f64)> = (a.table.0.zeta.iter().zip(&a.table.0.p))
+    smoothed_table(&a.table.0, a.table.1)
+}
+
+/// [`measured_table`] of any radial PSD table (rad/m, m⁴), e.g. the de-stretched one of
+/// [`crate::kc2d::destretched_radial`].
+pub fn smoothed_table(
+    table: &crate::psd::RadialPsdTable,
+    source: &'static str,
+) -> Result<(Vec<f64>, Vec<f64>, TableInfo), String> {
+    let pts: Vec<(f64, f64)> = (table.zeta.iter().zip(&table.p))
         .filter(|(z, p)| z.is_finite() && **z > 0.0 && p.is_finite() && **p > 0.0)
         .map(|(z, p)| ((z / UM).ln(), (p * UM.powi(4)).ln()))
         .collect();
@@ -420,8 +529,8 @@ pub fn measured_table(a: &Analysis) -> Result<(Vec<f64>, Vec<f64>, TableInfo), S
     p.push(pl * 1.5f64.powf(slope));
     TabulatedPsd::new(&z, &p).map_err(|e| format!("the measured PSD table: {e}"))?;
     let info = TableInfo {
-        source: a.table.1,
-        points: a.table.0.zeta.len(),
+        source,
+        points: table.zeta.len(),
         tail_exponent: slope,
         tail_clamped: slope != fitted,
     };

@@ -30,7 +30,7 @@
 //! `γ` combined with several axis angles and ratios, the best end kept. Lx ≤ Ly on output
 //! (a is the direction across the lay) and φ₀ in (−90°, 90°].
 
-use crate::psd::hann;
+use crate::psd::{RadialPsdTable, hann};
 use crate::{FitError, Topography};
 use nalgebra::{DMatrix, DVector};
 use rustfft::FftPlanner;
@@ -116,6 +116,16 @@ pub struct AnisoKcFit {
     pub band: (f64, f64),
     /// Why the fit should not be used, if it should not.
     pub problem: Option<String>,
+    /// The radial PSD of the map in the frame where the fitted ellipse (Ly/Lx, φ₀ of
+    /// `params`) is a circle, areas kept ([`destretched_radial`]): the table of the
+    /// stretched measured-PSD model.
+    pub destretched: RadialPsdTable,
+    /// Weighted rms ln residual of the same cells against the elliptical measured model
+    /// (the smoothed de-stretched table stretched back, no noise term added: the table
+    /// holds the floor); NaN when the table is unusable.
+    pub rms_log_residual_elliptical: f64,
+    /// The same for the isotropic measured model (the radially averaged table, ratio 1).
+    pub rms_log_residual_radial: f64,
 }
 
 /// Hann-windowed 2-D periodogram of a NaN-free map, FFT order, row-major, m⁴
@@ -310,6 +320,9 @@ pub fn fit(t: &Topography, axis_hint_rad: f64) -> Result<AnisoKcFit, FitError> {
     let (params, noise) = unpack(&best.0);
     let params = params.normalised();
     let problem = problem_of(&params, band, noise, &cells);
+    let (ratio, angle) = (params.ratio(), params.angle_rad);
+    let destretched = destretched_radial(t, &p, (dzx, dzy), ratio, angle);
+    let isotropic = destretched_radial(t, &p, (dzx, dzy), 1.0, 0.0);
     Ok(AnisoKcFit {
         params,
         noise_m4: noise,
@@ -318,7 +331,90 @@ pub fn fit(t: &Topography, axis_hint_rad: f64) -> Result<AnisoKcFit, FitError> {
         cells: cells.len(),
         band,
         problem,
+        rms_log_residual_elliptical: radial_residual(&cells, &destretched, ratio, angle),
+        rms_log_residual_radial: radial_residual(&cells, &isotropic, 1.0, 0.0),
+        destretched,
     })
+}
+
+/// The radial PSD of the de-stretched frame: the periodogram `p` (FFT order, steps `dz`
+/// rad/m) averaged over ellipses ρ = |(s_a ζ·a, s_b ζ·b)| = const, s_a = 1/√ratio,
+/// s_b = √ratio, a at `angle_rad` (ratio 1: the radially averaged PSD). Under the
+/// elliptical model P(ζ) = P_r(ρ) (areas kept: the stretch has unit Jacobian), so each bin
+/// mean estimates P_r(ρ), from whatever part of its ellipse lies inside the measured band
+/// (0 < |ζ| ≤ the coarser axis' Nyquist frequency): at ρ below the band's bottom ×√ratio or
+/// above its top /√ratio only the sector along the long, resp. short, axis is measured.
+/// Bins of the coarser frequency step in ρ; fewer than [`MIN_BINS`] samples are dropped.
+pub fn destretched_radial(
+    t: &Topography,
+    p: &[f64],
+    dz: (f64, f64),
+    ratio: f64,
+    angle_rad: f64,
+) -> RadialPsdTable {
+    let (nx, ny) = (t.nx, t.ny);
+    let (sa, sb) = (1.0 / ratio.sqrt(), ratio.sqrt());
+    let (s, c) = angle_rad.sin_cos();
+    let width = dz.0.max(dz.1);
+    let z_max = PI / t.dx.max(t.dy);
+    let nbins = (z_max * sb / width).ceil() as usize + 2;
+    let (mut sz, mut sp, mut sw) = (vec![0.0; nbins], vec![0.0; nbins], vec![0.0; nbins]);
+    for iy in 0..ny {
+        let zy = crate::fft::signed(iy, ny) * dz.1;
+        for ix in 0..nx {
+            let zx = crate::fft::signed(ix, nx) * dz.0;
+            let z = zx.hypot(zy);
+            if z == 0.0 || z > z_max {
+                continue;
+            }
+            let rho = (sa * (c * zx + s * zy)).hypot(sb * (c * zy - s * zx));
+            let b = (rho / width).round() as usize;
+            if b == 0 || b >= nbins {
+                continue;
+            }
+            sz[b] += rho;
+            sp[b] += p[iy * nx + ix];
+            sw[b] += 1.0;
+        }
+    }
+    let mut out = RadialPsdTable {
+        zeta: Vec::new(),
+        p: Vec::new(),
+        count: Vec::new(),
+    };
+    for b in 0..nbins {
+        if sw[b] >= MIN_BINS as f64 {
+            out.zeta.push(sz[b] / sw[b]);
+            out.p.push(sp[b] / sw[b]);
+            out.count.push(sw[b]);
+        }
+    }
+    out
+}
+
+/// Weighted rms ln residual of the cells against the radial table `r` (rad/m, m⁴), smoothed
+/// as the measured-PSD model's table and stretched by `ratio` along the axis at `angle_rad`;
+/// NaN when the table cannot be made.
+fn radial_residual(cells: &[Cell], r: &RadialPsdTable, ratio: f64, angle_rad: f64) -> f64 {
+    let model = crate::candidates::smoothed_table(r, "")
+        .ok()
+        .and_then(|(z, p, _)| brdf::statistics::TabulatedPsd::new(&z, &p).ok())
+        .and_then(|t| brdf::statistics::EllipticalPsd::new(t, 1.0, ratio, angle_rad).ok());
+    let Some(model) = model else {
+        return f64::NAN;
+    };
+    let (mut acc, mut wsum) = (0.0, 0.0);
+    for c in cells {
+        let m = c
+            .zeta
+            .iter()
+            .map(|&(a, b)| model.psd(a * 1e-6, b * 1e-6) * 1e-24)
+            .sum::<f64>()
+            / c.zeta.len() as f64;
+        acc += c.weight * (m.ln() - c.ln_p).powi(2);
+        wsum += c.weight;
+    }
+    (acc / wsum).sqrt()
 }
 
 /// Lx = Ly = Lc: minimise over (ln σ, ln Lc, ln(γ−1), ln N), the angle unused.
@@ -418,6 +514,18 @@ fn problem_of(p: &AnisoKcParams, band: (f64, f64), noise: f64, cells: &[Cell]) -
 /// stretched K-correlation `p` (white noise filtered by √PSD; the DC term zero): the
 /// synthetic surfaces of the tests, whose parameters are known.
 pub fn synth_surface(nx: usize, ny: usize, dx: f64, p: AnisoKcParams, seed: u64) -> Topography {
+    synth_surface_with(nx, ny, dx, &|zx, zy| p.psd(zx, zy), seed)
+}
+
+/// A periodic `nx × ny` map (square pixels `dx` [m]) whose expected 2-D periodogram is
+/// `psd(ζx, ζy)` [m⁴ at rad/m] (white noise filtered by √PSD; the DC term zero).
+pub fn synth_surface_with(
+    nx: usize,
+    ny: usize,
+    dx: f64,
+    psd: &dyn Fn(f64, f64) -> f64,
+    seed: u64,
+) -> Topography {
     let mut buf = crate::rng::white_noise(nx * ny, seed);
     let mut planner = FftPlanner::<f64>::new();
     crate::fft::fft2(&mut buf, nx, ny, &mut planner, false);
@@ -430,7 +538,7 @@ pub fn synth_surface(nx: usize, ny: usize, dx: f64, p: AnisoKcParams, seed: u64)
             let a = if kx == 0 && ky == 0 {
                 0.0
             } else {
-                (4.0 * PI * PI * p.psd(zx, zy) / (dx * dx)).sqrt()
+                (4.0 * PI * PI * psd(zx, zy) / (dx * dx)).sqrt()
             };
             buf[ky * nx + kx] *= a;
         }

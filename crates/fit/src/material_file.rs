@@ -19,7 +19,7 @@ use crate::two_scale::BetaSource;
 use crate::{FitError, sha256};
 use brdf::Metal;
 use brdf::spec::file::{
-    Anisotropy, Asymptote, FitDiagnostics, Form, Kc2d, MaterialFile, Named,
+    Anisotropy, Asymptote, DestretchedPsd, FitDiagnostics, Form, Kc2d, MaterialFile, Named,
     Provenance as ProvenanceTable, PsdTable, Reliability, Split,
 };
 use brdf::spec::{FresnelSpec, MaterialDesc, ModelKind, ModelSpec};
@@ -122,14 +122,24 @@ pub fn build(a: &Analysis, prov: &Provenance<'_>) -> MaterialFile {
         .then(|| variance_mismatch(a.kc.params.sigma, a.stats.sq, a.kc.range, psd.sound()))
         .flatten();
     let (model, why) = chosen_model(prov.model, kc, psd);
+    let aniso_fit = (a.anisotropy.as_ref())
+        .filter(|an| an.anisotropic)
+        .and_then(|an| an.kc.as_ref())
+        .and_then(|r| r.as_ref().ok());
     material.model = Some(model);
-    let psd_table = psd_table(psd);
+    let mut psd_table = psd_table(psd);
+    if let Some(t) = psd_table.as_mut() {
+        let residual = aniso_fit.map_or(f64::NAN, |f| f.rms_log_residual_elliptical);
+        t.destretched = find(Family::MeasuredPsdAniso).and_then(|c| destretched_table(c, residual));
+    }
     let mut reliability = reliability(&Flags {
         cands: &cands,
         model,
         why,
         form: a.form.warning(),
         anisotropy: aniso.as_ref().and_then(|t| t.warning.clone()),
+        non_elliptical: aniso_fit.and_then(crate::candidates::non_elliptical),
+        flagged: a.anisotropy.as_ref().is_some_and(|an| an.anisotropic),
         variance,
         split_problems,
         quality: &a.quality,
@@ -247,6 +257,10 @@ struct Flags<'a> {
     why: String,
     form: Option<String>,
     anisotropy: Option<String>,
+    /// The 2-D PSD is not constant on ellipses ([`crate::candidates::non_elliptical`]).
+    non_elliptical: Option<String>,
+    /// The scan is flagged anisotropic.
+    flagged: bool,
     variance: Option<String>,
     split_problems: Vec<String>,
     quality: &'a crate::pipeline::Quality,
@@ -266,6 +280,14 @@ fn reliability(f: &Flags<'_>) -> Reliability {
         .map(|p| format!("{p}; [material] holds the bounded best estimate"));
     let alpha = problems(&[Family::Ggx, Family::Beckmann]);
     let psd = problems(&[Family::MeasuredPsd]);
+    // Only a scan flagged anisotropic has the table; for the others the candidate's one
+    // problem says so, which is not a fault of the scan.
+    let flagged = f.flagged;
+    let psd_destretched = problems(&[Family::MeasuredPsdAniso])
+        .into_iter()
+        .chain(f.non_elliptical.clone())
+        .reduce(|a, b| format!("{a}; {b}"))
+        .filter(|_| flagged);
     let two_scale = (!f.split_problems.is_empty())
         .then(|| format!("see problem in {}", f.split_problems.join(", ")));
     let q = f.quality;
@@ -273,6 +295,7 @@ fn reliability(f: &Flags<'_>) -> Reliability {
         ("kc", &kc),
         ("alpha", &alpha),
         ("psd", &psd),
+        ("psd_destretched", &psd_destretched),
         ("two_scale", &two_scale),
         ("form", &f.form),
         ("anisotropy", &f.anisotropy),
@@ -307,6 +330,11 @@ fn reliability(f: &Flags<'_>) -> Reliability {
         alpha: ok(&alpha),
         psd: ok(&psd),
         psd_extrapolation: String::new(),
+        psd_destretched: if flagged {
+            ok(&psd_destretched)
+        } else {
+            "not written: the scan is not flagged anisotropic".into()
+        },
         two_scale: ok(&two_scale),
         form: ok(&f.form),
         anisotropy: ok(&f.anisotropy),
@@ -382,6 +410,22 @@ fn psd_table(c: &Candidate) -> Option<PsdTable> {
         tail_exponent: info.map(|t| t.tail_exponent),
         zeta_rad_per_um: zeta_rad_per_um.clone(),
         p_um4: psd_um4.clone(),
+        destretched: None,
+    })
+}
+
+/// `[psd.destretched]`: the stretched measured-PSD candidate's table.
+fn destretched_table(c: &Candidate, residual: f64) -> Option<DestretchedPsd> {
+    let Some(ModelSpec::MeasuredPsdAniso { surface, .. }) = c.spec.as_ref().map(|s| &s.model)
+    else {
+        return None;
+    };
+    Some(DestretchedPsd {
+        source: c.table.as_ref().map_or("", |t| t.source).to_string(),
+        usable: c.sound(),
+        rms_log_residual: residual,
+        zeta_rad_per_um: surface.zeta_rad_per_um.clone(),
+        p_um4: surface.psd_um4.clone(),
     })
 }
 
@@ -481,10 +525,11 @@ fn anisotropy(a: &Analysis, alpha: f64) -> Option<Anisotropy> {
         alpha_beckmann: [fix(bx), fix(by)],
         warning: an.anisotropic.then(|| {
             format!(
-                "anisotropic ({}, lay at {:.1}°): the isotropic K-correlation and NDF fits \
+                "anisotropic ({}; {}, lay at {:.1}°): the isotropic K-correlation and NDF fits \
                  average over directions and are only an approximation; \
                  [material].alpha_x/alpha_y (GGX) and [anisotropy].alpha_beckmann describe the \
                  two axes, with alpha_x across the lay (at {:.1}°)",
+                an.flag_source,
                 an.ratio_text(),
                 an.lay_direction_deg(),
                 an.slope_direction_deg

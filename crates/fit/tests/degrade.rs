@@ -326,13 +326,16 @@ fn anisotropy_finds_the_lay_of_a_grooved_surface() {
         .anisotropy
         .unwrap();
     println!(
-        "grooved: slopes x {:.4} y {:.4}, principal {:?}, ratio {:.2}, slope dir {:.2}°, lay {:.2}°",
+        "grooved: slopes x {:.4} y {:.4}, principal {:?}, ratio {:.2}, slope dir {:.2}°, lay {:.2}°; {}; {:?}",
         a.rms_slope_x,
         a.rms_slope_y,
         a.principal,
         a.ratio,
         a.slope_direction_deg,
-        a.lay_direction_deg()
+        a.lay_direction_deg(),
+        a.flag_source,
+        a.kc.as_ref()
+            .map(|k| k.as_ref().map(|f| (f.params, f.rms_log_residual)))
     );
     assert!(a.anisotropic && a.ratio > 10.0);
     assert!(

@@ -8,9 +8,11 @@
 mod beckmann;
 mod conductor;
 mod ggx;
+mod rotated;
 mod rows;
 
 pub use conductor::{MicrofacetConductor, SmoothConductor};
+pub use rotated::Rotated;
 
 use crate::error::{BrdfError, check_range};
 use glam::DVec3;

@@ -130,23 +130,28 @@ material_keys! {
     /// KC exponent γ.
     gamma: f64, Own, [GhsSsa, Ghs, TwoScale, RayleighRice, GhsSsaAniso, GhsAniso];
     /// GHS energy handling.
-    energy: Energy, Own, [GhsSsa, Ghs, MeasuredPsd, GhsSsaAniso, GhsAniso];
+    energy: Energy, Own, [GhsSsa, Ghs, MeasuredPsd, GhsSsaAniso, GhsAniso, MeasuredPsdSsaAniso,
+        MeasuredPsdAniso];
     /// GHS Fresnel angle.
-    fresnel_angle: FresnelAngle, Own, [GhsSsa, Ghs, MeasuredPsd, GhsSsaAniso, GhsAniso];
+    fresnel_angle: FresnelAngle, Own, [GhsSsa, Ghs, MeasuredPsd, GhsSsaAniso, GhsAniso,
+        MeasuredPsdSsaAniso, MeasuredPsdAniso];
     /// Incident polarisation (`unpolarized`, `s`, `p`).
     polarization: Polarization, Own,
-        [GhsSsa, Ghs, MeasuredPsd, RayleighRice, GhsSsaAniso, GhsAniso];
+        [GhsSsa, Ghs, MeasuredPsd, RayleighRice, GhsSsaAniso, GhsAniso, MeasuredPsdSsaAniso,
+        MeasuredPsdAniso];
     /// GHS reflectance factor of the scattered part (`r` or `q`).
     polarization_factor: PolarizationFactor, Own,
-        [GhsSsa, Ghs, MeasuredPsd, GhsSsaAniso, GhsAniso];
-    /// Anisotropic KC correlation length along the axis, µm.
-    lx_um: f64, Own, [GhsSsaAniso, GhsAniso];
-    /// Anisotropic KC correlation length across the axis, µm.
-    ly_um: f64, Own, [GhsSsaAniso, GhsAniso];
-    /// Anisotropic KC axis angle from the tangent x towards y, degrees.
-    angle_deg: f64, Own, [GhsSsaAniso, GhsAniso];
-    /// A CSV `zeta_rad_per_um,p_um4` (resolved by the caller).
-    psd_csv: String, Own, [MeasuredPsd, RayleighRice];
+        [GhsSsa, Ghs, MeasuredPsd, GhsSsaAniso, GhsAniso, MeasuredPsdSsaAniso, MeasuredPsdAniso];
+    /// Anisotropic correlation length along the axis, µm (the stretched measured PSD
+    /// reads only Ly/Lx).
+    lx_um: f64, Own, [GhsSsaAniso, GhsAniso, MeasuredPsdSsaAniso, MeasuredPsdAniso];
+    /// Anisotropic correlation length across the axis, µm.
+    ly_um: f64, Own, [GhsSsaAniso, GhsAniso, MeasuredPsdSsaAniso, MeasuredPsdAniso];
+    /// Anisotropic axis angle from the tangent x towards y, degrees.
+    angle_deg: f64, Own, [GhsSsaAniso, GhsAniso, MeasuredPsdSsaAniso, MeasuredPsdAniso];
+    /// A CSV `zeta_rad_per_um,p_um4` (resolved by the caller; for the stretched
+    /// models, the PSD of the de-stretched frame).
+    psd_csv: String, Own, [MeasuredPsd, RayleighRice, MeasuredPsdSsaAniso, MeasuredPsdAniso];
     /// Two-scale macro NDF width β.
     beta: f64, Own, [TwoScale];
     /// Two-scale coherent part.
@@ -676,16 +681,7 @@ impl MaterialDesc {
                 options,
             },
             ModelKind::MeasuredPsd => {
-                let path = self.psd_csv.as_deref().ok_or_else(|| {
-                    SpecError::new(
-                        "psd_csv",
-                        "model `measured_psd` needs `psd_csv = \"file.csv\"` \
-                         (zeta_rad_per_um,p_um4) or an included fit file with a [psd] table",
-                    )
-                })?;
-                let (zeta_rad_per_um, psd_um4) = files
-                    .psd_table(path)
-                    .map_err(|e| SpecError::new("psd_csv", e))?;
+                let (zeta_rad_per_um, psd_um4) = self.psd_of(model, files)?;
                 ModelSpec::MeasuredPsd {
                     zeta_rad_per_um,
                     psd_um4,
@@ -723,6 +719,14 @@ impl MaterialDesc {
                 surface: aniso(model)?,
                 options,
             },
+            ModelKind::MeasuredPsdSsaAniso => ModelSpec::MeasuredPsdSsaAniso {
+                surface: self.measured_aniso(model, files)?,
+                options,
+            },
+            ModelKind::MeasuredPsdAniso => ModelSpec::MeasuredPsdAniso {
+                surface: self.measured_aniso(model, files)?,
+                options,
+            },
             ModelKind::Diffuse => ModelSpec::Diffuse {
                 reflectance: self.reflectance_spec(model, None, files)?,
             },
@@ -740,6 +744,43 @@ impl MaterialDesc {
         };
         spec.validate()?;
         Ok(spec)
+    }
+
+    /// The `psd_csv` table of a measured-PSD model.
+    fn psd_of(
+        &self,
+        model: ModelKind,
+        files: &mut dyn FileLoader,
+    ) -> Result<(Vec<f64>, Vec<f64>), SpecError> {
+        let path = self.psd_csv.as_deref().ok_or_else(|| {
+            SpecError::new(
+                "psd_csv",
+                format!(
+                    "model `{}` needs `psd_csv = \"file.csv\"` (zeta_rad_per_um,p_um4) or an \
+                     included fit file with a [psd] table",
+                    model.name()
+                ),
+            )
+        })?;
+        files
+            .psd_table(path)
+            .map_err(|e| SpecError::new("psd_csv", e))
+    }
+
+    /// The surface of the stretched measured-PSD models.
+    fn measured_aniso(
+        &self,
+        model: ModelKind,
+        files: &mut dyn FileLoader,
+    ) -> Result<MeasuredAnisoSpec, SpecError> {
+        let (zeta_rad_per_um, psd_um4) = self.psd_of(model, files)?;
+        Ok(MeasuredAnisoSpec {
+            zeta_rad_per_um,
+            psd_um4,
+            lx_um: need(self.lx_um, "lx_um", model)?,
+            ly_um: need(self.ly_um, "ly_um", model)?,
+            angle_deg: self.angle_deg.unwrap_or(0.0),
+        })
     }
 
     fn roughness(&self, model: ModelKind, iso: Option<f64>) -> Result<(f64, f64), SpecError> {
@@ -883,6 +924,13 @@ impl MaterialSpec {
                 d.ly_um = Some(surface.ly_um);
                 d.angle_deg = Some(surface.angle_deg);
                 d.gamma = Some(surface.gamma);
+                set_opts(&mut d, options);
+            }
+            ModelSpec::MeasuredPsdSsaAniso { surface, options }
+            | ModelSpec::MeasuredPsdAniso { surface, options } => {
+                d.lx_um = Some(surface.lx_um);
+                d.ly_um = Some(surface.ly_um);
+                d.angle_deg = Some(surface.angle_deg);
                 set_opts(&mut d, options);
             }
             ModelSpec::Diffuse { reflectance } => set_reflectance(&mut d, reflectance),

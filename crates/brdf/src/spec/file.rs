@@ -19,6 +19,10 @@ use serde::{Deserialize, Serialize};
 /// The name under which a description's `psd_csv` refers to the file's own `[psd]`.
 pub const OWN_PSD: &str = "[psd]";
 
+/// The name under which `psd_csv` refers to the file's `[psd.destretched]` (the PSD of the
+/// de-stretched frame the stretched measured-PSD models read).
+pub const OWN_PSD_DESTRETCHED: &str = "[psd.destretched]";
+
 impl MaterialFile {
     /// The `[material]` a scene's `desc` builds on when it includes this file: for
     /// `two_scale`, with the split `desc.cutoff` chooses (or the only one) over it; for
@@ -68,8 +72,27 @@ impl MaterialFile {
             base.gamma = Some(t.gamma);
             split = Some(chosen.to_string());
         }
-        if model == Some(ModelKind::MeasuredPsd) && base.psd_csv.is_none() && self.psd.is_some() {
-            base.psd_csv = Some(OWN_PSD.to_string());
+        let measured = matches!(
+            model,
+            Some(
+                ModelKind::MeasuredPsd
+                    | ModelKind::MeasuredPsdSsaAniso
+                    | ModelKind::MeasuredPsdAniso
+            )
+        );
+        if measured && base.psd_csv.is_none() && self.psd.is_some() {
+            let stretched = matches!(
+                model,
+                Some(ModelKind::MeasuredPsdSsaAniso | ModelKind::MeasuredPsdAniso)
+            );
+            base.psd_csv = Some(
+                if stretched {
+                    OWN_PSD_DESTRETCHED
+                } else {
+                    OWN_PSD
+                }
+                .to_string(),
+            );
         }
         Ok((base, split))
     }
@@ -156,6 +179,12 @@ impl MaterialFile {
         if self.psd.as_ref().is_some_and(|p| p.usable) {
             out.push(offer(ModelKind::MeasuredPsd, None));
         }
+        let destretched = (self.psd.as_ref())
+            .and_then(|p| p.destretched.as_ref())
+            .is_some_and(|d| d.usable);
+        if destretched && self.material.lx_um.is_some() && self.material.ly_um.is_some() {
+            out.push(offer(ModelKind::MeasuredPsdAniso, None));
+        }
         for name in self.two_scale.names() {
             out.push(offer(ModelKind::TwoScale, Some(name)));
         }
@@ -178,6 +207,13 @@ impl FileLoader for WithOwnPsd<'_> {
     fn psd_table(&mut self, path: &str) -> Result<(Vec<f64>, Vec<f64>), String> {
         match self.psd {
             Some(t) if path == OWN_PSD => Ok((t.zeta_rad_per_um.clone(), t.p_um4.clone())),
+            Some(t) if path == OWN_PSD_DESTRETCHED => match &t.destretched {
+                Some(d) => Ok((d.zeta_rad_per_um.clone(), d.p_um4.clone())),
+                None => Err(format!(
+                    "the file has no {OWN_PSD_DESTRETCHED} table (`lustre fit` writes one for \
+                     maps it flags anisotropic)"
+                )),
+            },
             _ => self.files.psd_table(path),
         }
     }
@@ -386,6 +422,10 @@ pub struct Reliability {
     /// What `model = "measured_psd"` assumes outside the band the `[psd]` table covers
     /// (the renderer continues it there; see `crate::statistics::TabulatedPsd`).
     pub psd_extrapolation: String,
+    /// The `[psd.destretched]` table for `model = "measured_psd_aniso"`: `"ok"`, why it
+    /// should not be trusted (e.g. a 2-D PSD that is not constant on ellipses), or why it
+    /// was not written.
+    pub psd_destretched: String,
     /// The two-scale tables.
     pub two_scale: String,
     /// Form left in the residual after levelling.
@@ -447,7 +487,7 @@ pub struct Anisotropy {
     pub lay_direction_deg: f64,
     /// Rms slopes along x and y from the x- and y-PSDs.
     pub psd_rms_slopes: [f64; 2],
-    /// True when `ratio > 1.5`.
+    /// True when the 2-D PSD fit's Ly/Lx exceeds 1.5 (where that fit is sound; else `ratio`).
     pub anisotropic: bool,
     /// GGX α along the principal axes.
     pub alpha_ggx: [f64; 2],
@@ -528,5 +568,31 @@ pub struct PsdTable {
     /// Radial frequency ζ [rad/µm].
     pub zeta_rad_per_um: Vec<f64>,
     /// Isotropic 2D PSD [µm⁴].
+    pub p_um4: Vec<f64>,
+    /// The radial PSD of the de-stretched frame, for the stretched measured-PSD models
+    /// (maps flagged anisotropic only).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub destretched: Option<DestretchedPsd>,
+}
+
+/// `[psd.destretched]`: the radial PSD of a map seen in the frame where its fitted
+/// ellipse (`[material]` `lx_um`, `ly_um`, `angle_deg`) is a circle, areas kept
+/// (physics.md §15.2), what `model = "measured_psd_aniso"` reads.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DestretchedPsd {
+    /// How the table was made.
+    #[serde(default)]
+    pub source: String,
+    /// True when the renderer accepts the table.
+    #[serde(default)]
+    pub usable: bool,
+    /// Rms in ln of the 2-D periodogram's polar cells against the elliptical model
+    /// (the radial table stretched back); compare with the sampling scatter in `source`.
+    #[serde(default)]
+    pub rms_log_residual: f64,
+    /// Radial frequency ζ of the de-stretched frame [rad/µm].
+    pub zeta_rad_per_um: Vec<f64>,
+    /// Its PSD [µm⁴].
     pub p_um4: Vec<f64>,
 }

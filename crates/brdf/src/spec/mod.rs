@@ -13,7 +13,7 @@
 //!
 //! | key | models | meaning |
 //! |---|---|---|
-//! | `model` | all | `ggx`, `beckmann`, `smooth`, `ghs_ssa`, `ghs`, `two_scale`, `measured_psd`, `rayleigh_rice`, `ghs_ssa_aniso`, `ghs_aniso`, `diffuse`, `roughplastic` |
+//! | `model` | all | `ggx`, `beckmann`, `smooth`, `ghs_ssa`, `ghs`, `two_scale`, `measured_psd`, `rayleigh_rice`, `ghs_ssa_aniso`, `ghs_aniso`, `measured_psd_ssa_aniso`, `measured_psd_aniso`, `diffuse`, `roughplastic` |
 //! | `metal` / `nk` / `nk_csv` | all but diffuse, roughplastic | built-in metal, constant `[n, k]`, or a CSV `wavelength_nm,n,k` |
 //! | `fresnel` | all but diffuse, roughplastic | `conductor` (default) or `one` (R ≡ 1; alias `none`) |
 //! | `alpha`, or `alpha_x` + `alpha_y` | ggx, beckmann (roughplastic: `alpha` only) | roughness (x along the surface tangent) |
@@ -22,11 +22,12 @@
 //! | `alpha_beckmann` | beckmann | used in preference to `alpha` (a fit file serves both models) |
 //! | `sigma_um`, `lc_um`, `gamma` | ghs_ssa, ghs, two_scale, rayleigh_rice | K-correlation σ (µm), Lc (µm), γ |
 //! | `sigma_um`, `lx_um`, `ly_um`, `angle_deg`, `gamma` | ghs_ssa_aniso, ghs_aniso | anisotropic K-correlation: Lx along the axis at `angle_deg` (from the tangent x towards y; default 0), Ly across it |
+//! | `psd_csv`, `lx_um`, `ly_um`, `angle_deg` | measured_psd_ssa_aniso, measured_psd_aniso | a measured radial PSD of the de-stretched frame stretched along the axis at `angle_deg` by the ratio Ly/Lx, areas kept (physics.md §15.2; only the ratio of the two lengths is read) |
 //! | `energy` | ghs_ssa, ghs, measured_psd (the `_aniso` models: `raw` only) | `raw` (default), `krywonos`, `sigma_rel` |
 //! | `fresnel_angle` | ghs_ssa, ghs, measured_psd, `_aniso` | `halfway` (default) or `incident` |
 //! | `polarization` | ghs_ssa, ghs, measured_psd, rayleigh_rice, `_aniso` | `unpolarized` (default), `s`, `p` (incident; both scattered polarisations summed) |
 //! | `polarization_factor` | ghs_ssa, ghs, measured_psd, `_aniso` | `r` (default: scalar Fresnel R) or `q` (Rayleigh–Rice Q, physics.md §13.2) |
-//! | `psd_csv` | measured_psd, rayleigh_rice | CSV `zeta_rad_per_um,p_um4` (rayleigh_rice: in place of the K-correlation keys, which must then not be set) |
+//! | `psd_csv` | measured_psd, rayleigh_rice, measured_psd_(ssa_)aniso | CSV `zeta_rad_per_um,p_um4` (rayleigh_rice: in place of the K-correlation keys, which must then not be set) |
 //! | `beta`, `coherent` | two_scale | macro NDF width β; `macro_ndf` (default) or `delta` |
 //! | `include`, `cutoff` | all | a `lustre fit` material file and its two-scale split (resolved by the caller) |
 //!
@@ -70,9 +71,9 @@ use alloc::format;
 use alloc::string::{String, ToString};
 use alloc::vec::Vec;
 
-use crate::statistics::TabulatedPsd;
 use crate::statistics::anisotropic::AnisotropicKc;
 use crate::statistics::kc::KcPsd;
+use crate::statistics::{EllipticalPsd, TabulatedPsd};
 use crate::wave::two_scale::{CoherentPart, TableResolution, TwoScale, TwoScaleParams};
 use crate::wave::{GhsAnisotropic, GhsFull, GhsOptions, GhsSsa, Polarization, RayleighRice};
 use crate::{
@@ -142,6 +143,10 @@ pub enum ModelKind {
     GhsSsaAniso,
     /// Full GHS of an anisotropic K-correlation surface.
     GhsAniso,
+    /// GHS smooth-surface approximation of a measured PSD stretched along two axes.
+    MeasuredPsdSsaAniso,
+    /// Full GHS of a measured PSD stretched along two axes.
+    MeasuredPsdAniso,
     /// Lambertian reflector (no Fresnel term).
     Diffuse,
     /// GGX dielectric coat over a Lambertian base (Mitsuba's `roughplastic`).
@@ -151,7 +156,7 @@ pub enum ModelKind {
 
 impl ModelKind {
     /// Every model, in the order the documentation lists them.
-    pub const ALL: [ModelKind; 12] = [
+    pub const ALL: [ModelKind; 14] = [
         ModelKind::Ggx,
         ModelKind::Beckmann,
         ModelKind::Smooth,
@@ -162,6 +167,8 @@ impl ModelKind {
         ModelKind::RayleighRice,
         ModelKind::GhsSsaAniso,
         ModelKind::GhsAniso,
+        ModelKind::MeasuredPsdSsaAniso,
+        ModelKind::MeasuredPsdAniso,
         ModelKind::Diffuse,
         ModelKind::RoughPlastic,
     ];
@@ -179,6 +186,8 @@ impl ModelKind {
             ModelKind::RayleighRice => "rayleigh_rice",
             ModelKind::GhsSsaAniso => "ghs_ssa_aniso",
             ModelKind::GhsAniso => "ghs_aniso",
+            ModelKind::MeasuredPsdSsaAniso => "measured_psd_ssa_aniso",
+            ModelKind::MeasuredPsdAniso => "measured_psd_aniso",
             ModelKind::Diffuse => "diffuse",
             ModelKind::RoughPlastic => "roughplastic",
         }
@@ -211,6 +220,19 @@ impl ModelKind {
     /// [`MaterialSpec::fresnel`] must be [`FresnelSpec::One`].
     pub fn conductor(self) -> bool {
         !matches!(self, ModelKind::Diffuse | ModelKind::RoughPlastic)
+    }
+
+    /// Whether the model describes a surface stretched along two axes (`ghs_ssa_aniso`,
+    /// `ghs_aniso`, `measured_psd_ssa_aniso`, `measured_psd_aniso`): its axes exist only
+    /// for a scan `lustre fit` flags anisotropic.
+    pub fn stretched(self) -> bool {
+        matches!(
+            self,
+            ModelKind::GhsSsaAniso
+                | ModelKind::GhsAniso
+                | ModelKind::MeasuredPsdSsaAniso
+                | ModelKind::MeasuredPsdAniso
+        )
     }
 
     /// `ggx, beckmann, …` for error messages.
@@ -266,6 +288,36 @@ impl AnisoSpec {
             self.angle_deg.to_radians(),
             self.gamma,
         )
+    }
+}
+
+/// A measured radial PSD stretched along two axes (physics.md §15.2), validated as
+/// [`TabulatedPsd::new`] and [`EllipticalPsd::new`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct MeasuredAnisoSpec {
+    /// Radial frequencies ζ of the de-stretched frame, rad/µm, strictly increasing.
+    pub zeta_rad_per_um: Vec<f64>,
+    /// PSD values P(ζ) of the de-stretched frame, µm⁴.
+    pub psd_um4: Vec<f64>,
+    /// Length along the axis at `angle_deg`, µm (only Ly/Lx is read).
+    pub lx_um: f64,
+    /// Length across it, µm.
+    pub ly_um: f64,
+    /// Axis angle from the tangent x towards y, degrees.
+    pub angle_deg: f64,
+}
+
+impl MeasuredAnisoSpec {
+    /// The stretched PSD, or the error naming the key.
+    pub fn psd(&self) -> Result<EllipticalPsd<TabulatedPsd>, SpecError> {
+        let table = TabulatedPsd::new(&self.zeta_rad_per_um, &self.psd_um4)
+            .map_err(|e| SpecError::new("psd", e.to_string()))?;
+        Ok(EllipticalPsd::new(
+            table,
+            self.lx_um,
+            self.ly_um,
+            self.angle_deg.to_radians(),
+        )?)
     }
 }
 
@@ -375,6 +427,20 @@ pub enum ModelSpec {
         /// Options (energy `raw` only).
         options: GhsOptions,
     },
+    /// GHS smooth-surface approximation, measured PSD stretched along two axes.
+    MeasuredPsdSsaAniso {
+        /// The surface.
+        surface: MeasuredAnisoSpec,
+        /// Options (energy `raw` only).
+        options: GhsOptions,
+    },
+    /// Full GHS, measured PSD stretched along two axes.
+    MeasuredPsdAniso {
+        /// The surface.
+        surface: MeasuredAnisoSpec,
+        /// Options (energy `raw` only).
+        options: GhsOptions,
+    },
     /// A Lambertian reflector.
     Diffuse {
         /// Its reflectance.
@@ -409,6 +475,8 @@ impl ModelSpec {
             ModelSpec::RayleighRice { .. } => ModelKind::RayleighRice,
             ModelSpec::GhsSsaAniso { .. } => ModelKind::GhsSsaAniso,
             ModelSpec::GhsAniso { .. } => ModelKind::GhsAniso,
+            ModelSpec::MeasuredPsdSsaAniso { .. } => ModelKind::MeasuredPsdSsaAniso,
+            ModelSpec::MeasuredPsdAniso { .. } => ModelKind::MeasuredPsdAniso,
             ModelSpec::Diffuse { .. } => ModelKind::Diffuse,
             ModelSpec::RoughPlastic { .. } => ModelKind::RoughPlastic,
         }
@@ -534,14 +602,7 @@ impl MaterialSpec {
             ModelSpec::GhsSsaAniso { surface, options }
             | ModelSpec::GhsAniso { surface, options } => {
                 let psd = surface.psd()?;
-                if options.energy != crate::wave::Energy::Raw {
-                    return Err(SpecError::new(
-                        "energy",
-                        "the anisotropic models take `energy = \"raw\"` only (the krywonos and \
-                         sigma_rel tables are over θi and λ; an anisotropic lobe also depends on \
-                         the incidence azimuth)",
-                    ));
-                }
+                raw_only(options)?;
                 if self.model.kind() == ModelKind::GhsAniso
                     && psd.gamma() < crate::statistics::kc::GAMMA_MIN_FULL
                 {
@@ -554,6 +615,11 @@ impl MaterialSpec {
                         ),
                     ));
                 }
+            }
+            ModelSpec::MeasuredPsdSsaAniso { surface, options }
+            | ModelSpec::MeasuredPsdAniso { surface, options } => {
+                surface.psd()?;
+                raw_only(options)?;
             }
             ModelSpec::Diffuse { reflectance } => {
                 reflectance.build()?;
@@ -570,6 +636,19 @@ impl MaterialSpec {
         }
         Ok(())
     }
+}
+
+/// The anisotropic models' energy option: `raw` only.
+fn raw_only(options: &GhsOptions) -> Result<(), SpecError> {
+    if options.energy != crate::wave::Energy::Raw {
+        return Err(SpecError::new(
+            "energy",
+            "the anisotropic models take `energy = \"raw\"` only (the krywonos and \
+             sigma_rel tables are over θi and λ; an anisotropic lobe also depends on \
+             the incidence azimuth)",
+        ));
+    }
+    Ok(())
 }
 
 /// The parameters of a `roughplastic` material, checked (its tables are built
@@ -673,6 +752,12 @@ impl MaterialSpec {
             ModelSpec::GhsAniso { surface, options } => {
                 Box::new(GhsAnisotropic::full(surface.psd()?, fresnel, *options)?)
             }
+            ModelSpec::MeasuredPsdSsaAniso { surface, options } => {
+                Box::new(GhsAnisotropic::ssa(surface.psd()?, fresnel, *options)?)
+            }
+            ModelSpec::MeasuredPsdAniso { surface, options } => {
+                Box::new(GhsAnisotropic::full(surface.psd()?, fresnel, *options)?)
+            }
             ModelSpec::Diffuse { reflectance } => Box::new(Diffuse::new(reflectance.build()?)),
             ModelSpec::RoughPlastic {
                 alpha,
@@ -731,6 +816,12 @@ impl MaterialSpec {
             },
             ModelSpec::GhsSsaAniso { surface, .. } | ModelSpec::GhsAniso { surface, .. } => {
                 1.0 / (k * surface.lx_um.max(surface.ly_um))
+            }
+            ModelSpec::MeasuredPsdSsaAniso { surface, .. }
+            | ModelSpec::MeasuredPsdAniso { surface, .. } => {
+                let ratio = (surface.ly_um / surface.lx_um).max(surface.lx_um / surface.ly_um);
+                let z0 = surface.zeta_rad_per_um.first().copied().unwrap_or(1.0);
+                z0 / (k * libm::sqrt(ratio))
             }
             ModelSpec::Smooth => 1e-3,
             ModelSpec::Diffuse { .. } => 1.0,
@@ -793,6 +884,13 @@ mod tests {
             angle_deg: 30.0,
             gamma: 2.5,
         };
+        let measured_aniso = MeasuredAnisoSpec {
+            zeta_rad_per_um: zeta.clone(),
+            psd_um4: p.clone(),
+            lx_um: 0.5,
+            ly_um: 4.0,
+            angle_deg: -20.0,
+        };
         let specs = [
             ModelSpec::Ggx {
                 alpha_x: 0.1,
@@ -840,6 +938,14 @@ mod tests {
                 surface: aniso,
                 options: GhsOptions::default(),
             },
+            ModelSpec::MeasuredPsdSsaAniso {
+                surface: measured_aniso.clone(),
+                options: GhsOptions::default(),
+            },
+            ModelSpec::MeasuredPsdAniso {
+                surface: measured_aniso,
+                options: GhsOptions::default(),
+            },
         ];
         for (spec, kind) in specs.into_iter().zip([
             ModelKind::Ggx,
@@ -853,6 +959,8 @@ mod tests {
             ModelKind::RayleighRice,
             ModelKind::GhsSsaAniso,
             ModelKind::GhsAniso,
+            ModelKind::MeasuredPsdSsaAniso,
+            ModelKind::MeasuredPsdAniso,
         ]) {
             assert_eq!(spec.kind(), kind);
             let m = MaterialSpec {

@@ -1,6 +1,7 @@
 //! Surface statistics the wave-optical models are driven by: the
 //! K-correlation PSD ([`KcPsd`], with its validated domain) and its Matérn
-//! correlation ([`matern`]), its anisotropic stretch ([`AnisotropicKc`]), a measured, tabulated PSD ([`TabulatedPsd`],
+//! correlation ([`matern`]), its anisotropic stretch ([`AnisotropicKc`]) and the stretch of any radial
+//! law ([`EllipticalPsd`]), a measured, tabulated PSD ([`TabulatedPsd`],
 //! feature `alloc`), and the exponential NDF of the two-scale model's macro
 //! surface ([`epd`]). [`RadialPsd`] is what the GHS models need of a PSD,
 //! [`Correlation`](crate::numerics::hankel::Correlation) what the Hankel
@@ -11,6 +12,7 @@
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 pub mod anisotropic;
+pub mod elliptical;
 pub mod epd;
 pub mod kc;
 pub mod matern;
@@ -18,6 +20,7 @@ pub mod matern;
 pub mod measured_psd;
 
 pub use anisotropic::AnisotropicKc;
+pub use elliptical::{EllipticalPsd, StretchedPsd};
 pub use kc::KcPsd;
 #[cfg(feature = "alloc")]
 pub use measured_psd::TabulatedPsd;

@@ -1,22 +1,24 @@
-//! GHS (SSA and full) of an anisotropic K-correlation surface
-//! ([`AnisotropicKc`], physics.md §15).
+//! GHS (SSA and full) of a stretched surface: the anisotropic K-correlation
+//! ([`AnisotropicKc`], physics.md §15) or any radial PSD stretched along two
+//! axes ([`EllipticalPsd`](crate::statistics::EllipticalPsd), §15.2, e.g. a
+//! measured one).
 //!
-//! The surface is the isotropic KC stretched by (Lx, Ly) along axes at φ₀,
-//! so its GHS kernel is the isotropic one in the stretched frequency
-//! u = (Lx ζ·a, Ly ζ·b), with Lc² → Lx Ly:
+//! The surface is an isotropic one stretched along axes at φ₀, so its GHS
+//! kernel is the isotropic one in the stretched frequency u = A ζ (for the KC,
+//! u = (Lx ζ·a, Ly ζ·b), with Lc² → Lx Ly = |det A|):
 //!
 //! ```text
-//! f(i,o) = R_s A_s δ_ω(o − s)/cosθo + R · k² Lx Ly · S̃(|u|; g(i,o)),
+//! f(i,o) = R_s A_s δ_ω(o − s)/cosθo + R · k² |det A| · S̃(|u|; g(i,o)),
 //! SSA:  S̃ → (1 − e^{−g}) p₁(|u|),     ζ = k(o⊥ + i⊥),
 //! ```
 //!
-//! (substitute r = A r' in the covariance integral: d²r = Lx Ly d²r' and
+//! (substitute r = Aᵀ r' in the covariance integral: d²r = |det A| d²r' and
 //! ζ·r = u·r'). A_s, g and the Fresnel and polarisation options are those of
 //! the isotropic models; the full S̃ comes from the isotropic table of the
-//! same γ. Sampling draws |u| as the isotropic model does (p₁ exactly for the
+//! radial law, over |u| up to 2k(360 nm)·max|A|. Sampling draws |u| as the isotropic model does (p₁ exactly for the
 //! SSA, the table's proposal with the defensive p₁ mixture for the full
 //! GHS), a uniform direction of u, and maps it back to ζ; the solid-angle pdf
-//! is k² Lx Ly cosθo q(|u|). Energy: `raw` only — the renormalisations of §5
+//! is k² |det A| cosθo q(|u|). Energy: `raw` only — the renormalisations of §5
 //! are tabulated over (θi, λ) and an anisotropic lobe depends on the
 //! incidence azimuth too.
 
@@ -30,43 +32,46 @@ use crate::BrdfError;
 use crate::fresnel::Fresnel;
 use crate::model::{Bxdf, BxdfSample, Specular, WAVELENGTH_MAX_NM, WAVELENGTH_MIN_NM};
 use crate::numerics::math::finite_nonneg;
+use crate::statistics::RadialPsd;
 use crate::statistics::anisotropic::AnisotropicKc;
-use crate::statistics::{KcPsd, RadialPsd};
+use crate::statistics::elliptical::StretchedPsd;
 
-/// GHS of an anisotropic K-correlation surface: the smooth-surface
-/// approximation, or all orders from the isotropic S̃ table.
+use super::ghs::{TableSource, hemisphere_g_max, hemisphere_u_max};
+use super::ghs_table::TableResolution;
+
+/// GHS of a stretched surface (by default the anisotropic K-correlation): the
+/// smooth-surface approximation, or all orders from the isotropic S̃ table of
+/// its radial law.
 #[derive(Clone, Debug)]
-pub struct GhsAnisotropic {
-    surface: AnisotropicKc,
-    /// The radial law in u (p₁, its CDF and sampler).
-    radial: KcPsd,
+pub struct GhsAnisotropic<S: StretchedPsd = AnisotropicKc>
+where
+    S::Radial: TableSource,
+{
+    surface: S,
+    /// The radial law in u (p, its CDF and sampler).
+    radial: S::Radial,
     common: GhsCommon,
-    /// The full model's isotropic table (u up to 2k(360 nm)·max(Lx, Ly));
+    /// The full model's isotropic table (u up to 2k(360 nm)·max|A|);
     /// `None`: the SSA.
-    full: Option<GhsFull<KcPsd>>,
+    full: Option<GhsFull<S::Radial>>,
 }
 
-impl GhsAnisotropic {
+impl<S: StretchedPsd> GhsAnisotropic<S>
+where
+    S::Radial: TableSource,
+{
     /// The smooth-surface approximation.
-    pub fn ssa(
-        surface: AnisotropicKc,
-        fresnel: Fresnel,
-        opts: GhsOptions,
-    ) -> Result<Self, BrdfError> {
+    pub fn ssa(surface: S, fresnel: Fresnel, opts: GhsOptions) -> Result<Self, BrdfError> {
         Self::build(surface, fresnel, opts, false)
     }
 
-    /// All diffraction orders (γ ≥ 1.05, as the isotropic full GHS).
-    pub fn full(
-        surface: AnisotropicKc,
-        fresnel: Fresnel,
-        opts: GhsOptions,
-    ) -> Result<Self, BrdfError> {
+    /// All diffraction orders (for the KC, γ ≥ 1.05, as the isotropic full GHS).
+    pub fn full(surface: S, fresnel: Fresnel, opts: GhsOptions) -> Result<Self, BrdfError> {
         Self::build(surface, fresnel, opts, true)
     }
 
     fn build(
-        surface: AnisotropicKc,
+        surface: S,
         fresnel: Fresnel,
         opts: GhsOptions,
         all_orders: bool,
@@ -81,21 +86,29 @@ impl GhsAnisotropic {
                         azimuth too)",
             });
         }
-        let (lx, ly) = (surface.lx_um(), surface.ly_um());
-        let radial = surface.radial(lx.max(ly))?;
-        if all_orders && surface.gamma() < crate::statistics::kc::GAMMA_MIN_FULL {
-            return Err(BrdfError::OutOfRange {
-                name: "gamma",
-                value: surface.gamma(),
-                valid: "≥ 1.05 for the full GHS (use the SSA below)",
-            });
-        }
+        let radial = surface.radial()?;
         let full = if all_orders {
-            Some(GhsFull::new(radial, Fresnel::One)?)
+            surface.check_full()?;
+            let table = radial.build_table(
+                hemisphere_u_max(surface.reach_um()),
+                hemisphere_g_max(surface.sigma_um()),
+                TableResolution::default(),
+            )?;
+            Some(GhsFull::with_table(
+                radial.clone(),
+                Fresnel::One,
+                GhsOptions::default(),
+                alloc::sync::Arc::new(table),
+            )?)
         } else {
             None
         };
-        let common = GhsCommon::new(fresnel, opts, surface.sigma_um(), libm::sqrt(lx * ly));
+        let common = GhsCommon::new(
+            fresnel,
+            opts,
+            surface.sigma_um(),
+            libm::sqrt(surface.area_um2()),
+        );
         Ok(GhsAnisotropic {
             surface,
             radial,
@@ -105,7 +118,7 @@ impl GhsAnisotropic {
     }
 
     /// The surface.
-    pub fn surface(&self) -> &AnisotropicKc {
+    pub fn surface(&self) -> &S {
         &self.surface
     }
 
@@ -152,7 +165,7 @@ impl GhsAnisotropic {
             return (0.0, 0.0);
         };
         let (ci, co) = (wi.z.min(1.0), wo.z.min(1.0));
-        let area = k * k * self.surface.lx_um() * self.surface.ly_um();
+        let area = k * k * self.surface.area_um2();
         let (p_delta, gs) = self.common.choice(ci, lambda_nm);
         let pdf = finite_nonneg((1.0 - p_delta) * area * co * self.proposal(gs, u));
         let t = k * self.common.sigma * (ci + co);
@@ -170,7 +183,10 @@ impl GhsAnisotropic {
     }
 }
 
-impl Bxdf for GhsAnisotropic {
+impl<S: StretchedPsd> Bxdf for GhsAnisotropic<S>
+where
+    S::Radial: TableSource,
+{
     fn eval(&self, wi: DVec3, wo: DVec3, lambda_nm: f64) -> f64 {
         self.eval_pdf_impl(wi, wo, lambda_nm).0
     }
@@ -200,7 +216,7 @@ impl Bxdf for GhsAnisotropic {
             return None;
         }
         let (s, c) = libm::sincos(2.0 * core::f64::consts::PI * u[2]);
-        let (zx, zy) = self.surface.from_u(r * c, r * s);
+        let (zx, zy) = self.surface.u_to_zeta(r * c, r * s);
         let (ox, oy) = (zx / k - wi.x, zy / k - wi.y);
         let rho2 = ox * ox + oy * oy;
         if !(rho2 < 1.0) {

@@ -7,8 +7,9 @@
 //!   Hankel transform ([`ghs_table`]), needs the `alloc` feature;
 //! * [`two_scale::TwoScale`]: the Holzschuch–Pacanowski two-scale model (its
 //!   D̃_eff table is built by the crate-internal `two_scale_table`), `alloc`;
-//! * [`GhsAnisotropic`]: SSA and full GHS of an anisotropic K-correlation
-//!   surface (`alloc`);
+//! * [`GhsAnisotropic`]: SSA and full GHS of a stretched surface: the
+//!   anisotropic K-correlation, or a measured radial PSD constant on ellipses
+//!   ([`crate::statistics::EllipticalPsd`]) (`alloc`);
 //! * [`RayleighRice`]: first-order vector perturbation theory for a
 //!   conductor, with the polarisation factor Q of [`polarization`];
 //! * [`ggx_kc`]: the GGX ↔ K-correlation identity;
