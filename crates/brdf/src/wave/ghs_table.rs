@@ -88,6 +88,8 @@ impl Default for TableResolution {
 struct Row {
     /// rms radius sqrt(∫h x³dx/∫h x dx) of the kernel: S̃ is flat for u ≪ 1/ℓ.
     ell: f64,
+    /// ln(1e−6/ℓ): below it the row is held flat ([`Row::parts_ln`]).
+    ln_u_flat: f64,
     /// The subtracted cusp c₁K(x/ε₁) + c₂K(x/ε₂) as [(c₁, ε₁), (c₂, ε₂)].
     cusp: [(f64, f64); 2],
     /// g e^{−g} when the row's kernel leaves the first order out, else 0.
@@ -403,6 +405,7 @@ impl Row {
         let rem = scratch.0.iter().map(|v| v / (2.0 * PI)).collect();
         Row {
             ell,
+            ln_u_flat: crate::numerics::math::ln(1e-6 / ell),
             cusp: rp.cusp.terms(dt),
             first_order: if rp.apart {
                 g * crate::numerics::math::exp(-g)
@@ -432,6 +435,12 @@ impl Row {
     /// FFTLog remainder at u. Far in the tail the analytic part alone is S̃'s
     /// leading asymptote g·p(u) (Σ c_i ε_i^{−2ν} = A ε^{−2ν} = g).
     fn parts<C: Correlation + ?Sized>(&self, c: &C, u: f64) -> (f64, f64) {
+        self.parts_ln(c, u, crate::numerics::math::ln(u))
+    }
+
+    /// [`Row::parts`] with ln u given (the table's columns are uniform in
+    /// ln u: a logarithm per entry saved).
+    fn parts_ln<C: Correlation + ?Sized>(&self, c: &C, u: f64, ln_u: f64) -> (f64, f64) {
         let analytic: f64 = self
             .cusp
             .iter()
@@ -439,7 +448,7 @@ impl Row {
             .sum();
         // Far below 1/ℓ the output F·u^q is at round-off and dividing by u^q
         // amplifies it; S̃ is flat there to O(u²ℓ²) < 1e−12, so hold the value.
-        let pos = (crate::numerics::math::ln(u.max(1e-6 / self.ell)) - self.s0) / self.dt;
+        let pos = (ln_u.max(self.ln_u_flat) - self.s0) / self.dt;
         let n = self.rem.len();
         let i = (libm::floor(pos) as isize).clamp(1, n as isize - 3) as usize;
         let t = pos - i as f64;
@@ -485,19 +494,24 @@ pub(crate) const RELIABLE: f64 = 1e-12;
 fn tail_safe_row<'a>(parts: &'a [(f64, f64)], u: &'a [f64]) -> impl Iterator<Item = f64> + 'a {
     let peak = parts.iter().fold(0.0f64, |m, &(a, r)| m.max(a + r));
     let floor = RELIABLE * peak;
-    // (u², ln S̃) at the last two reliable columns.
+    // (u², S̃) at the last two reliable columns (logarithms taken only
+    // where the floor is crossed).
     let mut last = [(f64::NAN, f64::NAN); 2];
     // (u_b², ln S̃_b, d ln S̃/d u²) once the floor is crossed.
     let mut carry: Option<(f64, f64, f64)> = None;
     parts.iter().zip(u).map(move |(&(analytic, rem), &u)| {
         let total = analytic + rem;
         if total >= floor {
-            last = [(u * u, crate::numerics::math::ln(total)), last[0]];
+            last = [(u * u, total), last[0]];
             carry = None;
             return total;
         }
         if carry.is_none() {
-            let [(x1, y1), (x0, y0)] = last;
+            let [(x1, s1), (x0, s0)] = last;
+            let (y1, y0) = (
+                crate::numerics::math::ln(s1),
+                crate::numerics::math::ln(s0),
+            );
             let slope = (y1 - y0) / (x1 - x0);
             carry = (slope < 0.0).then_some((x1, y1, slope));
         }
@@ -768,7 +782,12 @@ impl GhsTable {
         let row_values = crate::parallel::map_rows(n_g, |r| {
             let (row, width) = (&rows[r], widths[r]);
             let us: Vec<f64> = col_w.iter().map(|&w| width * w).collect();
-            let parts: Vec<(f64, f64)> = us.iter().map(|&u| row.parts(c, u)).collect();
+            let ln_width = crate::numerics::math::ln(width);
+            let parts: Vec<(f64, f64)> = us
+                .iter()
+                .enumerate()
+                .map(|(k, &u)| row.parts_ln(c, u, ln_width + ln_w0 + k as f64 * d_w))
+                .collect();
             let w2 = width * width;
             // ln(S̃W²): the factor A = 1 − e^{−g} is kept inside (it is
             // smooth in ln g), which saves an expm1 per evaluation.
@@ -932,6 +951,13 @@ impl GhsTable {
     fn build_cdfs(&mut self) {
         let (n_g, n_w) = (self.n_g, self.n_w);
         let t = &*self;
+        // w_k² of the cells' left edges, shared by all rows.
+        let w2: Vec<f64> = (0..n_w)
+            .map(|k| {
+                let wk = crate::numerics::math::exp(t.ln_w0 + k as f64 * t.d_w);
+                wk * wk
+            })
+            .collect();
         let rows = crate::parallel::map_rows(n_g, |r| {
             let vals = &t.values[r * n_w..(r + 1) * n_w];
             let mut cum = Vec::with_capacity(n_w + 1);
@@ -939,7 +965,7 @@ impl GhsTable {
             let mut acc = PI * w0 * w0 * crate::numerics::math::exp(vals[0]);
             cum.push(acc);
             for k in 0..n_w - 1 {
-                acc += t.cell_mass(vals, k);
+                acc += t.cell_mass(vals, k, w2[k]);
                 cum.push(acc);
             }
             acc += t.tail_mass(vals);
@@ -959,11 +985,10 @@ impl GhsTable {
         (vals[k + 1] - vals[k]) / self.d_w
     }
 
-    /// ∫ over cell k of 2π w ρ(w) dw with ρ = ρ_k (w/w_k)^β.
-    fn cell_mass(&self, vals: &[f64], k: usize) -> f64 {
-        let wk = crate::numerics::math::exp(self.ln_w0 + k as f64 * self.d_w);
+    /// ∫ over cell k of 2π w ρ(w) dw with ρ = ρ_k (w/w_k)^β, given w_k².
+    fn cell_mass(&self, vals: &[f64], k: usize, wk2: f64) -> f64 {
         let b2 = self.cell_beta(vals, k) + 2.0;
-        2.0 * PI * crate::numerics::math::exp(vals[k]) * wk * wk * expm1_over(b2, self.d_w)
+        2.0 * PI * crate::numerics::math::exp(vals[k]) * wk2 * expm1_over(b2, self.d_w)
     }
 
     /// Tail slope (kept below −2.01 so the tail mass is finite).
