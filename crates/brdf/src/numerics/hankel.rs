@@ -177,12 +177,25 @@ pub(crate) fn expm1_fast(t: f64) -> f64 {
     if libm::fabs(t) > 0.0625 {
         return libm::expm1(t);
     }
-    // t(1 + t/2(1 + t/3(1 + … (1 + t/12)))), Horner from the inside.
-    let mut p = 1.0;
-    let mut k = 12.0;
-    while k >= 2.0 {
-        p = 1.0 + t / k * p;
-        k -= 1.0;
+    // Σ_{k=1}^{12} t^k/k! by Horner in t with the coefficients 1/k! as
+    // constants (a division per term would cost more than expm1).
+    const C: [f64; 12] = [
+        1.0,
+        1.0 / 2.0,
+        1.0 / 6.0,
+        1.0 / 24.0,
+        1.0 / 120.0,
+        1.0 / 720.0,
+        1.0 / 5040.0,
+        1.0 / 40320.0,
+        1.0 / 362880.0,
+        1.0 / 3628800.0,
+        1.0 / 39916800.0,
+        1.0 / 479001600.0,
+    ];
+    let mut p = C[11];
+    for &c in C[..11].iter().rev() {
+        p = c + t * p;
     }
     t * p
 }
