@@ -508,10 +508,7 @@ fn tail_safe_row<'a>(parts: &'a [(f64, f64)], u: &'a [f64]) -> impl Iterator<Ite
         }
         if carry.is_none() {
             let [(x1, s1), (x0, s0)] = last;
-            let (y1, y0) = (
-                crate::numerics::math::ln(s1),
-                crate::numerics::math::ln(s0),
-            );
+            let (y1, y0) = (crate::numerics::math::ln(s1), crate::numerics::math::ln(s0));
             let slope = (y1 - y0) / (x1 - x0);
             carry = (slope < 0.0).then_some((x1, y1, slope));
         }
@@ -964,8 +961,8 @@ impl GhsTable {
             let w0 = crate::numerics::math::exp(t.ln_w0);
             let mut acc = PI * w0 * w0 * crate::numerics::math::exp(vals[0]);
             cum.push(acc);
-            for k in 0..n_w - 1 {
-                acc += t.cell_mass(vals, k, w2[k]);
+            for (k, &wk2) in w2[..n_w - 1].iter().enumerate() {
+                acc += t.cell_mass(vals, k, wk2);
                 cum.push(acc);
             }
             acc += t.tail_mass(vals);
