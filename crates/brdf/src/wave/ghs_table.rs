@@ -16,9 +16,10 @@
 //! [`TableResolution::fft_n`] real points (2× or 4× that when the kernel
 //! spans more than the window's ~44 decades: heavy tails at large g; ½ or ¼
 //! of it when the kernel and the output range fit a shorter window, as they
-//! do for most rows) and ~2500 evaluations of M for the subtracted cusp. The kernel's M and
-//! 1 − M come from one lattice in ln x shared by all rows (every row's
-//! window starts on it), evaluated once per table.
+//! do for most rows). The kernel's M and 1 − M, and the subtracted cusp
+//! (split over two lattice scales, [`CuspMix`]), come from one lattice in
+//! ln x shared by all rows (every row's window starts on it), evaluated once
+//! per table.
 //!
 //! What the transform cannot resolve is not tabulated from it:
 //! * below 1e−12 of a row's peak (`RELIABLE`) S̃ is carried by its exact
@@ -87,8 +88,10 @@ impl Default for TableResolution {
 struct Row {
     /// rms radius sqrt(∫h x³dx/∫h x dx) of the kernel: S̃ is flat for u ≪ 1/ℓ.
     ell: f64,
-    a: f64,
-    eps: f64,
+    /// ln(1e−6/ℓ): below it the row is held flat ([`Row::parts_ln`]).
+    ln_u_flat: f64,
+    /// The subtracted cusp c₁K(x/ε₁) + c₂K(x/ε₂) as [(c₁, ε₁), (c₂, ε₂)].
+    cusp: [(f64, f64); 2],
     /// g e^{−g} when the row's kernel leaves the first order out, else 0.
     first_order: f64,
     w: f64,
@@ -98,6 +101,44 @@ struct Row {
     rem: Vec<f64>,
 }
 
+/// The cusp a row subtracts, A·K(x/ε) of [`cusp_params`], rewritten as
+/// c₁K(x/ε₁) + c₂K(x/ε₂) with ε₁ ≤ ε < ε₂ the neighbouring lattice scales
+/// e^{s₁Δ}, e^{(s₁+1)Δ}: then K(x_j/ε_i) = K(x_{j−s_i}) is read from the
+/// lattice all rows share instead of evaluated per row (~2500 Bessel
+/// functions a row). c₁ + c₂ = A keeps the value at 0, and
+/// c₁ε₁^{−2ν} + c₂ε₂^{−2ν} = Aε^{−2ν} the leading non-analytic term, so the
+/// remainder is as smooth as with A·K(x/ε); both weights lie in [0, A]. The
+/// pair's transform is added back exactly as for one term.
+#[derive(Clone, Copy, Debug)]
+struct CuspMix {
+    /// ε₁ = e^{s₁Δ}.
+    s1: i64,
+    c1: f64,
+    c2: f64,
+}
+
+impl CuspMix {
+    fn new(nu: f64, a: f64, eps: f64, dt: f64) -> CuspMix {
+        let ln_eps = crate::numerics::math::ln(eps);
+        let s1 = libm::floor(ln_eps / dt) as i64;
+        // k_i = (ε/ε_i)^{2ν}: k₁ ≥ 1 > k₂.
+        let k1 = crate::numerics::math::exp(2.0 * nu * (ln_eps - s1 as f64 * dt));
+        let k2 = crate::numerics::math::exp(2.0 * nu * (ln_eps - (s1 + 1) as f64 * dt));
+        let c2 = (a * (k1 - 1.0) / (k1 - k2)).clamp(0.0, a);
+        CuspMix { s1, c1: a - c2, c2 }
+    }
+
+    /// ε_i for i = 0 (ε₁) or 1 (ε₂).
+    fn scale(&self, i: i64, dt: f64) -> f64 {
+        crate::numerics::math::exp((self.s1 + i) as f64 * dt)
+    }
+
+    /// [(c₁, ε₁), (c₂, ε₂)].
+    fn terms(&self, dt: f64) -> [(f64, f64); 2] {
+        [(self.c1, self.scale(0, dt)), (self.c2, self.scale(1, dt))]
+    }
+}
+
 /// Where a row's FFTLog window sits on the lattice ln x_j = jΔ shared by
 /// all rows of a table, and how far its two terms reach.
 struct RowPlan {
@@ -105,8 +146,9 @@ struct RowPlan {
     /// The row transforms the kernel without its first order (see
     /// [`Correlation::separate_first_order`]).
     apart: bool,
-    a: f64,
-    eps: f64,
+    /// The subtracted cusp, c₁K(x/ε₁) + c₂K(x/ε₂) with ε₁ = e^{s₁Δ} and
+    /// ε₂ = e^{(s₁+1)Δ} on the lattice ([`CuspMix`]).
+    cusp: CuspMix,
     w: f64,
     /// The window is x_{j0}, …, x_{j0+N−1}, N = `n`.
     j0: i64,
@@ -176,17 +218,19 @@ impl RowPlan {
         // same points and the lattice evaluates each once.
         let j0 = libm::floor(crate::numerics::math::ln(1e-12 * (1.0 / w).min(eps)) / dt) as i64;
         let t0 = j0 as f64 * dt;
+        let cusp = CuspMix::new(nu, a, eps, dt);
+        // The wider of the two subtracted terms reaches furthest.
+        let eps_hi = cusp.scale(1, dt);
         // Past these points the kernel and the subtracted Matérn are below
         // 1e−25 of A: treat as zero.
         // Envelopes, not the functions: a measured covariance crosses zero
         // long before it has decayed.
         let x_h = first_below(|x| kernel_envelope(c, x, g, apart), 1e-25 * a, t0, dt, n);
-        let x_e = first_below(|x| c.cusp_m_envelope(x / eps), 1e-25, t0, dt, n);
+        let x_e = first_below(|x| c.cusp_m_envelope(x / eps_hi), 1e-25, t0, dt, n);
         RowPlan {
             g,
             apart,
-            a,
-            eps,
+            cusp,
             w,
             j0,
             n,
@@ -256,6 +300,9 @@ struct Lattice {
     j_lo: i64,
     /// (x, M(x), 1 − M(x)) at j = j_lo, j_lo + 1, …
     at: Vec<(f64, f64, f64)>,
+    k_lo: i64,
+    /// The subtracted K(x) ([`Correlation::cusp_m`]) at k = k_lo, k_lo + 1, …
+    cusp: Vec<f64>,
 }
 
 impl Lattice {
@@ -266,6 +313,17 @@ impl Lattice {
             .map(|p| p.j0 + p.x_h.max(p.x_e) as i64)
             .max()
             .unwrap_or(j_lo);
+        // Row points j < j0 + x_e read K at j − s₁ and j − s₁ − 1.
+        let k_lo = plans
+            .iter()
+            .map(|p| p.j0 - p.cusp.s1 - 1)
+            .min()
+            .unwrap_or(0);
+        let k_hi = plans
+            .iter()
+            .map(|p| p.j0 + p.x_e as i64 - p.cusp.s1)
+            .max()
+            .unwrap_or(k_lo);
         const CHUNK: usize = 512;
         let len = (j_hi - j_lo).max(0) as usize;
         let chunks = crate::parallel::map_rows(len.div_ceil(CHUNK), |k| {
@@ -276,9 +334,17 @@ impl Lattice {
                 })
                 .collect::<Vec<_>>()
         });
+        let len_k = (k_hi - k_lo).max(0) as usize;
+        let cusp = crate::parallel::map_rows(len_k.div_ceil(CHUNK), |k| {
+            (k * CHUNK..((k + 1) * CHUNK).min(len_k))
+                .map(|i| c.cusp_m(crate::numerics::math::exp((k_lo + i as i64) as f64 * dt)))
+                .collect::<Vec<_>>()
+        });
         Lattice {
             j_lo,
             at: chunks.into_iter().flatten().collect(),
+            k_lo,
+            cusp: cusp.concat(),
         }
     }
 }
@@ -294,11 +360,10 @@ impl Row {
     ) -> Row {
         let rp = RowPlan::fitted(c, g, plans.n, plans.dt);
         let lattice = Lattice::build(c, core::slice::from_ref(&rp), plans.dt);
-        Row::build(c, plans.get(rp.n), &rp, &lattice, scratch)
+        Row::build(plans.get(rp.n), &rp, &lattice, scratch)
     }
 
-    fn build<C: Correlation + ?Sized>(
-        c: &C,
+    fn build(
         plan: &FftLog,
         rp: &RowPlan,
         lattice: &Lattice,
@@ -308,12 +373,15 @@ impl Row {
         debug_assert_eq!(n, rp.n);
         let dt = plan.dt();
         let t0 = rp.j0 as f64 * dt;
-        let (g, a, eps) = (rp.g, rp.a, rp.eps);
+        let g = rp.g;
         let mut f = vec![0.0; n];
         let (mut m0, mut m2) = (0.0, 0.0);
         let first = (rp.j0 - lattice.j_lo) as usize;
         let end = rp.x_h.max(rp.x_e).min(n);
         let points = &lattice.at[first..first + end];
+        // K(x_j/ε₁) = cusp[j − s₁ − k_lo], K(x_j/ε₂) the entry before it.
+        let k1 = (rp.j0 - rp.cusp.s1 - lattice.k_lo) as usize;
+        let (c1, c2) = (rp.cusp.c1, rp.cusp.c2);
         let kernel = KernelAtG::new(g);
         for (i, (slot, &(x, m, omm))) in f.iter_mut().zip(points).enumerate() {
             let h = if i >= rp.x_h {
@@ -324,7 +392,7 @@ impl Row {
                 kernel.h(m, omm)
             };
             let s = if i < rp.x_e {
-                a * c.cusp_m(x / eps)
+                c1 * lattice.cusp[k1 + i] + c2 * lattice.cusp[k1 + i - 1]
             } else {
                 0.0
             };
@@ -337,8 +405,8 @@ impl Row {
         let rem = scratch.0.iter().map(|v| v / (2.0 * PI)).collect();
         Row {
             ell,
-            a,
-            eps,
+            ln_u_flat: crate::numerics::math::ln(1e-6 / ell),
+            cusp: rp.cusp.terms(dt),
             first_order: if rp.apart {
                 g * crate::numerics::math::exp(-g)
             } else {
@@ -363,14 +431,24 @@ impl Row {
         analytic + rem + first
     }
 
-    /// The cusp term A ε² p(εu), whose transform is exact, and the FFTLog
-    /// remainder at u. Far in the tail the analytic part alone is S̃'s
-    /// leading asymptote g·p(u) (A ε^{−2ν} = g).
+    /// The cusp terms Σ c_i ε_i² p(ε_i u), whose transform is exact, and the
+    /// FFTLog remainder at u. Far in the tail the analytic part alone is S̃'s
+    /// leading asymptote g·p(u) (Σ c_i ε_i^{−2ν} = A ε^{−2ν} = g).
     fn parts<C: Correlation + ?Sized>(&self, c: &C, u: f64) -> (f64, f64) {
-        let analytic = self.a * self.eps * self.eps * c.cusp_psd_u(self.eps * u);
+        self.parts_ln(c, u, crate::numerics::math::ln(u))
+    }
+
+    /// [`Row::parts`] with ln u given (the table's columns are uniform in
+    /// ln u: a logarithm per entry saved).
+    fn parts_ln<C: Correlation + ?Sized>(&self, c: &C, u: f64, ln_u: f64) -> (f64, f64) {
+        let analytic: f64 = self
+            .cusp
+            .iter()
+            .map(|&(ci, ei)| ci * ei * ei * c.cusp_psd_u(ei * u))
+            .sum();
         // Far below 1/ℓ the output F·u^q is at round-off and dividing by u^q
         // amplifies it; S̃ is flat there to O(u²ℓ²) < 1e−12, so hold the value.
-        let pos = (crate::numerics::math::ln(u.max(1e-6 / self.ell)) - self.s0) / self.dt;
+        let pos = (ln_u.max(self.ln_u_flat) - self.s0) / self.dt;
         let n = self.rem.len();
         let i = (libm::floor(pos) as isize).clamp(1, n as isize - 3) as usize;
         let t = pos - i as f64;
@@ -416,19 +494,21 @@ pub(crate) const RELIABLE: f64 = 1e-12;
 fn tail_safe_row<'a>(parts: &'a [(f64, f64)], u: &'a [f64]) -> impl Iterator<Item = f64> + 'a {
     let peak = parts.iter().fold(0.0f64, |m, &(a, r)| m.max(a + r));
     let floor = RELIABLE * peak;
-    // (u², ln S̃) at the last two reliable columns.
+    // (u², S̃) at the last two reliable columns (logarithms taken only
+    // where the floor is crossed).
     let mut last = [(f64::NAN, f64::NAN); 2];
     // (u_b², ln S̃_b, d ln S̃/d u²) once the floor is crossed.
     let mut carry: Option<(f64, f64, f64)> = None;
     parts.iter().zip(u).map(move |(&(analytic, rem), &u)| {
         let total = analytic + rem;
         if total >= floor {
-            last = [(u * u, crate::numerics::math::ln(total)), last[0]];
+            last = [(u * u, total), last[0]];
             carry = None;
             return total;
         }
         if carry.is_none() {
-            let [(x1, y1), (x0, y0)] = last;
+            let [(x1, s1), (x0, s0)] = last;
+            let (y1, y0) = (crate::numerics::math::ln(s1), crate::numerics::math::ln(s0));
             let slope = (y1 - y0) / (x1 - x0);
             carry = (slope < 0.0).then_some((x1, y1, slope));
         }
@@ -661,7 +741,7 @@ impl GhsTable {
         let lattice = Lattice::build(c, &plans, res.fft_dt);
         let rows: Vec<Row> = crate::parallel::map_rows(n_g, |r| {
             let mut scratch = (Vec::new(), Vec::new());
-            Row::build(c, fft.get(plans[r].n), &plans[r], &lattice, &mut scratch)
+            Row::build(fft.get(plans[r].n), &plans[r], &lattice, &mut scratch)
         });
         // Columns start where every row is flat to ~1e−7: w ≤ 1e−3/(ℓW). For
         // heavy-tailed surfaces (small ν) the core is far narrower than W.
@@ -699,7 +779,12 @@ impl GhsTable {
         let row_values = crate::parallel::map_rows(n_g, |r| {
             let (row, width) = (&rows[r], widths[r]);
             let us: Vec<f64> = col_w.iter().map(|&w| width * w).collect();
-            let parts: Vec<(f64, f64)> = us.iter().map(|&u| row.parts(c, u)).collect();
+            let ln_width = crate::numerics::math::ln(width);
+            let parts: Vec<(f64, f64)> = us
+                .iter()
+                .enumerate()
+                .map(|(k, &u)| row.parts_ln(c, u, ln_width + ln_w0 + k as f64 * d_w))
+                .collect();
             let w2 = width * width;
             // ln(S̃W²): the factor A = 1 − e^{−g} is kept inside (it is
             // smooth in ln g), which saves an expm1 per evaluation.
@@ -863,14 +948,21 @@ impl GhsTable {
     fn build_cdfs(&mut self) {
         let (n_g, n_w) = (self.n_g, self.n_w);
         let t = &*self;
+        // w_k² of the cells' left edges, shared by all rows.
+        let w2: Vec<f64> = (0..n_w)
+            .map(|k| {
+                let wk = crate::numerics::math::exp(t.ln_w0 + k as f64 * t.d_w);
+                wk * wk
+            })
+            .collect();
         let rows = crate::parallel::map_rows(n_g, |r| {
             let vals = &t.values[r * n_w..(r + 1) * n_w];
             let mut cum = Vec::with_capacity(n_w + 1);
             let w0 = crate::numerics::math::exp(t.ln_w0);
             let mut acc = PI * w0 * w0 * crate::numerics::math::exp(vals[0]);
             cum.push(acc);
-            for k in 0..n_w - 1 {
-                acc += t.cell_mass(vals, k);
+            for (k, &wk2) in w2[..n_w - 1].iter().enumerate() {
+                acc += t.cell_mass(vals, k, wk2);
                 cum.push(acc);
             }
             acc += t.tail_mass(vals);
@@ -890,11 +982,10 @@ impl GhsTable {
         (vals[k + 1] - vals[k]) / self.d_w
     }
 
-    /// ∫ over cell k of 2π w ρ(w) dw with ρ = ρ_k (w/w_k)^β.
-    fn cell_mass(&self, vals: &[f64], k: usize) -> f64 {
-        let wk = crate::numerics::math::exp(self.ln_w0 + k as f64 * self.d_w);
+    /// ∫ over cell k of 2π w ρ(w) dw with ρ = ρ_k (w/w_k)^β, given w_k².
+    fn cell_mass(&self, vals: &[f64], k: usize, wk2: f64) -> f64 {
         let b2 = self.cell_beta(vals, k) + 2.0;
-        2.0 * PI * crate::numerics::math::exp(vals[k]) * wk * wk * expm1_over(b2, self.d_w)
+        2.0 * PI * crate::numerics::math::exp(vals[k]) * wk2 * expm1_over(b2, self.d_w)
     }
 
     /// Tail slope (kept below −2.01 so the tail mass is finite).
