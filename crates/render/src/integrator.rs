@@ -771,7 +771,15 @@ fn exact_delta(
         return [0.0; 3];
     }
     let ci = v.wi.z.min(1.0);
-    tables.reflected(delta, ci * ci, 1.0, &em)
+    let xyz = tables.reflected(delta, ci * ci, 1.0, &em);
+    if scene.signed_radiance {
+        return xyz;
+    }
+    // Where e^{−g} underflows (σ ≫ λ near normal incidence) the lobe's
+    // integrals are ~10⁻⁷⁰ and the cubic interpolation's overshoot, within
+    // the table's tolerance, can make them negative; the integral of a
+    // non-negative emission is not.
+    xyz.map(|v| v.max(0.0))
 }
 
 /// Spectral radiance estimates (wavelength pdf included) along `ray` at each
