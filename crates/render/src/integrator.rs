@@ -772,14 +772,23 @@ fn exact_delta(
     }
     let ci = v.wi.z.min(1.0);
     let xyz = tables.reflected(delta, ci * ci, 1.0, &em);
-    if scene.signed_radiance {
-        return xyz;
-    }
     // Where e^{−g} underflows (σ ≫ λ near normal incidence) the lobe's
     // integrals are ~10⁻⁷⁰ and the cubic interpolation's overshoot, within
-    // the table's tolerance, can make them negative; the integral of a
-    // non-negative emission is not.
-    xyz.map(|v| v.max(0.0))
+    // the table's tolerance, can make them negative. The weight R·e^{−g}
+    // is at most 1, reached at grazing, so the grazing value bounds every
+    // channel: what is within the tolerance of it from zero is zero, and
+    // the integral of a non-negative emission is not negative.
+    let top = tables.reflected(delta, 0.0, 1.0, &em);
+    std::array::from_fn(|c| {
+        let v = xyz[c];
+        if v.abs() <= crate::spectral_table::TOLERANCE * top[c].abs() {
+            0.0
+        } else if scene.signed_radiance {
+            v
+        } else {
+            v.max(0.0)
+        }
+    })
 }
 
 /// Spectral radiance estimates (wavelength pdf included) along `ray` at each
