@@ -526,6 +526,9 @@ struct Throughput {
     /// The glossy sample of the last vertex, until its other wavelengths'
     /// BSDF value and pdf are applied ([`Throughput::resolve`]).
     pending: Option<Pending>,
+    /// The next vertex's delta-lobe emission is already counted
+    /// ([`exact_delta`]).
+    delta_counted: bool,
 }
 
 impl Throughput {
@@ -541,6 +544,7 @@ impl Throughput {
             l_mis: [0.0; N],
             peak: None,
             pending: None,
+            delta_counted: false,
         }
     }
 
@@ -635,7 +639,11 @@ fn trace_exact(
         scene.materials[m as usize].fresnel_only.as_ref(),
     ) else {
         let wavelengths = draw_wavelengths(scene, sampler, u_lambda);
-        let start = Throughput::camera(&wavelengths);
+        let mut start = Throughput::camera(&wavelengths);
+        if let Some(delta) = tables.delta(m).filter(|_| settings.max_depth >= 1) {
+            add(&mut xyz, exact_delta(scene, tables, delta, &hit, &ray), 1.0);
+            start.delta_counted = true;
+        }
         let radiance = trace(scene, ray, Some(hit), &wavelengths, sampler, start, 0);
         return SampleRadiance::Spectral(CameraSample {
             wavelengths,
@@ -733,6 +741,56 @@ fn trace_exact(
     })
 }
 
+/// The emission a first vertex's delta lobe reflects along the mirror
+/// direction, integrated over λ with the lobe's table `delta`
+/// ([`SpectralTables::delta`]): the XYZ that `delta_emission` estimates
+/// from the path's sampled wavelengths, and with weight 1 too, since no
+/// other strategy reaches a delta direction.
+///
+/// Why: the lobe's weight R·e^{−g} changes with λ by orders of magnitude
+/// (e^{−(4πσ cosθ/λ)²}: 8·10⁻⁵ at 400 nm and 0.05 at 700 nm for σ 0.138 µm
+/// at 45°), and where the mirror direction meets a small light that
+/// spike is the pixel: a few sampled wavelengths estimate it with large
+/// colour noise, which was most of a full-GHS plate's error.
+fn exact_delta(
+    scene: &Scene,
+    tables: &SpectralTables,
+    delta: u32,
+    hit: &Hit,
+    ray: &Ray,
+) -> [f64; 3] {
+    let Some(v) = Vertex::new(hit, ray) else {
+        return [0.0; 3];
+    };
+    let Some(mirror) = v.ray(brdf::frame::reflect_z(v.wi)) else {
+        return [0.0; 3];
+    };
+    let next = scene.shapes.intersect(&mirror, f64::INFINITY);
+    let (em, _) = emission_at(&scene.lights, &mirror, next.as_ref());
+    if matches!(em, Emission::None) {
+        return [0.0; 3];
+    }
+    let ci = v.wi.z.min(1.0);
+    let xyz = tables.reflected(delta, ci * ci, 1.0, &em);
+    // Where e^{−g} underflows (σ ≫ λ near normal incidence) the lobe's
+    // integrals are ~10⁻⁷⁰ and the cubic interpolation's overshoot, within
+    // the table's tolerance, can make them negative. The weight R·e^{−g}
+    // is at most 1, reached at grazing, so the grazing value bounds every
+    // channel: what is within the tolerance of it from zero is zero, and
+    // the integral of a non-negative emission is not negative.
+    let top = tables.reflected(delta, 0.0, 1.0, &em);
+    std::array::from_fn(|c| {
+        let v = xyz[c];
+        if v.abs() <= crate::spectral_table::TOLERANCE * top[c].abs() {
+            0.0
+        } else if scene.signed_radiance {
+            v
+        } else {
+            v.max(0.0)
+        }
+    })
+}
+
 /// Spectral radiance estimates (wavelength pdf included) along `ray` at each
 /// λ_j from scattering event `depth0` on, with the path's state `start`
 /// (for `depth0` = 0, [`Throughput::camera`]); `first` is `ray`'s hit,
@@ -790,6 +848,7 @@ fn trace(
             q,
             l_mis,
             pending,
+            delta_counted,
             ..
         } = &mut th;
         let (u_light, u_bsdf) = vertex_draws(sampler, lights, bxdf);
@@ -824,20 +883,22 @@ fn trace(
         );
 
         // The emission a delta lobe mixed with others reflects, traced
-        // deterministically (see `delta_emission`); a delta direction the
-        // BSDF sample below picks then counts no emission.
-        let delta_traced = bxdf.uses_lobe_choice()
-            && delta_emission(
-                scene,
-                bxdf,
-                &v,
-                lambdas,
-                n,
-                |j, e| {
-                    out[j] += t[j] * e;
-                },
-                bsdf_weight_over_pdf(mis.heuristic, 1.0, q[..n].iter().sum(), 0.0),
-            );
+        // deterministically (see `delta_emission`) or already integrated
+        // over λ (`exact_delta`); a delta direction the BSDF sample below
+        // picks then counts no emission.
+        let delta_traced = std::mem::take(delta_counted)
+            || bxdf.uses_lobe_choice()
+                && delta_emission(
+                    scene,
+                    bxdf,
+                    &v,
+                    lambdas,
+                    n,
+                    |j, e| {
+                        out[j] += t[j] * e;
+                    },
+                    bsdf_weight_over_pdf(mis.heuristic, 1.0, q[..n].iter().sum(), 0.0),
+                );
 
         // BSDF sampling at the hero wavelength.
         let Some(s) = bxdf.sample(wi, lambdas[0], u_bsdf) else {

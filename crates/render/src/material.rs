@@ -27,6 +27,31 @@ pub struct Material {
     /// over λ exactly (`spectral_table.rs`). It must describe `bxdf`: whoever
     /// replaces `bxdf` by another model replaces or clears it too.
     pub fresnel_only: Option<FresnelOnly>,
+    /// For the models whose delta lobe's weight depends on the path only
+    /// through cosθi and λ ([`delta_by_cos_only`]): their Fresnel factor,
+    /// whose n, κ rows the integrator's λ quadrature of that lobe breaks
+    /// at (`spectral_table.rs`). Whoever replaces `bxdf` clears it or
+    /// replaces it too.
+    pub delta_fresnel: Option<Fresnel>,
+}
+
+/// Whether a model's delta lobe (its [`brdf::Bxdf::specular`]) depends on
+/// the incident direction only through cosθi: R(λ, cosθi)·e^{−g(λ, cosθi)}
+/// for the wave-optical models, whose coherent attenuation uses the RMS
+/// height (isotropic even for the anisotropic surfaces) and whose energy
+/// tables are indexed by cosθi. Tested over azimuths in
+/// `tests/delta_exact.rs`.
+pub fn delta_by_cos_only(kind: ModelKind) -> bool {
+    matches!(
+        kind,
+        ModelKind::GhsSsa
+            | ModelKind::Ghs
+            | ModelKind::MeasuredPsd
+            | ModelKind::TwoScale
+            | ModelKind::RayleighRice
+            | ModelKind::GhsSsaAniso
+            | ModelKind::GhsAniso
+    )
 }
 
 /// A material split into its Fresnel factor and a λ-free rest.
@@ -229,10 +254,16 @@ pub fn build_material(
     } else {
         None
     };
+    let delta_fresnel = if delta_by_cos_only(spec.model.kind()) {
+        Some(spec.fresnel.build().map_err(|e| e.to_string())?)
+    } else {
+        None
+    };
     Ok(Material {
         name: name.to_string(),
         model: spec.model.kind(),
         bxdf,
         fresnel_only,
+        delta_fresnel,
     })
 }

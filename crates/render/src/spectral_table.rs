@@ -76,6 +76,8 @@ impl Basis<'_> {
 
 /// Quadrature nodes in λ with each basis function's weighted colour matching.
 struct Nodes {
+    /// The wavelength of each node (nm).
+    lambda: Vec<f64>,
     /// (n, κ) at each node.
     nk: Vec<(f64, f64)>,
     /// Per node, per basis: quadrature weight · basis(λ) · (x̄, ȳ, z̄)(λ).
@@ -102,8 +104,10 @@ impl Nodes {
         let cie = Cie::get();
         let nodes = gl4_nodes(&cuts);
         let mut nk = Vec::with_capacity(nodes.len());
+        let mut lambda = Vec::with_capacity(nodes.len());
         let mut w = Vec::with_capacity(nodes.len() * bases.len());
         for (l, gw) in nodes {
+            lambda.push(l);
             nk.push(match fresnel {
                 Fresnel::Conductor(ior) => ior.at(l),
                 Fresnel::One => (1.0, 0.0),
@@ -115,6 +119,7 @@ impl Nodes {
             }
         }
         Nodes {
+            lambda,
             nk,
             w,
             bases: bases.len(),
@@ -123,13 +128,25 @@ impl Nodes {
 
     /// ∫ basis · F(cos²θd = `cos2`) · cmf dλ for every basis, into `out`.
     fn integrate(&self, fresnel: bool, cos2: f64, out: &mut [[f64; 3]]) {
+        self.integrate_with(
+            |i| {
+                if fresnel {
+                    let (n, k) = self.nk[i];
+                    conductor_reflectance_ratio(cos2, 1.0, n, k)
+                } else {
+                    1.0
+                }
+            },
+            out,
+        );
+    }
+
+    /// ∫ basis · f · cmf dλ for every basis, into `out`, with `f(i)` the
+    /// factor's value at node i.
+    fn integrate_with(&self, f: impl Fn(usize) -> f64, out: &mut [[f64; 3]]) {
         out.iter_mut().for_each(|o| *o = [0.0; 3]);
-        for (i, &(n, k)) in self.nk.iter().enumerate() {
-            let f = if fresnel {
-                conductor_reflectance_ratio(cos2, 1.0, n, k)
-            } else {
-                1.0
-            };
+        for i in 0..self.lambda.len() {
+            let f = f(i);
             let w = &self.w[i * self.bases..(i + 1) * self.bases];
             for (o, w) in out.iter_mut().zip(w) {
                 for c in 0..3 {
@@ -173,6 +190,20 @@ pub struct TableStats {
     pub refused: usize,
     /// Largest grid, in intervals.
     pub max_intervals: usize,
+    /// Delta lobes with a grid.
+    pub delta_grids: usize,
+    /// Delta lobes whose grid did not converge (their paths sample λ).
+    pub delta_refused: usize,
+}
+
+/// A material's delta lobe whose weight depends on the path only through
+/// cosθi, to integrate over λ exactly at a first vertex.
+#[derive(Clone, Copy)]
+pub struct DeltaLobe<'a> {
+    /// The model's Fresnel factor: its n, κ rows break the λ quadrature.
+    pub fresnel: &'a Fresnel,
+    /// The model: [`brdf::Bxdf::specular`] gives the lobe's weight.
+    pub bxdf: &'a dyn brdf::Bxdf,
 }
 
 /// The exact spectral integrals of a scene's single-Fresnel contributions.
@@ -186,6 +217,8 @@ pub struct SpectralTables {
     direct: Vec<[f64; 3]>,
     /// Per material: its Fresnel table, if it has one.
     material: Vec<Option<u32>>,
+    /// Per material: the table of its delta lobe, if it has one.
+    delta: Vec<Option<u32>>,
     tables: Vec<FresnelTable>,
     /// What was built.
     pub stats: TableStats,
@@ -196,6 +229,19 @@ impl SpectralTables {
     /// per material, `None` for materials that are not Fresnel-only),
     /// against the emission of `lights`.
     pub fn build(lights: &Lights, fresnels: &[Option<&Fresnel>]) -> SpectralTables {
+        Self::build_with_deltas(lights, fresnels, &[])
+    }
+
+    /// [`build`](Self::build), and a table per delta lobe among `deltas`
+    /// (one entry per material, `None` for materials without such a lobe;
+    /// may be shorter than `fresnels`): ∫ Le(λ) w(λ, cosθi) cmf(λ) dλ with
+    /// w the lobe's weight ([`brdf::Bxdf::specular`]) at wi = (sinθi, 0,
+    /// cosθi). A lobe whose weight is zero everywhere gets none.
+    pub fn build_with_deltas(
+        lights: &Lights,
+        fresnels: &[Option<&Fresnel>],
+        deltas: &[Option<DeltaLobe>],
+    ) -> SpectralTables {
         let mut bases: Vec<Basis> = Vec::new();
         let mut light_basis = Vec::with_capacity(lights.lights.len());
         let mut environment_basis = (0, 0);
@@ -270,14 +316,48 @@ impl SpectralTables {
                 id
             })
             .collect();
+        let delta = deltas
+            .iter()
+            .map(|d| {
+                let d = (*d)?;
+                let weight = |cos: f64, lambda: f64| {
+                    let sin = (1.0 - cos * cos).max(0.0).sqrt();
+                    d.bxdf
+                        .specular(glam::DVec3::new(sin, 0.0, cos), lambda)
+                        .weight
+                };
+                let Some(t) = delta_grid(d.fresnel, &weight, &bases) else {
+                    stats.delta_refused += 1;
+                    return None;
+                };
+                if let FresnelTable::Grid { intervals, rows } = &t {
+                    if rows.iter().all(|r| r.iter().all(|&v| v == 0.0)) {
+                        return None;
+                    }
+                    stats.delta_grids += 1;
+                    stats.max_intervals = stats.max_intervals.max(*intervals);
+                }
+                tables.push(t);
+                Some((tables.len() - 1) as u32)
+            })
+            .collect();
         SpectralTables {
             light_basis,
             environment_basis,
             direct,
             material,
+            delta,
             tables,
             stats,
         }
+    }
+
+    /// The table of material `m`'s delta lobe, if its emission along the
+    /// mirror direction at a first vertex is integrated exactly: read it
+    /// with [`reflected`](Self::reflected) at cos²θd = cos²θi.
+    #[inline]
+    pub fn delta(&self, m: u32) -> Option<u32> {
+        self.delta.get(m as usize).copied().flatten()
     }
 
     /// The table of material `m`, if its contributions are integrated exactly.
@@ -369,22 +449,55 @@ impl Coefficients<'_> {
 /// meets [`TOLERANCE`]; `None` if [`MAX_INTERVALS`] do not.
 fn grid(fresnel: &Fresnel, bases: &[Basis]) -> Option<FresnelTable> {
     let nodes = Nodes::new(fresnel, bases);
-    let nb = bases.len();
     // Nodes uniform in x = √cosθd, so cosθd = x²: dense near grazing,
     // where a large |n + iκ| puts a narrow pseudo-Brewster dip at
     // cosθd ≈ 1/|n + iκ|. F is smooth in x (F(cosθd) is, and x² is).
-    let at = |x: f64| {
-        let mut v = vec![[0.0; 3]; nb];
+    refine(bases.len(), |x, v| {
         let cos = x * x;
-        nodes.integrate(true, cos * cos, &mut v);
+        nodes.integrate(true, cos * cos, v);
+    })
+}
+
+/// The grid of a delta lobe whose weight `weight(cosθi, λ)` (R·e^{−g} for
+/// the wave-optical models) depends on the path only through cosθi; the
+/// λ nodes also break at the rows of `fresnel`'s n, κ table, where R has
+/// kinks. Same grid variable x = √cosθi as [`grid`] (cosθd = cosθi at the
+/// mirror), so [`SpectralTables::reflected`] reads it.
+fn delta_grid(
+    fresnel: &Fresnel,
+    weight: &dyn Fn(f64, f64) -> f64,
+    bases: &[Basis],
+) -> Option<FresnelTable> {
+    let nodes = Nodes::new(fresnel, bases);
+    let mut f = vec![0.0; nodes.lambda.len()];
+    refine(bases.len(), |x, v| {
+        // Models give no lobe at exactly cosθi = 0 (wi on the horizon);
+        // the grid's end node takes the limit, continuous with its
+        // neighbours.
+        let cos = (x * x).max(1e-12);
+        for (f, &l) in f.iter_mut().zip(&nodes.lambda) {
+            *f = weight(cos, l);
+        }
+        nodes.integrate_with(|i| f[i], v);
+    })
+}
+
+/// A grid of `nb` basis functions' integrals `at(x, out)` over x ∈ [0, 1],
+/// from [`FIRST_INTERVALS`] intervals doubled until cubic interpolation
+/// meets [`TOLERANCE`] halfway between the nodes; `None` if
+/// [`MAX_INTERVALS`] do not.
+fn refine(nb: usize, mut at: impl FnMut(f64, &mut [[f64; 3]])) -> Option<FresnelTable> {
+    let mut eval = |x: f64| {
+        let mut v = vec![[0.0; 3]; nb];
+        at(x, &mut v);
         v
     };
     let mut n = FIRST_INTERVALS;
-    let mut rows: Vec<[f64; 3]> = (0..=n).flat_map(|i| at(i as f64 / n as f64)).collect();
+    let mut rows: Vec<[f64; 3]> = (0..=n).flat_map(|i| eval(i as f64 / n as f64)).collect();
     loop {
         // The midpoints: the check, and the next grid's new nodes.
         let mids: Vec<[f64; 3]> = (0..n)
-            .flat_map(|i| at((i as f64 + 0.5) / n as f64))
+            .flat_map(|i| eval((i as f64 + 0.5) / n as f64))
             .collect();
         // Per basis function and channel: each is weighted by its own
         // coefficients at run time.

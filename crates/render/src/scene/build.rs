@@ -18,7 +18,7 @@ use crate::material::{Material, build_material};
 use crate::mesh::{MeshAccel, MeshSource, obj_from_bytes};
 use crate::shapes::{Checker, Shapes, Surface};
 use crate::sky::{Sky, SkyParams};
-use crate::spectral_table::SpectralTables;
+use crate::spectral_table::{DeltaLobe, SpectralTables};
 use crate::spectrum::{LAMBDA_MAX, LAMBDA_MIN, Spectrum, parse_spectrum_with};
 use crate::wavelength::{HERO_COUNT, HERO_COUNT_CONDUCTORS, MAX_WAVELENGTHS, WavelengthSampler};
 use glam::DVec3;
@@ -91,23 +91,38 @@ pub(super) fn build(path: &Path, text: &str, desc: &SceneDesc) -> Result<Scene, 
     let fingerprint = inputs::fingerprint(ESTIMATOR, &inputs);
     // No tables when no material could use them.
     let tables_start = Instant::now();
+    /// A delta lobe is integrated only where its emission would otherwise
+    /// be traced by `delta_emission` (a model that chooses among lobes).
+    fn delta_lobe(m: &Material) -> Option<DeltaLobe<'_>> {
+        m.delta_fresnel
+            .as_ref()
+            .filter(|_| m.bxdf.uses_lobe_choice())
+            .map(|fresnel| DeltaLobe {
+                fresnel,
+                bxdf: &*m.bxdf,
+            })
+    }
     let spectral = (settings.spectral_integration == SpectralIntegration::Auto
-        && materials.iter().any(|m| m.fresnel_only.is_some()))
+        && materials
+            .iter()
+            .any(|m| m.fresnel_only.is_some() || delta_lobe(m).is_some()))
     .then(|| {
         let fresnels: Vec<_> = materials
             .iter()
             .map(|m| m.fresnel_only.as_ref().map(|f| &f.fresnel))
             .collect();
-        SpectralTables::build(&lights, &fresnels)
+        let deltas: Vec<_> = materials.iter().map(delta_lobe).collect();
+        SpectralTables::build_with_deltas(&lights, &fresnels, &deltas)
     });
     let spectral_summary = match &spectral {
         None => String::new(),
         Some(t) => format!(
-            ", λ integrated exactly at the first bounce ({} Fresnel grid(s) of ≤ {} intervals, {} λ-free, {} refused; {:.1} ms)",
+            ", λ integrated exactly at the first bounce ({} Fresnel grid(s) and {} delta-lobe grid(s) of ≤ {} intervals, {} λ-free, {} refused; {:.1} ms)",
             t.stats.grids,
+            t.stats.delta_grids,
             t.stats.max_intervals,
             t.stats.flat,
-            t.stats.refused,
+            t.stats.refused + t.stats.delta_refused,
             tables_start.elapsed().as_secs_f64() * 1e3
         ),
     };
