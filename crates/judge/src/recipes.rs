@@ -132,10 +132,11 @@ fn measured(
 const TABLE_TOLERANCE: f64 = 0.3;
 
 /// Most Bessel half-periods one direct transform of [`check_table`] may integrate (16
-/// kernel evaluations each; ~0.1 s in a test build): a guard, not a budget the bundled scans
-/// reach. The bounded transform stops where the rest of its integral is provably below
-/// [`CHECK_REST`] of the peak, which on the 19 bundled scans is within ~2e4 half-periods at
-/// the hemisphere's u; points past it are reported as unverified instead of waited for.
+/// kernel evaluations each; ~0.5 s in a test build): a guard against a covariance that
+/// never decays, not a budget the bundled scans reach (the bounded transform stops where
+/// the rest of its integral is below [`CHECK_REST`] of the peak; corpus/al3d-1, sur-2 and
+/// plu-1 are checked at every judged point). Points past it are reported as unverified
+/// instead of waited for.
 const CHECK_MAX_PANELS: f64 = 1e5;
 
 /// The rest a direct transform of [`check_table`] may leave out, relative to the row's peak
