@@ -3,7 +3,8 @@
 //! that yields a table, copied into `tests/data/measured_psd/` by
 //! `crates/fit/tests/measured_psd_tables.rs` (which also checks fit still makes the
 //! synthetic ones). The S̃ table must agree with the direct Hankel transform of the same
-//! continued PSD (`numerics::hankel::s_tilde_direct`) to 1e−3 wherever S̃ ≥ 1e−3 of its
+//! continued PSD (`numerics::hankel::s_tilde_direct_bounded`, itself checked against
+//! `s_tilde_direct` and a plain quadrature) to 1e−3 wherever S̃ ≥ 1e−3 of its
 //! row's peak, for g from 1e−3 to the largest the surface reaches in the visible
 //! ((2k(360 nm)σ)²) and u = Lζ over the table's band (and 0) inside the hemisphere; the direct
 //! transform is checked against a plain quadrature without its cusp subtraction, and the
