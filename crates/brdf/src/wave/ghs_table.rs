@@ -41,8 +41,8 @@ use core::f64::consts::PI;
 
 use crate::BrdfError;
 use crate::numerics::hankel::{
-    Correlation, FftLog, KernelAtG, cusp_params, cusp_params_without_first_order, kernel_envelope,
-    kernel_width,
+    Correlation, FftLog, KernelAtG, confined_cusp, cusp_params, cusp_params_without_first_order,
+    kernel_envelope, kernel_width,
 };
 use crate::numerics::interp::lagrange4;
 
@@ -207,6 +207,7 @@ impl RowPlan {
         } else {
             cusp_params(nu, c.cusp_weight(), g)
         };
+        let (a, eps) = confined_cusp(nu, a, eps);
         let xs = kernel_width(c, g);
         let w = if xs.is_finite() {
             libm::sqrt(1.0 + 1.0 / (xs * xs))
