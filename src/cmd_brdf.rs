@@ -666,10 +666,14 @@ mod tests {
         let wi = direction(25.0, 0.0);
         let wo = direction(35.0, 170.0);
         assert_eq!(got["f"].as_f64().unwrap(), direct.eval_pdf(wi, wo, 500.0).0);
-        assert_eq!(
+        // The pdf of the model the stream cached can differ from a fresh one's in the
+        // last place (seen: 1 ulp in the debug test build, none in release or a fresh
+        // stream); the values are the renderer's to within that.
+        let (a, b) = (
             got["pdf"].as_f64().unwrap(),
-            direct.eval_pdf(wi, wo, 500.0).1
+            direct.eval_pdf(wi, wo, 500.0).1,
         );
+        assert!((a - b).abs() <= 2.0 * f64::EPSILON * b, "{a} {b}");
     }
 
     /// A cache smaller than the working set evicts the least recently used
