@@ -83,14 +83,7 @@ pub trait Bxdf {
         f: &mut [f64],
         pdf: &mut [f64],
     ) {
-        let rows = wi
-            .iter()
-            .zip(wo)
-            .zip(lambda_nm)
-            .zip(f.iter_mut().zip(pdf.iter_mut()));
-        for (((&a, &b), &l), (f, p)) in rows {
-            (*f, *p) = self.eval_pdf(a, b, l);
-        }
+        eval_pdf_each_row(self, wi, wo, lambda_nm, f, pdf);
     }
 
     /// Draws an outgoing direction from three uniform numbers in [0, 1).
@@ -122,6 +115,27 @@ pub trait Bxdf {
     fn lobe_peak_pdf(&self, wi: DVec3) -> Option<f64> {
         let _ = wi;
         None
+    }
+}
+
+/// [`Bxdf::eval_pdf_rows`] one row at a time through `eval_pdf`: the default,
+/// and what an override falls back to for the models it does not pack.
+#[inline]
+pub(crate) fn eval_pdf_each_row<B: Bxdf + ?Sized>(
+    model: &B,
+    wi: &[DVec3],
+    wo: &[DVec3],
+    lambda_nm: &[f64],
+    f: &mut [f64],
+    pdf: &mut [f64],
+) {
+    let rows = wi
+        .iter()
+        .zip(wo)
+        .zip(lambda_nm)
+        .zip(f.iter_mut().zip(pdf.iter_mut()));
+    for (((&a, &b), &l), (f, p)) in rows {
+        (*f, *p) = model.eval_pdf(a, b, l);
     }
 }
 

@@ -164,20 +164,9 @@ impl Bxdf for MicrofacetConductor {
         pdf: &mut [f64],
     ) {
         match self.dist.kind() {
-            NdfKind::Ggx => super::rows::ggx_eval_pdf_rows(
-                &self.dist,
-                &self.fresnel,
-                (wi, wo, lambda_nm),
-                (f, pdf),
-                |a, b, l| self.eval_pdf(a, b, l),
-            ),
+            NdfKind::Ggx => super::rows::ggx_eval_pdf_rows(self, (wi, wo, lambda_nm), (f, pdf)),
             // Beckmann's Λ branches between 0 and erfc: row by row.
-            NdfKind::Beckmann => {
-                let rows = wi.iter().zip(wo).zip(lambda_nm);
-                for (((&a, &b), &l), (f, p)) in rows.zip(f.iter_mut().zip(pdf.iter_mut())) {
-                    (*f, *p) = self.eval_pdf(a, b, l);
-                }
-            }
+            NdfKind::Beckmann => crate::model::eval_pdf_each_row(self, wi, wo, lambda_nm, f, pdf),
         }
     }
 

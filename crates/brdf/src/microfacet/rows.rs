@@ -10,7 +10,7 @@
 
 use glam::DVec3;
 
-use super::{COS_HORIZON, Distribution};
+use super::{COS_HORIZON, Distribution, MicrofacetConductor};
 use crate::fresnel::{Fresnel, conductor_reflectance_ratio_lanes};
 
 /// Rows per packed evaluation: four f64 fill one 256-bit register.
@@ -98,14 +98,13 @@ fn ggx_lanes(
 }
 
 /// `Bxdf::eval_pdf_rows` of a GGX conductor: whole blocks of [`LANES`] rows
-/// packed, the rest through `one` (the scalar `eval_pdf`).
+/// packed, the rest one by one through its `eval_pdf`.
 pub(super) fn ggx_eval_pdf_rows(
-    dist: &Distribution,
-    fresnel: &Fresnel,
+    model: &MicrofacetConductor,
     (wi, wo, lambda_nm): (&[DVec3], &[DVec3], &[f64]),
     (f, pdf): (&mut [f64], &mut [f64]),
-    one: impl Fn(DVec3, DVec3, f64) -> (f64, f64),
 ) {
+    let (dist, fresnel) = (model.distribution(), model.fresnel());
     let n = wi
         .len()
         .min(wo.len())
@@ -125,7 +124,13 @@ pub(super) fn ggx_eval_pdf_rows(
         f[r.clone()].copy_from_slice(&fl);
         pdf[r].copy_from_slice(&pl);
     }
-    for i in whole..n {
-        (f[i], pdf[i]) = one(wi[i], wo[i], lambda_nm[i]);
-    }
+    let tail = whole..n;
+    crate::model::eval_pdf_each_row(
+        model,
+        &wi[tail.clone()],
+        &wo[tail.clone()],
+        &lambda_nm[tail.clone()],
+        &mut f[tail.clone()],
+        &mut pdf[tail],
+    );
 }
