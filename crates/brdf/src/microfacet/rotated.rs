@@ -8,7 +8,7 @@
 
 use glam::DVec3;
 
-use crate::error::{BrdfError, check_range};
+use crate::error::BrdfError;
 use crate::model::{Bxdf, BxdfSample, Specular};
 
 /// `inner` with its tangent frame turned by φ about the normal.
@@ -23,13 +23,7 @@ pub struct Rotated<B> {
 impl<B: Bxdf> Rotated<B> {
     /// Turns `inner`'s frame by `angle_rad` (finite) from the tangent x towards y.
     pub fn new(inner: B, angle_rad: f64) -> Result<Self, BrdfError> {
-        check_range(
-            "angle_deg",
-            angle_rad,
-            -1e6,
-            1e6,
-            "a finite angle (degrees from the tangent x towards y)",
-        )?;
+        crate::statistics::anisotropic::check_angle(angle_rad)?;
         Ok(Rotated {
             inner,
             angle_rad,

@@ -18,6 +18,39 @@ use crate::error::check_range;
 
 use super::kc::{GAMMA_MAX, GAMMA_MIN, KcPsd, LC_MAX_UM, LC_MIN_UM, SIGMA_MAX_UM};
 
+/// Checks an axis angle (radians from the tangent x towards y): finite, as
+/// `angle_deg` in a material.
+pub(crate) fn check_angle(angle_rad: f64) -> Result<(), BrdfError> {
+    check_range(
+        "angle_deg",
+        angle_rad,
+        -1e6,
+        1e6,
+        "a finite angle (degrees from the tangent x towards y)",
+    )?;
+    Ok(())
+}
+
+/// Checks the two correlation lengths of a stretched surface (each in
+/// [0.03, 1000] µm) and its axis angle.
+pub(crate) fn check_axes(lx_um: f64, ly_um: f64, angle_rad: f64) -> Result<(), BrdfError> {
+    check_range(
+        "lx_um",
+        lx_um,
+        LC_MIN_UM,
+        LC_MAX_UM,
+        "0.03 ≤ lx_um ≤ 1000 (µm)",
+    )?;
+    check_range(
+        "ly_um",
+        ly_um,
+        LC_MIN_UM,
+        LC_MAX_UM,
+        "0.03 ≤ ly_um ≤ 1000 (µm)",
+    )?;
+    check_angle(angle_rad)
+}
+
 /// An anisotropic K-correlation PSD: σ, Lx, Ly (µm), the axis angle φ₀
 /// (radians) and γ.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -48,27 +81,7 @@ impl AnisotropicKc {
             SIGMA_MAX_UM,
             "0 ≤ sigma_um ≤ 10 (µm); rougher surfaces scatter geometrically: use ggx or beckmann",
         )?;
-        check_range(
-            "lx_um",
-            lx_um,
-            LC_MIN_UM,
-            LC_MAX_UM,
-            "0.03 ≤ lx_um ≤ 1000 (µm)",
-        )?;
-        check_range(
-            "ly_um",
-            ly_um,
-            LC_MIN_UM,
-            LC_MAX_UM,
-            "0.03 ≤ ly_um ≤ 1000 (µm)",
-        )?;
-        check_range(
-            "angle_deg",
-            angle_rad,
-            -1e6,
-            1e6,
-            "a finite angle (degrees from the tangent x towards y)",
-        )?;
+        check_axes(lx_um, ly_um, angle_rad)?;
         check_range("gamma", gamma, GAMMA_MIN, GAMMA_MAX, "1.001 ≤ gamma ≤ 100")?;
         Ok(AnisotropicKc {
             sigma_um,

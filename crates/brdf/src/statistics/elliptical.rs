@@ -15,11 +15,10 @@
 //! u = L (s_a ζ·a, s_b ζ·b), and P₂(ζ) = σ² L² p(|u|).
 
 use crate::BrdfError;
-use crate::error::check_range;
 
 use super::RadialPsd;
-use super::anisotropic::AnisotropicKc;
-use super::kc::{KcPsd, LC_MAX_UM, LC_MIN_UM};
+use super::anisotropic::{AnisotropicKc, check_axes};
+use super::kc::KcPsd;
 
 /// What the anisotropic GHS needs of a stretched surface: its radial law in u
 /// and the linear map ζ ↦ u.
@@ -101,27 +100,7 @@ impl<P: RadialPsd> EllipticalPsd<P> {
     /// Validates and builds: Lx, Ly ∈ [0.03, 1000] µm (only Ly/Lx is used), φ₀
     /// finite (radians from the tangent x towards y).
     pub fn new(radial: P, lx_um: f64, ly_um: f64, angle_rad: f64) -> Result<Self, BrdfError> {
-        check_range(
-            "lx_um",
-            lx_um,
-            LC_MIN_UM,
-            LC_MAX_UM,
-            "0.03 ≤ lx_um ≤ 1000 (µm)",
-        )?;
-        check_range(
-            "ly_um",
-            ly_um,
-            LC_MIN_UM,
-            LC_MAX_UM,
-            "0.03 ≤ ly_um ≤ 1000 (µm)",
-        )?;
-        check_range(
-            "angle_deg",
-            angle_rad,
-            -1e6,
-            1e6,
-            "a finite angle (degrees from the tangent x towards y)",
-        )?;
+        check_axes(lx_um, ly_um, angle_rad)?;
         let l = radial.length_um();
         let s = libm::sqrt(ly_um / lx_um);
         Ok(EllipticalPsd {
