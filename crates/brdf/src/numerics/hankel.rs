@@ -327,6 +327,24 @@ fn crossing(f: impl Fn(f64) -> f64, x0: f64, level: f64) -> f64 {
     hi
 }
 
+/// The panel rule of the direct transforms: 16-point Gauss–Legendre.
+type PanelRule = ([f64; 8], [f64; 8]);
+
+/// ∫_lo^hi f(x) J₀(ux) x dx by the panel rule `(gx, gw)` (`gauss_legendre::<8>()`,
+/// computed once per transform by the caller: it is a Newton iteration).
+fn j0_panel((gx, gw): &PanelRule, f: &impl Fn(f64) -> f64, u: f64, lo: f64, hi: f64) -> f64 {
+    let half = 0.5 * (hi - lo);
+    let mid = 0.5 * (hi + lo);
+    let mut s = 0.0;
+    for k in 0..8 {
+        for sign in [-1.0, 1.0] {
+            let x = mid + sign * half * gx[k];
+            s += gw[k] * f(x) * libm::j0(u * x) * x;
+        }
+    }
+    s * half
+}
+
 /// S̃(u; g) by the direct, cusp-subtracted Hankel transform: the reference
 /// generator (~1e−12 relative where S̃ is above the round-off floor of
 /// ~1e−18·A absolute). Costs O(u·x_c) kernel evaluations. Where the
@@ -381,19 +399,8 @@ pub fn s_tilde_direct_within<C: Correlation + ?Sized>(
     let xh = crossing(|x| kernel_envelope(c, x, g, apart), xs, 1e-19 * a);
     let xe = eps * crossing(|x| c.cusp_m_envelope(x), 1.0, 1e-19);
     let xc = xh.max(xe);
-    let (gx, gw) = gauss_legendre::<8>();
-    let integrate = |lo: f64, hi: f64| {
-        let half = 0.5 * (hi - lo);
-        let mid = 0.5 * (hi + lo);
-        let mut s = 0.0;
-        for k in 0..8 {
-            for sign in [-1.0, 1.0] {
-                let x = mid + sign * half * gx[k];
-                s += gw[k] * rem(x) * libm::j0(u * x) * x;
-            }
-        }
-        s * half
-    };
+    let rule: PanelRule = gauss_legendre::<8>();
+    let integrate = |lo: f64, hi: f64| j0_panel(&rule, &rem, u, lo, hi);
     // Geometric panels resolve the kernel's own scale (down to 1e−9·x_w);
     // uniform panels of at most half a Bessel period take over from 0.25.
     let panel = if u > 0.0 { (PI / u).min(0.25) } else { 0.25 };
@@ -526,19 +533,8 @@ pub fn s_tilde_direct_bounded<C: Correlation + ?Sized>(
         let cusp = if x < xe { b * c.cusp_m(x / delta) } else { 0.0 };
         h(x) - cusp
     };
-    let (gx, gw) = gauss_legendre::<8>();
-    let integrate = |lo: f64, hi: f64| {
-        let half = 0.5 * (hi - lo);
-        let mid = 0.5 * (hi + lo);
-        let mut s = 0.0;
-        for k in 0..8 {
-            for sign in [-1.0, 1.0] {
-                let x = mid + sign * half * gx[k];
-                s += gw[k] * rem(x) * libm::j0(u * x) * x;
-            }
-        }
-        s * half
-    };
+    let rule: PanelRule = gauss_legendre::<8>();
+    let integrate = |lo: f64, hi: f64| j0_panel(&rule, &rem, u, lo, hi);
     let panel = if u > 0.0 { (PI / u).min(0.25) } else { 0.25 };
     let envelope = |x: f64| {
         kernel_envelope(c, x, g, apart)
