@@ -21,11 +21,13 @@ use super::kc::{GAMMA_MAX, GAMMA_MIN, KcPsd, LC_MAX_UM, LC_MIN_UM, SIGMA_MAX_UM}
 /// Checks an axis angle (radians from the tangent x towards y): finite, as
 /// `angle_deg` in a material.
 pub(crate) fn check_angle(angle_rad: f64) -> Result<(), BrdfError> {
+    // Reported in degrees, as the key is given; the bound is ±1e6 rad.
+    const MAX_DEG: f64 = 1e6 * 180.0 / core::f64::consts::PI;
     check_range(
         "angle_deg",
-        angle_rad,
-        -1e6,
-        1e6,
+        angle_rad.to_degrees(),
+        -MAX_DEG,
+        MAX_DEG,
         "a finite angle (degrees from the tangent x towards y)",
     )?;
     Ok(())
