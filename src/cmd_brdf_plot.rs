@@ -151,8 +151,12 @@ fn materials(args: &PlotArgs, s: &Surface) -> anyhow::Result<Vec<Labelled>> {
         let mut l = s.material(m);
         if let Some(a) = args.alpha {
             use brdf::spec::ModelSpec;
-            if let ModelSpec::Ggx { alpha_x, alpha_y } | ModelSpec::Beckmann { alpha_x, alpha_y } =
-                &mut l.spec.model
+            if let ModelSpec::Ggx {
+                alpha_x, alpha_y, ..
+            }
+            | ModelSpec::Beckmann {
+                alpha_x, alpha_y, ..
+            } = &mut l.spec.model
             {
                 (*alpha_x, *alpha_y) = (a, a);
                 let name = if matches!(l.spec.model, ModelSpec::Ggx { .. }) {

@@ -355,7 +355,8 @@ mod tests {
             b.model,
             ModelSpec::Beckmann {
                 alpha_x: 0.12,
-                alpha_y: 0.12
+                alpha_y: 0.12,
+                angle_deg: 0.0,
             }
         );
         let ts = material_file(&fit, Some(ModelKind::TwoScale), None).unwrap();
@@ -378,7 +379,8 @@ mod tests {
             g.model,
             ModelSpec::Ggx {
                 alpha_x: 0.3,
-                alpha_y: 0.3
+                alpha_y: 0.3,
+                angle_deg: 0.0,
             }
         );
         // nk_csv relative to the description.

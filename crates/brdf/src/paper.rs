@@ -298,6 +298,7 @@ impl PaperModel {
                 ModelSpec::Ggx {
                     alpha_x: a,
                     alpha_y: a,
+                    angle_deg: 0.0,
                 }
             }
             PaperModel::Beckmann(rule) => {
@@ -305,6 +306,7 @@ impl PaperModel {
                 ModelSpec::Beckmann {
                     alpha_x: a,
                     alpha_y: a,
+                    angle_deg: 0.0,
                 }
             }
             PaperModel::GhsSsa => ModelSpec::GhsSsa {

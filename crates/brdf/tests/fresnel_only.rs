@@ -41,18 +41,33 @@ fn models() -> Vec<ModelSpec> {
         ModelSpec::Ggx {
             alpha_x: 0.2,
             alpha_y: 0.2,
+            angle_deg: 0.0,
         },
         ModelSpec::Ggx {
             alpha_x: 0.03,
             alpha_y: 0.7,
+            angle_deg: 0.0,
         },
         ModelSpec::Beckmann {
             alpha_x: 0.05,
             alpha_y: 0.05,
+            angle_deg: 0.0,
         },
         ModelSpec::Beckmann {
             alpha_x: 1.0,
             alpha_y: 0.3,
+            angle_deg: 0.0,
+        },
+        // Turned by `angle_deg`: the frame changes, not the Fresnel factor.
+        ModelSpec::Ggx {
+            alpha_x: 0.03,
+            alpha_y: 0.7,
+            angle_deg: 37.0,
+        },
+        ModelSpec::Beckmann {
+            alpha_x: 1.0,
+            alpha_y: 0.3,
+            angle_deg: -120.0,
         },
         ModelSpec::Smooth,
         ModelSpec::GhsSsa {

@@ -20,7 +20,7 @@
 //! ```no_run
 //! use brdf::spec::{FresnelSpec, MaterialSpec, ModelSpec};
 //! let copper = MaterialSpec {
-//!     model: ModelSpec::Ggx { alpha_x: 0.2, alpha_y: 0.2 },
+//!     model: ModelSpec::Ggx { alpha_x: 0.2, alpha_y: 0.2, angle_deg: 0.0 },
 //!     fresnel: FresnelSpec::Metal(brdf::Metal::Cu),
 //! };
 //! let out = export::rgl_material(&copper, &export::RglOptions::default())?;
@@ -319,12 +319,20 @@ fn glossy(spec: &MaterialSpec) -> Result<brdf::spec::DynBxdf, ExportError> {
 /// The distribution that parameterises a material's RGL table.
 pub fn ndf_of(spec: &MaterialSpec) -> Result<NdfSource, ExportError> {
     Ok(match &spec.model {
-        ModelSpec::Ggx { alpha_x, alpha_y } => NdfSource::Microfacet(
-            brdf::Distribution::ggx(*alpha_x, *alpha_y).map_err(SpecError::from)?,
-        ),
-        ModelSpec::Beckmann { alpha_x, alpha_y } => NdfSource::Microfacet(
-            brdf::Distribution::beckmann(*alpha_x, *alpha_y).map_err(SpecError::from)?,
-        ),
+        ModelSpec::Ggx { .. } | ModelSpec::Beckmann { .. } => match spec.model.microfacet()? {
+            Some((d, angle_rad)) if angle_rad == 0.0 || d.alpha_x() == d.alpha_y() => {
+                NdfSource::Microfacet(d)
+            }
+            _ => {
+                return Err(ExportError::Model(
+                    "an anisotropic microfacet material turned by `angle_deg` is not exported: \
+                     the table's distribution is along the tangent axes; export it with \
+                     `angle_deg = 0` and turn the shape's tangent frame by the angle in the \
+                     target renderer"
+                        .into(),
+                ));
+            }
+        },
         _ => NdfSource::Backscatter,
     })
 }

@@ -27,7 +27,11 @@ fn small() -> RglOptions {
 
 fn ggx(alpha_x: f64, alpha_y: f64, metal: Metal) -> MaterialSpec {
     MaterialSpec {
-        model: ModelSpec::Ggx { alpha_x, alpha_y },
+        model: ModelSpec::Ggx {
+            alpha_x,
+            alpha_y,
+            angle_deg: 0.0,
+        },
         fresnel: FresnelSpec::Metal(metal),
     }
 }

@@ -42,11 +42,13 @@ fn material() -> impl Strategy<Value = MaterialSpec> {
     let model = prop_oneof![
         (0.01f64..1.0, 0.01f64..1.0).prop_map(|(a, b)| ModelSpec::Ggx {
             alpha_x: a,
-            alpha_y: b
+            alpha_y: b,
+            angle_deg: 0.0,
         }),
         (0.01f64..1.0).prop_map(|a| ModelSpec::Beckmann {
             alpha_x: a,
-            alpha_y: a
+            alpha_y: a,
+            angle_deg: 0.0,
         }),
         kc.clone().prop_map(|surface| ModelSpec::GhsSsa {
             surface,
@@ -137,6 +139,7 @@ fn small_file() -> Vec<u8> {
         model: ModelSpec::Ggx {
             alpha_x: 0.3,
             alpha_y: 0.3,
+            angle_deg: 0.0,
         },
         fresnel: FresnelSpec::Metal(Metal::Cu),
     };

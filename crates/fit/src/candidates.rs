@@ -218,11 +218,13 @@ fn microfacet(a: &Analysis, fresnel: &FresnelSpec, beckmann: bool) -> Candidate 
         ModelSpec::Beckmann {
             alpha_x: alpha,
             alpha_y: alpha,
+            angle_deg: 0.0,
         }
     } else {
         ModelSpec::Ggx {
             alpha_x: alpha,
             alpha_y: alpha,
+            angle_deg: 0.0,
         }
     };
     c.spec = Some(MaterialSpec {
@@ -272,6 +274,7 @@ fn ggx_kc(a: &Analysis, fresnel: &FresnelSpec) -> Candidate {
                 model: ModelSpec::Ggx {
                     alpha_x: alpha,
                     alpha_y: alpha,
+                    angle_deg: 0.0,
                 },
                 fresnel: fresnel.clone(),
             });

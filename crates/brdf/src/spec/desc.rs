@@ -21,6 +21,9 @@ enum Group {
     Roughness,
     /// With the index keys (metal, n,k), only when the index is not set here.
     Index,
+    /// On its own, when neither it nor a roughness key is set here (`angle_deg`: a pair
+    /// `alpha_x`, `alpha_y` set here is along the tangent axes unless turned here too).
+    Orientation,
     /// Never (`include` and `cutoff` name the file and its split).
     NotInherited,
 }
@@ -117,9 +120,9 @@ material_keys! {
     fresnel: FresnelKind, Index, [];
     /// Isotropic microfacet roughness.
     alpha: f64, Roughness, [Ggx, Beckmann, RoughPlastic];
-    /// Roughness along the surface tangent.
+    /// Roughness along the axis at `angle_deg` (the surface tangent by default).
     alpha_x: f64, Roughness, [Ggx, Beckmann];
-    /// Roughness along the bitangent.
+    /// Roughness across it (the bitangent by default).
     alpha_y: f64, Roughness, [Ggx, Beckmann];
     /// Beckmann roughness, used in preference to `alpha` by `beckmann`.
     alpha_beckmann: f64, Roughness, [Beckmann];
@@ -147,8 +150,10 @@ material_keys! {
     lx_um: f64, Own, [GhsSsaAniso, GhsAniso, MeasuredPsdSsaAniso, MeasuredPsdAniso];
     /// Anisotropic correlation length across the axis, µm.
     ly_um: f64, Own, [GhsSsaAniso, GhsAniso, MeasuredPsdSsaAniso, MeasuredPsdAniso];
-    /// Anisotropic axis angle from the tangent x towards y, degrees.
-    angle_deg: f64, Own, [GhsSsaAniso, GhsAniso, MeasuredPsdSsaAniso, MeasuredPsdAniso];
+    /// Anisotropic axis angle (of `alpha_x`, of `lx_um`) from the tangent x towards y,
+    /// degrees (default 0).
+    angle_deg: f64, Orientation, [Ggx, Beckmann, GhsSsaAniso, GhsAniso, MeasuredPsdSsaAniso,
+        MeasuredPsdAniso];
     /// A CSV `zeta_rad_per_um,p_um4` (resolved by the caller; for the stretched
     /// models, the PSD of the de-stretched frame).
     psd_csv: String, Own, [MeasuredPsd, RayleighRice, MeasuredPsdSsaAniso, MeasuredPsdAniso];
@@ -367,10 +372,15 @@ impl MaterialDesc {
     /// `nk`, `nk_csv`, `fresnel`; an explicit `fresnel = "conductor"` here
     /// still takes the index from `base`). Key by key, a fit file's `alpha_x`
     /// and `alpha_y` (or `alpha_beckmann`) would silently beat an `alpha`
-    /// set here, and its `metal` would clash with an `nk` set here.
+    /// set here, and its `metal` would clash with an `nk` set here. The axis
+    /// angle `angle_deg` is taken when neither it nor a roughness key is set
+    /// here: a pair `alpha_x`, `alpha_y` set here lies along the tangent axes
+    /// unless `angle_deg` is set here too, and `angle_deg` alone here turns the
+    /// file's pair (and its stretched surface).
     pub fn inherit(&mut self, base: &MaterialDesc) {
         if !self.roughness_here() {
             self.take(base, Group::Roughness);
+            self.take(base, Group::Orientation);
         }
         if !self.index_here() {
             self.take(base, Group::Index);
@@ -411,6 +421,7 @@ impl MaterialDesc {
             .map(|(_, g, _)| *g);
         let replaced = match group {
             Some(Group::Roughness) => self.roughness_here(),
+            Some(Group::Orientation) => self.roughness_here() || self.is_set(key),
             Some(Group::Index) => self.index_here() || self.is_set(key),
             _ => self.is_set(key),
         };
@@ -664,12 +675,20 @@ impl MaterialDesc {
         let spec = match model {
             ModelKind::Ggx => {
                 let (alpha_x, alpha_y) = self.roughness(model, self.alpha)?;
-                ModelSpec::Ggx { alpha_x, alpha_y }
+                ModelSpec::Ggx {
+                    alpha_x,
+                    alpha_y,
+                    angle_deg: self.angle_deg.unwrap_or(0.0),
+                }
             }
             ModelKind::Beckmann => {
                 let (alpha_x, alpha_y) =
                     self.roughness(model, self.alpha_beckmann.or(self.alpha))?;
-                ModelSpec::Beckmann { alpha_x, alpha_y }
+                ModelSpec::Beckmann {
+                    alpha_x,
+                    alpha_y,
+                    angle_deg: self.angle_deg.unwrap_or(0.0),
+                }
             }
             ModelKind::Smooth => ModelSpec::Smooth,
             ModelKind::GhsSsa => ModelSpec::GhsSsa {
@@ -885,13 +904,24 @@ impl MaterialSpec {
                 .then_some(o.polarization_factor);
         };
         match &self.model {
-            ModelSpec::Ggx { alpha_x, alpha_y } | ModelSpec::Beckmann { alpha_x, alpha_y } => {
+            ModelSpec::Ggx {
+                alpha_x,
+                alpha_y,
+                angle_deg,
+            }
+            | ModelSpec::Beckmann {
+                alpha_x,
+                alpha_y,
+                angle_deg,
+            } => {
                 if alpha_x == alpha_y {
                     d.alpha = Some(*alpha_x);
                 } else {
                     d.alpha_x = Some(*alpha_x);
                     d.alpha_y = Some(*alpha_y);
                 }
+                // Absent at 0, as a material written before the key has it.
+                d.angle_deg = (*angle_deg != 0.0).then_some(*angle_deg);
             }
             ModelSpec::Smooth => {}
             ModelSpec::GhsSsa { surface, options } | ModelSpec::Ghs { surface, options } => {

@@ -16,7 +16,8 @@
 //! | `model` | all | `ggx`, `beckmann`, `smooth`, `ghs_ssa`, `ghs`, `two_scale`, `measured_psd`, `rayleigh_rice`, `ghs_ssa_aniso`, `ghs_aniso`, `measured_psd_ssa_aniso`, `measured_psd_aniso`, `diffuse`, `roughplastic` |
 //! | `metal` / `nk` / `nk_csv` | all but diffuse, roughplastic | built-in metal, constant `[n, k]`, or a CSV `wavelength_nm,n,k` |
 //! | `fresnel` | all but diffuse, roughplastic | `conductor` (default) or `one` (R ≡ 1; alias `none`) |
-//! | `alpha`, or `alpha_x` + `alpha_y` | ggx, beckmann (roughplastic: `alpha` only) | roughness (x along the surface tangent) |
+//! | `alpha`, or `alpha_x` + `alpha_y` | ggx, beckmann (roughplastic: `alpha` only) | roughness (αx along the axis at `angle_deg`, the surface tangent by default) |
+//! | `angle_deg` | ggx, beckmann | the axis of `alpha_x`, degrees from the tangent x towards y (default 0; the convention of the `_aniso` models' `angle_deg`) |
 //! | `reflectance` or `reflectance_csv` | diffuse, roughplastic | the (base's) reflectance ρ ∈ [0, 1]: a constant, or a CSV `wavelength_nm,reflectance` |
 //! | `int_ior`, `ext_ior`, `nonlinear` | roughplastic | the coat's index (default 1.49) and the medium's (default 1.0); whether internal scattering tints (`ρ/(1 − ρR_i)`) or not (`ρ/(1 − R_i)`, default `false`) |
 //! | `alpha_beckmann` | beckmann | used in preference to `alpha` (a fit file serves both models) |
@@ -78,7 +79,7 @@ use crate::wave::two_scale::{CoherentPart, TableResolution, TwoScale, TwoScalePa
 use crate::wave::{GhsAnisotropic, GhsFull, GhsOptions, GhsSsa, Polarization, RayleighRice};
 use crate::{
     BrdfError, Bxdf, Diffuse, Distribution, Fresnel, Ior, Metal, MicrofacetConductor, Reflectance,
-    RoughPlastic, RoughPlasticParams, SmoothConductor,
+    RoughPlastic, RoughPlasticParams, SmoothConductor, microfacet::Rotated,
 };
 
 /// A built model, shareable across threads.
@@ -358,19 +359,26 @@ impl ReflectanceSpec {
 /// A model and its parameters.
 #[derive(Clone, Debug, PartialEq)]
 pub enum ModelSpec {
-    /// GGX with roughness α along x (surface tangent) and y.
+    /// GGX with roughness αx along the axis at `angle_deg` from the surface tangent
+    /// towards the bitangent, αy across it.
     Ggx {
-        /// α along the tangent.
+        /// α along the axis at `angle_deg` (the tangent when it is 0).
         alpha_x: f64,
-        /// α along the bitangent.
+        /// α across it (the bitangent when `angle_deg` is 0).
         alpha_y: f64,
+        /// The axis of `alpha_x`, degrees from the tangent towards the bitangent (finite;
+        /// 0: the tangent axes), the convention of [`AnisoSpec::angle_deg`].
+        angle_deg: f64,
     },
-    /// Beckmann with roughness α along x and y.
+    /// Beckmann with roughness αx along the axis at `angle_deg`, αy across it.
     Beckmann {
-        /// α along the tangent.
+        /// α along the axis at `angle_deg` (the tangent when it is 0).
         alpha_x: f64,
-        /// α along the bitangent.
+        /// α across it (the bitangent when `angle_deg` is 0).
         alpha_y: f64,
+        /// The axis of `alpha_x`, degrees from the tangent towards the bitangent (finite;
+        /// 0: the tangent axes), the convention of [`AnisoSpec::angle_deg`].
+        angle_deg: f64,
     },
     /// A perfect mirror.
     Smooth,
@@ -482,6 +490,28 @@ impl ModelSpec {
         }
     }
 
+    /// The distribution of `ggx` and `beckmann`, in its own frame, and the angle of that
+    /// frame's x axis from the tangent (radians), each checked (the error names its key);
+    /// `None` for the other models.
+    pub fn microfacet(&self) -> Result<Option<(Distribution, f64)>, SpecError> {
+        let (distribution, angle_deg) = match self {
+            ModelSpec::Ggx {
+                alpha_x,
+                alpha_y,
+                angle_deg,
+            } => (Distribution::ggx(*alpha_x, *alpha_y)?, *angle_deg),
+            ModelSpec::Beckmann {
+                alpha_x,
+                alpha_y,
+                angle_deg,
+            } => (Distribution::beckmann(*alpha_x, *alpha_y)?, *angle_deg),
+            _ => return Ok(None),
+        };
+        let angle_rad = angle_deg.to_radians();
+        crate::statistics::anisotropic::check_angle(angle_rad)?;
+        Ok(Some((distribution, angle_rad)))
+    }
+
     /// The KC surface of the wave-optical models.
     pub fn surface(&self) -> Option<KcSpec> {
         match self {
@@ -552,11 +582,8 @@ impl MaterialSpec {
             ));
         }
         match &self.model {
-            ModelSpec::Ggx { alpha_x, alpha_y } => {
-                Distribution::ggx(*alpha_x, *alpha_y)?;
-            }
-            ModelSpec::Beckmann { alpha_x, alpha_y } => {
-                Distribution::beckmann(*alpha_x, *alpha_y)?;
+            ModelSpec::Ggx { .. } | ModelSpec::Beckmann { .. } => {
+                self.model.microfacet()?;
             }
             ModelSpec::Smooth => {}
             ModelSpec::GhsSsa { surface, .. } | ModelSpec::Ghs { surface, .. } => {
@@ -687,14 +714,22 @@ impl MaterialSpec {
         self.validate()?;
         let fresnel = self.fresnel.build()?;
         Ok(match &self.model {
-            ModelSpec::Ggx { alpha_x, alpha_y } => Box::new(MicrofacetConductor::new(
-                Distribution::ggx(*alpha_x, *alpha_y)?,
-                fresnel,
-            )?),
-            ModelSpec::Beckmann { alpha_x, alpha_y } => Box::new(MicrofacetConductor::new(
-                Distribution::beckmann(*alpha_x, *alpha_y)?,
-                fresnel,
-            )?),
+            ModelSpec::Ggx { .. } | ModelSpec::Beckmann { .. } => {
+                let Some((distribution, angle_rad)) = self.model.microfacet()? else {
+                    return Err(SpecError::new(
+                        "model",
+                        "ggx and beckmann have a distribution",
+                    ));
+                };
+                let conductor = MicrofacetConductor::new(distribution, fresnel)?;
+                // The unturned model itself at 0 (bit-identical to a material without the
+                // key) and for an isotropic pair, which a turn leaves unchanged.
+                if angle_rad == 0.0 || distribution.alpha_x() == distribution.alpha_y() {
+                    Box::new(conductor)
+                } else {
+                    Box::new(Rotated::new(conductor, angle_rad)?)
+                }
+            }
             ModelSpec::Smooth => Box::new(SmoothConductor::new(fresnel)?),
             ModelSpec::GhsSsa { surface, options } => {
                 Box::new(GhsSsa::with_options(surface.psd()?, fresnel, *options)?)
@@ -800,9 +835,12 @@ impl MaterialSpec {
         let k = crate::wave::wavenumber(lambda_nm);
         let wave = |kc: &KcSpec| 1.0 / (k * kc.lc_um);
         let rho = match &self.model {
-            ModelSpec::Ggx { alpha_x, alpha_y } | ModelSpec::Beckmann { alpha_x, alpha_y } => {
-                alpha_x.min(*alpha_y)
+            ModelSpec::Ggx {
+                alpha_x, alpha_y, ..
             }
+            | ModelSpec::Beckmann {
+                alpha_x, alpha_y, ..
+            } => alpha_x.min(*alpha_y),
             ModelSpec::TwoScale { beta, surface, .. } => beta.max(wave(surface)),
             ModelSpec::GhsSsa { surface, .. } | ModelSpec::Ghs { surface, .. } => wave(surface),
             ModelSpec::MeasuredPsd {
@@ -895,10 +933,12 @@ mod tests {
             ModelSpec::Ggx {
                 alpha_x: 0.1,
                 alpha_y: 0.2,
+                angle_deg: 0.0,
             },
             ModelSpec::Beckmann {
                 alpha_x: 0.1,
                 alpha_y: 0.1,
+                angle_deg: 0.0,
             },
             ModelSpec::Smooth,
             ModelSpec::GhsSsa {
@@ -1302,8 +1342,12 @@ mod tests {
             for model in ["ggx", "beckmann"] {
                 let own = desc(&format!(r#"{{"model": "{model}", "alpha": 0.05}}"#)).unwrap();
                 let s = own.resolve(Some(&base), &mut NoFiles).unwrap();
-                let (ModelSpec::Ggx { alpha_x, alpha_y }
-                | ModelSpec::Beckmann { alpha_x, alpha_y }) = s.model
+                let (ModelSpec::Ggx {
+                    alpha_x, alpha_y, ..
+                }
+                | ModelSpec::Beckmann {
+                    alpha_x, alpha_y, ..
+                }) = s.model
                 else {
                     panic!("{model}: {:?}", s.model);
                 };
@@ -1324,7 +1368,8 @@ mod tests {
                 s.model,
                 ModelSpec::Ggx {
                     alpha_x: 0.3,
-                    alpha_y: 0.1
+                    alpha_y: 0.1,
+                    angle_deg: 0.0,
                 }
             );
         }
@@ -1343,7 +1388,8 @@ mod tests {
                 s.model,
                 ModelSpec::Beckmann {
                     alpha_x: 0.25,
-                    alpha_y: 0.25
+                    alpha_y: 0.25,
+                    angle_deg: 0.0,
                 }
             );
             // …but a key the scene sets itself must be used.
@@ -1378,6 +1424,7 @@ mod tests {
             model: ModelSpec::Ggx {
                 alpha_x: 0.0,
                 alpha_y: 0.1,
+                angle_deg: 0.0,
             },
             fresnel: FresnelSpec::One,
         };
