@@ -82,6 +82,34 @@ impl Anisotropy {
         if d > 90.0 { d - 180.0 } else { d }
     }
 
+    /// Rms slopes along the axis at `angle_deg` (from +x towards +y) and across it, from
+    /// the slope covariance: `s_a² = s₁² cos²Δ + s₂² sin²Δ` with Δ the angle from the
+    /// steepest direction (the principal slopes at Δ = 0).
+    pub fn slopes_along(&self, angle_deg: f64) -> (f64, f64) {
+        let (s1, s2) = self.principal;
+        let (sin, cos) = (angle_deg - self.slope_direction_deg)
+            .to_radians()
+            .sin_cos();
+        let (c2, s2sq) = (cos * cos, sin * sin);
+        (
+            (s1 * s1 * c2 + s2 * s2 * s2sq).sqrt(),
+            (s1 * s1 * s2sq + s2 * s2 * c2).sqrt(),
+        )
+    }
+
+    /// Anisotropic GGX roughness along the axis at `angle_deg` and across it, from the
+    /// isotropic fit `alpha` split like the slopes along those axes (their mean square is
+    /// the principal slopes', so the split keeps the isotropic fit's mean square).
+    pub fn ggx_along(&self, alpha: f64, angle_deg: f64) -> (f64, f64) {
+        let (a, b) = self.slopes_along(angle_deg);
+        let m = ((a * a + b * b) / 2.0).sqrt();
+        if m > 0.0 {
+            (alpha * a / m, alpha * b / m)
+        } else {
+            (alpha, alpha)
+        }
+    }
+
     /// Anisotropic Beckmann roughness along the principal axes `(α₁, α₂)`.
     pub fn beckmann(&self) -> (f64, f64) {
         (
@@ -90,15 +118,10 @@ impl Anisotropy {
         )
     }
 
-    /// Anisotropic GGX roughness from the isotropic fit `alpha`, split like the slopes.
+    /// Anisotropic GGX roughness along the principal axes from the isotropic fit `alpha`,
+    /// split like the slopes.
     pub fn ggx(&self, alpha: f64) -> (f64, f64) {
-        let (a, b) = self.principal;
-        let m = ((a * a + b * b) / 2.0).sqrt();
-        if m > 0.0 {
-            (alpha * a / m, alpha * b / m)
-        } else {
-            (alpha, alpha)
-        }
+        self.ggx_along(alpha, self.slope_direction_deg)
     }
 }
 

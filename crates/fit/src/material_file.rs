@@ -116,7 +116,8 @@ pub fn build(a: &Analysis, prov: &Provenance<'_>) -> MaterialFile {
     let psd = find(Family::MeasuredPsd).expect("the measured-PSD candidate");
     let aniso = anisotropy(a, find(Family::Ggx).and_then(alpha_of).unwrap_or(f64::NAN));
     let (two_scale, split_problems) = splits(a, &cands);
-    let mut material = material_desc(prov.metal, &cands, aniso.as_ref());
+    let flagged = a.anisotropy.as_ref().filter(|an| an.anisotropic);
+    let mut material = material_desc(prov.metal, &cands, flagged);
     let kc_ok = kc.problems.is_empty();
     let variance = kc_ok
         .then(|| variance_mismatch(a.kc.params.sigma, a.stats.sq, a.kc.range, psd.sound()))
@@ -166,20 +167,40 @@ fn alpha_of(c: &Candidate) -> Option<f64> {
     }
 }
 
-/// `[material]`: the metal, the K-correlation parameters, the NDF roughness (and its two
-/// axes on an anisotropic surface).
-fn material_desc(metal: &str, cands: &[Candidate], aniso: Option<&Anisotropy>) -> MaterialDesc {
+/// `[material]`: the metal, the K-correlation parameters, the NDF roughness, and on a
+/// surface flagged anisotropic (`flagged`) its axes: `angle_deg` is the direction across
+/// the lay in the scan's frame (x along a scan line, y along the line index, the
+/// renderer's tangent and bitangent; degrees from x towards y), the stretched
+/// K-correlation's φ₀ where that fit was made, else the steepest slope direction;
+/// `lx_um`/`ly_um` and the GGX `alpha_x`/`alpha_y` lie along it and across it, so every
+/// model the file offers renders the scan as it lay.
+fn material_desc(
+    metal: &str,
+    cands: &[Candidate],
+    flagged: Option<&crate::anisotropy::Anisotropy>,
+) -> MaterialDesc {
     let find = |f: Family| cands.iter().find(|c| c.family == f);
     let surface = find(Family::GhsSsa)
         .and_then(|c| c.spec.as_ref())
         .and_then(|s| s.model.surface());
-    let axes = aniso.filter(|t| t.anisotropic).map(|t| t.alpha_ggx);
     let stretched = find(Family::GhsAniso)
         .and_then(|c| c.spec.as_ref())
         .and_then(|s| match &s.model {
             ModelSpec::GhsAniso { surface, .. } => Some(*surface),
             _ => None,
         });
+    let alpha = find(Family::Ggx).and_then(alpha_of);
+    let angle_deg = stretched
+        .map(|s| s.angle_deg)
+        .or(flagged.map(|an| an.slope_direction_deg));
+    let axes = match (flagged, alpha, angle_deg) {
+        (Some(an), Some(alpha), Some(angle)) => {
+            let fix = |v: f64| crate::candidates::renderer_alpha(v).0;
+            let (x, y) = an.ggx_along(alpha, angle);
+            Some([fix(x), fix(y)])
+        }
+        _ => None,
+    };
     MaterialDesc {
         metal: Some(metal.to_string()),
         sigma_um: surface.map(|s| s.sigma_um),
@@ -191,7 +212,7 @@ fn material_desc(metal: &str, cands: &[Candidate], aniso: Option<&Anisotropy>) -
         alpha_y: axes.map(|a| a[1]),
         lx_um: stretched.map(|s| s.lx_um),
         ly_um: stretched.map(|s| s.ly_um),
-        angle_deg: stretched.map(|s| s.angle_deg),
+        angle_deg,
         ..MaterialDesc::default()
     }
 }
@@ -527,8 +548,10 @@ fn anisotropy(a: &Analysis, alpha: f64) -> Option<Anisotropy> {
             format!(
                 "anisotropic ({}; {}, lay at {:.1}°): the isotropic K-correlation and NDF fits \
                  average over directions and are only an approximation; \
-                 [material].alpha_x/alpha_y (GGX) and [anisotropy].alpha_beckmann describe the \
-                 two axes, with alpha_x across the lay (at {:.1}°)",
+                 [material].alpha_x/alpha_y (GGX's; a beckmann include reads them too) lie along \
+                 [material].angle_deg, across the lay, and across that (the steepest slope is \
+                 at {:.1}°), the frame ggx and beckmann read; \
+                 [anisotropy].alpha_ggx/alpha_beckmann are along the principal slope axes",
                 an.flag_source,
                 an.ratio_text(),
                 an.lay_direction_deg(),

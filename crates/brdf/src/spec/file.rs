@@ -481,17 +481,21 @@ pub struct Anisotropy {
     /// Principal ratio (> 1.5: anisotropic).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub ratio: Option<f64>,
-    /// Direction of the steepest slope (`alpha_x`), degrees from +x towards +y.
+    /// Direction of the steepest slope (`alpha_ggx[0]`), degrees from +x towards +y; close
+    /// to `[material].angle_deg`, the axis of `alpha_x` (which is the 2-D PSD fit's φ₀
+    /// where that fit was made).
     pub slope_direction_deg: f64,
-    /// Direction of the lay (grooves, `alpha_y`), degrees from +x towards +y.
+    /// Direction of the lay (grooves, `alpha_ggx[1]`), degrees from +x towards +y.
     pub lay_direction_deg: f64,
     /// Rms slopes along x and y from the x- and y-PSDs.
     pub psd_rms_slopes: [f64; 2],
     /// True when the 2-D PSD fit's Ly/Lx exceeds 1.5 (where that fit is sound; else `ratio`).
     pub anisotropic: bool,
-    /// GGX α along the principal axes.
+    /// GGX α along the principal axes (`[material].alpha_x`/`alpha_y` are the same split
+    /// along `[material].angle_deg`).
     pub alpha_ggx: [f64; 2],
-    /// Beckmann α along the principal axes.
+    /// Beckmann α along the principal axes (`beckmann` reads the principal Beckmann pair
+    /// from here only by hand: `alpha_x`, `alpha_y` and `angle_deg = slope_direction_deg`).
     pub alpha_beckmann: [f64; 2],
     /// Set for anisotropic surfaces.
     #[serde(skip_serializing_if = "Option::is_none")]
