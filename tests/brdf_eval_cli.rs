@@ -173,3 +173,28 @@ fn two_scale_queries_share_one_model() {
     let peak = f.iter().cloned().fold(0.0, f64::max);
     assert!((f[30] - peak).abs() <= 0.2 * peak, "{f:?}");
 }
+
+/// `angle_deg` turns a microfacet material's axes: at normal incidence (which a turn
+/// leaves in place) the material turned by 40° at φo is the unturned one at φo − 40°, and
+/// a bad angle names the key.
+#[test]
+fn angle_deg_turns_the_microfacet_axes() {
+    let input = r#"{"model": "ggx", "alpha_x": 0.1, "alpha_y": 0.3, "angle_deg": 40, "lambda_nm": 550, "theta_i_deg": 0, "theta_o_deg": 20, "phi_o_deg": 70, "metal": "cu"}
+{"model": "ggx", "alpha_x": 0.1, "alpha_y": 0.3, "lambda_nm": 550, "theta_i_deg": 0, "theta_o_deg": 20, "phi_o_deg": 30, "metal": "cu"}
+{"model": "beckmann", "alpha_x": 0.1, "alpha_y": 0.3, "angle_deg": -25, "lambda_nm": 450, "theta_i_deg": 0, "theta_o_deg": 35, "phi_o_deg": 200, "fresnel": "one"}
+{"model": "beckmann", "alpha_x": 0.1, "alpha_y": 0.3, "lambda_nm": 450, "theta_i_deg": 0, "theta_o_deg": 35, "phi_o_deg": 225, "fresnel": "one"}
+{"model": "ggx", "alpha_x": 0.1, "alpha_y": 0.3, "lambda_nm": 550, "theta_i_deg": 0, "theta_o_deg": 20, "phi_o_deg": 70, "metal": "cu"}
+{"model": "ggx", "alpha": 0.1, "angle_deg": 1e300, "lambda_nm": 550, "theta_i_deg": 0, "theta_o_deg": 20, "phi_o_deg": 70, "metal": "cu"}
+{"model": "smooth", "angle_deg": 10, "lambda_nm": 550, "theta_i_deg": 0, "theta_o_deg": 0, "phi_o_deg": 0, "metal": "cu"}
+"#;
+    let out = run(input);
+    assert_eq!(out.len(), 7, "{out:?}");
+    let f = |i: usize| out[i]["f"].as_f64().unwrap();
+    assert!(rel(f(0), f(1)) < 1e-12, "{} vs {}", f(0), f(1));
+    assert!(rel(f(2), f(3)) < 1e-12, "{} vs {}", f(2), f(3));
+    // The turn matters: unturned at 70° is another value.
+    assert!(rel(f(4), f(0)) > 0.1, "{} vs {}", f(4), f(0));
+    for i in [5, 6] {
+        assert_eq!(out[i]["field"].as_str(), Some("angle_deg"), "{:?}", out[i]);
+    }
+}

@@ -93,6 +93,11 @@ fn the_written_angle_and_ggx_render_the_scan_as_it_lay() {
             ax > 1.5 * ay && (ax / ay / (su / sv) - 1.0).abs() < 0.05,
             "φ {phi}: alpha_x {ax} alpha_y {ay}, own-frame slopes {su} {sv}"
         );
+        // Every model the file offers builds, and the file reads back with its axes.
+        material::check(&doc).unwrap();
+        let text = material::to_toml(&doc).unwrap();
+        let back: brdf::spec::MaterialFile = toml::from_str(&text).unwrap();
+        assert_eq!(back.material, doc.material);
         // The file's GGX as a scene's include of it builds it.
         let written = doc
             .resolve(
