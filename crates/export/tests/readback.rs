@@ -354,3 +354,25 @@ fn what_a_table_cannot_hold_is_refused_by_name() {
         }
     }
 }
+
+/// An anisotropic microfacet material turned by `angle_deg` is refused by name (its RGL
+/// table's distribution would lie along the tangent axes); an isotropic one, which a turn
+/// leaves unchanged, and an unturned one are exported.
+#[test]
+fn a_turned_anisotropic_microfacet_material_is_refused_by_name() {
+    let turned = |alpha_x: f64, alpha_y: f64, angle_deg: f64| MaterialSpec {
+        model: ModelSpec::Beckmann {
+            alpha_x,
+            alpha_y,
+            angle_deg,
+        },
+        fresnel: FresnelSpec::Metal(Metal::Au),
+    };
+    let e = export::ndf_of(&turned(0.1, 0.3, 30.0)).err().unwrap();
+    assert!(
+        matches!(&e, ExportError::Model(m) if m.contains("angle_deg")),
+        "{e}"
+    );
+    assert!(export::ndf_of(&turned(0.2, 0.2, 30.0)).is_ok());
+    assert!(export::ndf_of(&turned(0.1, 0.3, 0.0)).is_ok());
+}

@@ -114,6 +114,9 @@ fn measured(
     Ok((m, label))
 }
 
+/// The full GHS of a measured PSD stretched along two axes.
+type StretchedMeasured = GhsAnisotropic<EllipticalPsd<TabulatedPsd>>;
+
 /// The full GHS of the measured PSD stretched along two axes, its table (the isotropic S̃
 /// of the de-stretched frame's PSD, over |u| up to 2k times the larger stretch) verified
 /// against the direct Hankel transform of that PSD's covariance as [`measured`]'s is.
@@ -122,7 +125,7 @@ fn measured_stretched(
     c: &fit::candidates::Candidate,
     geometry: &[(f64, f64)],
     params: &mut Map<String, Value>,
-) -> Result<(GhsAnisotropic<EllipticalPsd<TabulatedPsd>>, String), (String, String)> {
+) -> Result<(StretchedMeasured, String), (String, String)> {
     let label = c.label.clone();
     let fail = |e: String| (label.clone(), e);
     let ModelSpec::MeasuredPsdAniso { surface, options } = &spec.model else {
