@@ -91,6 +91,17 @@ def _vector(a: Any, name: str) -> np.ndarray:
     return a
 
 
+def _nan_to_none(v: Any) -> Any:
+    """JSON has no NaN: a material file's undefined diagnostics travel as null."""
+    if isinstance(v, float) and math.isnan(v):
+        return None
+    if isinstance(v, Mapping):
+        return {k: _nan_to_none(x) for k, x in v.items()}
+    if isinstance(v, (list, tuple)):
+        return [_nan_to_none(x) for x in v]
+    return v
+
+
 class Material:
     __doc__ = f"""A reflection model built from the flat material keys.
 
@@ -122,22 +133,22 @@ class Material:
     def from_fit(cls, material_file: Mapping[str, Any], **overrides: Any) -> "Material":
         """The material of a :func:`fit` result (or a parsed material file).
 
-        Its ``[material]`` table carries the keys of every model it offers; this takes
-        those the chosen ``model`` reads (``overrides`` win, e.g. ``model="ggx"``), as a
-        scene's ``include`` of the file does. A model drawn from the file's own PSD table
-        (``measured_psd``) needs the file itself: ``Material(include="m.toml", ...)``.
+        Built as a scene's ``include`` of that file builds it, by the same code: the
+        file's ``[material]`` under ``overrides`` (e.g. ``model="ggx"``, or
+        ``model="two_scale", cutoff="cutoff_100"`` for a split), and for
+        ``model="measured_psd"`` (or its stretched forms) the file's own ``[psd]``
+        table. Raises ``ValueError`` naming the key, as an include would. Its
+        :attr:`keys` are the resolved flat keys (a measured PSD stays in the file).
         """
-        keys = {**material_file["material"], **overrides}
-        reads = {k: models for k, _, _, models in material_keys()}
-        model = keys.get("model")
-        chosen = {
-            k: v
-            for k, v in keys.items()
-            if k in overrides
-            or (not reads.get(k) and k not in ("include", "cutoff"))
-            or model in reads.get(k, [])
-        }
-        return cls(**chosen)
+        try:
+            file_text = json.dumps(_nan_to_none(dict(material_file)), allow_nan=False)
+            keys_text = json.dumps(overrides, allow_nan=False)
+        except (TypeError, ValueError) as e:
+            raise ValueError(f"material file and keys must be JSON-like: {e}") from None
+        m = cls.__new__(cls)
+        m._m = _lustre.Material.over_file(file_text, keys_text)
+        m._keys = json.loads(m._m.keys_json)
+        return m
 
     @property
     def keys(self) -> dict[str, Any]:

@@ -2,7 +2,7 @@
 
 use std::path::Path;
 
-use brdf::spec::{DynBxdf, MaterialDesc, MaterialSpec};
+use brdf::spec::{DynBxdf, MaterialDesc, MaterialFile, MaterialSpec};
 use brdf::{Bxdf, DVec3};
 use numpy::PyUntypedArrayMethods;
 use numpy::ndarray::Array2;
@@ -176,18 +176,52 @@ pub struct Material {
     keys: String,
 }
 
-#[pymethods]
+/// A material file from the JSON of a fit result. JSON has no NaN, so a fit's
+/// undefined diagnostics arrive as `null` (serde_json writes NaN so, and Python's
+/// `from_fit` turns a parsed TOML file's nan into None): they go back to NaN through
+/// the TOML data model, where the file's schema was written.
+fn material_file_from_json(text: &str) -> Result<MaterialFile, String> {
+    fn to_toml(v: serde_json::Value) -> Result<toml::Value, String> {
+        use serde_json::Value as J;
+        Ok(match v {
+            J::Null => toml::Value::Float(f64::NAN),
+            J::Bool(b) => toml::Value::Boolean(b),
+            J::Number(n) => match n.as_i64() {
+                Some(i) => toml::Value::Integer(i),
+                None => toml::Value::Float(n.as_f64().ok_or("a number out of range")?),
+            },
+            J::String(s) => toml::Value::String(s),
+            J::Array(a) => {
+                toml::Value::Array(a.into_iter().map(to_toml).collect::<Result<_, _>>()?)
+            }
+            J::Object(o) => toml::Value::Table(
+                o.into_iter()
+                    .map(|(k, v)| Ok((k, to_toml(v)?)))
+                    .collect::<Result<_, String>>()?,
+            ),
+        })
+    }
+    let json: serde_json::Value = serde_json::from_str(text).map_err(|e| e.to_string())?;
+    to_toml(json)?
+        .try_into()
+        .map_err(|e: toml::de::Error| e.message().to_string())
+}
+
 impl Material {
-    /// Builds the material of `keys_json`, a JSON object of material keys.
-    #[new]
-    fn new(py: Python<'_>, keys_json: &str) -> PyResult<Material> {
+    /// Resolves and builds `keys_json` (over `file` when given) as a scene build does.
+    fn build(py: Python<'_>, keys_json: &str, file: Option<&MaterialFile>) -> PyResult<Material> {
         let desc: MaterialDesc =
             serde_json::from_str(keys_json).map_err(|e| key_error(e, keys_json))?;
         let (spec, model) = py
             .detach(|| -> Result<_, String> {
                 let dir = Path::new(".");
                 let mut inputs = render::inputs::Inputs::new(dir);
-                let spec = render::material::resolve_spec(&desc, dir, &mut inputs)?;
+                let spec = match file {
+                    Some(f) => {
+                        render::material::resolve_spec_over_file(&desc, f, dir, &mut inputs)?
+                    }
+                    None => render::material::resolve_spec(&desc, dir, &mut inputs)?,
+                };
                 let model = spec
                     .build()
                     .map_err(|e| format!("`{}`: {}", e.field, e.message))?;
@@ -199,6 +233,29 @@ impl Material {
             spec,
             keys: keys_json.to_string(),
         })
+    }
+}
+
+#[pymethods]
+impl Material {
+    /// Builds the material of `keys_json`, a JSON object of material keys.
+    #[new]
+    fn new(py: Python<'_>, keys_json: &str) -> PyResult<Material> {
+        Material::build(py, keys_json, None)
+    }
+
+    /// Builds the material of `keys_json` over the material file `file_json` (a fit
+    /// result as JSON), as a scene's `include` of that file would.
+    #[staticmethod]
+    fn over_file(py: Python<'_>, file_json: &str, keys_json: &str) -> PyResult<Material> {
+        let file = material_file_from_json(file_json)
+            .map_err(|e| value_error(format!("material file: {e}")))?;
+        let mut m = Material::build(py, keys_json, Some(&file))?;
+        // What the include resolved to, as flat keys (a measured PSD table is data,
+        // not a key: it stays in the file).
+        m.keys = serde_json::to_string(&m.spec.to_desc())
+            .map_err(|e| value_error(format!("material keys: {e}")))?;
+        Ok(m)
     }
 
     /// The keys the material was built from, as JSON.

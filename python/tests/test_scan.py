@@ -90,3 +90,59 @@ def test_read_errors_are_os_and_value_errors(tmp_path):
         lustre.Scan(np.zeros((4, 4)), dx=-1.0)
     with pytest.raises(ValueError, match="level"):
         lustre.read_scan(SURFACES / "di-3.di").stats(level="quartic")
+
+
+def _stretched_map(angle_deg, n=256, dx=0.1e-6, lx=0.4e-6, ly=1.6e-6, seed=7):
+    """A Gaussian random surface whose correlation lengths are lx across the lay and ly
+    along it, the lay's normal at angle_deg from x towards y (heights ~ 20 nm rms)."""
+    rng = np.random.default_rng(seed)
+    k = np.fft.fftfreq(n, d=dx) * 2 * np.pi
+    kx, ky = np.meshgrid(k, k)
+    a = math.radians(angle_deg)
+    u = kx * math.cos(a) + ky * math.sin(a)
+    v = -kx * math.sin(a) + ky * math.cos(a)
+    psd = (1 + (u * lx) ** 2 + (v * ly) ** 2) ** -2.0
+    h = np.real(np.fft.ifft2(np.fft.fft2(rng.standard_normal((n, n))) * np.sqrt(psd)))
+    return h / h.std() * 20e-9
+
+
+@pytest.mark.parametrize("angle_deg", [0.0, 35.0, 110.0])
+def test_from_fit_builds_what_an_include_of_the_file_builds(tmp_path, angle_deg):
+    scan = lustre.Scan(_stretched_map(angle_deg), 0.1e-6, 0.1e-6, name="stretched")
+    got = lustre.fit(scan, metal="cu")
+    mat = got["material"]
+    assert "angle_deg" in mat and mat["alpha_x"] != mat["alpha_y"], mat
+    # The lay's normal is recovered (mod 180°).
+    d = (mat["angle_deg"] - angle_deg + 90.0) % 180.0 - 90.0
+    assert abs(d) < 5.0, (mat["angle_deg"], angle_deg)
+    turned = lustre.Material.from_fit(got, model="ggx")
+    by_hand = lustre.Material(
+        model="ggx", alpha_x=mat["alpha_x"], alpha_y=mat["alpha_y"],
+        angle_deg=mat["angle_deg"], metal="cu",
+    )
+    rng = np.random.default_rng(1)
+    wi = rng.normal(size=(64, 3)); wi[:, 2] = abs(wi[:, 2]); wi /= np.linalg.norm(wi, axis=1)[:, None]
+    wo = rng.normal(size=(64, 3)); wo[:, 2] = abs(wo[:, 2]); wo /= np.linalg.norm(wo, axis=1)[:, None]
+    f1, p1 = turned.eval(wi, wo, 550.0)
+    f2, p2 = by_hand.eval(wi, wo, 550.0)
+    assert np.array_equal(f1, f2) and np.array_equal(p1, p2)
+    # Turning matters: the same pair along the tangent axes differs.
+    flat = lustre.Material(model="ggx", alpha_x=mat["alpha_x"], alpha_y=mat["alpha_y"], metal="cu")
+    if abs(math.sin(2 * math.radians(mat["angle_deg"]))) > 0.3:
+        assert not np.allclose(flat.eval(wi, wo, 550.0)[0], f1)
+    assert turned.keys["angle_deg"] == mat["angle_deg"]
+    # The file's own PSD answers a measured-PSD model without writing the file.
+    measured = lustre.Material.from_fit(got, model="measured_psd")
+    assert measured.eval([0, 0, 1], [0.05, 0, math.sqrt(1 - 0.0025)], 550.0)[0][0] > 0
+
+
+def test_from_fit_takes_a_parsed_file_and_names_a_bad_key(cli, tmp_path):
+    out = tmp_path / "m.toml"
+    cli("fit", "data/surfaces/di-3.di", "--metal", "cu", "-o", str(out), "--no-plots")
+    parsed = tomllib.loads(out.read_text())
+    a = lustre.Material.from_fit(parsed, model="ghs_ssa")
+    b = lustre.Material(include=str(out), model="ghs_ssa")
+    wo = [0.2, 0.1, math.sqrt(0.95)]
+    assert a.eval([0, 0, 1], wo, 550.0)[0][0] == b.eval([0, 0, 1], wo, 550.0)[0][0]
+    with pytest.raises(ValueError, match="alpha_z"):
+        lustre.Material.from_fit(parsed, alpha_z=0.1)

@@ -232,6 +232,32 @@ pub fn resolve_spec(
     })
 }
 
+/// The material of `desc` over an in-memory material file, as a scene's `include`
+/// of that file resolves it ([`MaterialFile::base_for`], the file's own `[psd]`
+/// answering `psd_csv = "[psd]"`): for a fit result that was never written to disk
+/// (the Python `Material.from_fit`). Paths the description or the file name are
+/// relative to `base_dir`.
+pub fn resolve_spec_over_file(
+    desc: &MaterialDesc,
+    file: &MaterialFile,
+    base_dir: &Path,
+    inputs: &mut Inputs,
+) -> Result<MaterialSpec, String> {
+    if desc.include.is_some() {
+        return Err(
+            "`include` names a material file, but one was given already: drop `include`".into(),
+        );
+    }
+    let (base, _) = file.base_for(desc).map_err(|e| e.to_string())?;
+    let mut scene_files = SceneFiles { base_dir, inputs };
+    let mut files = WithOwnPsd {
+        psd: file.psd.as_ref(),
+        files: &mut scene_files,
+    };
+    desc.resolve(Some(&base), &mut files)
+        .map_err(|e| e.to_string())
+}
+
 /// Builds the named material. `base_dir` resolves relative paths; every
 /// file is read through `inputs`.
 pub fn build_material(
