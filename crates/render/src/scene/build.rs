@@ -103,26 +103,41 @@ pub(super) fn build(path: &Path, text: &str, desc: &SceneDesc) -> Result<Scene, 
             })
     }
     let spectral = (settings.spectral_integration == SpectralIntegration::Auto
-        && materials
-            .iter()
-            .any(|m| m.fresnel_only.is_some() || delta_lobe(m).is_some()))
+        && materials.iter().any(|m| {
+            m.fresnel_only.is_some()
+                || delta_lobe(m).is_some()
+                || crate::material::glossy_isotropic(m.model)
+        }))
     .then(|| {
         let fresnels: Vec<_> = materials
             .iter()
             .map(|m| m.fresnel_only.as_ref().map(|f| &f.fresnel))
             .collect();
         let deltas: Vec<_> = materials.iter().map(delta_lobe).collect();
-        SpectralTables::build_with_deltas(&lights, &fresnels, &deltas)
+        let mut t = SpectralTables::build_with_deltas(&lights, &fresnels, &deltas);
+        if lights.nee_len() > 0 {
+            let lobes: Vec<_> = materials
+                .iter()
+                .map(|m| {
+                    crate::material::glossy_isotropic(m.model)
+                        .then_some(&*m.bxdf as &(dyn brdf::Bxdf + Sync))
+                })
+                .collect();
+            t.add_glossy(&lights, &lobes);
+        }
+        t
     });
     let spectral_summary = match &spectral {
         None => String::new(),
         Some(t) => format!(
-            ", λ integrated exactly at the first bounce ({} Fresnel grid(s) and {} delta-lobe grid(s) of ≤ {} intervals, {} λ-free, {} refused; {:.1} ms)",
+            ", λ integrated exactly at the first bounce ({} Fresnel grid(s) and {} delta-lobe grid(s) of ≤ {} intervals, {} λ-free, {} refused, {} glossy control-variate table(s) of {:.1} MB; {:.1} ms)",
             t.stats.grids,
             t.stats.delta_grids,
             t.stats.max_intervals,
             t.stats.flat,
             t.stats.refused + t.stats.delta_refused,
+            t.stats.glossy_grids,
+            t.stats.glossy_bytes as f64 / 1e6,
             tables_start.elapsed().as_secs_f64() * 1e3
         ),
     };
