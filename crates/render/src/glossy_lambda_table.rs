@@ -20,7 +20,6 @@
 use crate::spectrum::{LAMBDA_MAX, LAMBDA_MIN};
 use brdf::Bxdf;
 use glam::DVec3;
-use rayon::prelude::*;
 
 /// Wavelength nodes, uniform over 360–830 nm (the interpolant is linear
 /// between them).
@@ -124,83 +123,143 @@ pub fn node_geometry(g: usize) -> (f64, f64, f64) {
     )
 }
 
-/// A material's glossy lobe on the grid, with its exact λ integrals.
-pub struct GlossyTable {
-    /// f at node (g, k): `f[g * LAMBDA_NODES + k]`.
+/// The nodes of one (cosθi, cosθo) pair: f over ρ and λ, and the λ
+/// integrals per ρ node and basis function.
+struct Cell {
+    /// f at (ρ node r, λ node k): `f[r * LAMBDA_NODES + k]`.
     f: Vec<f32>,
-    /// Per geometric node g and basis function b: `integrals[g * bases + b]`
-    /// = ∫ b f̃_g cmf dλ.
-    pub(crate) integrals: Vec<[f64; 3]>,
+    /// `integrals[r * bases + b]` = ∫ b f̃ cmf dλ at ρ node r.
+    integrals: Vec<[f64; 3]>,
+}
+
+/// A material's glossy lobe on the grid, with its exact λ integrals. Each
+/// (cosθi, cosθo) pair of nodes is evaluated the first time a lookup needs
+/// it: a scene's first vertices see a narrow range of cosθi, and the
+/// light's directions a narrow range of cosθo, so most of the grid is
+/// never built. A cell's values do not depend on which thread builds it.
+pub struct GlossyTable {
+    cells: Vec<std::sync::OnceLock<Cell>>,
+    /// ∫ hat_k b cmf dλ per λ node k and basis function b.
+    hats: Vec<[f64; 3]>,
+    bases: usize,
 }
 
 impl GlossyTable {
-    /// The table of `bxdf`'s glossy lobe against basis functions whose
-    /// weighted hat integrals are `hats` (`hats[k * bases + b]` =
-    /// ∫ hat_k(λ) b(λ) cmf(λ) dλ, hat_k the piecewise linear function
-    /// that is 1 at λ node k and 0 at the others). Non-finite values of the
-    /// model count as 0.
-    pub fn build(bxdf: &(dyn Bxdf + Sync), hats: &[[f64; 3]], bases: usize) -> GlossyTable {
-        let lambdas: Vec<f64> = (0..LAMBDA_NODES).map(lambda_node).collect();
-        let mut f = vec![0.0f32; GEOMETRIC_NODES * LAMBDA_NODES];
-        f.par_chunks_mut(LAMBDA_NODES * RHO_NODES)
-            .enumerate()
-            .for_each(|(row, out)| {
-                let mut fp = [(0.0, 0.0); LAMBDA_NODES];
-                // Nodes outside the ρ the cosines allow take the value at
-                // the nearest allowed ρ: evaluated once per row and end.
-                let mut last: Option<(DVec3, DVec3)> = None;
-                for (i_rho, out) in out.chunks_mut(LAMBDA_NODES).enumerate() {
-                    let (ci, co, rho) = node_geometry(row * RHO_NODES + i_rho);
-                    let dirs = node_directions(ci, co, rho);
-                    if last != Some(dirs) {
-                        bxdf.eval_pdf_many(dirs.0, dirs.1, &lambdas, &mut fp);
-                        last = Some(dirs);
-                    }
-                    for (o, v) in out.iter_mut().zip(&fp) {
-                        *o = if v.0.is_finite() { v.0 as f32 } else { 0.0 };
-                    }
-                }
-            });
-        let mut integrals = vec![[0.0; 3]; GEOMETRIC_NODES * bases];
-        integrals
-            .par_chunks_mut(bases)
-            .zip(f.par_chunks(LAMBDA_NODES))
-            .for_each(|(out, fg)| {
-                for (k, &v) in fg.iter().enumerate() {
-                    let v = v as f64;
-                    if v == 0.0 {
-                        continue;
-                    }
-                    for (o, h) in out.iter_mut().zip(&hats[k * bases..(k + 1) * bases]) {
-                        for c in 0..3 {
-                            o[c] += v * h[c];
-                        }
-                    }
-                }
-            });
-        GlossyTable { f, integrals }
+    /// An empty table against basis functions whose weighted hat integrals
+    /// are `hats` (`hats[k * bases + b]` = ∫ hat_k(λ) b(λ) cmf(λ) dλ,
+    /// hat_k the piecewise linear function that is 1 at λ node k and 0 at
+    /// the others).
+    pub fn new(hats: Vec<[f64; 3]>, bases: usize) -> GlossyTable {
+        GlossyTable {
+            cells: (0..COS_NODES * COS_NODES)
+                .map(|_| std::sync::OnceLock::new())
+                .collect(),
+            hats,
+            bases,
+        }
     }
 
-    /// Bytes held.
-    pub fn bytes(&self) -> usize {
-        self.f.len() * 4 + self.integrals.len() * 24
-    }
-
-    /// The interpolant f̃ at the geometry of `c` and wavelength `lambda` nm.
+    /// The cell of nodes (`i_ci`, `i_co`) of `bxdf`'s lobe, built if new.
+    /// Non-finite values of the model count as 0.
     #[inline]
-    pub fn interpolant(&self, c: &Corners, lambda: f64) -> f64 {
+    fn cell(&self, bxdf: &dyn Bxdf, i_ci: usize, i_co: usize) -> &Cell {
+        self.cells[i_ci * COS_NODES + i_co].get_or_init(|| self.build_cell(bxdf, i_ci, i_co))
+    }
+
+    fn build_cell(&self, bxdf: &dyn Bxdf, i_ci: usize, i_co: usize) -> Cell {
+        let lambdas: [f64; LAMBDA_NODES] = std::array::from_fn(lambda_node);
+        let mut f = vec![0.0f32; RHO_NODES * LAMBDA_NODES];
+        let mut fp = [(0.0, 0.0); LAMBDA_NODES];
+        // Nodes outside the ρ the cosines allow take the value at the
+        // nearest allowed ρ: evaluated once per end.
+        let mut last: Option<(DVec3, DVec3)> = None;
+        for (i_rho, out) in f.chunks_mut(LAMBDA_NODES).enumerate() {
+            let (ci, co, rho) = node_geometry(node_index(i_ci, i_co, i_rho));
+            let dirs = node_directions(ci, co, rho);
+            if last != Some(dirs) {
+                bxdf.eval_pdf_many(dirs.0, dirs.1, &lambdas, &mut fp);
+                last = Some(dirs);
+            }
+            for (o, v) in out.iter_mut().zip(&fp) {
+                *o = if v.0.is_finite() { v.0 as f32 } else { 0.0 };
+            }
+        }
+        let nb = self.bases;
+        let mut integrals = vec![[0.0; 3]; RHO_NODES * nb];
+        for (out, fr) in integrals.chunks_mut(nb).zip(f.chunks(LAMBDA_NODES)) {
+            for (k, &v) in fr.iter().enumerate() {
+                let v = v as f64;
+                if v == 0.0 {
+                    continue;
+                }
+                for (o, h) in out.iter_mut().zip(&self.hats[k * nb..(k + 1) * nb]) {
+                    for c in 0..3 {
+                        o[c] += v * h[c];
+                    }
+                }
+            }
+        }
+        Cell { f, integrals }
+    }
+
+    /// Bytes held by the cells built so far.
+    pub fn bytes(&self) -> usize {
+        let per_cell = RHO_NODES * (LAMBDA_NODES * 4 + self.bases * 24);
+        self.cells.iter().filter(|c| c.get().is_some()).count() * per_cell + self.hats.len() * 24
+    }
+
+    /// The rows of corner `s` of `c`: its cell's f and integrals, offset
+    /// to its ρ node.
+    #[inline]
+    fn corner<'t>(&'t self, bxdf: &dyn Bxdf, c: &Corners, s: usize) -> (&'t [f32], &'t [[f64; 3]]) {
+        let g = c.node[s] as usize;
+        let i_rho = g % RHO_NODES;
+        let cell = self.cell(
+            bxdf,
+            g / (RHO_NODES * COS_NODES),
+            (g / RHO_NODES) % COS_NODES,
+        );
+        (
+            &cell.f[i_rho * LAMBDA_NODES..(i_rho + 1) * LAMBDA_NODES],
+            &cell.integrals[i_rho * self.bases..(i_rho + 1) * self.bases],
+        )
+    }
+
+    /// The per-basis λ integrals of the corners of `c`, with their weights,
+    /// to `each(weight, integrals)`.
+    #[inline]
+    pub(crate) fn for_corners(
+        &self,
+        bxdf: &dyn Bxdf,
+        c: &Corners,
+        mut each: impl FnMut(f64, &[[f64; 3]]),
+    ) {
+        for s in 0..8 {
+            each(c.w[s], self.corner(bxdf, c, s).1);
+        }
+    }
+
+    /// The interpolant f̃ of `bxdf`'s lobe at the geometry of `c` and
+    /// wavelength `lambda` nm.
+    #[inline]
+    pub fn interpolant(&self, bxdf: &dyn Bxdf, c: &Corners, lambda: f64) -> f64 {
         let x = (lambda - LAMBDA_MIN) / (LAMBDA_MAX - LAMBDA_MIN) * (LAMBDA_NODES - 1) as f64;
         let (k, t) = cell(x, LAMBDA_NODES);
         let mut v = 0.0;
         for s in 0..8 {
-            let row = &self.f[c.node[s] as usize * LAMBDA_NODES + k..];
-            v += c.w[s] * ((1.0 - t) * row[0] as f64 + t * row[1] as f64);
+            let row = self.corner(bxdf, c, s).0;
+            v += c.w[s] * ((1.0 - t) * row[k] as f64 + t * row[k + 1] as f64);
         }
         v
     }
 
-    /// f̃ of geometric node `g` at λ node `k`.
-    pub fn node_value(&self, g: usize, k: usize) -> f64 {
-        self.f[g * LAMBDA_NODES + k] as f64
+    /// f̃ of `bxdf`'s lobe at geometric node `g` and λ node `k`.
+    pub fn node_value(&self, bxdf: &dyn Bxdf, g: usize, k: usize) -> f64 {
+        let (i_ci, i_co, i_rho) = (
+            g / (RHO_NODES * COS_NODES),
+            (g / RHO_NODES) % COS_NODES,
+            g % RHO_NODES,
+        );
+        self.cell(bxdf, i_ci, i_co).f[i_rho * LAMBDA_NODES + k] as f64
     }
 }

@@ -826,14 +826,14 @@ fn first_vertex_cv(
     // n ∫ Le f̃ cmf dλ + Σ_j T_j (f − f̃)(λ_j) Le(λ_j) cmf(λ_j), times `scale`.
     let glossy = |xyz: &mut [f64; 3], wo: DVec3, f: &[(f64, f64); N], em: &Emission, scale: f64| {
         let c = crate::glossy_lambda_table::corners(wi, wo);
-        let exact = first.tables.glossy_exact(g, &c, em);
+        let exact = first.tables.glossy_exact(g, &**bxdf, &c, em);
         for k in 0..3 {
             xyz[k] += scale * q_sum * exact[k];
         }
         let mut e = [0.0; N];
         em.eval_many(&lambdas[..n], &mut e[..n]);
         for j in 0..n {
-            e[j] *= scale * t[j] * (f[j].0 - g.interpolant(&c, lambdas[j]));
+            e[j] *= scale * t[j] * (f[j].0 - g.interpolant(&**bxdf, &c, lambdas[j]));
         }
         add_spectral(xyz, &lambdas[..n], &e[..n]);
     };
@@ -895,9 +895,22 @@ fn first_vertex_cv(
             reached_emission(scene, &ray, next.as_ref(), &mut th, lambdas, n, &mut out);
         }
     } else {
+        let (em, pdf_l) = emission_at(lights, &ray, next.as_ref());
+        let goes_on = settings.max_depth > 1
+            && matches!(
+                next,
+                Some(Hit {
+                    surface: Surface::Material(_),
+                    ..
+                })
+            );
+        // The other wavelengths' values only if something uses them: at
+        // the last bounce of a direct-lighting render most samples escape.
+        if matches!(em, Emission::None) && !goes_on {
+            return done(out, xyz);
+        }
         let mut fp = [(0.0, 0.0); N];
         bxdf.eval_pdf_many(wi, s.wo, &lambdas[..n], &mut fp[..n]);
-        let (em, pdf_l) = emission_at(lights, &ray, next.as_ref());
         if !matches!(em, Emission::None) {
             let own: f64 = fp[..n].iter().map(|v| v.1).sum::<f64>() / s.pdf;
             let w = mis.bsdf(pdf_l, own, q_sum / s.pdf);

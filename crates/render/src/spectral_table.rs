@@ -203,8 +203,6 @@ pub struct TableStats {
     pub delta_refused: usize,
     /// Glossy control-variate tables ([`SpectralTables::add_glossy`]).
     pub glossy_grids: usize,
-    /// Their bytes.
-    pub glossy_bytes: usize,
 }
 
 /// A material's delta lobe whose weight depends on the path only through
@@ -335,23 +333,23 @@ impl SpectralTables {
         }
     }
 
-    /// Adds a glossy control-variate table ([`crate::glossy_lambda_table`])
-    /// for every material whose entry in `lobes` is `Some` (an isotropic
-    /// glossy lobe), against the emission of `lights` (the lights these
-    /// tables were built for).
-    pub fn add_glossy(&mut self, lights: &Lights, lobes: &[Option<&(dyn brdf::Bxdf + Sync)>]) {
-        if lobes.iter().all(Option::is_none) {
+    /// Adds a glossy control-variate table ([`crate::glossy_lambda_table`],
+    /// built lazily by its users) for every material whose entry in
+    /// `glossy` is true (an isotropic glossy lobe), against the emission of
+    /// `lights` (the lights these tables were built for).
+    pub fn add_glossy(&mut self, lights: &Lights, glossy: &[bool]) {
+        if !glossy.iter().any(|&g| g) {
             return;
         }
         let (bases, _, _) = scene_bases(lights);
         let hats = hat_integrals(&bases);
-        self.glossy = lobes
+        self.glossy = glossy
             .iter()
-            .map(|l| {
-                let t = GlossyTable::build((*l)?, &hats, bases.len());
-                self.stats.glossy_grids += 1;
-                self.stats.glossy_bytes += t.bytes();
-                Some(t)
+            .map(|&g| {
+                g.then(|| {
+                    self.stats.glossy_grids += 1;
+                    GlossyTable::new(hats.clone(), bases.len())
+                })
             })
             .collect();
     }
@@ -362,17 +360,21 @@ impl SpectralTables {
         self.glossy.get(m as usize).and_then(Option::as_ref)
     }
 
-    /// ∫ Le f̃ cmf dλ: the λ integral of `table`'s interpolant at the
-    /// geometry of `corners`, under emission `em`.
+    /// ∫ Le f̃ cmf dλ: the λ integral of `table`'s interpolant of `bxdf`'s
+    /// lobe at the geometry of `corners`, under emission `em`.
     #[inline]
-    pub fn glossy_exact(&self, table: &GlossyTable, corners: &Corners, em: &Emission) -> [f64; 3] {
+    pub fn glossy_exact(
+        &self,
+        table: &GlossyTable,
+        bxdf: &dyn brdf::Bxdf,
+        corners: &Corners,
+        em: &Emission,
+    ) -> [f64; 3] {
         let (b, c) = self.basis(em);
-        let nb = self.direct.len();
         let mut out = [0.0; 3];
-        for s in 0..8 {
-            let g = corners.node[s] as usize;
-            c.accumulate(&table.integrals[g * nb + b..], corners.w[s], &mut out);
-        }
+        table.for_corners(bxdf, corners, |w, rows| {
+            c.accumulate(&rows[b..], w, &mut out)
+        });
         out
     }
 

@@ -116,12 +116,9 @@ pub(super) fn build(path: &Path, text: &str, desc: &SceneDesc) -> Result<Scene, 
         let deltas: Vec<_> = materials.iter().map(delta_lobe).collect();
         let mut t = SpectralTables::build_with_deltas(&lights, &fresnels, &deltas);
         if lights.nee_len() > 0 {
-            let lobes: Vec<_> = materials
+            let lobes: Vec<bool> = materials
                 .iter()
-                .map(|m| {
-                    crate::material::glossy_isotropic(m.model)
-                        .then_some(&*m.bxdf as &(dyn brdf::Bxdf + Sync))
-                })
+                .map(|m| crate::material::glossy_isotropic(m.model))
                 .collect();
             t.add_glossy(&lights, &lobes);
         }
@@ -130,14 +127,13 @@ pub(super) fn build(path: &Path, text: &str, desc: &SceneDesc) -> Result<Scene, 
     let spectral_summary = match &spectral {
         None => String::new(),
         Some(t) => format!(
-            ", λ integrated exactly at the first bounce ({} Fresnel grid(s) and {} delta-lobe grid(s) of ≤ {} intervals, {} λ-free, {} refused, {} glossy control-variate table(s) of {:.1} MB; {:.1} ms)",
+            ", λ integrated exactly at the first bounce ({} Fresnel grid(s) and {} delta-lobe grid(s) of ≤ {} intervals, {} λ-free, {} refused, {} glossy control-variate table(s) built as used; {:.1} ms)",
             t.stats.grids,
             t.stats.delta_grids,
             t.stats.max_intervals,
             t.stats.flat,
             t.stats.refused + t.stats.delta_refused,
             t.stats.glossy_grids,
-            t.stats.glossy_bytes as f64 / 1e6,
             tables_start.elapsed().as_secs_f64() * 1e3
         ),
     };
