@@ -308,3 +308,28 @@ fn the_control_variate_agrees_with_sampled_wavelengths() {
         }
     }
 }
+
+/// The cells are built as lookups need them: a 45° plate under a small
+/// light builds a few of the 256 (cosθi, cosθo) cells, not the whole grid.
+#[test]
+fn a_plate_builds_only_the_cells_it_uses() {
+    let (_, ghs) = &models()[0];
+    let s = plate(ghs, "max_depth = 1\n", 0.03, "constant", "");
+    let t = s.spectral.as_ref().unwrap().glossy(0).unwrap();
+    let empty = t.bytes();
+    let mut film = s.film().unwrap();
+    let opts = render::RenderOptions {
+        threads: Some(1),
+        ..Default::default()
+    };
+    render::render_range(&s, &mut film, 0..16, &opts).unwrap();
+    let per_cell = render::glossy_lambda_table::RHO_NODES
+        * (render::glossy_lambda_table::LAMBDA_NODES * 4 + 24);
+    let cells = (t.bytes() - empty) / per_cell;
+    eprintln!(
+        "cells built: {cells} of {}, {} bytes",
+        render::glossy_lambda_table::COS_NODES.pow(2),
+        t.bytes()
+    );
+    assert!((1..=64).contains(&cells), "{cells} cells");
+}
