@@ -5,8 +5,8 @@
 //! only through cosθi, cosθo and ρ = |wi_xy + wo_xy| (the in-plane part of
 //! the scattering vector: its Q factor, the PSD's argument ρ/λ, the
 //! Fresnel factor's angle and the energy factors are functions of these).
-//! [`GlossyTable`] holds f at the nodes of a grid over those three and λ;
-//! f̃ is its multilinear interpolant. For an emission basis function b, the
+//! [`GlossyTable`] holds f·cosθo (below simply f) at the nodes of a grid
+//! over those three and λ; f̃ is its multilinear interpolant. For an emission basis function b, the
 //! λ integral of the interpolant at a geometry is
 //! Σ_c w_c ∫ b(λ) f̃_c(λ) cmf(λ) dλ, with w_c the geometric corner weights
 //! and f̃_c(λ) the node's values linear in λ, so it is exact from the
@@ -180,8 +180,13 @@ impl GlossyTable {
                 bxdf.eval_pdf_many(dirs.0, dirs.1, &lambdas, &mut fp);
                 last = Some(dirs);
             }
+            // f·cosθo, the factor the integrand carries: bounded where
+            // f alone grows toward the horizon, so the interpolant does not
+            // overshoot between the horizon's node and the next.
+            let cos_o = dirs.1.z;
             for (o, v) in out.iter_mut().zip(&fp) {
-                *o = if v.0.is_finite() { v.0 as f32 } else { 0.0 };
+                let g = v.0 * cos_o;
+                *o = if g.is_finite() { g as f32 } else { 0.0 };
             }
         }
         let nb = self.bases;

@@ -787,10 +787,11 @@ fn add_spectral(xyz: &mut [f64; 3], lambdas: &[f64], r: &[f64]) {
 /// residual f − f̃, small where the table resolves the lobe: most of a
 /// wave-optical plate's colour noise under a small light.
 ///
-/// The XYZ holds the whole glossy estimate, not only its exact part: the
-/// film refuses a sample whose exact XYZ has a negative Y, and the
-/// residual alone is as often negative as positive. A path that goes on
-/// continues in [`trace`] from depth 1.
+/// The XYZ holds the whole glossy estimate, not only its exact part, and
+/// the radiance at each wavelength stays the non-negative rest. The
+/// estimate itself can be negative where f̃ exceeds f; such scenes are
+/// [`Scene::signed_radiance`], so the film keeps those samples. A path that
+/// goes on continues in [`trace`] from depth 1.
 // The loops index several per-wavelength arrays at once.
 #[allow(clippy::needless_range_loop)]
 fn first_vertex_cv(
@@ -823,7 +824,8 @@ fn first_vertex_cv(
     // Every Q_k is 1 at the camera.
     let q_sum = n as f64;
     let t = th.t;
-    // n ∫ Le f̃ cmf dλ + Σ_j T_j (f − f̃)(λ_j) Le(λ_j) cmf(λ_j), times `scale`.
+    // n ∫ Le f̃ cmf dλ + Σ_j T_j (f cosθo − f̃)(λ_j) Le(λ_j) cmf(λ_j), times
+    // `scale` (the table holds f cosθo).
     let glossy = |xyz: &mut [f64; 3], wo: DVec3, f: &[(f64, f64); N], em: &Emission, scale: f64| {
         let c = crate::glossy_lambda_table::corners(wi, wo);
         let exact = first.tables.glossy_exact(g, &**bxdf, &c, em);
@@ -833,7 +835,7 @@ fn first_vertex_cv(
         let mut e = [0.0; N];
         em.eval_many(&lambdas[..n], &mut e[..n]);
         for j in 0..n {
-            e[j] *= scale * t[j] * (f[j].0 - g.interpolant(&**bxdf, &c, lambdas[j]));
+            e[j] *= scale * t[j] * (f[j].0 * wo.z - g.interpolant(&**bxdf, &c, lambdas[j]));
         }
         add_spectral(xyz, &lambdas[..n], &e[..n]);
     };
@@ -855,7 +857,7 @@ fn first_vertex_cv(
             let p_bsdf: f64 = fp[..n].iter().map(|v| v.1).sum();
             Some((q_sum, p_bsdf, fp))
         },
-        |ls, wo, w, fp| glossy(&mut xyz, wo, &fp, &ls.emission, w * wo.z),
+        |ls, wo, w, fp| glossy(&mut xyz, wo, &fp, &ls.emission, w),
     );
 
     // The delta lobe's emission, as in `trace`.
@@ -915,7 +917,7 @@ fn first_vertex_cv(
             let own: f64 = fp[..n].iter().map(|v| v.1).sum::<f64>() / s.pdf;
             let w = mis.bsdf(pdf_l, own, q_sum / s.pdf);
             if w > 0.0 {
-                glossy(&mut xyz, s.wo, &fp, &em, w * s.wo.z / s.pdf);
+                glossy(&mut xyz, s.wo, &fp, &em, w / s.pdf);
             }
         }
         for j in 0..n {

@@ -171,6 +171,13 @@ pub(super) fn build(path: &Path, text: &str, desc: &SceneDesc) -> Result<Scene, 
         start.elapsed().as_secs_f64() * 1e3
     );
 
+    // A control variate's estimate (the exact integral of the table's
+    // interpolant plus the sampled residual) is negative now and then where
+    // the interpolant exceeds the lobe; dropping those samples would bias
+    // the image upward (by 10–16 % on a narrow lobe under a 1 nm band),
+    // kept they average to the lobe's own XYZ.
+    let signed_radiance =
+        signed_radiance || spectral.as_ref().is_some_and(|t| t.stats.glossy_grids > 0);
     let mut scene = Scene {
         path: path.to_path_buf(),
         camera,
