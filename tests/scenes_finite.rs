@@ -73,8 +73,12 @@ fn first_bad_sample(scene: &Scene, spp: u64) -> Option<String> {
         for x in 0..cam.width {
             for s in 0..spp {
                 let cs = camera_sample(scene, x, y, s);
-                // The exactly integrated part: finite, and its Y not negative.
-                if !(cs.xyz.iter().all(|v| v.is_finite()) && cs.xyz[1] >= 0.0) {
+                // The exactly integrated part: finite, and its Y not negative
+                // unless the scene's estimates are signed (a glossy control
+                // variate's may be).
+                if !(cs.xyz.iter().all(|v| v.is_finite())
+                    && (cs.xyz[1] >= 0.0 || scene.signed_radiance))
+                {
                     return Some(format!(
                         "pixel ({x}, {y}) sample {s}: exactly integrated XYZ {:?} (mode {:?}, sampler {:?})",
                         cs.xyz, scene.settings.mode, scene.settings.sampler

@@ -26,6 +26,7 @@ use crate::film::{
     BadSample, BandLayout, CameraSample, SampleRadiance, sample_xyz, sample_xyz_bands,
 };
 use crate::geometry::Ray;
+use crate::glossy_lambda_table::GlossyTable;
 use crate::light::{Emission, LightSample, Lights};
 use crate::sampler::{Reserved2d, Sampler};
 use crate::scene::desc::MisHeuristic;
@@ -644,6 +645,16 @@ fn trace_exact(
             add(&mut xyz, exact_delta(scene, tables, delta, &hit, &ray), 1.0);
             start.delta_counted = true;
         }
+        if let Some(glossy) = tables.glossy(m).filter(|_| settings.max_depth >= 1) {
+            let first = FirstVertex {
+                tables,
+                glossy,
+                m,
+                hit: &hit,
+                ray: &ray,
+            };
+            return first_vertex_cv(scene, first, &wavelengths, sampler, start, xyz);
+        }
         let radiance = trace(scene, ray, Some(hit), &wavelengths, sampler, start, 0);
         return SampleRadiance::Spectral(CameraSample {
             wavelengths,
@@ -739,6 +750,196 @@ fn trace_exact(
         radiance,
         xyz,
     })
+}
+
+/// A first vertex whose glossy lobe has a control-variate table.
+struct FirstVertex<'a> {
+    tables: &'a SpectralTables,
+    glossy: &'a GlossyTable,
+    m: u32,
+    hit: &'a Hit,
+    ray: &'a Ray,
+}
+
+/// Σ_j `r[j]` · cmf(λ_j) into `xyz`.
+#[inline]
+fn add_spectral(xyz: &mut [f64; 3], lambdas: &[f64], r: &[f64]) {
+    let cie = crate::spectrum::Cie::get();
+    for (&l, &v) in lambdas.iter().zip(r) {
+        let c = cie.xyz(l);
+        for k in 0..3 {
+            xyz[k] += v * c[k];
+        }
+    }
+}
+
+/// The first vertex of a camera path on a material with a glossy
+/// control-variate table ([`crate::glossy_lambda_table`]): what [`trace`]
+/// does at depth 0, except that both strategies' glossy contributions,
+/// Σ_j T_j f(λ_j) Le(λ_j) cmf(λ_j) · cosθo · weight, become
+/// n · ∫ Le f̃ cmf dλ + Σ_j T_j (f − f̃)(λ_j) Le(λ_j) cmf(λ_j), times the same
+/// cosθo · weight, into the sample's XYZ. The first term is the second's
+/// expectation over the wavelengths with f̃ in place of f, so each
+/// strategy's estimate keeps its expectation for every direction; both
+/// use the same MIS weights as [`trace`], which sum to one for every
+/// direction and wavelength set, so the sum over strategies stays unbiased
+/// though the weights depend on the wavelengths. The sampled part is the
+/// residual f − f̃, small where the table resolves the lobe: most of a
+/// wave-optical plate's colour noise under a small light.
+///
+/// The XYZ holds the whole glossy estimate, not only its exact part, and
+/// the radiance at each wavelength stays the non-negative rest. The
+/// estimate itself can be negative where f̃ exceeds f; such scenes are
+/// [`Scene::signed_radiance`], so the film keeps those samples. A path that
+/// goes on continues in [`trace`] from depth 1.
+// The loops index several per-wavelength arrays at once.
+#[allow(clippy::needless_range_loop)]
+fn first_vertex_cv(
+    scene: &Scene,
+    first: FirstVertex,
+    wavelengths: &SampledWavelengths,
+    sampler: &mut Sampler,
+    mut th: Throughput,
+    mut xyz: [f64; 3],
+) -> SampleRadiance {
+    let (lambdas, n) = (&wavelengths.lambda, wavelengths.n);
+    let (lights, settings) = (&scene.lights, &scene.settings);
+    let bxdf = &scene.materials[first.m as usize].bxdf;
+    let g = first.glossy;
+    let mut out = [0.0; N];
+    let done = |radiance, xyz| {
+        SampleRadiance::Spectral(CameraSample {
+            wavelengths: *wavelengths,
+            radiance,
+            xyz,
+        })
+    };
+    let Some(v) = Vertex::new(first.hit, first.ray) else {
+        return done(out, xyz);
+    };
+    let wi = v.wi;
+    th.peak = lobe_peak(settings.mis_light_weight, bxdf, wi);
+    let mis = VertexMis::new(settings, th.peak);
+    let (u_light, u_bsdf) = vertex_draws(sampler, lights, bxdf);
+    // Every Q_k is 1 at the camera.
+    let q_sum = n as f64;
+    let t = th.t;
+    // n ∫ Le f̃ cmf dλ + Σ_j T_j (f cosθo − f̃)(λ_j) Le(λ_j) cmf(λ_j), times
+    // `scale` (the table holds f cosθo).
+    let glossy = |xyz: &mut [f64; 3], wo: DVec3, f: &[(f64, f64); N], em: &Emission, scale: f64| {
+        let c = crate::glossy_lambda_table::corners(wi, wo);
+        let exact = first.tables.glossy_exact(g, &**bxdf, &c, em);
+        for k in 0..3 {
+            xyz[k] += scale * q_sum * exact[k];
+        }
+        let mut e = [0.0; N];
+        em.eval_many(&lambdas[..n], &mut e[..n]);
+        for j in 0..n {
+            e[j] *= scale * t[j] * (f[j].0 * wo.z - g.interpolant(&**bxdf, &c, lambdas[j]));
+        }
+        add_spectral(xyz, &lambdas[..n], &e[..n]);
+    };
+
+    next_event(
+        scene,
+        &v,
+        u_light,
+        mis,
+        |wo, is_delta| {
+            let mut fp = [(0.0, 0.0); N];
+            bxdf.eval_pdf_many(wi, wo, &lambdas[..n], &mut fp[..n]);
+            if is_delta {
+                fp[..n].iter_mut().for_each(|v| v.1 = 0.0);
+            }
+            if !fp[..n].iter().any(|v| v.0 > 0.0) {
+                return None;
+            }
+            let p_bsdf: f64 = fp[..n].iter().map(|v| v.1).sum();
+            Some((q_sum, p_bsdf, fp))
+        },
+        |ls, wo, w, fp| glossy(&mut xyz, wo, &fp, &ls.emission, w),
+    );
+
+    // The delta lobe's emission, as in `trace`.
+    let delta_traced = std::mem::take(&mut th.delta_counted)
+        || bxdf.uses_lobe_choice()
+            && delta_emission(
+                scene,
+                bxdf,
+                &v,
+                lambdas,
+                n,
+                |j, e| out[j] += th.t[j] * e,
+                bsdf_weight_over_pdf(mis.heuristic, 1.0, q_sum, 0.0),
+            );
+
+    // BSDF sampling at the hero wavelength.
+    let Some(s) = bxdf.sample(wi, lambdas[0], u_bsdf) else {
+        return done(out, xyz);
+    };
+    if s.pdf.is_nan() || s.pdf <= 0.0 || s.wo.z <= 0.0 {
+        return done(out, xyz);
+    }
+    let Some(ray) = v.ray(s.wo) else {
+        return done(out, xyz);
+    };
+    let next = scene.shapes.intersect(&ray, f64::INFINITY);
+    if s.is_delta {
+        th.t[0] *= s.weight;
+        for j in 1..n {
+            let sp = bxdf.specular(wi, lambdas[j]);
+            th.t[j] *= sp.weight / s.pdf;
+            th.q[j] *= sp.probability / s.pdf;
+        }
+        th.l_mis = [0.0; N];
+        // Its emission is counted above, unless the lobe has none.
+        if !delta_traced {
+            reached_emission(scene, &ray, next.as_ref(), &mut th, lambdas, n, &mut out);
+        }
+    } else {
+        let (em, pdf_l) = emission_at(lights, &ray, next.as_ref());
+        let goes_on = settings.max_depth > 1
+            && matches!(
+                next,
+                Some(Hit {
+                    surface: Surface::Material(_),
+                    ..
+                })
+            );
+        // The other wavelengths' values only if something uses them: at
+        // the last bounce of a direct-lighting render most samples escape.
+        if matches!(em, Emission::None) && !goes_on {
+            return done(out, xyz);
+        }
+        let mut fp = [(0.0, 0.0); N];
+        bxdf.eval_pdf_many(wi, s.wo, &lambdas[..n], &mut fp[..n]);
+        if !matches!(em, Emission::None) {
+            let own: f64 = fp[..n].iter().map(|v| v.1).sum::<f64>() / s.pdf;
+            let w = mis.bsdf(pdf_l, own, q_sum / s.pdf);
+            if w > 0.0 {
+                glossy(&mut xyz, s.wo, &fp, &em, w / s.pdf);
+            }
+        }
+        for j in 0..n {
+            th.t[j] *= fp[j].0 * s.wo.z / s.pdf;
+            th.q[j] *= fp[j].1 / s.pdf;
+            th.l_mis[j] = 1.0 / s.pdf;
+        }
+    }
+    let Some(next) = next.filter(|h| matches!(h.surface, Surface::Material(_))) else {
+        return done(out, xyz);
+    };
+    if settings.max_depth == 1 {
+        return done(out, xyz);
+    }
+    if 1 >= settings.rr_depth && !survives(&mut th, n, roulette_scale(wavelengths), sampler) {
+        return done(out, xyz);
+    }
+    let rest = trace(scene, ray, Some(next), wavelengths, sampler, th, 1);
+    for j in 0..n {
+        out[j] += rest[j];
+    }
+    done(out, xyz)
 }
 
 /// The emission a first vertex's delta lobe reflects along the mirror

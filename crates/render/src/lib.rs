@@ -22,6 +22,7 @@ pub mod driver;
 pub mod error;
 pub mod film;
 pub mod geometry;
+pub mod glossy_lambda_table;
 pub mod inputs;
 pub mod integrator;
 pub mod interrupt;

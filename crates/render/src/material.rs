@@ -54,6 +54,23 @@ pub fn delta_by_cos_only(kind: ModelKind) -> bool {
     )
 }
 
+/// Whether a model's glossy lobe is isotropic: f(λ; wi, wo) depends on the
+/// directions only through cosθi, cosθo and |wi_xy + wo_xy| (the
+/// scattering vector's in-plane length, the PSD's argument; the Fresnel
+/// angle, Q factor and energy tables are functions of these), so a
+/// table over those three and λ describes it (`glossy_lambda_table.rs`).
+/// Tested over azimuths in `tests/glossy_cv.rs`.
+pub fn glossy_isotropic(kind: ModelKind) -> bool {
+    matches!(
+        kind,
+        ModelKind::GhsSsa
+            | ModelKind::Ghs
+            | ModelKind::MeasuredPsd
+            | ModelKind::TwoScale
+            | ModelKind::RayleighRice
+    )
+}
+
 /// A material split into its Fresnel factor and a λ-free rest.
 pub struct FresnelOnly {
     /// The Fresnel factor F(λ, cosθd).

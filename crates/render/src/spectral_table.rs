@@ -25,6 +25,7 @@
 //! per distinct spectrum), the three colour-matching functions of an
 //! RGB-lifted environment map, the four daylight-sky functions.
 
+use crate::glossy_lambda_table::{Corners, GlossyTable};
 use crate::light::{Emission, Environment, LightKind, Lights};
 use crate::spectrum::{Cie, LAMBDA_MAX, LAMBDA_MIN, Spectrum};
 use brdf::Fresnel;
@@ -87,8 +88,14 @@ struct Nodes {
 
 impl Nodes {
     fn new(fresnel: &Fresnel, bases: &[Basis]) -> Nodes {
+        Self::with_cuts(fresnel, bases, &[])
+    }
+
+    /// [`new`](Self::new), the intervals also broken at `extra` (nm).
+    fn with_cuts(fresnel: &Fresnel, bases: &[Basis], extra: &[f64]) -> Nodes {
         let mut cuts: Vec<f64> = (LAMBDA_MIN as i64..=LAMBDA_MAX as i64)
             .map(|l| l as f64)
+            .chain(extra.iter().copied())
             .collect();
         if let Fresnel::Conductor(ior) = fresnel
             && let Some(rows) = ior.rows()
@@ -194,6 +201,8 @@ pub struct TableStats {
     pub delta_grids: usize,
     /// Delta lobes whose grid did not converge (their paths sample λ).
     pub delta_refused: usize,
+    /// Glossy control-variate tables ([`SpectralTables::add_glossy`]).
+    pub glossy_grids: usize,
 }
 
 /// A material's delta lobe whose weight depends on the path only through
@@ -220,6 +229,9 @@ pub struct SpectralTables {
     /// Per material: the table of its delta lobe, if it has one.
     delta: Vec<Option<u32>>,
     tables: Vec<FresnelTable>,
+    /// Per material: the control-variate table of its glossy lobe
+    /// ([`add_glossy`](Self::add_glossy)), if it has one.
+    glossy: Vec<Option<GlossyTable>>,
     /// What was built.
     pub stats: TableStats,
 }
@@ -242,39 +254,7 @@ impl SpectralTables {
         fresnels: &[Option<&Fresnel>],
         deltas: &[Option<DeltaLobe>],
     ) -> SpectralTables {
-        let mut bases: Vec<Basis> = Vec::new();
-        let mut light_basis = Vec::with_capacity(lights.lights.len());
-        let mut environment_basis = (0, 0);
-        for (i, l) in lights.lights.iter().enumerate() {
-            let own: Vec<Basis> = match l {
-                LightKind::Point { spectrum, .. }
-                | LightKind::Sphere { spectrum, .. }
-                | LightKind::Rectangle { spectrum, .. }
-                | LightKind::Environment(Environment::Constant(spectrum)) => {
-                    vec![Basis::Spectrum(spectrum)]
-                }
-                LightKind::Environment(Environment::Map(_)) => (0..3).map(Basis::Cmf).collect(),
-                LightKind::Environment(Environment::Sky(sky)) => {
-                    (0..4).map(|k| Basis::Sky(sky, k)).collect()
-                }
-            };
-            // Lights with the same spectrum share its basis function.
-            let first = match own.as_slice() {
-                [Basis::Spectrum(s)] => bases
-                    .iter()
-                    .position(|b| matches!(b, Basis::Spectrum(t) if t == s)),
-                _ => None,
-            };
-            let first = first.unwrap_or_else(|| {
-                bases.extend(own.iter().copied());
-                bases.len() - own.len()
-            });
-            light_basis.push((first as u32, own.len() as u32));
-            if lights.environment == Some(i) {
-                environment_basis = (first as u32, own.len() as u32);
-            }
-        }
-
+        let (bases, light_basis, environment_basis) = scene_bases(lights);
         let direct = {
             let nodes = Nodes::new(&Fresnel::One, &bases);
             let mut d = vec![[0.0; 3]; bases.len()];
@@ -348,8 +328,54 @@ impl SpectralTables {
             material,
             delta,
             tables,
+            glossy: Vec::new(),
             stats,
         }
+    }
+
+    /// Adds a glossy control-variate table ([`crate::glossy_lambda_table`],
+    /// built lazily by its users) for every material whose entry in
+    /// `glossy` is true (an isotropic glossy lobe), against the emission of
+    /// `lights` (the lights these tables were built for).
+    pub fn add_glossy(&mut self, lights: &Lights, glossy: &[bool]) {
+        if !glossy.iter().any(|&g| g) {
+            return;
+        }
+        let (bases, _, _) = scene_bases(lights);
+        let hats = hat_integrals(&bases);
+        self.glossy = glossy
+            .iter()
+            .map(|&g| {
+                g.then(|| {
+                    self.stats.glossy_grids += 1;
+                    GlossyTable::new(hats.clone(), bases.len())
+                })
+            })
+            .collect();
+    }
+
+    /// The glossy control-variate table of material `m`, if it has one.
+    #[inline]
+    pub fn glossy(&self, m: u32) -> Option<&GlossyTable> {
+        self.glossy.get(m as usize).and_then(Option::as_ref)
+    }
+
+    /// ∫ Le f̃ cmf dλ: the λ integral of `table`'s interpolant of `bxdf`'s
+    /// lobe at the geometry of `corners`, under emission `em`.
+    #[inline]
+    pub fn glossy_exact(
+        &self,
+        table: &GlossyTable,
+        bxdf: &dyn brdf::Bxdf,
+        corners: &Corners,
+        em: &Emission,
+    ) -> [f64; 3] {
+        let (b, c) = self.basis(em);
+        let mut out = [0.0; 3];
+        table.for_corners(bxdf, corners, |w, rows| {
+            c.accumulate(&rows[b..], w, &mut out)
+        });
+        out
     }
 
     /// The table of material `m`'s delta lobe, if its emission along the
@@ -443,6 +469,72 @@ impl Coefficients<'_> {
             Coefficients::None => {}
         }
     }
+}
+
+/// The emission basis functions of `lights`, each light's first basis
+/// function and count, and the environment's.
+#[allow(clippy::type_complexity)]
+fn scene_bases(lights: &Lights) -> (Vec<Basis<'_>>, Vec<(u32, u32)>, (u32, u32)) {
+    let mut bases: Vec<Basis> = Vec::new();
+    let mut light_basis = Vec::with_capacity(lights.lights.len());
+    let mut environment_basis = (0, 0);
+    for (i, l) in lights.lights.iter().enumerate() {
+        let own: Vec<Basis> = match l {
+            LightKind::Point { spectrum, .. }
+            | LightKind::Sphere { spectrum, .. }
+            | LightKind::Rectangle { spectrum, .. }
+            | LightKind::Environment(Environment::Constant(spectrum)) => {
+                vec![Basis::Spectrum(spectrum)]
+            }
+            LightKind::Environment(Environment::Map(_)) => (0..3).map(Basis::Cmf).collect(),
+            LightKind::Environment(Environment::Sky(sky)) => {
+                (0..4).map(|k| Basis::Sky(sky, k)).collect()
+            }
+        };
+        // Lights with the same spectrum share its basis function.
+        let first = match own.as_slice() {
+            [Basis::Spectrum(s)] => bases
+                .iter()
+                .position(|b| matches!(b, Basis::Spectrum(t) if t == s)),
+            _ => None,
+        };
+        let first = first.unwrap_or_else(|| {
+            bases.extend(own.iter().copied());
+            bases.len() - own.len()
+        });
+        light_basis.push((first as u32, own.len() as u32));
+        if lights.environment == Some(i) {
+            environment_basis = (first as u32, own.len() as u32);
+        }
+    }
+
+    (bases, light_basis, environment_basis)
+}
+
+/// Per λ node k of [`crate::glossy_lambda_table`] and basis function b:
+/// ∫ hat_k(λ) b(λ) cmf(λ) dλ at `[k * bases.len() + b]`, by the same
+/// knot-aware quadrature, its intervals also broken at the λ nodes (the
+/// hats' kinks).
+fn hat_integrals(bases: &[Basis]) -> Vec<[f64; 3]> {
+    use crate::glossy_lambda_table::{LAMBDA_NODES, lambda_node};
+    let knots: Vec<f64> = (0..LAMBDA_NODES).map(lambda_node).collect();
+    let nodes = Nodes::with_cuts(&Fresnel::One, bases, &knots);
+    let nb = bases.len();
+    let mut hats = vec![[0.0; 3]; LAMBDA_NODES * nb];
+    let step = (LAMBDA_MAX - LAMBDA_MIN) / (LAMBDA_NODES - 1) as f64;
+    for (i, &l) in nodes.lambda.iter().enumerate() {
+        let x = ((l - LAMBDA_MIN) / step).clamp(0.0, (LAMBDA_NODES - 1) as f64);
+        let k = (x as usize).min(LAMBDA_NODES - 2);
+        let t = x - k as f64;
+        for b in 0..nb {
+            let w = nodes.w[i * nb + b];
+            for c in 0..3 {
+                hats[k * nb + b][c] += (1.0 - t) * w[c];
+                hats[(k + 1) * nb + b][c] += t * w[c];
+            }
+        }
+    }
+    hats
 }
 
 /// The grid for a Fresnel term whose index depends on λ, refined until it

@@ -103,26 +103,37 @@ pub(super) fn build(path: &Path, text: &str, desc: &SceneDesc) -> Result<Scene, 
             })
     }
     let spectral = (settings.spectral_integration == SpectralIntegration::Auto
-        && materials
-            .iter()
-            .any(|m| m.fresnel_only.is_some() || delta_lobe(m).is_some()))
+        && materials.iter().any(|m| {
+            m.fresnel_only.is_some()
+                || delta_lobe(m).is_some()
+                || crate::material::glossy_isotropic(m.model)
+        }))
     .then(|| {
         let fresnels: Vec<_> = materials
             .iter()
             .map(|m| m.fresnel_only.as_ref().map(|f| &f.fresnel))
             .collect();
         let deltas: Vec<_> = materials.iter().map(delta_lobe).collect();
-        SpectralTables::build_with_deltas(&lights, &fresnels, &deltas)
+        let mut t = SpectralTables::build_with_deltas(&lights, &fresnels, &deltas);
+        if lights.nee_len() > 0 {
+            let lobes: Vec<bool> = materials
+                .iter()
+                .map(|m| crate::material::glossy_isotropic(m.model))
+                .collect();
+            t.add_glossy(&lights, &lobes);
+        }
+        t
     });
     let spectral_summary = match &spectral {
         None => String::new(),
         Some(t) => format!(
-            ", λ integrated exactly at the first bounce ({} Fresnel grid(s) and {} delta-lobe grid(s) of ≤ {} intervals, {} λ-free, {} refused; {:.1} ms)",
+            ", λ integrated exactly at the first bounce ({} Fresnel grid(s) and {} delta-lobe grid(s) of ≤ {} intervals, {} λ-free, {} refused, {} glossy control-variate table(s) built as used; {:.1} ms)",
             t.stats.grids,
             t.stats.delta_grids,
             t.stats.max_intervals,
             t.stats.flat,
             t.stats.refused + t.stats.delta_refused,
+            t.stats.glossy_grids,
             tables_start.elapsed().as_secs_f64() * 1e3
         ),
     };
@@ -160,6 +171,13 @@ pub(super) fn build(path: &Path, text: &str, desc: &SceneDesc) -> Result<Scene, 
         start.elapsed().as_secs_f64() * 1e3
     );
 
+    // A control variate's estimate (the exact integral of the table's
+    // interpolant plus the sampled residual) is negative now and then where
+    // the interpolant exceeds the lobe; dropping those samples would bias
+    // the image upward (by 10–16 % on a narrow lobe under a 1 nm band),
+    // kept they average to the lobe's own XYZ.
+    let signed_radiance =
+        signed_radiance || spectral.as_ref().is_some_and(|t| t.stats.glossy_grids > 0);
     let mut scene = Scene {
         path: path.to_path_buf(),
         camera,

@@ -124,7 +124,9 @@ pub struct Scene {
     /// daylight sky, whose CIE basis spectrum is negative in the blue for a
     /// low sun): then a
     /// negative estimate at one wavelength is part of an unbiased colour
-    /// average, and only non-finite samples are dropped.
+    /// average, and only non-finite samples are dropped. Likewise when a
+    /// material has a glossy control variate (`glossy_lambda_table.rs`),
+    /// whose estimate may be negative.
     pub signed_radiance: bool,
 }
 
