@@ -391,39 +391,60 @@ impl Lattice {
         const CHUNK: usize = 512;
         let (j_lo, k_lo) = (j.0, k.0);
         let len = (j.1 - j_lo).max(0) as usize;
-        let chunks = crate::parallel::map_rows(len.div_ceil(CHUNK), |k| {
-            (k * CHUNK..((k + 1) * CHUNK).min(len))
-                .map(|i| {
-                    let j = j_lo + i as i64;
-                    if let Some(&v) =
-                        prior.and_then(|p| p.at.get(usize::try_from(j - p.j_lo).ok()?))
-                    {
-                        return v;
-                    }
-                    let x = crate::numerics::math::exp(j as f64 * dt);
-                    (x, c.m(x), c.one_minus_m(x))
-                })
-                .collect::<Vec<_>>()
-        });
         let len_k = (k.1 - k_lo).max(0) as usize;
-        let cusp = crate::parallel::map_rows(len_k.div_ceil(CHUNK), |kk| {
-            (kk * CHUNK..((kk + 1) * CHUNK).min(len_k))
-                .map(|i| {
-                    let k = k_lo + i as i64;
-                    if let Some(&v) =
-                        prior.and_then(|p| p.cusp.get(usize::try_from(k - p.k_lo).ok()?))
-                    {
-                        return v;
-                    }
-                    c.cusp_m(crate::numerics::math::exp(k as f64 * dt))
-                })
-                .collect::<Vec<_>>()
-        });
+        let at_j = |i: usize| {
+            let j = j_lo + i as i64;
+            if let Some(&v) = prior.and_then(|p| p.at.get(usize::try_from(j - p.j_lo).ok()?)) {
+                return v;
+            }
+            let x = crate::numerics::math::exp(j as f64 * dt);
+            (x, c.m(x), c.one_minus_m(x))
+        };
+        let at_k = |i: usize| {
+            let k = k_lo + i as i64;
+            if let Some(&v) = prior.and_then(|p| p.cusp.get(usize::try_from(k - p.k_lo).ok()?)) {
+                return v;
+            }
+            c.cusp_m(crate::numerics::math::exp(k as f64 * dt))
+        };
+        // Points not in `prior` (each costs Bessel functions): threads only
+        // pay for more than a chunk of them.
+        let outside = |(lo, hi): (i64, i64), p_lo: i64, p_len: usize| {
+            let (plo, phi) = (p_lo, p_lo + p_len as i64);
+            let inside = (hi.min(phi) - lo.max(plo)).max(0);
+            ((hi - lo).max(0) - inside) as usize
+        };
+        let fresh = match prior {
+            Some(p) => outside(j, p.j_lo, p.at.len()) + outside(k, p.k_lo, p.cusp.len()),
+            None => len + len_k,
+        };
+        let (nj, nk) = (len.div_ceil(CHUNK), len_k.div_ceil(CHUNK));
+        let chunk = |t: usize| {
+            if t < nj {
+                let r = t * CHUNK..((t + 1) * CHUNK).min(len);
+                (r.map(at_j).collect::<Vec<_>>(), Vec::new())
+            } else {
+                let t = t - nj;
+                let r = t * CHUNK..((t + 1) * CHUNK).min(len_k);
+                (Vec::new(), r.map(at_k).collect::<Vec<_>>())
+            }
+        };
+        let parts: Vec<_> = if fresh > CHUNK {
+            crate::parallel::map_rows(nj + nk, chunk)
+        } else {
+            (0..nj + nk).map(chunk).collect()
+        };
+        let mut at = Vec::with_capacity(len);
+        let mut cusp = Vec::with_capacity(len_k);
+        for (a, b) in parts {
+            at.extend(a);
+            cusp.extend(b);
+        }
         Lattice {
             j_lo,
-            at: chunks.into_iter().flatten().collect(),
+            at,
             k_lo,
-            cusp: cusp.concat(),
+            cusp,
         }
     }
 }
@@ -689,7 +710,9 @@ impl Orders {
                 *slot = mn - a[i] * k1[j] - b[i] * kb[j];
             }
             let (mut re, mut im) = (Vec::new(), Vec::new());
-            if order as usize >= n_lo {
+            // f₁ = M − K vanishes where the subtracted K is M itself (the
+            // closed-form covariances): its transform is 0.
+            if order as usize >= n_lo && f.iter().any(|&v| v != 0.0) {
                 plan.transform(t0, &f, &mut re, &mut im);
             } else {
                 re.resize(n, 0.0);
