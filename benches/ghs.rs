@@ -19,7 +19,8 @@
 //!   full-GHS table ≤ 2 ms, two-scale ≤ 5 ms. The builders spread rows over
 //!   the cores the process may use, so `taskset -c 0 cargo bench --bench ghs
 //!   -- new_surface` gives one core's time and the plain run the wall time on
-//!   all cores.
+//!   all cores. A filter argument other than `resolution_table` skips the
+//!   plain table above.
 //!
 //! Run: `cargo bench --bench ghs`.
 
@@ -144,8 +145,18 @@ fn resolution_table() {
     );
 }
 
+/// Whether the command line names a filter that leaves the resolution table
+/// out (`cargo bench --bench ghs -- new_surface`): it rebuilds 24 tables and
+/// measures each, minutes of a loaded machine, before criterion starts.
+fn resolution_table_wanted() -> bool {
+    let filter = std::env::args().skip(1).find(|a| !a.starts_with('-'));
+    filter.is_none_or(|f| "resolution_table".contains(f.as_str()))
+}
+
 fn models(c: &mut Criterion) {
-    resolution_table();
+    if resolution_table_wanted() {
+        resolution_table();
+    }
     let ggx = MicrofacetConductor::new(Distribution::ggx(0.2, 0.2).unwrap(), cu()).unwrap();
     bench_model(c, "ggx_cu", &ggx);
     let full = GhsFull::new(s280(), cu()).unwrap();
