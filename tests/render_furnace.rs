@@ -193,6 +193,13 @@ fn diffuse_and_plastic_plates_leave_a_constant_environment_to_bsdf_sampling() {
     eprintln!("diffuse ρ 0.5 under a unit environment: Y {y:.5} (σ {sigma:.4})");
     assert!((y - 0.5).abs() < 0.002, "Y {y}");
 
+    // A wave-optical model is not among the materials whose sampling is
+    // known to cover the lobe: its scene keeps environment NEE.
+    let ghs = "model = \"ghs_ssa\"\nmetal = \"brass\"\nsigma_um = 0.02\nlc_um = 2.0\ngamma = 3.0";
+    let text = plate_at_45deg("", ghs, env);
+    let scene = render::load_str(&scene_path("env_ghs.toml"), &text).unwrap();
+    assert!(!scene.lights.bsdf_only_environment);
+
     for (name, material) in [("diffuse", diffuse), ("roughplastic", plastic)] {
         let text = plate_at_45deg("", material, &format!("{env}\n\n{sphere}"));
         let mut scene = render::load_str(&scene_path("env_sphere.toml"), &text).unwrap();
