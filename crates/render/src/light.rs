@@ -340,9 +340,10 @@ pub struct Lights {
     /// visible-normal sampling of a microfacet conductor weighs each
     /// direction by F·G2/G1 ≤ 1, so the light strategy only adds variance
     /// (pbrt-v4 drops it for the same reason when allowed an incomplete
-    /// pdf). Sound only where every material's sampling covers its whole
-    /// lobe, so the scene sets it only when every material is a microfacet
-    /// or smooth conductor.
+    /// pdf); cosine sampling of a Lambertian surface weighs each direction
+    /// by ρ, constant. Sound only where every material's sampling covers
+    /// its whole lobe, so the scene sets it only when every material is a
+    /// microfacet or smooth conductor, diffuse or roughplastic.
     pub bsdf_only_environment: bool,
 }
 

@@ -71,10 +71,25 @@ pub(super) fn build(path: &Path, text: &str, desc: &SceneDesc) -> Result<Scene, 
             ModelKind::Ggx | ModelKind::Beckmann | ModelKind::Smooth
         )
     });
-    // Their visible-normal (or delta) sampling covers every lobe, so a
-    // constant environment can be left to it (see `Lights`).
+    // Visible-normal (or delta) sampling of a conductor, cosine sampling of
+    // a Lambertian base and the coat-or-base choice of roughplastic each
+    // cover the whole lobe, so a constant environment can be left to them
+    // (see `Lights`). For a Lambertian surface BSDF sampling is the exact
+    // importance function of an unoccluded constant environment (weight ρ),
+    // and next-event estimation then draws only the other lights, each
+    // twice as often when one environment was among two lights.
+    let covering = materials.iter().all(|m| {
+        matches!(
+            m.model,
+            ModelKind::Ggx
+                | ModelKind::Beckmann
+                | ModelKind::Smooth
+                | ModelKind::Diffuse
+                | ModelKind::RoughPlastic
+        )
+    });
     let mut lights = lights;
-    lights.bsdf_only_environment = conductors
+    lights.bsdf_only_environment = covering
         && lights.environment.is_some_and(|i| {
             matches!(
                 lights.lights[i],
