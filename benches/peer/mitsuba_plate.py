@@ -352,6 +352,15 @@ def render_timed(mi, dr, np, scene, spp: int, seed: int):
 
 
 def scene_hash(sc: dict, resolution) -> str:
+    """Key of a cached reference: the scene with each `reflectance_csv` (an absolute path,
+    so it would differ between checkouts) replaced by a hash of the file's bytes."""
+    sc = json.loads(json.dumps(sc))
+    for m in sc.get("materials", {}).values():
+        if isinstance(m, dict) and isinstance(m.get("reflectance_csv"), str):
+            try:
+                m["reflectance_csv"] = hashlib.sha256(Path(m["reflectance_csv"]).read_bytes()).hexdigest()
+            except OSError:
+                pass  # unreadable: the path stays the key, and the translation reports it
     blob = json.dumps({"scene": sc, "res": resolution}, sort_keys=True).encode()
     return hashlib.sha256(blob).hexdigest()[:16]
 
