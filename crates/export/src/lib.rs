@@ -318,22 +318,9 @@ fn glossy(spec: &MaterialSpec) -> Result<brdf::spec::DynBxdf, ExportError> {
 
 /// The distribution that parameterises a material's RGL table.
 pub fn ndf_of(spec: &MaterialSpec) -> Result<NdfSource, ExportError> {
-    Ok(match &spec.model {
-        ModelSpec::Ggx { .. } | ModelSpec::Beckmann { .. } => match spec.model.microfacet()? {
-            Some((d, angle_rad)) if angle_rad == 0.0 || d.alpha_x() == d.alpha_y() => {
-                NdfSource::Microfacet(d)
-            }
-            _ => {
-                return Err(ExportError::Model(
-                    "an anisotropic microfacet material turned by `angle_deg` is not exported: \
-                     the table's distribution is along the tangent axes; export it with \
-                     `angle_deg = 0` and turn the shape's tangent frame by the angle in the \
-                     target renderer"
-                        .into(),
-                ));
-            }
-        },
-        _ => NdfSource::Backscatter,
+    Ok(match spec.model.microfacet()? {
+        Some((d, angle_rad)) => NdfSource::Microfacet(d, angle_rad),
+        None => NdfSource::Backscatter,
     })
 }
 

@@ -27,8 +27,9 @@ use core::f64::consts::PI;
 #[derive(Clone, Debug)]
 pub enum NdfSource {
     /// A microfacet model's own distribution (GGX, Beckmann; anisotropic
-    /// allowed).
-    Microfacet(Distribution),
+    /// allowed) and the angle φ (radians, from the tangent x towards y) its
+    /// αx axis is turned by, as `brdf::microfacet::Rotated` turns the model.
+    Microfacet(Distribution, f64),
     /// Derived from the model's retro-reflection, as the RGL acquisition
     /// pipeline does from a measurement (isotropic models only).
     Backscatter,
@@ -98,12 +99,12 @@ pub fn ndf_grid(
     weights: &[f64],
 ) -> Result<NdfGrid, ExportError> {
     let values = match source {
-        NdfSource::Microfacet(dist) => {
+        NdfSource::Microfacet(dist, angle_rad) => {
             let mut v = Vec::with_capacity(n_theta * n_phi);
             for r in 0..n_phi {
                 for k in 0..n_theta {
                     let m = direction(u_to_theta(node(k, n_theta)), u_to_phi(node(r, n_phi)));
-                    v.push(dist.d(m));
+                    v.push(dist.d(turned_back(m, *angle_rad)));
                 }
             }
             v
@@ -189,16 +190,26 @@ fn normalise(d: &mut [f64]) {
     }
 }
 
+/// R(−φ) v: a direction of the tangent frame in the frame of a distribution
+/// turned by φ about the normal (cosθ and solid angle are kept).
+fn turned_back(v: DVec3, angle_rad: f64) -> DVec3 {
+    if angle_rad == 0.0 {
+        return v;
+    }
+    let (s, c) = angle_rad.sin_cos();
+    DVec3::new(c * v.x + s * v.y, c * v.y - s * v.x, v.z)
+}
+
 /// σ(ω) of `source` at `w` (upper hemisphere): Smith's cosθ (1 + Λ) for a
 /// microfacet distribution, the quadrature of the tabulated isotropic D
 /// otherwise (`iso` is that D at its u nodes).
 pub fn projected_area(source: &NdfSource, iso: &[f64], w: DVec3) -> f64 {
     match source {
-        NdfSource::Microfacet(dist) => {
+        NdfSource::Microfacet(dist, angle_rad) => {
             // At the horizon cosθ Λ tends to a finite limit; stay just above it.
             let z = w.z.max(1e-9);
             let w = DVec3::new(w.x, w.y, z).normalize();
-            w.z * (1.0 + dist.lambda(w))
+            w.z * (1.0 + dist.lambda(turned_back(w, *angle_rad)))
         }
         NdfSource::Backscatter => projected_area_iso(iso, crate::param::elevation(w)),
     }
@@ -223,7 +234,7 @@ mod tests {
         );
         for &t in &[0.0, 0.4, 1.0, 1.4, 1.55] {
             let w = direction(t, 0.0);
-            let smith = projected_area(&NdfSource::Microfacet(dist), &[], w);
+            let smith = projected_area(&NdfSource::Microfacet(dist, 0.0), &[], w);
             let quad = projected_area_iso(&d, t);
             assert!(
                 (quad - smith).abs() < 1e-4 * smith,

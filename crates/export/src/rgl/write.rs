@@ -320,7 +320,7 @@ pub fn build(
     validate(o)?;
     let dropped = delta_lobe(model, o)?;
     let iso = match source {
-        NdfSource::Microfacet(d) => d.alpha_x() == d.alpha_y(),
+        NdfSource::Microfacet(d, _) => d.alpha_x() == d.alpha_y(),
         NdfSource::Backscatter => true,
     };
     check_size(o, if iso { 1 } else { o.phi_i_nodes })?;
@@ -432,7 +432,7 @@ pub fn build(
             },
         ),
         ndf: match source {
-            NdfSource::Microfacet(_) => "the model's own microfacet distribution",
+            NdfSource::Microfacet(..) => "the model's own microfacet distribution",
             NdfSource::Backscatter => "derived from the model's retro-reflection (power iteration)",
         },
         bytes: bytes.len(),
