@@ -15,6 +15,7 @@
 //! (cosθo, φo), on panels graded towards the mirror direction on the scale
 //! of the lobe.
 
+use alloc::vec;
 use alloc::vec::Vec;
 use core::f64::consts::PI;
 
@@ -56,8 +57,11 @@ pub(crate) struct AlbedoCap {
 }
 
 impl AlbedoCap {
-    /// Builds the table from `ratio(μ, k)` = E/(1 − S); `None` when the
-    /// ratio stays ≤ 1 (the model needs no cap).
+    /// Builds the table from `ratio(μ, ks, out)`, which writes E/(1 − S)
+    /// at incidence cosine μ for each wavenumber of `ks` into `out` (the
+    /// wavenumbers of one μ share one quadrature: its directions, and what
+    /// depends on them alone, are computed once); `None` when the ratio
+    /// stays ≤ 1 (the model needs no cap).
     ///
     /// The excess is a grazing-incidence effect (it grows monotonically
     /// towards 90° in every case measured), so the ratio is first screened
@@ -67,20 +71,20 @@ impl AlbedoCap {
     pub(crate) fn build(
         k_lo: f64,
         k_hi: f64,
-        ratio: impl Fn(f64, f64) -> f64 + Sync,
+        ratio: impl Fn(f64, &[f64], &mut [f64]) + Sync,
     ) -> Option<AlbedoCap> {
         let mu: Vec<f64> = THETA_DEG
             .iter()
             .map(|t| libm::cos(t.to_radians()))
             .collect();
-        let screen = crate::parallel::map_rows(2 * SCREEN.len(), |j| {
-            let k = if j < SCREEN.len() { k_lo } else { k_hi };
-            ratio(mu[SCREEN[j % SCREEN.len()]], k)
+        let screen = crate::parallel::map_rows(SCREEN.len(), |j| {
+            let mut r = [0.0; 2];
+            ratio(mu[SCREEN[j]], &[k_lo, k_hi], &mut r);
+            r
         });
-        if !screen.iter().any(|&x| x * (1.0 + MARGIN) > 1.0) {
+        if !screen.iter().flatten().any(|&x| x * (1.0 + MARGIN) > 1.0) {
             return None;
         }
-        let n = mu.len();
         let stored = |r: f64| {
             if r.is_finite() {
                 (r * (1.0 + MARGIN)).max(1.0)
@@ -89,20 +93,25 @@ impl AlbedoCap {
             }
         };
         let k_node = |ik: usize| k_lo + (k_hi - k_lo) * ik as f64 / (K_NODES - 1) as f64;
-        let flat = crate::parallel::map_rows(K_NODES * n, |j| {
-            let (ik, im) = (j / n, j % n);
-            // The screened entries are reused.
-            let screened = SCREEN.iter().position(|&s| s == im).and_then(|p| match ik {
-                0 => Some(screen[p]),
-                _ if ik == K_NODES - 1 => Some(screen[SCREEN.len() + p]),
-                _ => None,
-            });
-            stored(screened.unwrap_or_else(|| ratio(mu[im], k_node(ik))))
+        let ks: [f64; K_NODES] = core::array::from_fn(k_node);
+        let mut columns: Vec<(f64, [f64; K_NODES])> = crate::parallel::map_rows(mu.len(), |im| {
+            let mut r = [0.0; K_NODES];
+            match SCREEN.iter().position(|&s| s == im) {
+                // The screened ends are reused; only the inner wavenumbers are new.
+                Some(p) => {
+                    ratio(mu[im], &ks[1..K_NODES - 1], &mut r[1..K_NODES - 1]);
+                    (r[0], r[K_NODES - 1]) = (screen[p][0], screen[p][1]);
+                }
+                None => ratio(mu[im], &ks, &mut r),
+            }
+            (mu[im], r.map(stored))
         });
-        let mut columns: Vec<(f64, [f64; K_NODES])> = (0..n)
-            .map(|im| (mu[im], core::array::from_fn(|ik| flat[ik * n + im])))
-            .collect();
-        refine(&mut columns, |m, ik| stored(ratio(m, k_node(ik))));
+        refine(&mut columns, |m, out| {
+            ratio(m, &ks, out);
+            for v in out.iter_mut() {
+                *v = stored(*v);
+            }
+        });
         let mu = columns.iter().map(|c| c.0).collect();
         let c = (0..K_NODES)
             .flat_map(|ik| columns.iter().map(move |col| col.1[ik]))
@@ -159,7 +168,7 @@ const REFINE_DMU_MIN: f64 = 2e-5;
 /// nothing is added. C is not always convex: for β 4e−4, Lc 0.036 µm, γ 2
 /// at 360 nm it peaks at 89.8°, and between the fixed 89° and 89.9° nodes
 /// the interpolation is 0.7 % low (albedo 1.0014 at 89.34°).
-fn refine(columns: &mut Vec<(f64, [f64; K_NODES])>, value: impl Fn(f64, usize) -> f64 + Sync) {
+fn refine(columns: &mut Vec<(f64, [f64; K_NODES])>, value: impl Fn(f64, &mut [f64]) + Sync) {
     let mut added = 0;
     // Intervals still to check, by the index of their upper-μ end.
     let mut todo: Vec<usize> = (0..columns.len() - 1).collect();
@@ -170,14 +179,16 @@ fn refine(columns: &mut Vec<(f64, [f64; K_NODES])>, value: impl Fn(f64, usize) -
             .filter(|&i| columns[i].0 - columns[i + 1].0 > REFINE_DMU_MIN)
             .take(REFINE_NODES_MAX - added)
             .collect();
-        let mids = crate::parallel::map_rows(todo_now.len() * K_NODES, |j| {
-            let i = todo_now[j / K_NODES];
-            value(0.5 * (columns[i].0 + columns[i + 1].0), j % K_NODES)
+        let mids = crate::parallel::map_rows(todo_now.len(), |t| {
+            let i = todo_now[t];
+            let mut mid = [0.0; K_NODES];
+            value(0.5 * (columns[i].0 + columns[i + 1].0), &mut mid);
+            mid
         });
         // Insert from the back so earlier indices stay valid.
         let mut next = Vec::new();
         for (t, &i) in todo_now.iter().enumerate().rev() {
-            let mid: [f64; K_NODES] = core::array::from_fn(|ik| mids[t * K_NODES + ik]);
+            let mid = mids[t];
             let low = (0..K_NODES).any(|ik| {
                 let lin = 0.5 * (columns[i].1[ik] + columns[i + 1].1[ik]);
                 mid[ik] > lin * (1.0 + REFINE_TOL)
@@ -201,7 +212,25 @@ fn refine(columns: &mut Vec<(f64, [f64; K_NODES])>, value: impl Fn(f64, usize) -
 /// ∫ f(wo) cosθo dωo over the upper hemisphere for wi = (sinθi, 0, μ) and an
 /// isotropic lobe around the mirror direction of angular scale `width`
 /// (radians): f must be symmetric in wo.y.
+#[cfg(test)]
 pub(crate) fn albedo(mu: f64, width: f64, f: impl Fn(DVec3) -> f64) -> f64 {
+    let mut out = [0.0];
+    albedo_many(mu, width, &mut out, |_, _| (), |_, wo, v| v[0] = f(wo));
+    out[0]
+}
+
+/// [`albedo`] of several integrands on the same nodes: `f(row, wo, values)`
+/// writes one value per entry of `out`, and `out` receives their integrals
+/// (each summed in the same order as a single one would be). `row` is
+/// `per_row(cosθo, sinθo)`, computed once per polar node: what depends on
+/// θo alone is shared by all its azimuths.
+pub(crate) fn albedo_many<R>(
+    mu: f64,
+    width: f64,
+    out: &mut [f64],
+    per_row: impl Fn(f64, f64) -> R,
+    f: impl Fn(&R, DVec3, &mut [f64]),
+) {
     let mu = mu.clamp(0.0, 1.0);
     let sin_i = libm::sqrt(1.0 - mu * mu);
     // In (z = cosθo, φo) the solid angle is dz dφ. The lobe's extent in z is
@@ -220,20 +249,30 @@ pub(crate) fn albedo(mu: f64, width: f64, f: impl Fn(DVec3) -> f64) -> f64 {
             (c, s, w)
         })
         .collect();
-    let mut sum = 0.0;
+    let n = out.len();
+    let mut values = vec![0.0; n];
+    let mut row = vec![0.0; n];
+    out.fill(0.0);
     for &(zo, wz) in &zs {
         let so = libm::sqrt((1.0 - zo * zo).max(0.0));
-        let mut row = 0.0;
+        row.fill(0.0);
+        let shared = per_row(zo, so);
         for &(c, s, wp) in &ps {
-            let v = f(DVec3::new(so * c, so * s, zo));
-            if v.is_finite() {
-                row += wp * v;
+            f(&shared, DVec3::new(so * c, so * s, zo), &mut values);
+            for (r, &v) in row.iter_mut().zip(&values) {
+                if v.is_finite() {
+                    *r += wp * v;
+                }
             }
         }
-        sum += wz * zo * row;
+        for (o, &r) in out.iter_mut().zip(&row) {
+            *o += wz * zo * r;
+        }
     }
     // φ over [0, π] only: the lobe is symmetric in wo.y.
-    2.0 * sum
+    for o in out.iter_mut() {
+        *o *= 2.0;
+    }
 }
 
 /// Panel edges on [lo, hi] graded geometrically away from each `(focus, first width)`.
@@ -279,7 +318,12 @@ mod tests {
     #[test]
     fn table_interpolates_and_floors_at_one() {
         let ratio = |mu: f64, k: f64| 0.9 + 0.2 * (1.0 - mu) + 0.001 * k;
-        let cap = AlbedoCap::build(7.0, 17.0, ratio).unwrap();
+        let each = |mu: f64, ks: &[f64], out: &mut [f64]| {
+            for (o, &k) in out.iter_mut().zip(ks) {
+                *o = ratio(mu, k);
+            }
+        };
+        let cap = AlbedoCap::build(7.0, 17.0, each).unwrap();
         for (i, &t) in THETA_DEG.iter().enumerate() {
             let mu = libm::cos(t.to_radians());
             for k in [7.0, 17.0] {
@@ -294,7 +338,7 @@ mod tests {
         assert!((cap.max_at(0.05, 0.05, 12.0) - ratio(0.05, 12.0) * (1.0 + MARGIN)).abs() < 1e-12);
         // Clamped outside the table, never below 1.
         assert!(cap.max_at(0.0, 0.0, 30.0) >= 1.0 && cap.max_at(1.0, 1.0, 1.0) == 1.0);
-        assert!(AlbedoCap::build(7.0, 17.0, |_, _| 0.99).is_none());
-        assert!(AlbedoCap::build(7.0, 17.0, |_, _| 0.9995).is_some());
+        assert!(AlbedoCap::build(7.0, 17.0, |_, _, o| o.fill(0.99)).is_none());
+        assert!(AlbedoCap::build(7.0, 17.0, |_, _, o| o.fill(0.9995)).is_some());
     }
 }

@@ -123,6 +123,26 @@ pub struct TwoScale {
     cap: Option<AlbedoCap>,
 }
 
+/// What an evaluation shares across every wo for one wi.
+struct Incidence {
+    wi: DVec3,
+    tan_i: f64,
+    /// The macro NDF's Λ at wi (MacroNdf reading; 0 otherwise).
+    macro_lambda_i: f64,
+}
+
+impl Incidence {
+    #[inline]
+    fn new(m: &TwoScale, wi: DVec3) -> Incidence {
+        let tan_i = libm::hypot(wi.x, wi.y) / wi.z;
+        Incidence {
+            wi,
+            tan_i,
+            macro_lambda_i: m.macro_lambda_or_zero(tan_i),
+        }
+    }
+}
+
 /// Points of the macro NDF's Λ table.
 const MACRO_LAMBDA_NODES: usize = 128;
 
@@ -212,15 +232,48 @@ impl TwoScale {
         // The lobe's angular scale: the macro NDF's, widened by the KC lobe
         // at small w.
         let width = self.ndf.beta().clamp(1e-3, 1.0);
-        AlbedoCap::build(k_lo, k_hi, |mu, k| {
+        AlbedoCap::build(k_lo, k_hi, |mu, ks, out| {
             let mu = mu.max(1e-3);
             let wi = DVec3::new(libm::sqrt(1.0 - mu * mu), 0.0, mu);
-            let e = albedo_cap::albedo(mu, width, |wo| self.glossy_unit(wi, wo, k));
-            let s = match self.coherent {
-                CoherentPart::MacroNdf => 0.0,
-                CoherentPart::Delta => self.coherent_fraction(k, mu).0,
+            // Everything that depends on wi alone, once per integral: its
+            // tanθ, the macro NDF's Λ there, and the lobe Λ at every w node.
+            let at_i = Incidence::new(self, wi);
+            let lambda_eff_i = self.table.lambda_nodes(at_i.tan_i);
+            // Per polar node of wo: its tanθ (exactly sinθo/cosθo there),
+            // the macro NDF's Λ and the lobe Λ at every w node, shared by
+            // all its azimuths and wavenumbers.
+            let per_row = |zo: f64, so: f64| {
+                let tan_o = so / zo;
+                (
+                    tan_o,
+                    self.macro_lambda_or_zero(tan_o),
+                    self.table.lambda_nodes(tan_o),
+                )
             };
-            e / (1.0 - s).max(1e-12)
+            albedo_cap::albedo_many(mu, width, out, per_row, |row, wo, values| {
+                let (tan_o, macro_lambda_o, lambda_eff_o) = row;
+                match self.pair_with(&at_i, wo, *tan_o, *macro_lambda_o) {
+                    Some(p) => {
+                        for (v, &k) in values.iter_mut().zip(ks) {
+                            let f = self.glossy_with(
+                                &p,
+                                k,
+                                |wb| self.table.mix_nodes(wb, |i| lambda_eff_i[i]),
+                                |wb| self.table.mix_nodes(wb, |i| lambda_eff_o[i]),
+                            );
+                            *v = finite_nonneg(f);
+                        }
+                    }
+                    None => values.fill(0.0),
+                }
+            });
+            for (e, &k) in out.iter_mut().zip(ks) {
+                let s = match self.coherent {
+                    CoherentPart::MacroNdf => 0.0,
+                    CoherentPart::Delta => self.coherent_fraction(k, mu).0,
+                };
+                *e /= (1.0 - s).max(1e-12);
+            }
         })
     }
 
@@ -327,19 +380,49 @@ impl TwoScale {
     /// below either horizon or without a half vector.
     #[inline]
     fn pair(&self, wi: DVec3, wo: DVec3) -> Option<Pair> {
+        if !(wi.z > 0.0) {
+            return None;
+        }
+        self.pair_from(&Incidence::new(self, wi), wo)
+    }
+
+    /// [`TwoScale::pair`] with the part that depends on wi alone given.
+    #[inline]
+    fn pair_from(&self, at_i: &Incidence, wo: DVec3) -> Option<Pair> {
+        if !(wo.z > 0.0) {
+            return None;
+        }
+        let tan_o = libm::hypot(wo.x, wo.y) / wo.z;
+        self.pair_with(at_i, wo, tan_o, self.macro_lambda_or_zero(tan_o))
+    }
+
+    /// The macro NDF's Λ at tanθ in the MacroNdf reading, 0 in the Delta
+    /// reading (where the macro NDF has no part in G₂).
+    #[inline]
+    fn macro_lambda_or_zero(&self, tan_t: f64) -> f64 {
+        match self.coherent {
+            CoherentPart::MacroNdf => self.macro_lambda(tan_t),
+            CoherentPart::Delta => 0.0,
+        }
+    }
+
+    /// [`TwoScale::pair_from`] with wo's tanθ and macro Λ given.
+    #[inline]
+    fn pair_with(
+        &self,
+        at_i: &Incidence,
+        wo: DVec3,
+        tan_o: f64,
+        macro_lambda_o: f64,
+    ) -> Option<Pair> {
+        let wi = at_i.wi;
         if !(wi.z > 0.0 && wo.z > 0.0) {
             return None;
         }
         let (h, cos_d) = crate::frame::half_vector(wi, wo)?;
-        let tan_i = libm::hypot(wi.x, wi.y) / wi.z;
-        let tan_o = libm::hypot(wo.x, wo.y) / wo.z;
-        let (d_macro, macro_lambda_i, macro_lambda_o) = match self.coherent {
-            CoherentPart::MacroNdf => (
-                self.ndf.d(h),
-                self.macro_lambda(tan_i),
-                self.macro_lambda(tan_o),
-            ),
-            CoherentPart::Delta => (0.0, 0.0, 0.0),
+        let d_macro = match self.coherent {
+            CoherentPart::MacroNdf => self.ndf.d(h),
+            CoherentPart::Delta => 0.0,
         };
         Some(Pair {
             zi: wi.z,
@@ -347,24 +430,23 @@ impl TwoScale {
             h_z: h.z,
             cos_d,
             tan_h: libm::hypot(h.x, h.y) / h.z,
-            tan_i,
+            tan_i: at_i.tan_i,
             tan_o,
             d_macro,
-            macro_lambda_i,
+            macro_lambda_i: at_i.macro_lambda_i,
             macro_lambda_o,
         })
     }
 
     /// Smith Λ of the lobe's own microfacet distribution at a direction
-    /// (tanθ, and the macro NDF's Λ there): MacroNdf reading, the mixture
+    /// (given D̃_eff's Λ_eff and the macro NDF's Λ_D there): MacroNdf reading, the mixture
     /// A·D + (1 − A)·D̃_eff, whose Λ is A·Λ_D + (1 − A)·Λ_eff; Delta
     /// reading, D̃_eff alone. With Λ of the macro NDF alone (HP17's reading
     /// of G₂) the wider D̃_eff lobe is under-shadowed and the albedo
     /// exceeds 1 by up to 7 % at oblique incidence; with the lobe's own Λ,
     /// single scattering conserves energy.
     #[inline]
-    fn lobe_lambda(&self, tan_t: f64, macro_lambda: f64, wb: (usize, f64), a: f64) -> f64 {
-        let eff = self.table.lambda(wb, tan_t);
+    fn lobe_lambda(&self, eff: f64, macro_lambda: f64, a: f64) -> f64 {
         match self.coherent {
             CoherentPart::MacroNdf => a * macro_lambda + (1.0 - a) * eff,
             CoherentPart::Delta => eff,
@@ -372,7 +454,26 @@ impl TwoScale {
     }
 
     /// The glossy BRDF without Fresnel and without the cap, at wavenumber k.
+    #[inline]
     fn glossy(&self, p: &Pair, k: f64) -> f64 {
+        self.glossy_with(
+            p,
+            k,
+            |wb| self.table.lambda(wb, p.tan_i),
+            |wb| self.table.lambda(wb, p.tan_o),
+        )
+    }
+
+    /// [`TwoScale::glossy`] given the D̃_eff table's Λ at wi and at wo for a
+    /// w bracket.
+    #[inline]
+    fn glossy_with(
+        &self,
+        p: &Pair,
+        k: f64,
+        lambda_eff_i: impl Fn((usize, f64)) -> f64,
+        lambda_eff_o: impl Fn((usize, f64)) -> f64,
+    ) -> f64 {
         let cos_d = p.cos_d.min(1.0);
         let w = 2.0 * k * cos_d * self.psd.lc_um();
         let wb = self.table.w_bracket(w);
@@ -390,15 +491,9 @@ impl TwoScale {
         };
         let g2 = 1.0
             / (1.0
-                + self.lobe_lambda(p.tan_i, p.macro_lambda_i, wb, a_d)
-                + self.lobe_lambda(p.tan_o, p.macro_lambda_o, wb, a_d));
+                + self.lobe_lambda(lambda_eff_i(wb), p.macro_lambda_i, a_d)
+                + self.lobe_lambda(lambda_eff_o(wb), p.macro_lambda_o, a_d));
         g2 * lobe / (4.0 * p.zi * p.zo)
-    }
-
-    /// [`TwoScale::glossy`] at (wi, wo) as a plain value (0 where undefined).
-    fn glossy_unit(&self, wi: DVec3, wo: DVec3, k: f64) -> f64 {
-        self.pair(wi, wo)
-            .map_or(0.0, |p| finite_nonneg(self.glossy(&p, k)))
     }
 
     /// The BRDF at one wavelength (k = 2π/λ).

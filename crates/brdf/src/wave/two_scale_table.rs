@@ -449,6 +449,12 @@ impl EffTable {
         t
     }
 
+    /// Smith Λ of the normalised D̃_eff at every w node for tanθ (for
+    /// [`EffTable::mix_nodes`] at many w brackets and one direction).
+    pub(crate) fn lambda_nodes(&self, tan_t: f64) -> Vec<f64> {
+        (0..self.nw).map(|i| self.lambda_node(i, tan_t)).collect()
+    }
+
     /// Smith Λ of the normalised D̃_eff at node i for tanθ.
     #[inline]
     fn lambda_node(&self, i: usize, tan_t: f64) -> f64 {
@@ -468,7 +474,7 @@ impl EffTable {
     /// table's linear mixture in w of every per-node quantity (a node with
     /// zero weight is not evaluated).
     #[inline]
-    fn mix_nodes(&self, (i, f): (usize, f64), value: impl Fn(usize) -> f64) -> f64 {
+    pub(crate) fn mix_nodes(&self, (i, f): (usize, f64), value: impl Fn(usize) -> f64) -> f64 {
         let a = if f < 1.0 { value(i) } else { 0.0 };
         let b = if f > 0.0 { value(i + 1) } else { 0.0 };
         (1.0 - f) * a + f * b
