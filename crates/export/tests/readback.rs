@@ -404,5 +404,8 @@ fn a_turned_anisotropic_microfacet_material_keeps_its_axes() {
         export::param::direction(0.35, core::f64::consts::FRAC_PI_2),
     );
     let rt_tangent = table.eval(n, y, 550.0) / table.eval(n, x, 550.0);
-    assert!(rt_tangent < 0.5 * rt, "tangent-axis ratio {rt_tangent} vs {rt}");
+    assert!(
+        rt_tangent < 0.5 * rt,
+        "tangent-axis ratio {rt_tangent} vs {rt}"
+    );
 }

@@ -703,7 +703,7 @@ impl Orders {
             let (k1, kb) = (lattice.cusp.as_slice(), &lattice.cusp[(-s_b) as usize..]);
             for (j, slot) in f.iter_mut().enumerate() {
                 let (x, m, _) = lattice.at[j];
-                let mn = m.powi(order);
+                let mn = pow_int(m, order);
                 let x2 = x * x;
                 m0 += mn * x2;
                 m2 += mn * x2 * x2;
@@ -1551,6 +1551,19 @@ fn expm1_over(b: f64, d: f64) -> f64 {
     } else {
         libm::expm1(b * d) / b
     }
+}
+
+/// x^n for n ≥ 0 by repeated squaring (`f64::powi` needs `std`).
+fn pow_int(x: f64, n: i32) -> f64 {
+    let (mut base, mut n, mut acc) = (x, n.unsigned_abs(), 1.0);
+    while n > 0 {
+        if n & 1 == 1 {
+            acc *= base;
+        }
+        base *= base;
+        n >>= 1;
+    }
+    acc
 }
 
 #[cfg(test)]

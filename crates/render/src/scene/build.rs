@@ -117,11 +117,12 @@ pub(super) fn build(path: &Path, text: &str, desc: &SceneDesc) -> Result<Scene, 
                 bxdf: &*m.bxdf,
             })
     }
-    let spectral = (settings.spectral_integration == SpectralIntegration::Auto
+    let glossy_cv = settings.spectral_integration == SpectralIntegration::Glossy;
+    let spectral = (settings.spectral_integration != SpectralIntegration::Sampled
         && materials.iter().any(|m| {
             m.fresnel_only.is_some()
                 || delta_lobe(m).is_some()
-                || crate::material::glossy_isotropic(m.model)
+                || glossy_cv && crate::material::glossy_isotropic(m.model)
         }))
     .then(|| {
         let fresnels: Vec<_> = materials
@@ -130,7 +131,7 @@ pub(super) fn build(path: &Path, text: &str, desc: &SceneDesc) -> Result<Scene, 
             .collect();
         let deltas: Vec<_> = materials.iter().map(delta_lobe).collect();
         let mut t = SpectralTables::build_with_deltas(&lights, &fresnels, &deltas);
-        if lights.nee_len() > 0 {
+        if glossy_cv && lights.nee_len() > 0 {
             let lobes: Vec<bool> = materials
                 .iter()
                 .map(|m| crate::material::glossy_isotropic(m.model))

@@ -230,7 +230,7 @@ pub struct IntegratorDesc {
     /// vertex and light ([`Settings::mis_light_weight`](super::Settings::mis_light_weight)).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub mis_light_weight: Option<Spanned<f64>>,
-    /// `auto` (default) or `sampled`.
+    /// `auto` (default), `glossy` or `sampled`.
     #[serde(default, skip_serializing_if = "is_default")]
     pub spectral_integration: SpectralIntegration,
 }
@@ -245,6 +245,12 @@ pub enum SpectralIntegration {
     /// conductor); by sampled wavelengths for the rest.
     #[default]
     Auto,
+    /// As `auto`, and the glossy lobe of an isotropic wave-optical model at
+    /// the first vertex by a control variate over λ
+    /// ([`crate::glossy_lambda_table`]): less colour noise under a small
+    /// light, but a single sample's estimate can be negative (the film keeps
+    /// signed samples, so a low-spp image can hold negative pixels).
+    Glossy,
     /// By sampled wavelengths everywhere.
     Sampled,
 }
