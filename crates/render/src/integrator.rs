@@ -468,6 +468,37 @@ fn delta_emission(
     true
 }
 
+/// (f, pdf) at each of a path's wavelengths.
+type FPerLambda = [(f64, f64); N];
+
+/// The BSDF side of a light sample at `wo` for [`next_event`]: f and pdf at
+/// each wavelength (no pdf toward a delta light, which BSDF sampling cannot
+/// reach), Σ Q_k and the pdf Σ Q_k p_k of the path's wavelengths' sampling;
+/// `None` where f is zero at every wavelength.
+fn nee_bsdf(
+    bxdf: &dyn Bxdf,
+    wi: DVec3,
+    wo: DVec3,
+    is_delta: bool,
+    lambdas: &[f64],
+    q: &[f64],
+) -> Option<(f64, f64, FPerLambda)> {
+    let n = lambdas.len();
+    let mut fp = [(0.0, 0.0); N];
+    bxdf.eval_pdf_many(wi, wo, lambdas, &mut fp[..n]);
+    if is_delta {
+        for v in &mut fp[..n] {
+            v.1 = 0.0;
+        }
+    }
+    if !fp[..n].iter().any(|v| v.0 > 0.0) {
+        return None;
+    }
+    let q_sum: f64 = q.iter().sum();
+    let p_bsdf: f64 = (0..n).map(|k| q[k] * fp[k].1).sum();
+    Some((q_sum, p_bsdf, fp))
+}
+
 /// Next-event estimation at vertex `v`: one light sample drawn with
 /// `u_light`, weighted against BSDF sampling by `mis`. `bsdf(wo, is_delta)`
 /// evaluates the BSDF toward the sampled point: `None` where it is zero at
@@ -845,18 +876,7 @@ fn first_vertex_cv(
         &v,
         u_light,
         mis,
-        |wo, is_delta| {
-            let mut fp = [(0.0, 0.0); N];
-            bxdf.eval_pdf_many(wi, wo, &lambdas[..n], &mut fp[..n]);
-            if is_delta {
-                fp[..n].iter_mut().for_each(|v| v.1 = 0.0);
-            }
-            if !fp[..n].iter().any(|v| v.0 > 0.0) {
-                return None;
-            }
-            let p_bsdf: f64 = fp[..n].iter().map(|v| v.1).sum();
-            Some((q_sum, p_bsdf, fp))
-        },
+        |wo, is_delta| nee_bsdf(&**bxdf, wi, wo, is_delta, &lambdas[..n], &th.q[..n]),
         |ls, wo, w, fp| glossy(&mut xyz, wo, &fp, &ls.emission, w),
     );
 
@@ -1059,21 +1079,7 @@ fn trace(
             &v,
             u_light,
             mis,
-            |wo, is_delta| {
-                let mut fp = [(0.0, 0.0); N];
-                bxdf.eval_pdf_many(wi, wo, &lambdas[..n], &mut fp[..n]);
-                if is_delta {
-                    for v in &mut fp[..n] {
-                        v.1 = 0.0;
-                    }
-                }
-                if !fp[..n].iter().any(|v| v.0 > 0.0) {
-                    return None;
-                }
-                let q_sum: f64 = q[..n].iter().sum();
-                let p_bsdf: f64 = (0..n).map(|k| q[k] * fp[k].1).sum();
-                Some((q_sum, p_bsdf, fp))
-            },
+            |wo, is_delta| nee_bsdf(&**bxdf, wi, wo, is_delta, &lambdas[..n], &q[..n]),
             |ls, wo, w, fp| {
                 let mut e = [0.0; N];
                 ls.emission.eval_many(&lambdas[..n], &mut e[..n]);
