@@ -293,22 +293,51 @@ impl RoughPlastic {
     /// (f, pdf) for directions both above the surface.
     #[inline]
     fn eval_pdf_above(&self, wi: DVec3, wo: DVec3, lambda_nm: f64) -> (f64, f64) {
+        self.above(wi, wo).at(self, lambda_nm)
+    }
+
+    /// What (f, pdf) above the surface shares between wavelengths: only the
+    /// base's reflectance depends on λ, so hero wavelengths pay for the coat's
+    /// D, G2, Fresnel and the transmittance lookups once.
+    #[inline]
+    fn above(&self, wi: DVec3, wo: DVec3) -> Above {
         let h = (wi + wo).normalize();
         let d = self.dist.d(h);
         let cos_ih = wi.dot(h).clamp(0.0, 1.0);
         let f_s = dielectric_reflectance(cos_ih, self.eta).0 * d * self.dist.g2(wi, wo)
             / (4.0 * wi.z * wo.z);
-        let rho = self.reflectance.at(lambda_nm);
-        let ri = self.internal_reflectance;
-        let inner = if self.nonlinear { rho * ri } else { ri };
         let (t_i, t_o) = (self.transmittance(wi.z), self.transmittance(wo.z));
-        let f_d = rho / (1.0 - inner) * t_i * t_o * FRAC_1_PI / (self.eta * self.eta);
         let p_s = self.specular_probability(wi.z);
         // Visible-normal density G1(wi) D(h) (wi·h) / cosθi times the
         // reflection Jacobian 1 / (4 wo·h), with wo·h = wi·h.
         let pdf_s = self.dist.g1(wi) * d / (4.0 * wi.z);
         let pdf = p_s * pdf_s + (1.0 - p_s) * wo.z * FRAC_1_PI;
-        (finite_nonneg(f_s + f_d), finite_nonneg(pdf))
+        Above {
+            f_s,
+            t_i,
+            t_o,
+            pdf: finite_nonneg(pdf),
+        }
+    }
+}
+
+/// The wavelength-independent part of [`RoughPlastic`]'s (f, pdf) at one
+/// pair of directions above the surface.
+struct Above {
+    f_s: f64,
+    t_i: f64,
+    t_o: f64,
+    pdf: f64,
+}
+
+impl Above {
+    #[inline]
+    fn at(&self, m: &RoughPlastic, lambda_nm: f64) -> (f64, f64) {
+        let rho = m.reflectance.at(lambda_nm);
+        let ri = m.internal_reflectance;
+        let inner = if m.nonlinear { rho * ri } else { ri };
+        let f_d = rho / (1.0 - inner) * self.t_i * self.t_o * FRAC_1_PI / (m.eta * m.eta);
+        (finite_nonneg(self.f_s + f_d), self.pdf)
     }
 }
 
@@ -330,6 +359,19 @@ impl Bxdf for RoughPlastic {
             self.eval_pdf_above(wi, wo, lambda_nm)
         } else {
             (0.0, 0.0)
+        }
+    }
+
+    fn eval_pdf_many(&self, wi: DVec3, wo: DVec3, lambdas: &[f64], out: &mut [(f64, f64)]) {
+        if wi.z > 0.0 && wo.z > 0.0 {
+            let above = self.above(wi, wo);
+            for (o, &l) in out.iter_mut().zip(lambdas) {
+                *o = above.at(self, l);
+            }
+        } else {
+            for o in out.iter_mut().take(lambdas.len()) {
+                *o = (0.0, 0.0);
+            }
         }
     }
 

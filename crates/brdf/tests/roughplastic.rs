@@ -335,3 +335,36 @@ proptest! {
         prop_assert!(f >= base * (1.0 - 1e-12), "{f} < {base}");
     }
 }
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 64, ..ProptestConfig::default() })]
+    /// The hero-wavelength path shares the coat's geometry between wavelengths:
+    /// it must give eval_pdf's bits at each, above and below the horizon, with
+    /// a tabulated base (the λ-dependent part) and the nonlinear option.
+    #[test]
+    fn eval_pdf_many_equals_eval_pdf_per_wavelength_bit_for_bit(
+        (alpha, int_ior, _rho, _theta, nonlinear) in model_strategy(),
+        ti in 0.0f64..3.2, pi in 0.0f64..6.3, to in 0.0f64..3.2, po in 0.0f64..6.3,
+    ) {
+        let m = RoughPlastic::new(RoughPlasticParams {
+            alpha,
+            int_ior,
+            ext_ior: 1.0,
+            reflectance: Reflectance::table(vec![[380.0, 0.05], [520.0, 0.9], [760.0, 0.3]]).unwrap(),
+            nonlinear,
+        })
+        .unwrap();
+        let (wi, wo) = (spherical(ti, pi), spherical(to, po));
+        let lambdas = [360.0, 431.7, 520.0, 612.25, 829.9];
+        // One slot more than wavelengths: it must be left alone.
+        let mut out = [(-1.0, -1.0); 6];
+        let boxed: Box<dyn Bxdf> = Box::new(m.clone());
+        boxed.eval_pdf_many(wi, wo, &lambdas, &mut out);
+        for (j, &l) in lambdas.iter().enumerate() {
+            let (f, p) = m.eval_pdf(wi, wo, l);
+            prop_assert_eq!(out[j].0.to_bits(), f.to_bits(), "f at λ {}", l);
+            prop_assert_eq!(out[j].1.to_bits(), p.to_bits(), "pdf at λ {}", l);
+        }
+        prop_assert_eq!(out[5], (-1.0, -1.0));
+    }
+}
