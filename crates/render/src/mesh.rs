@@ -190,6 +190,9 @@ pub struct MeshAccel {
     /// Per triangle, when some source has texture coordinates; else empty.
     uvs: Vec<[[f64; 2]; 3]>,
     surface: Vec<u32>,
+    /// Triangles in the sources (the leaves may hold a triangle more than
+    /// once: the build splits large triangles' boxes).
+    triangles: usize,
 }
 
 fn to_f32(v: DVec3) -> Vec3A {
@@ -226,7 +229,11 @@ impl MeshAccel {
             .collect();
         let bvh = obvhs::cwbvh::builder::build_cwbvh_from_tris(
             &f32_tris,
-            obvhs::BvhBuildParams::medium_build(),
+            // Pre-split boxes and a wider search: with the rough plastic's
+            // shared geometry, 5–6 % less CPU per sample on the preview scene
+            // (6.7 k triangles) than `medium_build`, for a slower build (a
+            // 500 k-triangle scene loads in 2.0 s instead of 1.7 s).
+            obvhs::BvhBuildParams::slow_build(),
             &mut Duration::default(),
         );
         // Reorder into leaf order once so traversal indexes directly.
@@ -235,6 +242,7 @@ impl MeshAccel {
             .iter()
             .map(|&i| RtTriangle::from(&f32_tris[i]))
             .collect();
+        let triangles = tris.len();
         let tris_leaf = order.iter().map(|&i| tris[i]).collect();
         let surface_leaf = order.iter().map(|&i| surface[i]).collect();
         let normals_leaf = order.iter().map(|&i| normals[i]).collect();
@@ -250,12 +258,13 @@ impl MeshAccel {
             normals: normals_leaf,
             uvs: uvs_leaf,
             surface: surface_leaf,
+            triangles,
         }
     }
 
     /// Number of triangles.
     pub fn len(&self) -> usize {
-        self.tris.len()
+        self.triangles
     }
 
     /// Whether there are no triangles.
