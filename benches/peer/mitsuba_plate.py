@@ -83,11 +83,15 @@ def die(msg: str) -> None:
 
 
 def absolute_csv_paths(sc: dict, folder: Path) -> None:
-    """Makes a material's `reflectance_csv` absolute (it is relative to the scene file), so
-    the Mitsuba translation and the lustre scene written into a temporary folder both find it."""
+    """Makes a material's `reflectance_csv` and a mesh's `file` absolute (they are relative to
+    the scene file), so the Mitsuba translation and the lustre scene written into a temporary
+    folder both find them."""
     for m in sc.get("materials", {}).values():
         if isinstance(m, dict) and isinstance(m.get("reflectance_csv"), str):
             m["reflectance_csv"] = str((folder / m["reflectance_csv"]).resolve())
+    for s in sc.get("shapes", []):
+        if isinstance(s, dict) and s.get("type") == "mesh" and isinstance(s.get("file"), str):
+            s["file"] = str((folder / s["file"]).resolve())
 
 
 def load_scenes(path: Path) -> list[dict]:
@@ -268,6 +272,10 @@ def mitsuba_scene_dict(mi, sc: dict, spp: int, resolution=None, sampler: str = "
         elif s["type"] == "sphere":
             d[f"shape{i}"] = {"type": "sphere", "center": s["center"], "radius": s["radius"],
                               "bsdf": bsdf}
+        elif s["type"] == "mesh":
+            # Both renderers interpolate the file's vertex normals (`vn`) as shading normals.
+            d[f"shape{i}"] = {"type": "obj", "filename": s["file"], "bsdf": bsdf,
+                              "to_world": shape_transform(mi, s.get("transform"))}
         else:
             raise Unsupported(f"{where}: shape type {s['type']!r} not supported by the peer script")
     for i, l in enumerate(sc.get("lights", [])):
@@ -454,7 +462,7 @@ def main() -> None:
     ap.add_argument("--lustre-spp", type=int, default=64)
     ap.add_argument("--lustre-scene", type=Path, nargs="+", metavar="TOML",
                     help="render these lustre scene files (name = file stem) instead of --scenes; "
-                         "files using features Mitsuba lacks (GHS models, meshes, ...) are skipped")
+                         "files using features Mitsuba lacks (GHS models, blackbody spectra, ...) are skipped")
     ap.add_argument("--threads", type=int, help="Mitsuba worker threads (default: all cores; 1 hung scalar_spectral here)")
     ap.add_argument("--tag", default="", help="prefix for the CSV file names (e.g. 's138_')")
     args = ap.parse_args()
