@@ -230,9 +230,11 @@ impl ModelKind {
         !matches!(self, ModelKind::Diffuse | ModelKind::RoughPlastic)
     }
 
-    /// Whether the model describes a surface stretched along two axes (`ghs_ssa_aniso`,
-    /// `ghs_aniso`, `measured_psd_ssa_aniso`, `measured_psd_aniso`): its axes exist only
-    /// for a scan `lustre fit` flags anisotropic.
+    /// Whether the model describes an anisotropic surface whose parameters exist only for
+    /// a scan `lustre fit` flags anisotropic: a surface stretched along two axes
+    /// (`ghs_ssa_aniso`, `ghs_aniso`, `measured_psd_ssa_aniso`, `measured_psd_aniso`) or
+    /// a 2-D PSD that is not elliptical (`measured_psd2d_ssa`, its `[psd.map]`), so a fit
+    /// file cannot recommend it for every scan.
     pub fn stretched(self) -> bool {
         matches!(
             self,
@@ -240,6 +242,7 @@ impl ModelKind {
                 | ModelKind::GhsAniso
                 | ModelKind::MeasuredPsdSsaAniso
                 | ModelKind::MeasuredPsdAniso
+                | ModelKind::MeasuredPsd2dSsa
         )
     }
 
