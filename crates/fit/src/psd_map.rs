@@ -20,7 +20,10 @@
 use crate::kc2d::periodogram;
 use crate::{FitError, Topography};
 
-/// Most nodes on a half axis (the grid has at most 2·32 cells across).
+/// Most nodes on a half axis (the grid has at most 2·43 cells across). With
+/// [`MIN_BOX_BINS`] it gives 3 × 3 boxes on a 256² map: against the explicit BRDF of
+/// crossing-lay maps (physics.md §15.4) 4 × 4 boxes smeared a lay one bin wide and 2 × 2
+/// or single bins kept the bins' scatter.
 pub const HALF_NODES: usize = 43;
 /// Fewest periodogram bins in a node's box.
 pub const MIN_BOX_BINS: usize = 9;
@@ -44,7 +47,7 @@ pub struct PsdMapGrid {
 
 /// How the grid is made (`[psd.map].source`).
 pub const MAP_SOURCE: &str = "Hann-windowed 2D periodogram of the map, box-averaged onto a \
-     grid of at most 64 × 64 cells up to each axis' Nyquist frequency (DC bin and ζx = 0 \
+     grid of at most 86 × 86 cells up to each axis' Nyquist frequency (DC bin and ζx = 0 \
      column left out), half plane ζy ≥ 0";
 
 /// Box size along one axis of n frequency bins per half axis: at most [`HALF_NODES`] nodes.
@@ -117,5 +120,54 @@ pub fn grid_of(p: &[f64], nx: usize, ny: usize, dzx: f64, dzy: f64) -> PsdMapGri
         dzy_rad_per_um: dzy * by as f64 * 1e-6,
         p_um4: out,
         box_bins: (bx, by),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::kc2d::{AnisoKcParams, synth_surface};
+
+    /// A stretched KC map (lay along 30°): the grid holds σ² (less the band's edge and
+    /// the ζx = 0 column) with its tail, and the lobe is wide across the lay.
+    #[test]
+    fn a_stretched_map_gives_its_sigma_and_its_lay() {
+        let p = AnisoKcParams {
+            sigma: 0.02e-6,
+            lx: 0.3e-6,
+            ly: 2.0e-6,
+            angle_rad: 30f64.to_radians(),
+            gamma: 3.0,
+        };
+        let t = synth_surface(256, 256, 20e-6 / 256.0, p, 3);
+        let g = psd_map(&t).unwrap();
+        assert_eq!(g.box_bins, (3, 3));
+        assert_eq!((g.half_nx, g.half_ny), (42, 42));
+        let table = brdf::statistics::TabulatedPsd2d::new(
+            g.half_nx,
+            g.half_ny,
+            g.dzx_rad_per_um,
+            g.dzy_rad_per_um,
+            &g.p_um4,
+            4.0,
+            0.0,
+        )
+        .unwrap();
+        let ratio = table.sigma_um() / 0.02;
+        assert!((ratio - 1.0).abs() < 0.1, "σ ratio {ratio}");
+        // Along a (across the lay) the PSD reaches further than along b.
+        let (c, s) = (30f64.to_radians().cos(), 30f64.to_radians().sin());
+        let z = 6.0;
+        let (pa, pb) = (table.psd(z * c, z * s), table.psd(-z * s, z * c));
+        assert!(pa > 10.0 * pb, "{pa} vs {pb}");
+    }
+
+    #[test]
+    fn small_maps_widen_the_box() {
+        let p = vec![1.0; 16 * 16];
+        let g = grid_of(&p, 16, 16, 1.0, 1.0);
+        assert!(g.box_bins.0 * g.box_bins.1 >= MIN_BOX_BINS);
+        assert_eq!(g.p_um4.len(), (2 * g.half_nx + 1) * (g.half_ny + 1));
+        assert!(g.p_um4.iter().all(|v| v.is_finite() && *v >= 0.0));
     }
 }
