@@ -99,7 +99,40 @@ fn models() -> Vec<ModelSpec> {
             surface: measured_aniso(),
             options: GhsOptions::default(),
         },
+        ModelSpec::MeasuredPsd2dSsa {
+            surface: measured_map(),
+            options: GhsOptions::default(),
+        },
     ]
+}
+
+/// A 2-D table of the KC of `kc()` stretched by 3 along 20° (a grid over ±8 rad/µm).
+fn measured_map() -> brdf::spec::Psd2dSpec {
+    let k = kc();
+    let a = brdf::statistics::AnisotropicKc::new(
+        k.sigma_um,
+        k.lc_um / 3f64.sqrt(),
+        k.lc_um * 3f64.sqrt(),
+        20f64.to_radians(),
+        k.gamma,
+    )
+    .unwrap();
+    let (mx, my, d) = (20usize, 20usize, 0.4);
+    let mut psd_um4 = Vec::new();
+    for j in 0..=my {
+        for i in 0..=2 * mx {
+            psd_um4.push(a.psd((i as f64 - mx as f64) * d, j as f64 * d));
+        }
+    }
+    brdf::spec::Psd2dSpec {
+        half_nx: mx,
+        half_ny: my,
+        dzx_rad_per_um: d,
+        dzy_rad_per_um: d,
+        psd_um4,
+        tail_exponent: k.gamma + 1.0,
+        angle_deg: 0.0,
+    }
 }
 
 /// A stretched tabulated PSD (the KC of `kc()` sampled over a scan's band).

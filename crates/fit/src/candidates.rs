@@ -98,13 +98,16 @@ pub enum Family {
     /// Full GHS of the measured PSD of the de-stretched frame, stretched along the axes of
     /// the anisotropic K-correlation fit (scans flagged anisotropic).
     MeasuredPsdAniso,
+    /// GHS smooth-surface approximation of the map's 2-D PSD on a grid (scans flagged
+    /// anisotropic whose 2-D PSD is not elliptical).
+    MeasuredPsd2dSsa,
     /// Two-scale at one split of the surface.
     TwoScale,
 }
 
 impl Family {
     /// Every recipe, in report order.
-    pub const ALL: [Family; 11] = [
+    pub const ALL: [Family; 12] = [
         Family::Ggx,
         Family::Beckmann,
         Family::GgxKc,
@@ -115,6 +118,7 @@ impl Family {
         Family::GhsAniso,
         Family::MeasuredPsd,
         Family::MeasuredPsdAniso,
+        Family::MeasuredPsd2dSsa,
         Family::TwoScale,
     ];
 
@@ -138,6 +142,7 @@ impl Family {
             Family::GhsAniso => ModelKind::GhsAniso,
             Family::MeasuredPsd => ModelKind::MeasuredPsd,
             Family::MeasuredPsdAniso => ModelKind::MeasuredPsdAniso,
+            Family::MeasuredPsd2dSsa => ModelKind::MeasuredPsd2dSsa,
             Family::TwoScale => ModelKind::TwoScale,
         }
     }
@@ -167,6 +172,9 @@ impl Family {
             Family::MeasuredPsdAniso => {
                 "Gaussian heights, measured PSD constant on ellipses (one lay direction), all orders"
             }
+            Family::MeasuredPsd2dSsa => {
+                "Gaussian heights, measured 2-D PSD (any shape), smooth-surface (first-order) lobe"
+            }
             Family::TwoScale => "exponential NDF above the cutoff period, KC diffraction below it",
         }
     }
@@ -186,6 +194,7 @@ pub fn candidates(a: &Analysis, fresnel: &FresnelSpec) -> Vec<Candidate> {
         ghs_aniso(a, fresnel),
         measured_psd(a, fresnel),
         measured_psd_aniso(a, fresnel),
+        measured_psd2d_ssa(a, fresnel),
     ];
     out.extend(a.two_scale.iter().map(|t| two_scale(t, fresnel)));
     out
@@ -434,6 +443,73 @@ fn measured_psd_aniso(a: &Analysis, fresnel: &FresnelSpec) -> Candidate {
                 lx_um: p.lx * UM,
                 ly_um: p.ly * UM,
                 angle_deg,
+            },
+            options: GhsOptions::default(),
+        },
+        fresnel: fresnel.clone(),
+    };
+    match spec.validate() {
+        Ok(()) => c.spec = Some(spec),
+        Err(e) => c.problems.push(e.to_string()),
+    }
+    c
+}
+
+/// GHS SSA of the map's 2-D PSD on a grid ([`crate::psd_map`]), for a scan flagged
+/// anisotropic whose 2-D PSD is not constant on ellipses ([`non_elliptical`]); the tail
+/// beyond the grid takes the exponent of the isotropic measured table's tail.
+fn measured_psd2d_ssa(a: &Analysis, fresnel: &FresnelSpec) -> Candidate {
+    let mut c = blank(Family::MeasuredPsd2dSsa, "GHS SSA, measured 2-D PSD".into());
+    let Some(fit) = aniso_fit(a, &mut c) else {
+        return c;
+    };
+    // The map's grid does not depend on the stretched K-correlation: its problems are
+    // not this model's.
+    c.problems.clear();
+    if non_elliptical(fit).is_none() {
+        c.problems.push(format!(
+            "not written: the 2-D PSD is elliptical (ellipse residual {:.2} ≤ {:.1} in ln),              which measured_psd_aniso holds",
+            fit.rms_log_residual_elliptical, NON_ELLIPTICAL_LOG_RESIDUAL
+        ));
+        return c;
+    }
+    let tail_exponent = match measured_table(a) {
+        Ok((_, _, info)) => -info.tail_exponent,
+        Err(e) => {
+            c.problems
+                .push(format!("no tail exponent (isotropic table: {e})"));
+            return c;
+        }
+    };
+    let grid = match crate::psd_map::psd_map(&a.scan) {
+        Ok(g) => g,
+        Err(e) => {
+            c.problems.push(format!("2-D PSD grid: {e}"));
+            return c;
+        }
+    };
+    c.label = format!(
+        "GHS SSA, measured 2-D PSD ({}×{} nodes of the half plane, ellipse residual {:.2} ln)",
+        2 * grid.half_nx + 1,
+        grid.half_ny + 1,
+        fit.rms_log_residual_elliptical
+    );
+    c.table = Some(TableInfo {
+        source: crate::psd_map::MAP_SOURCE,
+        points: (2 * grid.half_nx + 1) * (grid.half_ny + 1),
+        tail_exponent: -tail_exponent,
+        tail_clamped: false,
+    });
+    let spec = MaterialSpec {
+        model: ModelSpec::MeasuredPsd2dSsa {
+            surface: brdf::spec::Psd2dSpec {
+                half_nx: grid.half_nx,
+                half_ny: grid.half_ny,
+                dzx_rad_per_um: grid.dzx_rad_per_um,
+                dzy_rad_per_um: grid.dzy_rad_per_um,
+                psd_um4: grid.p_um4,
+                tail_exponent,
+                angle_deg: 0.0,
             },
             options: GhsOptions::default(),
         },

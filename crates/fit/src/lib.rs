@@ -29,6 +29,7 @@ pub mod ndf;
 mod ordered_sum;
 pub mod pipeline;
 pub mod psd;
+pub mod psd_map;
 pub mod quality;
 pub mod resample;
 pub mod rng;

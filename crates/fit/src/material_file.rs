@@ -20,7 +20,7 @@ use crate::{FitError, sha256};
 use brdf::Metal;
 use brdf::spec::file::{
     Anisotropy, Asymptote, DestretchedPsd, FitDiagnostics, Form, Kc2d, MaterialFile, Named,
-    Provenance as ProvenanceTable, PsdTable, Reliability, Split,
+    Provenance as ProvenanceTable, PsdMap, PsdTable, Reliability, Split,
 };
 use brdf::spec::{FresnelSpec, MaterialDesc, ModelKind, ModelSpec};
 
@@ -132,6 +132,7 @@ pub fn build(a: &Analysis, prov: &Provenance<'_>) -> MaterialFile {
     if let Some(t) = psd_table.as_mut() {
         let residual = aniso_fit.map_or(f64::NAN, |f| f.rms_log_residual_elliptical);
         t.destretched = find(Family::MeasuredPsdAniso).and_then(|c| destretched_table(c, residual));
+        t.map = find(Family::MeasuredPsd2dSsa).and_then(map_table);
     }
     let mut reliability = reliability(&Flags {
         cands: &cands,
@@ -432,6 +433,28 @@ fn psd_table(c: &Candidate) -> Option<PsdTable> {
         zeta_rad_per_um: zeta_rad_per_um.clone(),
         p_um4: psd_um4.clone(),
         destretched: None,
+        map: None,
+    })
+}
+
+/// `[psd.map]`: the 2-D PSD candidate's grid, with the share of σ² its assumed
+/// continuation beyond the grid holds.
+fn map_table(c: &Candidate) -> Option<PsdMap> {
+    let Some(ModelSpec::MeasuredPsd2dSsa { surface, .. }) = c.spec.as_ref().map(|s| &s.model)
+    else {
+        return None;
+    };
+    let tail_fraction = surface.psd().map_or(f64::NAN, |t| t.tail_fraction());
+    Some(PsdMap {
+        source: c.table.as_ref().map_or("", |t| t.source).to_string(),
+        usable: c.sound(),
+        tail_fraction,
+        tail_exponent: surface.tail_exponent,
+        half_nx: surface.half_nx,
+        half_ny: surface.half_ny,
+        dzx_rad_per_um: surface.dzx_rad_per_um,
+        dzy_rad_per_um: surface.dzy_rad_per_um,
+        p_um4: surface.psd_um4.clone(),
     })
 }
 

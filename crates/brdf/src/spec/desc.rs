@@ -134,17 +134,18 @@ material_keys! {
     gamma: f64, Own, [GhsSsa, Ghs, TwoScale, RayleighRice, GhsSsaAniso, GhsAniso];
     /// GHS energy handling.
     energy: Energy, Own, [GhsSsa, Ghs, MeasuredPsd, GhsSsaAniso, GhsAniso, MeasuredPsdSsaAniso,
-        MeasuredPsdAniso];
+        MeasuredPsdAniso, MeasuredPsd2dSsa];
     /// GHS Fresnel angle.
     fresnel_angle: FresnelAngle, Own, [GhsSsa, Ghs, MeasuredPsd, GhsSsaAniso, GhsAniso,
-        MeasuredPsdSsaAniso, MeasuredPsdAniso];
+        MeasuredPsdSsaAniso, MeasuredPsdAniso, MeasuredPsd2dSsa];
     /// Incident polarisation (`unpolarized`, `s`, `p`).
     polarization: Polarization, Own,
         [GhsSsa, Ghs, MeasuredPsd, RayleighRice, GhsSsaAniso, GhsAniso, MeasuredPsdSsaAniso,
-        MeasuredPsdAniso];
+        MeasuredPsdAniso, MeasuredPsd2dSsa];
     /// GHS reflectance factor of the scattered part (`r` or `q`).
     polarization_factor: PolarizationFactor, Own,
-        [GhsSsa, Ghs, MeasuredPsd, GhsSsaAniso, GhsAniso, MeasuredPsdSsaAniso, MeasuredPsdAniso];
+        [GhsSsa, Ghs, MeasuredPsd, GhsSsaAniso, GhsAniso, MeasuredPsdSsaAniso, MeasuredPsdAniso,
+        MeasuredPsd2dSsa];
     /// Anisotropic correlation length along the axis, µm (the stretched measured PSD
     /// reads only Ly/Lx).
     lx_um: f64, Own, [GhsSsaAniso, GhsAniso, MeasuredPsdSsaAniso, MeasuredPsdAniso];
@@ -153,10 +154,13 @@ material_keys! {
     /// Anisotropic axis angle (of `alpha_x`, of `lx_um`) from the tangent x towards y,
     /// degrees (default 0).
     angle_deg: f64, Orientation, [Ggx, Beckmann, GhsSsaAniso, GhsAniso, MeasuredPsdSsaAniso,
-        MeasuredPsdAniso];
+        MeasuredPsdAniso, MeasuredPsd2dSsa];
     /// A CSV `zeta_rad_per_um,p_um4` (resolved by the caller; for the stretched
     /// models, the PSD of the de-stretched frame).
     psd_csv: String, Own, [MeasuredPsd, RayleighRice, MeasuredPsdSsaAniso, MeasuredPsdAniso];
+    /// A measured 2-D PSD on a grid: `"[psd.map]"`, the table of an included `lustre fit`
+    /// material file (the default there; resolved by the caller).
+    psd_map: String, Own, [MeasuredPsd2dSsa];
     /// Two-scale macro NDF width β.
     beta: f64, Own, [TwoScale];
     /// Two-scale coherent part.
@@ -244,6 +248,14 @@ pub trait FileLoader {
     fn nk_table(&mut self, path: &str) -> Result<Vec<[f64; 3]>, String>;
     /// `(ζ rad/µm, P µm⁴)` samples of a `psd_csv` file.
     fn psd_table(&mut self, path: &str) -> Result<(Vec<f64>, Vec<f64>), String>;
+    /// The 2-D PSD a `psd_map` names (`angle_deg` of the result is 0, the grid's own
+    /// axes). By default none: only a material file's `[psd.map]` holds one.
+    fn psd_map(&mut self, path: &str) -> Result<Psd2dSpec, String> {
+        Err(format!(
+            "cannot read {path:?} here: a 2-D PSD comes from a `lustre fit` material file's \
+             [psd.map] (include the file)"
+        ))
+    }
     /// Rows `(λ nm, ρ)` of a `reflectance_csv` file.
     fn reflectance_table(&mut self, path: &str) -> Result<Vec<[f64; 2]>, String>;
 }
@@ -746,6 +758,21 @@ impl MaterialDesc {
                 surface: self.measured_aniso(model, files)?,
                 options,
             },
+            ModelKind::MeasuredPsd2dSsa => {
+                let path = self.psd_map.as_deref().ok_or_else(|| {
+                    SpecError::new(
+                        "psd_map",
+                        "model `measured_psd2d_ssa` needs a 2-D PSD: include a `lustre fit` \
+                         material file with a [psd.map] table (written for maps whose 2-D \
+                         PSD is not elliptical)",
+                    )
+                })?;
+                let mut surface = files
+                    .psd_map(path)
+                    .map_err(|e| SpecError::new("psd_map", e))?;
+                surface.angle_deg = self.angle_deg.unwrap_or(0.0);
+                ModelSpec::MeasuredPsd2dSsa { surface, options }
+            }
             ModelKind::Diffuse => ModelSpec::Diffuse {
                 reflectance: self.reflectance_spec(model, None, files)?,
             },
@@ -960,6 +987,10 @@ impl MaterialSpec {
             | ModelSpec::MeasuredPsdAniso { surface, options } => {
                 d.lx_um = Some(surface.lx_um);
                 d.ly_um = Some(surface.ly_um);
+                d.angle_deg = Some(surface.angle_deg);
+                set_opts(&mut d, options);
+            }
+            ModelSpec::MeasuredPsd2dSsa { surface, options } => {
                 d.angle_deg = Some(surface.angle_deg);
                 set_opts(&mut d, options);
             }

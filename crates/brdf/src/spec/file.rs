@@ -23,6 +23,10 @@ pub const OWN_PSD: &str = "[psd]";
 /// de-stretched frame the stretched measured-PSD models read).
 pub const OWN_PSD_DESTRETCHED: &str = "[psd.destretched]";
 
+/// The name under which `psd_map` refers to the file's `[psd.map]` (the 2-D PSD
+/// `model = "measured_psd2d_ssa"` reads).
+pub const OWN_PSD_MAP: &str = "[psd.map]";
+
 impl MaterialFile {
     /// The `[material]` a scene's `desc` builds on when it includes this file: for
     /// `two_scale`, with the split `desc.cutoff` chooses (or the only one) over it; for
@@ -93,6 +97,11 @@ impl MaterialFile {
                 }
                 .to_string(),
             );
+        }
+        if model == Some(ModelKind::MeasuredPsd2dSsa) && base.psd_map.is_none() {
+            base.psd_map = Some(OWN_PSD_MAP.to_string());
+            // The grid is in the scan's own axes: `[material].angle_deg` is the ellipse's.
+            base.angle_deg = None;
         }
         Ok((base, split))
     }
@@ -185,6 +194,12 @@ impl MaterialFile {
         if destretched && self.material.lx_um.is_some() && self.material.ly_um.is_some() {
             out.push(offer(ModelKind::MeasuredPsdAniso, None));
         }
+        let map = (self.psd.as_ref())
+            .and_then(|p| p.map.as_ref())
+            .is_some_and(|m| m.usable);
+        if map {
+            out.push(offer(ModelKind::MeasuredPsd2dSsa, None));
+        }
         for name in self.two_scale.names() {
             out.push(offer(ModelKind::TwoScale, Some(name)));
         }
@@ -219,6 +234,16 @@ impl FileLoader for WithOwnPsd<'_> {
     }
     fn reflectance_table(&mut self, path: &str) -> Result<Vec<[f64; 2]>, String> {
         self.files.reflectance_table(path)
+    }
+    fn psd_map(&mut self, path: &str) -> Result<super::Psd2dSpec, String> {
+        match self.psd.map(|t| &t.map) {
+            Some(Some(m)) if path == OWN_PSD_MAP => Ok(m.spec()),
+            Some(None) if path == OWN_PSD_MAP => Err(format!(
+                "the file has no {OWN_PSD_MAP} table (`lustre fit` writes one for maps whose \
+                 2-D PSD is not elliptical: [reliability].psd_destretched)"
+            )),
+            _ => self.files.psd_map(path),
+        }
     }
 }
 
@@ -577,6 +602,53 @@ pub struct PsdTable {
     /// (maps flagged anisotropic only).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub destretched: Option<DestretchedPsd>,
+    /// The 2-D PSD on a grid, for `model = "measured_psd2d_ssa"` (maps whose 2-D PSD is
+    /// not elliptical only).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub map: Option<PsdMap>,
+}
+
+/// `[psd.map]`: a map's 2-D PSD on a regular grid of its own axes (x along a scan line),
+/// what `model = "measured_psd2d_ssa"` reads (physics.md §15.4).
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PsdMap {
+    /// How the table was made.
+    #[serde(default)]
+    pub source: String,
+    /// True when the renderer accepts the table.
+    #[serde(default)]
+    pub usable: bool,
+    /// The share of σ² beyond the grid, in the assumed power-law continuation.
+    #[serde(default)]
+    pub tail_fraction: f64,
+    /// Exponent α of that continuation, P ∝ s^−α along each ray from the grid's edge.
+    pub tail_exponent: f64,
+    /// Nodes on each half of the ζx axis (2·half_nx + 1 columns).
+    pub half_nx: usize,
+    /// Node rows above ζy = 0 (half_ny + 1 rows of the half plane ζy ≥ 0).
+    pub half_ny: usize,
+    /// Grid step along ζx [rad/µm].
+    pub dzx_rad_per_um: f64,
+    /// Grid step along ζy [rad/µm].
+    pub dzy_rad_per_um: f64,
+    /// P₂ at the nodes [µm⁴], rows ζy = 0, Δζy, …, each from ζx = −half_nx·Δζx up.
+    pub p_um4: Vec<f64>,
+}
+
+impl PsdMap {
+    /// The model's description of the table (in the grid's own axes).
+    pub fn spec(&self) -> super::Psd2dSpec {
+        super::Psd2dSpec {
+            half_nx: self.half_nx,
+            half_ny: self.half_ny,
+            dzx_rad_per_um: self.dzx_rad_per_um,
+            dzy_rad_per_um: self.dzy_rad_per_um,
+            psd_um4: self.p_um4.clone(),
+            tail_exponent: self.tail_exponent,
+            angle_deg: 0.0,
+        }
+    }
 }
 
 /// `[psd.destretched]`: the radial PSD of a map seen in the frame where its fitted

@@ -13,7 +13,7 @@
 //!
 //! | key | models | meaning |
 //! |---|---|---|
-//! | `model` | all | `ggx`, `beckmann`, `smooth`, `ghs_ssa`, `ghs`, `two_scale`, `measured_psd`, `rayleigh_rice`, `ghs_ssa_aniso`, `ghs_aniso`, `measured_psd_ssa_aniso`, `measured_psd_aniso`, `diffuse`, `roughplastic` |
+//! | `model` | all | `ggx`, `beckmann`, `smooth`, `ghs_ssa`, `ghs`, `two_scale`, `measured_psd`, `rayleigh_rice`, `ghs_ssa_aniso`, `ghs_aniso`, `measured_psd_ssa_aniso`, `measured_psd_aniso`, `measured_psd2d_ssa`, `diffuse`, `roughplastic` |
 //! | `metal` / `nk` / `nk_csv` | all but diffuse, roughplastic | built-in metal, constant `[n, k]`, or a CSV `wavelength_nm,n,k` |
 //! | `fresnel` | all but diffuse, roughplastic | `conductor` (default) or `one` (R ≡ 1; alias `none`) |
 //! | `alpha`, or `alpha_x` + `alpha_y` | ggx, beckmann (roughplastic: `alpha` only) | roughness (αx along the axis at `angle_deg`, the surface tangent by default) |
@@ -24,10 +24,11 @@
 //! | `sigma_um`, `lc_um`, `gamma` | ghs_ssa, ghs, two_scale, rayleigh_rice | K-correlation σ (µm), Lc (µm), γ |
 //! | `sigma_um`, `lx_um`, `ly_um`, `angle_deg`, `gamma` | ghs_ssa_aniso, ghs_aniso | anisotropic K-correlation: Lx along the axis at `angle_deg` (from the tangent x towards y; default 0), Ly across it |
 //! | `psd_csv`, `lx_um`, `ly_um`, `angle_deg` | measured_psd_ssa_aniso, measured_psd_aniso | a measured radial PSD of the de-stretched frame stretched along the axis at `angle_deg` by the ratio Ly/Lx, areas kept (physics.md §15.2; only the ratio of the two lengths is read) |
-//! | `energy` | ghs_ssa, ghs, measured_psd (the `_aniso` models: `raw` only) | `raw` (default), `krywonos`, `sigma_rel` |
-//! | `fresnel_angle` | ghs_ssa, ghs, measured_psd, `_aniso` | `halfway` (default) or `incident` |
-//! | `polarization` | ghs_ssa, ghs, measured_psd, rayleigh_rice, `_aniso` | `unpolarized` (default), `s`, `p` (incident; both scattered polarisations summed) |
-//! | `polarization_factor` | ghs_ssa, ghs, measured_psd, `_aniso` | `r` (default: scalar Fresnel R) or `q` (Rayleigh–Rice Q, physics.md §13.2) |
+//! | `psd_map`, `angle_deg` | measured_psd2d_ssa | a measured 2-D PSD on a grid (physics.md §15.4): `"[psd.map]"` of an included `lustre fit` material file (the default there); `angle_deg` turns the grid's frame (default 0: the scan's axes) |
+//! | `energy` | ghs_ssa, ghs, measured_psd (the `_aniso` models and measured_psd2d_ssa: `raw` only) | `raw` (default), `krywonos`, `sigma_rel` |
+//! | `fresnel_angle` | ghs_ssa, ghs, measured_psd, `_aniso`, measured_psd2d_ssa | `halfway` (default) or `incident` |
+//! | `polarization` | ghs_ssa, ghs, measured_psd, rayleigh_rice, `_aniso`, measured_psd2d_ssa | `unpolarized` (default), `s`, `p` (incident; both scattered polarisations summed) |
+//! | `polarization_factor` | ghs_ssa, ghs, measured_psd, `_aniso`, measured_psd2d_ssa | `r` (default: scalar Fresnel R) or `q` (Rayleigh–Rice Q, physics.md §13.2) |
 //! | `psd_csv` | measured_psd, rayleigh_rice, measured_psd_(ssa_)aniso | CSV `zeta_rad_per_um,p_um4` (rayleigh_rice: in place of the K-correlation keys, which must then not be set) |
 //! | `beta`, `coherent` | two_scale | macro NDF width β; `macro_ndf` (default) or `delta` |
 //! | `include`, `cutoff` | all | a `lustre fit` material file and its two-scale split (resolved by the caller) |
@@ -74,9 +75,11 @@ use alloc::vec::Vec;
 
 use crate::statistics::anisotropic::AnisotropicKc;
 use crate::statistics::kc::KcPsd;
-use crate::statistics::{EllipticalPsd, TabulatedPsd};
+use crate::statistics::{EllipticalPsd, TabulatedPsd, TabulatedPsd2d};
 use crate::wave::two_scale::{CoherentPart, TableResolution, TwoScale, TwoScaleParams};
-use crate::wave::{GhsAnisotropic, GhsFull, GhsOptions, GhsSsa, Polarization, RayleighRice};
+use crate::wave::{
+    GhsAnisotropic, GhsFull, GhsOptions, GhsSsa, GhsSsaPsd2d, Polarization, RayleighRice,
+};
 use crate::{
     BrdfError, Bxdf, Diffuse, Distribution, Fresnel, Ior, Metal, MicrofacetConductor, Reflectance,
     RoughPlastic, RoughPlasticParams, SmoothConductor, microfacet::Rotated,
@@ -148,6 +151,8 @@ pub enum ModelKind {
     MeasuredPsdSsaAniso,
     /// Full GHS of a measured PSD stretched along two axes.
     MeasuredPsdAniso,
+    /// GHS smooth-surface approximation of a measured 2-D PSD on a grid.
+    MeasuredPsd2dSsa,
     /// Lambertian reflector (no Fresnel term).
     Diffuse,
     /// GGX dielectric coat over a Lambertian base (Mitsuba's `roughplastic`).
@@ -157,7 +162,7 @@ pub enum ModelKind {
 
 impl ModelKind {
     /// Every model, in the order the documentation lists them.
-    pub const ALL: [ModelKind; 14] = [
+    pub const ALL: [ModelKind; 15] = [
         ModelKind::Ggx,
         ModelKind::Beckmann,
         ModelKind::Smooth,
@@ -170,6 +175,7 @@ impl ModelKind {
         ModelKind::GhsAniso,
         ModelKind::MeasuredPsdSsaAniso,
         ModelKind::MeasuredPsdAniso,
+        ModelKind::MeasuredPsd2dSsa,
         ModelKind::Diffuse,
         ModelKind::RoughPlastic,
     ];
@@ -189,6 +195,7 @@ impl ModelKind {
             ModelKind::GhsAniso => "ghs_aniso",
             ModelKind::MeasuredPsdSsaAniso => "measured_psd_ssa_aniso",
             ModelKind::MeasuredPsdAniso => "measured_psd_aniso",
+            ModelKind::MeasuredPsd2dSsa => "measured_psd2d_ssa",
             ModelKind::Diffuse => "diffuse",
             ModelKind::RoughPlastic => "roughplastic",
         }
@@ -223,9 +230,11 @@ impl ModelKind {
         !matches!(self, ModelKind::Diffuse | ModelKind::RoughPlastic)
     }
 
-    /// Whether the model describes a surface stretched along two axes (`ghs_ssa_aniso`,
-    /// `ghs_aniso`, `measured_psd_ssa_aniso`, `measured_psd_aniso`): its axes exist only
-    /// for a scan `lustre fit` flags anisotropic.
+    /// Whether the model describes an anisotropic surface whose parameters exist only for
+    /// a scan `lustre fit` flags anisotropic: a surface stretched along two axes
+    /// (`ghs_ssa_aniso`, `ghs_aniso`, `measured_psd_ssa_aniso`, `measured_psd_aniso`) or
+    /// a 2-D PSD that is not elliptical (`measured_psd2d_ssa`, its `[psd.map]`), so a fit
+    /// file cannot recommend it for every scan.
     pub fn stretched(self) -> bool {
         matches!(
             self,
@@ -233,6 +242,7 @@ impl ModelKind {
                 | ModelKind::GhsAniso
                 | ModelKind::MeasuredPsdSsaAniso
                 | ModelKind::MeasuredPsdAniso
+                | ModelKind::MeasuredPsd2dSsa
         )
     }
 
@@ -319,6 +329,45 @@ impl MeasuredAnisoSpec {
             self.ly_um,
             self.angle_deg.to_radians(),
         )?)
+    }
+}
+
+/// A measured 2-D PSD on a grid (physics.md §15.4), validated as [`TabulatedPsd2d::new`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct Psd2dSpec {
+    /// Nodes on each half of the ζx axis (the grid has 2·half_nx + 1 columns).
+    pub half_nx: usize,
+    /// Node rows of the half plane ζy ≥ 0 above the ζy = 0 row.
+    pub half_ny: usize,
+    /// Grid step along ζx, rad/µm.
+    pub dzx_rad_per_um: f64,
+    /// Grid step along ζy, rad/µm.
+    pub dzy_rad_per_um: f64,
+    /// P₂ at the nodes of the half plane, µm⁴: rows j = 0..=half_ny, each
+    /// i = −half_nx..=half_nx.
+    pub psd_um4: Vec<f64>,
+    /// Exponent α of the continuation beyond the grid, P ∝ s^−α along each ray.
+    pub tail_exponent: f64,
+    /// The grid's x axis from the tangent x towards y, degrees.
+    pub angle_deg: f64,
+}
+
+impl Psd2dSpec {
+    /// The table, or the error naming the key.
+    pub fn psd(&self) -> Result<TabulatedPsd2d, SpecError> {
+        TabulatedPsd2d::new(
+            self.half_nx,
+            self.half_ny,
+            self.dzx_rad_per_um,
+            self.dzy_rad_per_um,
+            &self.psd_um4,
+            self.tail_exponent,
+            self.angle_deg.to_radians(),
+        )
+        .map_err(|e| match e {
+            BrdfError::InvalidTable { .. } => SpecError::new("psd_map", e.to_string()),
+            other => other.into(),
+        })
     }
 }
 
@@ -449,6 +498,13 @@ pub enum ModelSpec {
         /// Options (energy `raw` only).
         options: GhsOptions,
     },
+    /// GHS smooth-surface approximation, measured 2-D PSD.
+    MeasuredPsd2dSsa {
+        /// The table.
+        surface: Psd2dSpec,
+        /// Options (energy `raw` only).
+        options: GhsOptions,
+    },
     /// A Lambertian reflector.
     Diffuse {
         /// Its reflectance.
@@ -485,6 +541,7 @@ impl ModelSpec {
             ModelSpec::GhsAniso { .. } => ModelKind::GhsAniso,
             ModelSpec::MeasuredPsdSsaAniso { .. } => ModelKind::MeasuredPsdSsaAniso,
             ModelSpec::MeasuredPsdAniso { .. } => ModelKind::MeasuredPsdAniso,
+            ModelSpec::MeasuredPsd2dSsa { .. } => ModelKind::MeasuredPsd2dSsa,
             ModelSpec::Diffuse { .. } => ModelKind::Diffuse,
             ModelSpec::RoughPlastic { .. } => ModelKind::RoughPlastic,
         }
@@ -648,6 +705,10 @@ impl MaterialSpec {
                 surface.psd()?;
                 raw_only(options)?;
             }
+            ModelSpec::MeasuredPsd2dSsa { surface, options } => {
+                surface.psd()?;
+                raw_only(options)?;
+            }
             ModelSpec::Diffuse { reflectance } => {
                 reflectance.build()?;
             }
@@ -793,6 +854,9 @@ impl MaterialSpec {
             ModelSpec::MeasuredPsdAniso { surface, options } => {
                 Box::new(GhsAnisotropic::full(surface.psd()?, fresnel, *options)?)
             }
+            ModelSpec::MeasuredPsd2dSsa { surface, options } => {
+                Box::new(GhsSsaPsd2d::new(surface.psd()?, fresnel, *options)?)
+            }
             ModelSpec::Diffuse { reflectance } => Box::new(Diffuse::new(reflectance.build()?)),
             ModelSpec::RoughPlastic {
                 alpha,
@@ -860,6 +924,9 @@ impl MaterialSpec {
                 let ratio = (surface.ly_um / surface.lx_um).max(surface.lx_um / surface.ly_um);
                 let z0 = surface.zeta_rad_per_um.first().copied().unwrap_or(1.0);
                 z0 / (k * libm::sqrt(ratio))
+            }
+            ModelSpec::MeasuredPsd2dSsa { surface, .. } => {
+                surface.dzx_rad_per_um.min(surface.dzy_rad_per_um) / k
             }
             ModelSpec::Smooth => 1e-3,
             ModelSpec::Diffuse { .. } => 1.0,

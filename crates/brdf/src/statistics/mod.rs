@@ -2,7 +2,7 @@
 //! K-correlation PSD ([`KcPsd`], with its validated domain) and its Matérn
 //! correlation ([`matern`]), its anisotropic stretch ([`AnisotropicKc`]) and the stretch of any radial
 //! law ([`EllipticalPsd`]), a measured, tabulated PSD ([`TabulatedPsd`],
-//! feature `alloc`), and the exponential NDF of the two-scale model's macro
+//! feature `alloc`) and a measured 2-D one ([`TabulatedPsd2d`]), and the exponential NDF of the two-scale model's macro
 //! surface ([`epd`]). [`RadialPsd`] is what the GHS models need of a PSD,
 //! [`Correlation`](crate::numerics::hankel::Correlation) what the Hankel
 //! transforms need of its covariance.
@@ -18,12 +18,16 @@ pub mod kc;
 pub mod matern;
 #[cfg(feature = "alloc")]
 pub mod measured_psd;
+#[cfg(feature = "alloc")]
+pub mod psd2d;
 
 pub use anisotropic::AnisotropicKc;
 pub use elliptical::{EllipticalPsd, StretchedPsd};
 pub use kc::KcPsd;
 #[cfg(feature = "alloc")]
 pub use measured_psd::TabulatedPsd;
+#[cfg(feature = "alloc")]
+pub use psd2d::TabulatedPsd2d;
 
 /// An isotropic surface height PSD as the GHS models use it: in the
 /// dimensionless frequency u = L·ζ (ζ in rad/µm) with a length L of the

@@ -28,6 +28,8 @@ pub mod ggx_kc;
 pub mod ghs;
 #[cfg(feature = "alloc")]
 pub mod ghs_aniso;
+#[cfg(feature = "alloc")]
+pub mod ghs_psd2d;
 pub mod ghs_ssa;
 #[cfg(feature = "alloc")]
 pub mod ghs_table;
@@ -43,6 +45,8 @@ pub use energy::{Energy, FresnelAngle, GhsOptions};
 pub use ghs::{GhsFull, TableSource};
 #[cfg(feature = "alloc")]
 pub use ghs_aniso::GhsAnisotropic;
+#[cfg(feature = "alloc")]
+pub use ghs_psd2d::GhsSsaPsd2d;
 pub use ghs_ssa::GhsSsa;
 pub use polarization::{Polarization, PolarizationFactor};
 pub use rayleigh_rice::RayleighRice;

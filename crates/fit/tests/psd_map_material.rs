@@ -1,0 +1,119 @@
+//! `[psd.map]` in the material file (physics.md §15.4): two crossing lays (a 2-D PSD that
+//! is not elliptical) get a usable grid that survives a TOML round trip, is offered, and an
+//! `include` with `model = "measured_psd2d_ssa"` builds the model of that grid; a stretched
+//! (elliptical) map and an isotropic one get no grid and are not offered the model.
+
+use brdf::spec::{MaterialDesc, MaterialFile, ModelKind, ModelSpec, NoFiles};
+use fit::kc2d::{self, AnisoKcParams};
+use fit::material_file::{self as material, Provenance};
+use fit::pipeline::{Options, analyse};
+
+const UM: f64 = 1e-6;
+
+fn prov(file: &str) -> Provenance<'_> {
+    Provenance {
+        file,
+        bytes: b"",
+        stylus: None,
+        merge_cutoff_rad_per_um: 1.0,
+        metal: "cu",
+        model: "auto",
+        notes: &[],
+    }
+}
+
+fn stretched(ratio: f64, angle_deg: f64, sigma_um: f64) -> AnisoKcParams {
+    AnisoKcParams {
+        sigma: sigma_um * UM,
+        lx: 0.25 * UM,
+        ly: 0.25 * UM * ratio,
+        angle_rad: angle_deg.to_radians(),
+        gamma: 3.0,
+    }
+}
+
+fn file_of(t: fit::Topography, name: &str) -> MaterialFile {
+    let a = analyse(t, None, &Options::default()).unwrap();
+    let doc = material::build(&a, &prov(name));
+    let text = material::to_toml(&doc).unwrap();
+    let back: MaterialFile = toml::from_str(&text).unwrap();
+    assert_eq!(back.psd, doc.psd, "{name}: [psd] does not round-trip");
+    back
+}
+
+fn offers_map(doc: &MaterialFile) -> bool {
+    doc.offered()
+        .iter()
+        .any(|o| o.model == Some(ModelKind::MeasuredPsd2dSsa))
+}
+
+#[test]
+fn crossing_lays_get_a_grid_that_builds() {
+    let dx = 20.0 * UM / 256.0;
+    let a = kc2d::synth_surface(256, 256, dx, stretched(8.0, 0.0, 0.01), 5);
+    let b = kc2d::synth_surface(256, 256, dx, stretched(8.0, 70.0, 0.006), 6);
+    let mut t = a.clone();
+    for (h, g) in t.heights.iter_mut().zip(&b.heights) {
+        *h += g;
+    }
+    let doc = file_of(t, "crossed");
+    let m = doc.psd.as_ref().and_then(|p| p.map.as_ref()).unwrap();
+    println!(
+        "crossed: {}×{} nodes, step {:.3} rad/µm, α {}, tail {:.4}; {}",
+        2 * m.half_nx + 1,
+        m.half_ny + 1,
+        m.dzx_rad_per_um,
+        m.tail_exponent,
+        m.tail_fraction,
+        doc.reliability.psd_destretched
+    );
+    assert!(m.usable);
+    assert!(m.half_nx <= fit::psd_map::HALF_NODES && m.half_ny <= fit::psd_map::HALF_NODES);
+    assert!(
+        m.tail_fraction > 0.0 && m.tail_fraction < 0.2,
+        "{}",
+        m.tail_fraction
+    );
+    assert!(offers_map(&doc));
+    let desc = MaterialDesc {
+        model: Some(ModelKind::MeasuredPsd2dSsa),
+        ..MaterialDesc::default()
+    };
+    let spec = doc.resolve(&desc, &mut NoFiles).unwrap();
+    let ModelSpec::MeasuredPsd2dSsa { surface, .. } = &spec.model else {
+        panic!("{:?}", spec.model);
+    };
+    assert_eq!(surface.psd_um4, m.p_um4);
+    assert_eq!(surface.angle_deg, 0.0);
+    let table = surface.psd().unwrap();
+    // σ of the grid with its tail against the two lays' (0.01² + 0.006² µm²).
+    let want = (0.01f64.powi(2) + 0.006f64.powi(2)).sqrt();
+    assert!(
+        (table.sigma_um() / want - 1.0).abs() < 0.15,
+        "σ {} vs {want}",
+        table.sigma_um()
+    );
+    spec.build().unwrap();
+}
+
+#[test]
+fn elliptical_and_isotropic_maps_get_no_grid() {
+    let dx = 20.0 * UM / 256.0;
+    for (name, p) in [
+        ("stretched", stretched(5.0, 30.0, 0.01)),
+        ("isotropic", stretched(1.0, 0.0, 0.01)),
+    ] {
+        let doc = file_of(kc2d::synth_surface(256, 256, dx, p, 3), name);
+        assert!(
+            doc.psd.as_ref().is_some_and(|p| p.map.is_none()),
+            "{name}: a grid was written"
+        );
+        assert!(!offers_map(&doc), "{name}");
+        let desc = MaterialDesc {
+            model: Some(ModelKind::MeasuredPsd2dSsa),
+            ..MaterialDesc::default()
+        };
+        let e = doc.resolve(&desc, &mut NoFiles).unwrap_err();
+        assert_eq!(e.field, "psd_map", "{name}: {e}");
+    }
+}
