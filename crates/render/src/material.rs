@@ -51,6 +51,8 @@ pub fn delta_by_cos_only(kind: ModelKind) -> bool {
             | ModelKind::RayleighRice
             | ModelKind::GhsSsaAniso
             | ModelKind::GhsAniso
+            | ModelKind::MeasuredPsdSsaAniso
+            | ModelKind::MeasuredPsdAniso
     )
 }
 

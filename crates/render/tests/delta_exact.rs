@@ -53,6 +53,20 @@ fn materials() -> Vec<(&'static str, String)> {
             "ghs_ssa_aniso",
             format!("model = \"ghs_ssa_aniso\"\nmetal = \"cu\"\n{aniso}"),
         ),
+        (
+            "measured_psd_aniso",
+            format!(
+                "model = \"measured_psd_aniso\"\nmetal = \"au\"\npsd_csv = \"{}\"\nlx_um = 1.0\nly_um = 4.0\nangle_deg = 30.0\n",
+                psd.display()
+            ),
+        ),
+        (
+            "measured_psd_ssa_aniso",
+            format!(
+                "model = \"measured_psd_ssa_aniso\"\nmetal = \"cu\"\npsd_csv = \"{}\"\nlx_um = 2.0\nly_um = 3.0\nangle_deg = -70.0\n",
+                psd.display()
+            ),
+        ),
     ]
 }
 
