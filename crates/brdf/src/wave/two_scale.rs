@@ -239,32 +239,40 @@ impl TwoScale {
             // tanθ, the macro NDF's Λ there, and the lobe Λ at every w node.
             let at_i = Incidence::new(self, wi);
             let lambda_eff_i = self.table.lambda_nodes(at_i.tan_i);
-            // Per polar node of wo: its tanθ (exactly sinθo/cosθo there),
-            // the macro NDF's Λ and the lobe Λ at every w node, shared by
-            // all its azimuths and wavenumbers.
-            let per_row = |zo: f64, so: f64| {
-                let tan_o = so / zo;
-                (
-                    tan_o,
-                    self.macro_lambda_or_zero(tan_o),
-                    self.table.lambda_nodes(tan_o),
-                )
+            // Per polar ring of h: tanθh, the macro NDF there and D̃_eff at
+            // every w node, shared by all its azimuths and wavenumbers.
+            let per_ring = |ch: f64, sh: f64| {
+                let tan_h = sh / ch;
+                let d_macro = match self.coherent {
+                    CoherentPart::MacroNdf => self.ndf.d_tan_cos(tan_h, ch),
+                    CoherentPart::Delta => 0.0,
+                };
+                (tan_h, d_macro, self.table.d_nodes(tan_h))
             };
-            albedo_cap::albedo_many(mu, width, out, per_row, |row, wo, values| {
-                let (tan_o, macro_lambda_o, lambda_eff_o) = row;
-                match self.pair_with(&at_i, wo, *tan_o, *macro_lambda_o) {
-                    Some(p) => {
-                        for (v, &k) in values.iter_mut().zip(ks) {
-                            let f = self.glossy_with(
-                                &p,
-                                k,
-                                |wb| self.table.mix_nodes(wb, |i| lambda_eff_i[i]),
-                                |wb| self.table.mix_nodes(wb, |i| lambda_eff_o[i]),
-                            );
-                            *v = finite_nonneg(f);
-                        }
-                    }
-                    None => values.fill(0.0),
+            albedo_cap::albedo_many_half(mu, width, out, per_ring, |ring, h, wo, values| {
+                let (tan_h, d_macro, d_eff_h) = ring;
+                let tan_o = libm::hypot(wo.x, wo.y) / wo.z;
+                let p = Pair {
+                    zi: wi.z,
+                    zo: wo.z,
+                    h_z: h.z,
+                    cos_d: wi.dot(h),
+                    tan_h: *tan_h,
+                    tan_i: at_i.tan_i,
+                    tan_o,
+                    d_macro: *d_macro,
+                    macro_lambda_i: at_i.macro_lambda_i,
+                    macro_lambda_o: self.macro_lambda_or_zero(tan_o),
+                };
+                for (v, &k) in values.iter_mut().zip(ks) {
+                    let f = self.glossy_with(
+                        &p,
+                        k,
+                        |wb| self.table.mix_nodes(wb, |i| d_eff_h[i]),
+                        |wb| self.table.mix_nodes(wb, |i| lambda_eff_i[i]),
+                        |wb| self.table.lambda(wb, tan_o),
+                    );
+                    *v = finite_nonneg(f);
                 }
             });
             for (e, &k) in out.iter_mut().zip(ks) {
@@ -459,25 +467,27 @@ impl TwoScale {
         self.glossy_with(
             p,
             k,
+            |wb| self.table.d_eff(wb, p.tan_h),
             |wb| self.table.lambda(wb, p.tan_i),
             |wb| self.table.lambda(wb, p.tan_o),
         )
     }
 
-    /// [`TwoScale::glossy`] given the D̃_eff table's Λ at wi and at wo for a
-    /// w bracket.
+    /// [`TwoScale::glossy`] given the D̃_eff table's value at h and its Λ at
+    /// wi and at wo for a w bracket.
     #[inline]
     fn glossy_with(
         &self,
         p: &Pair,
         k: f64,
+        d_eff: impl Fn((usize, f64)) -> f64,
         lambda_eff_i: impl Fn((usize, f64)) -> f64,
         lambda_eff_o: impl Fn((usize, f64)) -> f64,
     ) -> f64 {
         let cos_d = p.cos_d.min(1.0);
         let w = 2.0 * k * cos_d * self.psd.lc_um();
         let wb = self.table.w_bracket(w);
-        let d_eff = self.table.d_eff(wb, p.tan_h);
+        let d_eff = d_eff(wb);
         let (a_d, one_minus_a_d) = self.coherent_fraction(k, cos_d);
         let lobe = match self.coherent {
             CoherentPart::MacroNdf => a_d * p.d_macro + one_minus_a_d * d_eff,

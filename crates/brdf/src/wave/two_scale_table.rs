@@ -455,6 +455,12 @@ impl EffTable {
         (0..self.nw).map(|i| self.lambda_node(i, tan_t)).collect()
     }
 
+    /// The normalised D̃_eff at every w node for tanθh (for
+    /// [`EffTable::mix_nodes`] at many w brackets and one θh).
+    pub(crate) fn d_nodes(&self, tan_t: f64) -> Vec<f64> {
+        (0..self.nw).map(|i| self.d_node(i, tan_t)).collect()
+    }
+
     /// Smith Λ of the normalised D̃_eff at node i for tanθ.
     #[inline]
     fn lambda_node(&self, i: usize, tan_t: f64) -> f64 {
