@@ -322,7 +322,9 @@ pub(crate) fn material_spec(keys: &Map<String, Value>) -> Result<MaterialSpec, Q
         Some(name) => ModelKind::from_name(name).is_none_or(ModelKind::conductor),
         None => true,
     };
+    // An `include`d material file supplies the index itself.
     if conductor
+        && !q.contains_key("include")
         && !["fresnel", "metal", "nk", "nk_csv"]
             .iter()
             .any(|k| q.contains_key(*k))
@@ -362,10 +364,12 @@ pub(crate) fn material_spec(keys: &Map<String, Value>) -> Result<MaterialSpec, Q
         QueryError::new(field.clone(), format!("`{field}`: {msg}"))
     })?;
     if desc.include.is_some() {
-        return Err(QueryError::new(
-            "include",
-            "`include` is for scene files; give the material's parameters in the query",
-        ));
+        // A `lustre fit` material file, with the query's keys over it, as a scene's
+        // `[materials.NAME]` includes it (relative to the working directory).
+        let here = std::path::Path::new(".");
+        let mut inputs = render::inputs::Inputs::new(here);
+        return render::material::resolve_spec(&desc, here, &mut inputs)
+            .map_err(|e| QueryError::new("include", e));
     }
     desc.into_spec(&mut EvalFiles).map_err(|e| {
         // A query's isotropic `alpha` is checked as α_x = α_y.
@@ -401,7 +405,7 @@ fn answer(line: &str, cache: &mut ModelCache) -> Result<Value, QueryError> {
     for k in GEOMETRY {
         q.remove(k);
     }
-    if !q.contains_key("model") {
+    if !q.contains_key("model") && !q.contains_key("include") {
         return Err(QueryError::new(
             "model",
             format!("missing `model`: one of {}", ModelKind::names()),
@@ -410,7 +414,9 @@ fn answer(line: &str, cache: &mut ModelCache) -> Result<Value, QueryError> {
     // The material keys as written map to the model's key once: repeated queries skip
     // parsing, validation and key formatting. Queries naming files are resolved every
     // time, so a table edited during the stream is read again.
-    let names_files = q.contains_key("nk_csv") || q.contains_key("psd_csv");
+    let names_files = ["nk_csv", "psd_csv", "reflectance_csv", "include"]
+        .iter()
+        .any(|k| q.contains_key(*k));
     let text = (!names_files).then(|| Value::Object(q.clone()).to_string());
     let known = text
         .as_ref()
