@@ -276,56 +276,73 @@ pub(crate) fn kernel_width<C: Correlation + ?Sized>(c: &C, g: f64) -> f64 {
         return f64::INFINITY;
     }
     let target = -libm::expm1(-g) / g;
-    // 1 − M increases from 0 to 1; bracket in ln x. ln(1 − M) is nearly
-    // linear in ln x away from the ends, so false position (Illinois) takes
-    // ~10 evaluations where bisection to the same 1e−13 took ~53 (M costs
-    // Bessel functions, and a table asks for a width per row); a step that
-    // does not halve the bracket is followed by a bisection, so it is never
-    // slower than twice bisection.
-    let ln_target = crate::numerics::math::ln(target);
-    let phi = |t: f64| {
-        let v = c.one_minus_m(crate::numerics::math::exp(t));
-        crate::numerics::math::ln(v.max(f64::MIN_POSITIVE)) - ln_target
-    };
+    // 1 − M increases from 0 to 1; bracket in ln x, bisected to half a unit
+    // of ln x (which crossing is found is decided there, as by bisection to
+    // the end), then refined by false position (Illinois) on a function
+    // nearly linear across the bracket: ~8 evaluations where bisection to
+    // the same 1e−13 took ~42 more (M costs Bessel functions, and a table
+    // asks for a width per row).
+    let omm_at = |t: f64| c.one_minus_m(crate::numerics::math::exp(t));
     let (mut lo, mut hi) = (-700.0f64, 8.0f64);
-    let (mut f_lo, mut f_hi) = (phi(lo), phi(hi));
-    if f_hi < 0.0 {
+    if omm_at(hi) < target {
         return crate::numerics::math::exp(hi);
     }
-    if !(f_lo < 0.0) {
-        return crate::numerics::math::exp(lo);
-    }
-    // Which end the last two steps kept (−1 lo, +1 hi), and whether to bisect.
-    let mut kept = 0i8;
-    let mut bisect = false;
-    for _ in 0..200 {
-        if hi - lo < 1e-13 {
-            break;
-        }
-        let width = hi - lo;
-        let mid = if bisect {
-            0.5 * (lo + hi)
-        } else {
-            let t = hi - f_hi * (hi - lo) / (f_hi - f_lo);
-            if t > lo && t < hi { t } else { 0.5 * (lo + hi) }
-        };
-        let f = phi(mid);
-        if f < 0.0 {
+    while hi - lo > 0.5 {
+        let mid = 0.5 * (lo + hi);
+        if omm_at(mid) < target {
             lo = mid;
-            f_lo = f;
-            if kept == 1 {
-                f_hi *= 0.5;
-            }
-            kept = 1;
         } else {
             hi = mid;
+        }
+    }
+    // ln(1 − M) where 1 − M is small at the root; where M is (target ≥ ½),
+    // −ln M (≈ x for most correlations): both increase with t.
+    let ln_target = crate::numerics::math::ln(target);
+    let ln_m_target = libm::log1p(-target);
+    let phi = |t: f64| {
+        if target < 0.5 {
+            crate::numerics::math::ln(omm_at(t).max(f64::MIN_POSITIVE)) - ln_target
+        } else {
+            let m = c.m(crate::numerics::math::exp(t));
+            ln_m_target - crate::numerics::math::ln(m.max(f64::MIN_POSITIVE))
+        }
+    };
+    let (mut f_lo, mut f_hi) = (phi(lo), phi(hi));
+    // Which end moved last (−1 lo, +1 hi): when one end moves twice, the
+    // other's value is halved (Illinois), so both ends converge.
+    let mut moved = 0i8;
+    for _ in 0..100 {
+        if hi - lo < 1e-13 || !(f_lo < 0.0 && f_hi >= 0.0) || f_hi == 0.0 {
+            break;
+        }
+        let t = (lo * f_hi - hi * f_lo) / (f_hi - f_lo);
+        let t = if t > lo && t < hi { t } else { 0.5 * (lo + hi) };
+        let f = phi(t);
+        if f < 0.0 {
+            lo = t;
+            f_lo = f;
+            if moved == -1 {
+                f_hi *= 0.5;
+            }
+            moved = -1;
+        } else {
+            hi = t;
             f_hi = f;
-            if kept == -1 {
+            if moved == 1 {
                 f_lo *= 0.5;
             }
-            kept = -1;
+            moved = 1;
         }
-        bisect = hi - lo > 0.5 * width;
+    }
+    // Bisection ends the search if the two functions disagree on a side at
+    // round-off or false position stalls.
+    while hi - lo >= 1e-13 {
+        let mid = 0.5 * (lo + hi);
+        if omm_at(mid) < target {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
     }
     crate::numerics::math::exp(0.5 * (lo + hi))
 }
