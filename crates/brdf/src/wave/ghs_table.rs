@@ -703,11 +703,10 @@ impl Orders {
         // Σ_j Mⁿ x_j² and Σ_j Mⁿ x_j⁴ for every order, before any transform:
         // which rows the orders cover depends on them.
         let (mut m0, mut m2) = ([0.0; POISSON_ORDERS], [0.0; POISSON_ORDERS]);
-        for (i, (m0, m2)) in m0.iter_mut().zip(m2.iter_mut()).enumerate() {
-            let order = i as i32 + 1;
-            for &(x, m, _) in &lattice.at[..extent] {
-                let mn = pow_int(m, order);
-                let x2 = x * x;
+        for &(x, m, _) in &lattice.at[..extent] {
+            let (x2, mut mn) = (x * x, 1.0);
+            for (m0, m2) in m0.iter_mut().zip(m2.iter_mut()) {
+                mn *= m;
                 *m0 += mn * x2;
                 *m2 += mn * x2 * x2;
             }
@@ -776,9 +775,12 @@ impl Orders {
     fn set_transforms(&mut self, outs: Vec<Vec<f64>>) {
         let n = self.len;
         let mut rem = vec![0.0; n * POISSON_ORDERS];
-        for (i, re) in outs.iter().enumerate() {
-            for (j, v) in re.iter().enumerate() {
-                rem[j * POISSON_ORDERS + i] = v / (2.0 * PI);
+        // Written in order (read from the orders in turn): writing each
+        // order's values at a stride of N doubles missed the cache on
+        // every store.
+        for (j, at) in rem.chunks_exact_mut(POISSON_ORDERS).enumerate() {
+            for (slot, re) in at.iter_mut().zip(&outs) {
+                *slot = re[j] / (2.0 * PI);
             }
         }
         self.rem = rem;
@@ -856,12 +858,19 @@ impl PoissonRow {
         let pos = (ln_u.max(self.ln_u_flat) - o.s0) / o.dt;
         let i = (libm::floor(pos) as isize).clamp(1, o.len as isize - 3) as usize;
         let wts = lagrange4(pos - i as f64);
-        let mut r = 0.0;
-        for (k, wk) in wts.iter().enumerate() {
-            let at = &o.rem[(i - 1 + k) * POISSON_ORDERS..(i + k) * POISSON_ORDERS];
-            let s: f64 = at.iter().zip(&self.coef).map(|(a, b)| a * b).sum();
-            r += wk * s;
+        // Interpolated orders first (independent lanes), then their sum in
+        // four partial sums: one chain of 64 dependent additions was most
+        // of a column's cost.
+        let at = &o.rem[(i - 1) * POISSON_ORDERS..(i + 3) * POISSON_ORDERS];
+        let (r0, rest) = at.split_at(POISSON_ORDERS);
+        let (r1, rest) = rest.split_at(POISSON_ORDERS);
+        let (r2, r3) = rest.split_at(POISSON_ORDERS);
+        let mut lanes = [0.0; 4];
+        for n in 0..POISSON_ORDERS {
+            let v = wts[0] * r0[n] + wts[1] * r1[n] + wts[2] * r2[n] + wts[3] * r3[n];
+            lanes[n % 4] += self.coef[n] * v;
         }
+        let r = (lanes[0] + lanes[1]) + (lanes[2] + lanes[3]);
         (analytic, r)
     }
 }
