@@ -626,8 +626,10 @@ struct Orders {
     dt: f64,
     /// Grid points of the output.
     len: usize,
-    /// (1/2π)·transform of fₙ at u_j = e^{s0 + jΔ}, at j·N + n − 1.
-    rem: Vec<f64>,
+    /// (1/2π)·transform of fₙ at u_j = e^{s0 + jΔ}, one vector per order
+    /// (at n − 1): each order's task writes its own, so nothing is copied
+    /// after the fan-out.
+    rem: Vec<Vec<f64>>,
     /// Σ_j Mⁿ x_j² and Σ_j Mⁿ x_j⁴ over the window (∝ pₙ(0) and its
     /// second moment), at n − 1.
     m0: [f64; POISSON_ORDERS],
@@ -743,8 +745,7 @@ impl Orders {
         Some(o)
     }
 
-    /// The transform of f_{i+1} on the orders' window (1/2π applied by
-    /// [`Orders::set_transforms`]).
+    /// (1/2π)·transform of f_{i+1} on the orders' window.
     fn transform(&self, fft: &Plans, i: usize) -> Vec<f64> {
         let order = i as i32 + 1;
         let (n, extent) = (self.len, self.extent);
@@ -768,22 +769,16 @@ impl Orders {
         } else {
             re.resize(n, 0.0);
         }
+        for v in re.iter_mut() {
+            *v /= 2.0 * PI;
+        }
         re
     }
 
     /// Takes the transforms of the orders 1…N ([`Orders::transform`]).
     fn set_transforms(&mut self, outs: Vec<Vec<f64>>) {
-        let n = self.len;
-        let mut rem = vec![0.0; n * POISSON_ORDERS];
-        // Written in order (read from the orders in turn): writing each
-        // order's values at a stride of N doubles missed the cache on
-        // every store.
-        for (j, at) in rem.chunks_exact_mut(POISSON_ORDERS).enumerate() {
-            for (slot, re) in at.iter_mut().zip(&outs) {
-                *slot = re[j] / (2.0 * PI);
-            }
-        }
-        self.rem = rem;
+        debug_assert!(outs.len() == POISSON_ORDERS && outs.iter().all(|v| v.len() == self.len));
+        self.rem = outs;
     }
 
     /// gⁿ/n! for n = 1…N at n − 1 (those below the first order summed: 0).
@@ -861,14 +856,11 @@ impl PoissonRow {
         // Interpolated orders first (independent lanes), then their sum in
         // four partial sums: one chain of 64 dependent additions was most
         // of a column's cost.
-        let at = &o.rem[(i - 1) * POISSON_ORDERS..(i + 3) * POISSON_ORDERS];
-        let (r0, rest) = at.split_at(POISSON_ORDERS);
-        let (r1, rest) = rest.split_at(POISSON_ORDERS);
-        let (r2, r3) = rest.split_at(POISSON_ORDERS);
         let mut lanes = [0.0; 4];
-        for n in 0..POISSON_ORDERS {
-            let v = wts[0] * r0[n] + wts[1] * r1[n] + wts[2] * r2[n] + wts[3] * r3[n];
-            lanes[n % 4] += self.coef[n] * v;
+        for (n, (c, rem)) in self.coef.iter().zip(&o.rem).enumerate() {
+            let r = &rem[i - 1..i + 3];
+            let v = wts[0] * r[0] + wts[1] * r[1] + wts[2] * r[2] + wts[3] * r[3];
+            lanes[n % 4] += c * v;
         }
         let r = (lanes[0] + lanes[1]) + (lanes[2] + lanes[3]);
         (analytic, r)
