@@ -616,14 +616,20 @@ struct Orders {
     /// aₙ and bₙ at n − 1.
     a: [f64; POISSON_ORDERS],
     b: [f64; POISSON_ORDERS],
-    /// ε_b.
+    /// ε_b = e^{s_b Δ}.
     eps_b: f64,
+    s_b: i64,
+    /// The window starts at x_{j0}; the orders are zero past `extent` points.
+    j0: i64,
+    extent: usize,
     s0: f64,
     dt: f64,
     /// Grid points of the output.
     len: usize,
-    /// (1/2π)·transform of fₙ at u_j = e^{s0 + jΔ}, at j·N + n − 1.
-    rem: Vec<f64>,
+    /// (1/2π)·transform of fₙ at u_j = e^{s0 + jΔ}, one vector per order
+    /// (at n − 1): each order's task writes its own, so nothing is copied
+    /// after the fan-out.
+    rem: Vec<Vec<f64>>,
     /// Σ_j Mⁿ x_j² and Σ_j Mⁿ x_j⁴ over the window (∝ pₙ(0) and its
     /// second moment), at n − 1.
     m0: [f64; POISSON_ORDERS],
@@ -632,9 +638,9 @@ struct Orders {
     lattice: Lattice,
 }
 
-/// One row of small g as a sum over [`Orders`].
-struct PoissonRow<'a> {
-    orders: &'a Orders,
+/// One row of small g as a sum over [`Orders`] (which the caller passes to
+/// [`PoissonRow::parts_ln`]: rows are made while the orders are transformed).
+struct PoissonRow {
     /// e^{−g} gⁿ/n! at n − 1 (0 below the first order summed).
     coef: [f64; POISSON_ORDERS],
     /// Σ cₙaₙ and Σ cₙbₙ: the weights of p_K(u) and ε_b² p_K(ε_b u).
@@ -645,9 +651,10 @@ struct PoissonRow<'a> {
 }
 
 impl Orders {
-    /// The order transforms, or `None` when their window would be longer
+    /// The orders' window, lattice and moments, without their transforms
+    /// ([`Orders::transform`]), or `None` when their window would be longer
     /// than a row's longest (then every row is transformed on its own).
-    fn build<C: Correlation + Sync + ?Sized>(
+    fn prepare<C: Correlation + Sync + ?Sized>(
         c: &C,
         fft: &mut Plans,
         apart: bool,
@@ -694,38 +701,16 @@ impl Orders {
         // K(x_j/ε_b) = K at k = j − s_b.
         let lattice = Lattice::span(c, span, (j0, j0 + extent as i64 - s_b), dt, None);
         fft.add(n);
-        let plan = fft.get(n);
         let n_lo = if apart { 2 } else { 1 };
-        let outs = crate::parallel::map_rows(POISSON_ORDERS, |i| {
-            let order = i as i32 + 1;
-            let mut f = vec![0.0; extent];
-            let (mut m0, mut m2) = (0.0, 0.0);
-            let (k1, kb) = (lattice.cusp.as_slice(), &lattice.cusp[(-s_b) as usize..]);
-            for (j, slot) in f.iter_mut().enumerate() {
-                let (x, m, _) = lattice.at[j];
-                let mn = pow_int(m, order);
-                let x2 = x * x;
-                m0 += mn * x2;
-                m2 += mn * x2 * x2;
-                *slot = mn - a[i] * k1[j] - b[i] * kb[j];
-            }
-            let (mut re, mut im) = (Vec::new(), Vec::new());
-            // f₁ = M − K vanishes where the subtracted K is M itself (the
-            // closed-form covariances): its transform is 0.
-            if order as usize >= n_lo && f.iter().any(|&v| v != 0.0) {
-                plan.transform(t0, &f, &mut re, &mut im);
-            } else {
-                re.resize(n, 0.0);
-            }
-            (re, m0, m2)
-        });
-        let mut rem = vec![0.0; n * POISSON_ORDERS];
+        // Σ_j Mⁿ x_j² and Σ_j Mⁿ x_j⁴ for every order, before any transform:
+        // which rows the orders cover depends on them.
         let (mut m0, mut m2) = ([0.0; POISSON_ORDERS], [0.0; POISSON_ORDERS]);
-        for (i, (re, x0, x2)) in outs.iter().enumerate() {
-            m0[i] = *x0;
-            m2[i] = *x2;
-            for (j, v) in re.iter().enumerate() {
-                rem[j * POISSON_ORDERS + i] = v / (2.0 * PI);
+        for &(x, m, _) in &lattice.at[..extent] {
+            let (x2, mut mn) = (x * x, 1.0);
+            for (m0, m2) in m0.iter_mut().zip(m2.iter_mut()) {
+                mn *= m;
+                *m0 += mn * x2;
+                *m2 += mn * x2 * x2;
             }
         }
         Some(Orders {
@@ -733,14 +718,67 @@ impl Orders {
             a,
             b,
             eps_b,
+            s_b,
+            j0,
+            extent,
             s0: -(t0 + (n - 1) as f64 * dt),
             dt,
             len: n,
-            rem,
+            rem: Vec::new(),
             m0,
             m2,
             lattice,
         })
+    }
+
+    /// The orders with their transforms ([`Orders::prepare`], then
+    /// [`Orders::transform`] of each, [`Orders::set_transforms`]).
+    #[cfg(test)]
+    fn build<C: Correlation + Sync + ?Sized>(
+        c: &C,
+        fft: &mut Plans,
+        apart: bool,
+    ) -> Option<Orders> {
+        let mut o = Orders::prepare(c, fft, apart)?;
+        let outs = crate::parallel::map_rows(POISSON_ORDERS, |i| o.transform(fft, i));
+        o.set_transforms(outs);
+        Some(o)
+    }
+
+    /// (1/2π)·transform of f_{i+1} on the orders' window.
+    fn transform(&self, fft: &Plans, i: usize) -> Vec<f64> {
+        let order = i as i32 + 1;
+        let (n, extent) = (self.len, self.extent);
+        let plan = fft.get(n);
+        let lattice = &self.lattice;
+        let mut f = vec![0.0; extent];
+        let (k1, kb) = (
+            lattice.cusp.as_slice(),
+            &lattice.cusp[(-self.s_b) as usize..],
+        );
+        for (j, slot) in f.iter_mut().enumerate() {
+            let (_, m, _) = lattice.at[j];
+            let mn = pow_int(m, order);
+            *slot = mn - self.a[i] * k1[j] - self.b[i] * kb[j];
+        }
+        let (mut re, mut im) = (Vec::new(), Vec::new());
+        // f₁ = M − K vanishes where the subtracted K is M itself (the
+        // closed-form covariances): its transform is 0.
+        if order as usize >= self.n_lo && f.iter().any(|&v| v != 0.0) {
+            plan.transform(self.j0 as f64 * self.dt, &f, &mut re, &mut im);
+        } else {
+            re.resize(n, 0.0);
+        }
+        for v in re.iter_mut() {
+            *v /= 2.0 * PI;
+        }
+        re
+    }
+
+    /// Takes the transforms of the orders 1…N ([`Orders::transform`]).
+    fn set_transforms(&mut self, outs: Vec<Vec<f64>>) {
+        debug_assert!(outs.len() == POISSON_ORDERS && outs.iter().all(|v| v.len() == self.len));
+        self.rem = outs;
     }
 
     /// gⁿ/n! for n = 1…N at n − 1 (those below the first order summed: 0).
@@ -772,7 +810,7 @@ impl Orders {
         poisson_tail_bound(g) * self.m0[1] <= POISSON_TOL * peak
     }
 
-    fn row<C: Correlation + ?Sized>(&self, c: &C, g: f64) -> PoissonRow<'_> {
+    fn row<C: Correlation + ?Sized>(&self, c: &C, g: f64) -> PoissonRow {
         let e = crate::numerics::math::exp(-g);
         let mut coef = self.powers(g);
         let (mut cusp, mut m0, mut m2) = ([0.0; 2], 0.0, 0.0);
@@ -786,7 +824,6 @@ impl Orders {
         let ell = libm::sqrt(m2 / m0);
         let xs = kernel_width(c, g);
         PoissonRow {
-            orders: self,
             coef,
             cusp,
             ell,
@@ -800,33 +837,43 @@ impl Orders {
     }
 }
 
-impl PoissonRow<'_> {
-    /// As [`Row::parts_ln`]: (exact part, the rest) at u.
-    fn parts_ln<C: Correlation + ?Sized>(&self, c: &C, u: f64, ln_u: f64) -> (f64, f64) {
-        let o = self.orders;
+impl PoissonRow {
+    /// As [`Row::parts_ln`]: (exact part, the rest) at u, from the orders
+    /// the row was made from.
+    fn parts_ln<C: Correlation + ?Sized>(
+        &self,
+        o: &Orders,
+        c: &C,
+        u: f64,
+        ln_u: f64,
+    ) -> (f64, f64) {
         let eb = o.eps_b;
         let analytic =
             self.cusp[0] * c.cusp_psd_u(u) + self.cusp[1] * eb * eb * c.cusp_psd_u(eb * u);
         let pos = (ln_u.max(self.ln_u_flat) - o.s0) / o.dt;
         let i = (libm::floor(pos) as isize).clamp(1, o.len as isize - 3) as usize;
         let wts = lagrange4(pos - i as f64);
-        let mut r = 0.0;
-        for (k, wk) in wts.iter().enumerate() {
-            let at = &o.rem[(i - 1 + k) * POISSON_ORDERS..(i + k) * POISSON_ORDERS];
-            let s: f64 = at.iter().zip(&self.coef).map(|(a, b)| a * b).sum();
-            r += wk * s;
+        // Interpolated orders first (independent lanes), then their sum in
+        // four partial sums: one chain of 64 dependent additions was most
+        // of a column's cost.
+        let mut lanes = [0.0; 4];
+        for (n, (c, rem)) in self.coef.iter().zip(&o.rem).enumerate() {
+            let r = &rem[i - 1..i + 3];
+            let v = wts[0] * r[0] + wts[1] * r[1] + wts[2] * r[2] + wts[3] * r[3];
+            lanes[n % 4] += c * v;
         }
+        let r = (lanes[0] + lanes[1]) + (lanes[2] + lanes[3]);
         (analytic, r)
     }
 }
 
 /// A table row: transformed on its own, or summed from the orders.
-enum TableRow<'a> {
+enum TableRow {
     Fft(Row),
-    Poisson(PoissonRow<'a>),
+    Poisson(PoissonRow),
 }
 
-impl TableRow<'_> {
+impl TableRow {
     fn w(&self) -> f64 {
         match self {
             TableRow::Fft(r) => r.w,
@@ -841,10 +888,18 @@ impl TableRow<'_> {
         }
     }
 
-    fn parts_ln<C: Correlation + ?Sized>(&self, c: &C, u: f64, ln_u: f64) -> (f64, f64) {
-        match self {
-            TableRow::Fft(r) => r.parts_ln(c, u, ln_u),
-            TableRow::Poisson(r) => r.parts_ln(c, u, ln_u),
+    /// `orders`: those the Poisson rows were made from.
+    fn parts_ln<C: Correlation + ?Sized>(
+        &self,
+        orders: Option<&Orders>,
+        c: &C,
+        u: f64,
+        ln_u: f64,
+    ) -> (f64, f64) {
+        match (self, orders) {
+            (TableRow::Fft(r), _) => r.parts_ln(c, u, ln_u),
+            (TableRow::Poisson(r), Some(o)) => r.parts_ln(o, c, u, ln_u),
+            (TableRow::Poisson(_), None) => unreachable!("Poisson rows come with their orders"),
         }
     }
 }
@@ -923,25 +978,42 @@ const MAX_STEP: f64 = 8.0;
 /// max-plus dilation by an L1 cone is separable: one forward and one
 /// backward pass per axis is exact. It only raises values near the floor, by
 /// at most what keeps every step ≤ MAX_STEP.
-fn limit_steps(values: &mut [f64], n_g: usize, n_w: usize) {
-    for row in values.chunks_exact_mut(n_w) {
-        for k in 1..n_w {
-            row[k] = row[k].max(row[k - 1] - MAX_STEP);
-        }
-        for k in (0..n_w - 1).rev() {
-            row[k] = row[k].max(row[k + 1] - MAX_STEP);
-        }
+///
+/// This is the pass along one row; [`limit_steps_across_rows`] follows once
+/// every row has had it.
+fn limit_steps_along_row(row: &mut [f64]) {
+    let n_w = row.len();
+    for k in 1..n_w {
+        row[k] = row[k].max(row[k - 1] - MAX_STEP);
     }
-    for r in 1..n_g {
+    for k in (0..n_w - 1).rev() {
+        row[k] = row[k].max(row[k + 1] - MAX_STEP);
+    }
+}
+
+/// The passes of [`limit_steps_along_row`] across rows (after those along them);
+/// returns which rows it raised.
+fn limit_steps_across_rows(values: &mut [f64], n_g: usize, n_w: usize) -> Vec<bool> {
+    let mut raised = vec![false; n_g];
+    let mut lift = |values: &mut [f64], r: usize, from: usize| {
         for k in 0..n_w {
-            values[r * n_w + k] = values[r * n_w + k].max(values[(r - 1) * n_w + k] - MAX_STEP);
+            let (v, floor) = (values[r * n_w + k], values[from * n_w + k] - MAX_STEP);
+            // Written as the max of the two so that the bits are those of
+            // one whole-table pass.
+            let m = v.max(floor);
+            if m.to_bits() != v.to_bits() {
+                raised[r] = true;
+            }
+            values[r * n_w + k] = m;
         }
+    };
+    for r in 1..n_g {
+        lift(values, r, r - 1);
     }
     for r in (0..n_g - 1).rev() {
-        for k in 0..n_w {
-            values[r * n_w + k] = values[r * n_w + k].max(values[(r + 1) * n_w + k] - MAX_STEP);
-        }
+        lift(values, r, r + 1);
     }
+    raised
 }
 
 /// Index of the first grid point at which the decreasing `f` drops below
@@ -1038,6 +1110,72 @@ impl UnitPsdTable {
     }
 }
 
+/// The columns of a table: ln w_k = ln w₀ + kΔ_w, k < n_w.
+#[derive(Clone, Copy)]
+struct ColumnGrid {
+    ln_w0: f64,
+    d_w: f64,
+    n_w: usize,
+}
+
+impl ColumnGrid {
+    /// w_k² of the cells' left edges, shared by all rows.
+    fn w2(&self) -> Vec<f64> {
+        (0..self.n_w)
+            .map(|k| {
+                let wk = crate::numerics::math::exp(self.ln_w0 + k as f64 * self.d_w);
+                wk * wk
+            })
+            .collect()
+    }
+
+    /// One row's proposal: the density in the w-plane is exp(values)
+    /// interpolated log-linearly in ln w (a power law in each cell),
+    /// constant inside w < w₀, and a power-law tail beyond the last column.
+    /// Returns the normalised cumulative masses [disk, cells…, tail] (n_w + 1
+    /// entries) and the total mass.
+    fn row_cdf(&self, w2: &[f64], vals: &[f64]) -> (Vec<f64>, f64) {
+        let n_w = self.n_w;
+        let mut cum = Vec::with_capacity(n_w + 1);
+        let w0 = crate::numerics::math::exp(self.ln_w0);
+        let mut acc = PI * w0 * w0 * crate::numerics::math::exp(vals[0]);
+        cum.push(acc);
+        for (k, &wk2) in w2[..n_w - 1].iter().enumerate() {
+            acc += self.cell_mass(vals, k, wk2);
+            cum.push(acc);
+        }
+        acc += self.tail_mass(vals);
+        let total = acc;
+        for c in cum.iter_mut() {
+            *c /= total;
+        }
+        cum.push(1.0);
+        (cum, total)
+    }
+
+    #[inline]
+    fn cell_beta(&self, vals: &[f64], k: usize) -> f64 {
+        (vals[k + 1] - vals[k]) / self.d_w
+    }
+
+    /// ∫ over cell k of 2π w ρ(w) dw with ρ = ρ_k (w/w_k)^β, given w_k².
+    fn cell_mass(&self, vals: &[f64], k: usize, wk2: f64) -> f64 {
+        let b2 = self.cell_beta(vals, k) + 2.0;
+        2.0 * PI * crate::numerics::math::exp(vals[k]) * wk2 * expm1_over(b2, self.d_w)
+    }
+
+    /// Tail slope (kept below −2.01 so the tail mass is finite).
+    fn tail_beta(&self, vals: &[f64]) -> f64 {
+        self.cell_beta(vals, self.n_w - 2).min(-2.01)
+    }
+
+    fn tail_mass(&self, vals: &[f64]) -> f64 {
+        let wl = crate::numerics::math::exp(self.ln_w0 + (self.n_w - 1) as f64 * self.d_w);
+        let b2 = self.tail_beta(vals) + 2.0;
+        2.0 * PI * crate::numerics::math::exp(vals[self.n_w - 1]) * wl * wl / (-b2)
+    }
+}
+
 impl GhsTable {
     /// Builds the table for a surface with correlation `c`, covering
     /// u ∈ [0, u_max] (use 2·k_max·L, the hemisphere at the shortest
@@ -1123,7 +1261,7 @@ impl GhsTable {
         let g_at = |r: usize| crate::numerics::math::exp(ln_g0 + r as f64 * d_g);
         // The rows of small g from the diffraction orders, a prefix of the
         // rows; the rest each from its own transform.
-        let orders = Orders::build(c, &mut fft, first_order_apart(c));
+        let mut orders = Orders::prepare(c, &mut fft, first_order_apart(c));
         let n_poisson = orders
             .as_ref()
             .map_or(0, |o| (0..n_g).take_while(|&r| o.covers(g_at(r))).count());
@@ -1132,14 +1270,7 @@ impl GhsTable {
         });
         fft.cover(&plans);
         let lattice = Lattice::build(c, &plans, res.fft_dt, orders.as_ref().map(|o| &o.lattice));
-        let rows: Vec<TableRow> = crate::parallel::map_rows(n_g, |r| match &orders {
-            Some(o) if r < n_poisson => TableRow::Poisson(o.row(c, g_at(r))),
-            _ => {
-                let rp = &plans[r - n_poisson];
-                let mut scratch = (Vec::new(), Vec::new());
-                TableRow::Fft(Row::build(fft.get(rp.n), rp, &lattice, &mut scratch))
-            }
-        });
+        let rows = Self::transform_rows(c, &mut orders, &fft, &plans, &lattice, &g_at, n_poisson);
         // Columns start where every row is flat to ~1e−7: w ≤ 1e−3/(ℓW). For
         // heavy-tailed surfaces (small ν) the core is far narrower than W.
         // Columns scale with the lobe width, but never past the hemisphere:
@@ -1173,25 +1304,9 @@ impl GhsTable {
         let col_w: Vec<f64> = (0..n_w)
             .map(|k| crate::numerics::math::exp(ln_w0 + k as f64 * d_w))
             .collect();
-        let row_values = crate::parallel::map_rows(n_g, |r| {
-            let (row, width) = (&rows[r], widths[r]);
-            let us: Vec<f64> = col_w.iter().map(|&w| width * w).collect();
-            let ln_width = crate::numerics::math::ln(width);
-            let parts: Vec<(f64, f64)> = us
-                .iter()
-                .enumerate()
-                .map(|(k, &u)| row.parts_ln(c, u, ln_width + ln_w0 + k as f64 * d_w))
-                .collect();
-            let w2 = width * width;
-            // ln(S̃W²): the factor A = 1 − e^{−g} is kept inside (it is
-            // smooth in ln g), which saves an expm1 per evaluation.
-            tail_safe_row(&parts, &us)
-                .map(|s| crate::numerics::math::ln((s * w2).max(f64::MIN_POSITIVE)))
-                .collect::<Vec<f64>>()
-        });
-        let mut values = row_values.concat();
-        limit_steps(&mut values, n_g, n_w);
-        let mut t = GhsTable {
+        let grid = ColumnGrid { ln_w0, d_w, n_w };
+        let (values, cdf, mass) = Self::columns(c, &rows, orders.as_ref(), &widths, grid, &col_w);
+        Ok(GhsTable {
             ln_g0,
             d_g,
             inv_d_g: 1.0 / d_g,
@@ -1202,15 +1317,120 @@ impl GhsTable {
             n_w,
             ln_width,
             values,
-            cdf: Vec::new(),
-            mass: Vec::new(),
+            cdf,
+            mass,
             u_max,
             g_hi,
             ln_g_hi,
             first_order: first_order_apart(c).then(|| UnitPsdTable::build(c, u_max)),
-        };
-        t.build_cdfs();
-        Ok(t)
+        })
+    }
+
+    /// The table's values ln[S̃W²] on the columns `col_w` of `grid` (row r
+    /// scaled by `widths[r]`), steps limited ([`limit_steps_along_row`]), and each
+    /// row's sampling CDF and mass ([`ColumnGrid::row_cdf`]). A row's CDF is
+    /// made with its values, in the same fan-out, and made again only for
+    /// the rows the limit across rows raised (few: near the floor).
+    fn columns<C: Correlation + Sync + ?Sized>(
+        c: &C,
+        rows: &[TableRow],
+        orders: Option<&Orders>,
+        widths: &[f64],
+        grid: ColumnGrid,
+        col_w: &[f64],
+    ) -> (Vec<f64>, Vec<f64>, Vec<f64>) {
+        let (n_g, n_w) = (rows.len(), grid.n_w);
+        let (ln_w0, d_w) = (grid.ln_w0, grid.d_w);
+        let w2_cols = grid.w2();
+        let out = crate::parallel::map_rows(n_g, |r| {
+            let (row, width) = (&rows[r], widths[r]);
+            let us: Vec<f64> = col_w.iter().map(|&w| width * w).collect();
+            let ln_width = crate::numerics::math::ln(width);
+            let parts: Vec<(f64, f64)> = us
+                .iter()
+                .enumerate()
+                .map(|(k, &u)| row.parts_ln(orders, c, u, ln_width + ln_w0 + k as f64 * d_w))
+                .collect();
+            let w2 = width * width;
+            // ln(S̃W²): the factor A = 1 − e^{−g} is kept inside (it is
+            // smooth in ln g), which saves an expm1 per evaluation.
+            let mut vals: Vec<f64> = tail_safe_row(&parts, &us)
+                .map(|s| crate::numerics::math::ln((s * w2).max(f64::MIN_POSITIVE)))
+                .collect();
+            limit_steps_along_row(&mut vals);
+            let cdf = grid.row_cdf(&w2_cols, &vals);
+            (vals, cdf)
+        });
+        let mut values = Vec::with_capacity(n_g * n_w);
+        let mut cdfs = Vec::with_capacity(n_g);
+        for (vals, cdf) in out {
+            values.extend(vals);
+            cdfs.push(cdf);
+        }
+        let raised = limit_steps_across_rows(&mut values, n_g, n_w);
+        let redo: Vec<usize> = (0..n_g).filter(|&r| raised[r]).collect();
+        let again = crate::parallel::map_rows(redo.len(), |i| {
+            let r = redo[i];
+            grid.row_cdf(&w2_cols, &values[r * n_w..(r + 1) * n_w])
+        });
+        for (&r, cdf) in redo.iter().zip(again) {
+            cdfs[r] = cdf;
+        }
+        let mass = cdfs.iter().map(|r| r.1).collect();
+        let cdf = cdfs.into_iter().flat_map(|r| r.0).collect();
+        (values, cdf, mass)
+    }
+
+    /// Every row of the table: the orders' transforms and the rows' own in
+    /// one fan-out (all of a similar cost, so the threads stay balanced),
+    /// and the rows summed from the orders (cheap) after them in the same
+    /// one. `orders` receives its transforms.
+    fn transform_rows<C: Correlation + Sync + ?Sized>(
+        c: &C,
+        orders: &mut Option<Orders>,
+        fft: &Plans,
+        plans: &[RowPlan],
+        lattice: &Lattice,
+        g_at: &(impl Fn(usize) -> f64 + Sync),
+        n_poisson: usize,
+    ) -> Vec<TableRow> {
+        enum Out {
+            Order(Vec<f64>),
+            Row(TableRow),
+        }
+        let n_orders = if orders.is_some() { POISSON_ORDERS } else { 0 };
+        let n_fft = plans.len();
+        let o = orders.as_ref();
+        let outs = crate::parallel::map_rows(n_orders + n_fft + n_poisson, |t| match o {
+            Some(o) if t < n_orders => Out::Order(o.transform(fft, t)),
+            _ if t < n_orders + n_fft => {
+                let rp = &plans[t - n_orders];
+                let mut scratch = (Vec::new(), Vec::new());
+                Out::Row(TableRow::Fft(Row::build(
+                    fft.get(rp.n),
+                    rp,
+                    lattice,
+                    &mut scratch,
+                )))
+            }
+            Some(o) => Out::Row(TableRow::Poisson(o.row(c, g_at(t - n_orders - n_fft)))),
+            None => unreachable!("rows from the orders only when there are orders"),
+        });
+        let mut transforms = Vec::with_capacity(n_orders);
+        let mut fft_rows = Vec::with_capacity(n_fft);
+        let mut rows = Vec::with_capacity(n_fft + n_poisson);
+        for (t, out) in outs.into_iter().enumerate() {
+            match out {
+                Out::Order(v) => transforms.push(v),
+                Out::Row(r) if t < n_orders + n_fft => fft_rows.push(r),
+                Out::Row(r) => rows.push(r),
+            }
+        }
+        if let Some(o) = orders.as_mut() {
+            o.set_transforms(transforms);
+        }
+        rows.extend(fft_rows);
+        rows
     }
 
     /// Largest u the table was built for.
@@ -1338,62 +1558,22 @@ impl GhsTable {
         Some(crate::numerics::math::exp(v - 2.0 * ln_w_g))
     }
 
-    /// Per-row proposal densities for sampling: in each row the density in
-    /// the w-plane is exp(values) interpolated log-linearly in ln w (a power
-    /// law in each cell), constant inside w < w₀, and a power-law tail
-    /// beyond the last column.
-    fn build_cdfs(&mut self) {
-        let (n_g, n_w) = (self.n_g, self.n_w);
-        let t = &*self;
-        // w_k² of the cells' left edges, shared by all rows.
-        let w2: Vec<f64> = (0..n_w)
-            .map(|k| {
-                let wk = crate::numerics::math::exp(t.ln_w0 + k as f64 * t.d_w);
-                wk * wk
-            })
-            .collect();
-        let rows = crate::parallel::map_rows(n_g, |r| {
-            let vals = &t.values[r * n_w..(r + 1) * n_w];
-            let mut cum = Vec::with_capacity(n_w + 1);
-            let w0 = crate::numerics::math::exp(t.ln_w0);
-            let mut acc = PI * w0 * w0 * crate::numerics::math::exp(vals[0]);
-            cum.push(acc);
-            for (k, &wk2) in w2[..n_w - 1].iter().enumerate() {
-                acc += t.cell_mass(vals, k, wk2);
-                cum.push(acc);
-            }
-            acc += t.tail_mass(vals);
-            let total = acc;
-            for c in cum.iter_mut() {
-                *c /= total;
-            }
-            cum.push(1.0);
-            (cum, total)
-        });
-        self.mass = rows.iter().map(|r| r.1).collect();
-        self.cdf = rows.into_iter().flat_map(|r| r.0).collect();
+    fn column_grid(&self) -> ColumnGrid {
+        ColumnGrid {
+            ln_w0: self.ln_w0,
+            d_w: self.d_w,
+            n_w: self.n_w,
+        }
     }
 
     #[inline]
     fn cell_beta(&self, vals: &[f64], k: usize) -> f64 {
-        (vals[k + 1] - vals[k]) / self.d_w
-    }
-
-    /// ∫ over cell k of 2π w ρ(w) dw with ρ = ρ_k (w/w_k)^β, given w_k².
-    fn cell_mass(&self, vals: &[f64], k: usize, wk2: f64) -> f64 {
-        let b2 = self.cell_beta(vals, k) + 2.0;
-        2.0 * PI * crate::numerics::math::exp(vals[k]) * wk2 * expm1_over(b2, self.d_w)
+        self.column_grid().cell_beta(vals, k)
     }
 
     /// Tail slope (kept below −2.01 so the tail mass is finite).
     fn tail_beta(&self, vals: &[f64]) -> f64 {
-        self.cell_beta(vals, self.n_w - 2).min(-2.01)
-    }
-
-    fn tail_mass(&self, vals: &[f64]) -> f64 {
-        let wl = crate::numerics::math::exp(self.ln_w0 + (self.n_w - 1) as f64 * self.d_w);
-        let b2 = self.tail_beta(vals) + 2.0;
-        2.0 * PI * crate::numerics::math::exp(vals[self.n_w - 1]) * wl * wl / (-b2)
+        self.column_grid().tail_beta(vals)
     }
 
     /// Rows and probabilities of the sampling mixture for g: two adjacent
@@ -1675,7 +1855,7 @@ mod tests {
                     if !(want > 1e-12 * peak) {
                         continue;
                     }
-                    let (pa, prr) = pr.parts_ln(&m, u, crate::numerics::math::ln(u));
+                    let (pa, prr) = pr.parts_ln(&orders, &m, u, crate::numerics::math::ln(u));
                     let e = ((pa + prr) / want - 1.0).abs();
                     let band = usize::from(want < 1e-6 * peak);
                     worst[band] = worst[band].max(e);
