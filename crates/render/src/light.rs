@@ -358,6 +358,19 @@ fn cone_one_minus_cos(d2: f64, r2: f64) -> Option<f64> {
     Some((r2 / d2) / (1.0 + cos_max))
 }
 
+/// Distance from a point at distance `d` from the centre of a sphere of
+/// radius `r` < `d` to the sphere's near side along a direction at angle θ
+/// from the centre (`cos_t`, `sin2` = sin²θ, inside the sphere's cone): the
+/// near root of t² − 2dt cosθ + d² − r² = 0, as (d − r)(d + r) / (d cosθ +
+/// √(r² − d² sin²θ)), which cancels neither for far spheres nor at the
+/// cone's edge (where the discriminant, 0 up to round-off, is clamped: the
+/// tangent distance). Known from the draw, it needs no ray–sphere test.
+#[inline]
+fn sphere_near_distance(d: f64, r: f64, cos_t: f64, sin2: f64) -> f64 {
+    let disc = (r * r - d * d * sin2).max(0.0);
+    (d - r) * (d + r) / (d * cos_t + disc.sqrt())
+}
+
 /// Solid-angle pdf of a direction drawn uniformly in that cone (uniformly
 /// over the sphere of directions from inside).
 fn cone_pdf(one_minus_cos: Option<f64>) -> f64 {
@@ -436,7 +449,7 @@ impl Lights {
                 // One 1 − cosθmax for the draw and its pdf, the same
                 // expression `sphere_cone_pdf` gives a BSDF-sampled hit.
                 let cone = cone_one_minus_cos(d2, r2);
-                let wi = if let Some(one_minus) = cone {
+                let (wi, dist) = if let Some(one_minus) = cone {
                     // Uniform in the cone through the concentric disk: the
                     // disk's r² is uniform, so 1 − cosθ = r²(1 − cosθmax),
                     // and sinθ = r √((1 − cosθmax)(2 − r²(1 − cosθmax)))
@@ -447,22 +460,27 @@ impl Lights {
                     let h = (x * x + y * y) * one_minus;
                     let cos_t = 1.0 - h;
                     let scale = (one_minus * (2.0 - h)).max(0.0).sqrt();
-                    let w = to_c / d2.sqrt();
+                    let d = d2.sqrt();
+                    let w = to_c / d;
                     let (t, b) = frame(w);
                     // Unit by construction: scale²(x² + y²) + cos²θ =
                     // h(2 − h) + (1 − h)² = 1, so no normalisation (a square
                     // root and a division on the sample's critical path);
                     // what is left is round-off, checked to 1e−15 in
                     // `sphere_light_samples_are_uniform_in_its_cone`.
-                    scale * x * t + scale * y * b + cos_t * w
+                    let wi = scale * x * t + scale * y * b + cos_t * w;
+                    (
+                        wi,
+                        sphere_near_distance(d, sphere.radius, cos_t, h * (2.0 - h)),
+                    )
                 } else {
-                    uniform_sphere(uv)
+                    let wi = uniform_sphere(uv);
+                    let ray = Ray { o: p, d: wi };
+                    // Inside the sphere: the far side; round-off can miss it
+                    // only at a point on the surface, where 0 is the distance.
+                    let dist = sphere.hit_distance(&ray, 0.0, f64::INFINITY).unwrap_or(0.0);
+                    (wi, dist)
                 };
-                let ray = Ray { o: p, d: wi };
-                // Grazing cone samples can miss by round-off; the tangent distance is then exact enough.
-                let dist = sphere
-                    .hit_distance(&ray, 0.0, f64::INFINITY)
-                    .unwrap_or_else(|| (d2 - r2).max(0.0).sqrt());
                 Some(LightSample {
                     wi,
                     dist,
@@ -711,6 +729,68 @@ mod tests {
                 .unwrap();
             assert!(ls.wi.z >= cos_max - 1e-9 && (ls.dist - 4.0).abs() < 1.0 + 1e-9);
         }
+    }
+
+    #[test]
+    fn sphere_light_sample_distances_reach_the_near_side() {
+        // The distance from the draw against the ray–sphere test of the
+        // sampled ray, and the point it gives on the sphere, for spheres
+        // from 1e−4 to 1e4 radii away and 1e−9 of a radius off the surface,
+        // over the whole cone (u on a grid with the disk's edge).
+        let mut worst = 0.0f64;
+        for (dist, radius) in [
+            (1.2, 1.0),
+            (5.0, 1.0),
+            (1.0, 0.03),
+            (1e4, 1.0),
+            (1.0 + 1e-9, 1.0),
+            (2.0, 1e-4),
+        ] {
+            let dir = DVec3::new(0.3, -0.5, 0.8).normalize();
+            let p = DVec3::new(0.1, 0.2, -0.3);
+            let center = p + dir * dist;
+            let lights = Lights {
+                lights: vec![LightKind::Sphere {
+                    sphere: Sphere { center, radius },
+                    spectrum: Spectrum::Constant(1.0),
+                }],
+                environment: None,
+                bsdf_only_environment: false,
+            };
+            let sphere = Sphere { center, radius };
+            for i in 0..=64 {
+                for j in 0..=64 {
+                    let u = [0.5, i as f64 / 64.0, j as f64 / 64.0];
+                    let ls = lights.sample(p, u).unwrap();
+                    let on = p + ls.dist * ls.wi;
+                    // Radial residual: along the ray the distance is
+                    // ill-conditioned at the cone's edge (tangent rays), but
+                    // the point stays on the sphere.
+                    let radial = ((on - center).length() - radius).abs();
+                    assert!(
+                        radial <= 1e-12 * (dist + radius),
+                        "d {dist} r {radius} u {u:?}: {radial:e}"
+                    );
+                    let ray = Ray { o: p, d: ls.wi };
+                    if let Some(t) = sphere.hit_distance(&ray, 0.0, f64::INFINITY) {
+                        let rel = (t - ls.dist).abs() / t;
+                        // Away from the edge both are well conditioned.
+                        if i % 64 != 0 && j % 64 != 0 {
+                            assert!(
+                                rel <= 1e-9,
+                                "d {dist} r {radius} u {u:?}: {} vs {t}",
+                                ls.dist
+                            );
+                            worst = worst.max(rel);
+                        }
+                    }
+                }
+            }
+        }
+        assert!(
+            worst > 0.0,
+            "the distances never differ: nothing was compared"
+        );
     }
 
     #[test]

@@ -48,18 +48,17 @@ pub(super) fn lambda(t: f64) -> f64 {
 }
 
 /// [`lambda`] at t = q/z² from q = αx²x² + αy²y² > 0 and z = cosθ > 0
-/// (tangential components, exact as α → 0): where the polynomial applies,
-/// x = √q/z and a = z/√q from one division, 1/(√q z), instead of t's and
-/// the exponent's two.
+/// (tangential components, exact as α → 0; any common scale of the
+/// direction cancels). Where the polynomial applies, a² = z²/q and
+/// x = √q/z come from two independent divisions, so the exp does not wait
+/// for the square root: Λ ends a sample's dependency chain.
 #[inline]
 pub(super) fn lambda_qz(q: f64, z: f64) -> f64 {
     let s = libm::sqrt(q);
-    // z ≥ 1e−100 and, past the caller's negligible-Λ test, s > z/5.8: the
-    // product neither underflows nor overflows.
+    // z ≥ 1e−100 (z² stays normal) and, past the caller's negligible-Λ
+    // test, q > z²/5.8²: neither quotient overflows or underflows.
     if s <= LAMBDA_POLY_MAX_X * z && z > 0.0 {
-        let inv = 1.0 / (s * z);
-        let a = z * z * inv;
-        return exp(-a * a) * scaled_lambda(q * inv);
+        return exp(-(z * z / q)) * scaled_lambda(s / z);
     }
     lambda(q / (z * z))
 }
@@ -147,52 +146,65 @@ pub(super) fn sample_visible(wi: DVec3, ax: f64, ay: f64, u: [f64; 2]) -> DVec3 
 }
 
 /// [`sample_visible`] up to a positive factor (h.z = 1: the unstretched
-/// normal (−s, 1) of the sampled slopes s), and Smith Λ(wi), which the
+/// normal (−s, 1) of the sampled slopes s), Smith Λ(wi), which the
 /// inversion computes on the way (its normalisation is cotθ (1 + Λ) in the
-/// stretched frame): the sampler's caller needs G1(wi) and would otherwise
-/// evaluate it again, and works with an unnormalised h, as for GGX.
+/// stretched frame), and e^{−|s|²} of the stretched slopes, D's exponential:
+/// the sampler's caller needs G1(wi) and D(h), would otherwise evaluate both
+/// again, and works with an unnormalised h, as for GGX. With h.z = 1,
+/// D(h/|h|) = e^{−|s|²} |h|⁴ / (π αx αy).
 /// Λ is 0 from a = cotθ ≥ 5.8 on, as in [`super::Distribution::lambda_frac`].
-pub(super) fn sample_visible_with_lambda(wi: DVec3, ax: f64, ay: f64, u: [f64; 2]) -> (DVec3, f64) {
+pub(super) fn sample_visible_with_lambda(
+    wi: DVec3,
+    ax: f64,
+    ay: f64,
+    u: [f64; 2],
+) -> (DVec3, f64, f64) {
     // The stretched view (αx x, αy y, z), left unnormalised: the inversion
     // needs only its azimuth and cotθ, ratios of its components, so one
     // square root and one division give both (normalising first put two
     // more of each on the sample's critical path).
     let (vx, vy, vz) = (ax * wi.x, ay * wi.y, wi.z);
     let r2 = vx * vx + vy * vy;
-    let (rx, ry, lambda) = if r2 > 0.0 && r2 >= 1e-14 * (r2 + vz * vz) {
-        let inv_r = 1.0 / libm::sqrt(r2);
+    let (rx, ry, lambda, s2) = if r2 > 0.0 && r2 >= 1e-14 * (r2 + vz * vz) {
+        let r = libm::sqrt(r2);
+        let inv_r = 1.0 / r;
+        // tanθ = r/vz alongside cotθ = vz/r, not as 1/cotθ: two divisions
+        // side by side instead of one after the other on the chain.
+        let tan = r / vz;
         let (cos_phi, sin_phi) = (vx * inv_r, vy * inv_r);
-        let (sx, sy, lambda) = sample_slopes_unit(vz * inv_r, vz, r2 * inv_r, u);
+        let (sx, sy, lambda) = sample_slopes_unit(vz * inv_r, tan, vz, r2 * inv_r, u);
         // Rotate back to the view azimuth.
         (
             cos_phi * sx - sin_phi * sy,
             sin_phi * sx + cos_phi * sy,
             lambda,
+            sx * sx + sy * sy,
         )
     } else {
         // sinθ < 1e−7 (or a NaN or zero view): the normal view, whose visible slope
         // density is the isotropic Gaussian; the azimuth plays no part.
-        let r = libm::sqrt(-libm::log1p(-u[0]));
+        let r2 = -libm::log1p(-u[0]);
+        let r = libm::sqrt(r2);
         let (sp, cp) = libm::sincos(2.0 * PI * u[1]);
-        (r * cp, r * sp, 0.0)
+        (r * cp, r * sp, 0.0, r2)
     };
     // Unstretch; the normal is (−s, 1).
-    (DVec3::new(-rx * ax, -ry * ay, 1.0), lambda)
+    (DVec3::new(-rx * ax, -ry * ay, 1.0), lambda, exp(-s2))
 }
 
 /// Slopes of the visible normals of a unit-roughness Beckmann surface, for a
 /// view along +x at cotθ = `cot` (= `c`/`s`, with `c`, `s` any positive
-/// multiple of cosθ, sinθ), and Λ at that view. The x-slope density is
-/// ∝ (cotθ − x) e^{−x²} on x < cotθ, with CDF
+/// multiple of cosθ, sinθ; `tan` = 1/cotθ), and Λ at that view. The x-slope
+/// density is ∝ (cotθ − x) e^{−x²} on x < cotθ, with CDF
 /// C(x) = [cotθ (1 + erf x) + e^{−x²}/√π] / 2; y is Gaussian with variance ½.
-fn sample_slopes_unit(cot: f64, c: f64, s: f64, u: [f64; 2]) -> (f64, f64, f64) {
+fn sample_slopes_unit(cot: f64, tan: f64, c: f64, s: f64, u: [f64; 2]) -> (f64, f64, f64) {
     // Per-axis slope variance ½ at unit roughness: a standard normal / √2.
     let sy = normal_quantile(u[1]) * FRAC_1_SQRT_2;
     // Start from the cotθ → ∞ limit, moved by the tabulated difference
     // between it and the root: within 1e−4 of the root for nine draws in
     // ten, so one Halley step usually finishes (from the limit alone it
     // takes four to five, each an erfc and an exp).
-    let st = gaussian_start_and_target(cot, u[0]);
+    let st = gaussian_start_and_target(cot, tan, u[0]);
     let start = st.start + start_correction(c, s, u[0]);
     (solve_slope(cot, st.target, start, true), sy, st.lambda)
 }
@@ -224,7 +236,7 @@ struct StartAndTarget {
 /// as [`lambda`]'s, with erfc(cotθ) taken from 1 + erf, whose rounding
 /// (2·10⁻¹⁶ absolute) is below 2.5·10⁻¹⁴ of Λ there (Λ ≥ 0.0087).
 #[inline]
-fn gaussian_start_and_target(cot: f64, u: f64) -> StartAndTarget {
+fn gaussian_start_and_target(cot: f64, tan: f64, u: f64) -> StartAndTarget {
     if cot >= GAUSSIAN_LIMIT_COT {
         // e^{−cot²θ} < 2.4·10⁻¹⁶: erfc(cotθ) < 2.2·10⁻¹⁷ vanishes beside 2
         // and Λ < 1.2·10⁻¹⁹ beside 1, so the branch below would give these
@@ -236,7 +248,7 @@ fn gaussian_start_and_target(cot: f64, u: f64) -> StartAndTarget {
         };
     }
     if cot >= 1.0 / LAMBDA_POLY_MAX_X {
-        return polynomial_start_and_target(cot, u);
+        return polynomial_start_and_target(cot, tan, u);
     }
     let one_plus_erf = libm::erfc(-cot);
     let e = exp(-cot * cot) / SQRT_PI;
@@ -248,10 +260,9 @@ fn gaussian_start_and_target(cot: f64, u: f64) -> StartAndTarget {
     }
 }
 
-/// [`gaussian_start_and_target`] for cotθ ≥ 1.25 (see there).
+/// [`gaussian_start_and_target`] for cotθ ≥ 1.25 (see there); `x` = tanθ.
 #[inline]
-fn polynomial_start_and_target(cot: f64, u: f64) -> StartAndTarget {
-    let x = 1.0 / cot;
+fn polynomial_start_and_target(cot: f64, x: f64, u: f64) -> StartAndTarget {
     let e = exp(-cot * cot);
     let s = scaled_lambda(x);
     let lambda = e * s;
@@ -377,7 +388,7 @@ fn start_table_entry(i: usize, j: usize) -> f64 {
         return 0.0;
     }
     let cot = c / s;
-    let st = gaussian_start_and_target(cot, u);
+    let st = gaussian_start_and_target(cot, s / c, u);
     solve_slope(cot, st.target, st.start, false) - st.start
 }
 
@@ -535,7 +546,7 @@ mod tests {
                 };
                 for u0 in [u0, u0 * 1e-6, 1.0 - (1.0 - u0) * 1e-6] {
                     let cot = c / s;
-                    let (x, _, _) = sample_slopes_unit(cot, c, s, [u0, 0.5]);
+                    let (x, _, _) = sample_slopes_unit(cot, s / c, c, s, [u0, 0.5]);
                     // Bisection to adjacent floats: independent of Halley.
                     let cdf = |x: f64| 0.5 * (cot * libm::erfc(-x) + exp(-x * x) / SQRT_PI);
                     let total = cdf(cot);
@@ -774,7 +785,7 @@ mod tests {
                         2
                     }] += 1;
                     for u in [[0.5, 0.5], [1e-9, 0.3], [0.999, 0.01]] {
-                        let (h, got) = sample_visible_with_lambda(wi, ax, ay, u);
+                        let (h, got, _) = sample_visible_with_lambda(wi, ax, ay, u);
                         assert!(h.is_finite() && h.z > 0.0);
                         let tol = if a >= LAMBDA_NEGLIGIBLE_A {
                             1.8e-18
@@ -799,8 +810,8 @@ mod tests {
             for j in 0..=64 {
                 let u = (j as f64 / 64.0).clamp(1e-300, 1.0 - 1e-16);
                 let (a, b) = (
-                    gaussian_start_and_target(cot, u),
-                    polynomial_start_and_target(cot, u),
+                    gaussian_start_and_target(cot, 1.0 / cot, u),
+                    polynomial_start_and_target(cot, 1.0 / cot, u),
                 );
                 assert_eq!(a.start.to_bits(), b.start.to_bits(), "{cot} {u}");
                 assert_eq!(a.target.to_bits(), b.target.to_bits(), "{cot} {u}");
@@ -819,7 +830,7 @@ mod tests {
             for u in [1e-12, 0.03, 0.5, 0.97, 1.0 - 1e-12] {
                 let StartAndTarget {
                     start: x0, target, ..
-                } = gaussian_start_and_target(cot, u);
+                } = gaussian_start_and_target(cot, 1.0 / cot, u);
                 let one_plus_erf = libm::erfc(-cot);
                 let total = 0.5 * (cot * one_plus_erf + exp(-cot * cot) / SQRT_PI);
                 let rel = (target - u * total).abs() / (u * total);

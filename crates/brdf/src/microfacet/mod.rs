@@ -273,15 +273,27 @@ impl Distribution {
     }
 
     /// [`Distribution::sample_visible`] for a Beckmann distribution, up to a
-    /// positive factor (no normalisation: a square root and a division
-    /// fewer), with Smith Λ(wi), which the inversion computes on the way.
+    /// positive factor (h.z = 1, no normalisation: a square root and a
+    /// division fewer), with Smith Λ(wi), which the inversion computes on
+    /// the way, and e^{−|s|²} of the sampled stretched slopes s, from which
+    /// [`Distribution::beckmann_d_from_slopes`] gives D without another
+    /// division.
     #[inline]
     pub(crate) fn beckmann_sample_visible_with_lambda(
         &self,
         wi: DVec3,
         u: [f64; 2],
-    ) -> (DVec3, f64) {
+    ) -> (DVec3, f64, f64) {
         beckmann::sample_visible_with_lambda(wi, self.alpha_x, self.alpha_y, u)
+    }
+
+    /// Beckmann D(h/|h|) for h = (−αx sx, −αy sy, 1), the normal of the
+    /// stretched slopes s, from `exp_minus_s2` = e^{−|s|²} and `len2` = |h|²:
+    /// tan²θ/α² along h's azimuth is |s|² and cos²θ = 1/|h|², so
+    /// D = e^{−|s|²} |h|⁴ / (π αx αy).
+    #[inline(always)]
+    pub(crate) fn beckmann_d_from_slopes(&self, exp_minus_s2: f64, len2: f64) -> f64 {
+        exp_minus_s2 * (len2 * len2) * self.d_scale
     }
 
     /// [`Distribution::sample_visible`] for a GGX distribution, up to a
