@@ -53,6 +53,7 @@ pub fn delta_by_cos_only(kind: ModelKind) -> bool {
             | ModelKind::GhsAniso
             | ModelKind::MeasuredPsdSsaAniso
             | ModelKind::MeasuredPsdAniso
+            | ModelKind::MeasuredPsd2dSsa
     )
 }
 

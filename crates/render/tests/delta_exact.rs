@@ -18,6 +18,7 @@ fn materials() -> Vec<(&'static str, String)> {
     let psd = root.join("scenes/psd/s138_kc.csv");
     let kc = "sigma_um = 0.138\nlc_um = 2.0\ngamma = 2.0\n";
     let aniso = "sigma_um = 0.2\nlx_um = 1.0\nly_um = 4.0\ngamma = 2.5\nangle_deg = 30.0\n";
+    let map = psd_map_file();
     vec![
         ("ghs", format!("model = \"ghs\"\nmetal = \"cu\"\n{kc}")),
         (
@@ -61,6 +62,13 @@ fn materials() -> Vec<(&'static str, String)> {
             ),
         ),
         (
+            "measured_psd2d_ssa",
+            format!(
+                "model = \"measured_psd2d_ssa\"\ninclude = \"{}\"\nangle_deg = 20.0\n",
+                map.display()
+            ),
+        ),
+        (
             "measured_psd_ssa_aniso",
             format!(
                 "model = \"measured_psd_ssa_aniso\"\nmetal = \"cu\"\npsd_csv = \"{}\"\nlx_um = 2.0\nly_um = 3.0\nangle_deg = -70.0\n",
@@ -68,6 +76,36 @@ fn materials() -> Vec<(&'static str, String)> {
             ),
         ),
     ]
+}
+
+/// A material file with a `[psd.map]` (two crossing lays on a 13 × 6 grid of
+/// the half plane), as `lustre fit` writes for a PSD that is not elliptical.
+fn psd_map_file() -> PathBuf {
+    let (mx, my, d) = (6usize, 5usize, 0.8);
+    let mut p = Vec::new();
+    for j in 0..=my {
+        for i in 0..=2 * mx {
+            let (x, y) = ((i as f64 - mx as f64) * d, j as f64 * d);
+            let lay = |a: f64, b: f64| 1e-4 / (1.0 + a * a + 9.0 * b * b).powi(2);
+            p.push(format!(
+                "{:e}",
+                lay(x, y) + lay(0.34 * x + 0.94 * y, 0.94 * x - 0.34 * y)
+            ));
+        }
+    }
+    let text = format!(
+        "[material]\nmodel = \"ghs_ssa\"\nmetal = \"cu\"\nsigma_um = 0.05\nlc_um = 1.0\ngamma = 3.0\n\n\
+         [psd]\nzeta_rad_per_um = [1.0, 2.0]\np_um4 = [1.0, 0.01]\n\n\
+         [psd.map]\nusable = true\ntail_exponent = 4.0\nhalf_nx = {mx}\nhalf_ny = {my}\n\
+         dzx_rad_per_um = {d}\ndzy_rad_per_um = {d}\np_um4 = [{}]\n",
+        p.join(", ")
+    );
+    let path = std::env::temp_dir().join(format!(
+        "lustre-delta-exact-map-{}.toml",
+        std::process::id()
+    ));
+    std::fs::write(&path, text).unwrap();
+    path
 }
 
 /// The 45° plate of `benches/peer/plate_scenes.toml` (3 cm sphere light at
