@@ -217,17 +217,7 @@ where
         }
         let (s, c) = libm::sincos(2.0 * core::f64::consts::PI * u[2]);
         let (zx, zy) = self.surface.u_to_zeta(r * c, r * s);
-        let (ox, oy) = (zx / k - wi.x, zy / k - wi.y);
-        let rho2 = ox * ox + oy * oy;
-        if !(rho2 < 1.0) {
-            return None;
-        }
-        let rho = libm::sqrt(rho2);
-        let oz = libm::sqrt((1.0 - rho) * (1.0 + rho));
-        if !(oz > 0.0) {
-            return None;
-        }
-        let wo = DVec3::new(ox, oy, oz);
+        let wo = super::direction_from_offset(wi, zx / k, zy / k)?;
         super::glossy_sample(wo, self.eval_pdf_impl(wi, wo, lambda_nm))
     }
 

@@ -121,8 +121,16 @@ pub(crate) fn direction_from_u(wi: DVec3, kl: f64, u: f64, phi: f64) -> Option<D
     }
     let r = u / kl;
     let (s, c) = libm::sincos(phi);
-    let ox = r * c - wi.x;
-    let oy = r * s - wi.y;
+    direction_from_offset(wi, r * c, r * s)
+}
+
+/// Outgoing direction whose tangential part is o⊥ = (px, py) − i⊥, (px, py)
+/// the scattering vector's tangential part divided by the wavenumber. `None`
+/// if evanescent.
+#[inline]
+pub(crate) fn direction_from_offset(wi: DVec3, px: f64, py: f64) -> Option<DVec3> {
+    let ox = px - wi.x;
+    let oy = py - wi.y;
     let rho2 = ox * ox + oy * oy;
     if !(rho2 < 1.0) {
         return None;
