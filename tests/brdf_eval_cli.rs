@@ -7,8 +7,14 @@ use std::process::{Command, Stdio};
 use serde_json::Value;
 
 fn run(input: &str) -> Vec<Value> {
+    run_in(&std::env::current_dir().unwrap(), input)
+}
+
+/// [`run`] with `dir` as the working directory (relative file names).
+fn run_in(dir: &std::path::Path, input: &str) -> Vec<Value> {
     let mut child = Command::new(env!("CARGO_BIN_EXE_lustre"))
         .args(["brdf", "eval"])
+        .current_dir(dir)
         .stdin(Stdio::piped())
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())
@@ -225,27 +231,8 @@ fn include_reads_a_fit_material_file() {
         format!(r#"{{"include": "missing.toml", {geometry}}}"#),
     ]
     .join("\n");
-    let mut child = Command::new(env!("CARGO_BIN_EXE_lustre"))
-        .args(["brdf", "eval"])
-        .current_dir(&dir)
-        .stdin(Stdio::piped())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("run lustre");
-    child
-        .stdin
-        .take()
-        .unwrap()
-        .write_all(input.as_bytes())
-        .unwrap();
-    let out = child.wait_with_output().unwrap();
+    let out = run_in(&dir, &input);
     let _ = std::fs::remove_dir_all(&dir);
-    let out: Vec<Value> = String::from_utf8(out.stdout)
-        .unwrap()
-        .lines()
-        .map(|l| serde_json::from_str(l).unwrap())
-        .collect();
     assert_eq!(out.len(), 6, "{out:?}");
     let bits = |i: usize, k: &str| {
         out[i][k]
