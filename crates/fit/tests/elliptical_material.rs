@@ -4,48 +4,16 @@
 //! TOML round trip. Two crossing lays (a 2-D PSD that is a cross, not an ellipse) are said to
 //! be so in `[reliability].psd_destretched`. An isotropic map is not flagged and gets no table.
 
-use brdf::spec::{MaterialDesc, MaterialFile, ModelKind, ModelSpec, NoFiles};
-use fit::kc2d::{self, AnisoKcParams};
-use fit::material_file::{self as material, Provenance};
-use fit::pipeline::{Options, analyse};
+use brdf::spec::{MaterialDesc, ModelKind, ModelSpec, NoFiles};
+use fit::kc2d;
 
-const UM: f64 = 1e-6;
-
-fn prov(file: &str) -> Provenance<'_> {
-    Provenance {
-        file,
-        bytes: b"",
-        stylus: None,
-        merge_cutoff_rad_per_um: 1.0,
-        metal: "cu",
-        model: "auto",
-        notes: &[],
-    }
-}
-
-fn stretched(ratio: f64, angle_deg: f64, sigma_um: f64) -> AnisoKcParams {
-    AnisoKcParams {
-        sigma: sigma_um * UM,
-        lx: 0.25 * UM,
-        ly: 0.25 * UM * ratio,
-        angle_rad: angle_deg.to_radians(),
-        gamma: 3.0,
-    }
-}
-
-fn file_of(t: fit::Topography, name: &str) -> MaterialFile {
-    let a = analyse(t, None, &Options::default()).unwrap();
-    let doc = material::build(&a, &prov(name));
-    let text = material::to_toml(&doc).unwrap();
-    let back: MaterialFile = toml::from_str(&text).unwrap();
-    assert_eq!(back.psd, doc.psd, "{name}: [psd] does not round-trip");
-    doc
-}
+mod common;
+use common::{UM, file_of, stretched};
 
 #[test]
 fn a_stretched_map_gets_a_usable_destretched_table_that_builds() {
     let t = kc2d::synth_surface(256, 256, 20.0 * UM / 256.0, stretched(5.0, 30.0, 0.01), 3);
-    let doc = file_of(t, "stretched");
+    let doc = file_of(t, "stretched").0;
     let d = doc
         .psd
         .as_ref()
@@ -91,7 +59,7 @@ fn crossing_lays_are_said_not_to_be_elliptical() {
     for (h, g) in t.heights.iter_mut().zip(&b.heights) {
         *h += g;
     }
-    let doc = file_of(t, "crossed");
+    let doc = file_of(t, "crossed").0;
     let an = doc.anisotropy.as_ref().unwrap();
     println!(
         "crossed: anisotropic {}; {}; {:?}",
@@ -120,7 +88,7 @@ fn crossing_lays_are_said_not_to_be_elliptical() {
 #[test]
 fn an_isotropic_map_is_not_flagged_and_gets_no_table() {
     let t = kc2d::synth_surface(256, 256, 20.0 * UM / 256.0, stretched(1.0, 0.0, 0.01), 7);
-    let doc = file_of(t, "isotropic");
+    let doc = file_of(t, "isotropic").0;
     let an = doc.anisotropy.as_ref().unwrap();
     assert!(!an.anisotropic, "{:?}", an.warning);
     assert!(doc.psd.as_ref().unwrap().destretched.is_none());

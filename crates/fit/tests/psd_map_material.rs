@@ -4,42 +4,10 @@
 //! (elliptical) map and an isotropic one get no grid and are not offered the model.
 
 use brdf::spec::{MaterialDesc, MaterialFile, ModelKind, ModelSpec, NoFiles};
-use fit::kc2d::{self, AnisoKcParams};
-use fit::material_file::{self as material, Provenance};
-use fit::pipeline::{Options, analyse};
+use fit::kc2d;
 
-const UM: f64 = 1e-6;
-
-fn prov(file: &str) -> Provenance<'_> {
-    Provenance {
-        file,
-        bytes: b"",
-        stylus: None,
-        merge_cutoff_rad_per_um: 1.0,
-        metal: "cu",
-        model: "auto",
-        notes: &[],
-    }
-}
-
-fn stretched(ratio: f64, angle_deg: f64, sigma_um: f64) -> AnisoKcParams {
-    AnisoKcParams {
-        sigma: sigma_um * UM,
-        lx: 0.25 * UM,
-        ly: 0.25 * UM * ratio,
-        angle_rad: angle_deg.to_radians(),
-        gamma: 3.0,
-    }
-}
-
-fn file_of(t: fit::Topography, name: &str) -> MaterialFile {
-    let a = analyse(t, None, &Options::default()).unwrap();
-    let doc = material::build(&a, &prov(name));
-    let text = material::to_toml(&doc).unwrap();
-    let back: MaterialFile = toml::from_str(&text).unwrap();
-    assert_eq!(back.psd, doc.psd, "{name}: [psd] does not round-trip");
-    back
-}
+mod common;
+use common::{UM, file_of, stretched};
 
 fn offers_map(doc: &MaterialFile) -> bool {
     doc.offered()
@@ -56,7 +24,7 @@ fn crossing_lays_get_a_grid_that_builds() {
     for (h, g) in t.heights.iter_mut().zip(&b.heights) {
         *h += g;
     }
-    let doc = file_of(t, "crossed");
+    let doc = file_of(t, "crossed").1;
     let m = doc.psd.as_ref().and_then(|p| p.map.as_ref()).unwrap();
     println!(
         "crossed: {}×{} nodes, step {:.3} rad/µm, α {}, tail {:.4}; {}",
@@ -103,7 +71,7 @@ fn elliptical_and_isotropic_maps_get_no_grid() {
         ("stretched", stretched(5.0, 30.0, 0.01)),
         ("isotropic", stretched(1.0, 0.0, 0.01)),
     ] {
-        let doc = file_of(kc2d::synth_surface(256, 256, dx, p, 3), name);
+        let doc = file_of(kc2d::synth_surface(256, 256, dx, p, 3), name).1;
         assert!(
             doc.psd.as_ref().is_some_and(|p| p.map.is_none()),
             "{name}: a grid was written"

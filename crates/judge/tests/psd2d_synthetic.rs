@@ -12,6 +12,20 @@ use serde_json::Value;
 
 const UM: f64 = 1e-6;
 
+/// "key error, …" of every ranked model, for the log.
+fn ranking(j: &Value) -> String {
+    let table: Vec<String> = (j["models"].as_array().unwrap().iter())
+        .map(|m| {
+            format!(
+                "{} {:.3}",
+                m["key"],
+                m["log10_rms_error"].as_f64().unwrap_or(f64::NAN)
+            )
+        })
+        .collect();
+    table.join(", ")
+}
+
 fn model(j: &Value, key: &str) -> Option<f64> {
     j["models"]
         .as_array()
@@ -77,20 +91,11 @@ fn the_2d_psd_model_beats_the_elliptical_ones_on_crossing_lays() {
     for c in &cases {
         let j = judged(c);
         let noise = j["window"]["noise_floor_log10"].as_f64().unwrap();
-        let table: Vec<String> = (j["models"].as_array().unwrap().iter())
-            .map(|m| {
-                format!(
-                    "{} {:.3}",
-                    m["key"],
-                    m["log10_rms_error"].as_f64().unwrap_or(f64::NAN)
-                )
-            })
-            .collect();
         eprintln!(
             "σ {} µm share {}: noise {noise:.3}; {}; skipped {}",
             c.sigma_um,
             c.share,
-            table.join(", "),
+            ranking(&j),
             j["skipped"]
         );
         let Some(e) = model(&j, "measured_psd2d_ssa") else {
@@ -130,18 +135,9 @@ fn the_terraces_of_mi_1_are_ranked() {
         .unwrap()
         .json();
     let noise = j["window"]["noise_floor_log10"].as_f64().unwrap();
-    let table: Vec<String> = (j["models"].as_array().unwrap().iter())
-        .map(|m| {
-            format!(
-                "{} {:.3}",
-                m["key"],
-                m["log10_rms_error"].as_f64().unwrap_or(f64::NAN)
-            )
-        })
-        .collect();
     eprintln!(
         "mi-1: noise {noise:.3}; {}; skipped {}",
-        table.join(", "),
+        ranking(&j),
         j["skipped"]
     );
     let Some(e) = model(&j, "measured_psd2d_ssa") else {
