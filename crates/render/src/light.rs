@@ -712,14 +712,7 @@ mod tests {
         let pdf = sphere_cone_pdf(&s, DVec3::ZERO);
         let cos_max = (1.0f64 - 1.0 / 25.0).sqrt();
         assert!((1.0 / pdf - 2.0 * PI * (1.0 - cos_max)).abs() < 1e-12);
-        let lights = Lights {
-            lights: vec![LightKind::Sphere {
-                sphere: s,
-                spectrum: Spectrum::Constant(1.0),
-            }],
-            environment: None,
-            bsdf_only_environment: false,
-        };
+        let lights = one_sphere(s.center, s.radius);
         for i in 0..100 {
             let ls = lights
                 .sample(
@@ -728,6 +721,18 @@ mod tests {
                 )
                 .unwrap();
             assert!(ls.wi.z >= cos_max - 1e-9 && (ls.dist - 4.0).abs() < 1.0 + 1e-9);
+        }
+    }
+
+    /// A scene's lights: one sphere of unit constant radiance.
+    fn one_sphere(center: DVec3, radius: f64) -> Lights {
+        Lights {
+            lights: vec![LightKind::Sphere {
+                sphere: Sphere { center, radius },
+                spectrum: Spectrum::Constant(1.0),
+            }],
+            environment: None,
+            bsdf_only_environment: false,
         }
     }
 
@@ -749,14 +754,7 @@ mod tests {
             let dir = DVec3::new(0.3, -0.5, 0.8).normalize();
             let p = DVec3::new(0.1, 0.2, -0.3);
             let center = p + dir * dist;
-            let lights = Lights {
-                lights: vec![LightKind::Sphere {
-                    sphere: Sphere { center, radius },
-                    spectrum: Spectrum::Constant(1.0),
-                }],
-                environment: None,
-                bsdf_only_environment: false,
-            };
+            let lights = one_sphere(center, radius);
             let sphere = Sphere { center, radius };
             for i in 0..=64 {
                 for j in 0..=64 {
@@ -803,14 +801,7 @@ mod tests {
         for (dist, radius) in [(1.2, 1.0), (5.0, 1.0), (1.0, 0.03), (1e4, 1.0)] {
             let dir = DVec3::new(0.3, -0.5, 0.8).normalize();
             let center = dir * dist;
-            let lights = Lights {
-                lights: vec![LightKind::Sphere {
-                    sphere: Sphere { center, radius },
-                    spectrum: Spectrum::Constant(1.0),
-                }],
-                environment: None,
-                bsdf_only_environment: false,
-            };
+            let lights = one_sphere(center, radius);
             let r2d2 = (radius / dist) * (radius / dist);
             let one_minus = r2d2 / (1.0 + (1.0 - r2d2).sqrt());
             let (t, b) = frame(dir);

@@ -402,6 +402,17 @@ mod tests {
         }
     }
 
+    /// α pairs of the Beckmann sampler's round-off checks: the accepted
+    /// domain's ends, isotropic and both ways anisotropic.
+    const BECKMANN_ALPHAS: [(f64, f64); 6] = [
+        (1e-4, 1e-4),
+        (0.05, 0.05),
+        (0.2, 0.2),
+        (0.3, 0.1),
+        (1.0, 1.0),
+        (0.01, 0.9),
+    ];
+
     #[test]
     fn beckmann_sample_pdf_and_weight_are_the_evaluations_to_round_off() {
         // The sample's pdf and weight against `pdf` and `eval` at the
@@ -413,14 +424,7 @@ mod tests {
         // e^{−|s|²} turns subnormal in both forms and loses digits).
         let mut compared = 0;
         let mut worst = 0.0f64;
-        for (ax, ay) in [
-            (1e-4, 1e-4),
-            (0.05, 0.05),
-            (0.2, 0.2),
-            (0.3, 0.1),
-            (1.0, 1.0),
-            (0.01, 0.9),
-        ] {
+        for (ax, ay) in BECKMANN_ALPHAS {
             let m = MicrofacetConductor::new(Distribution::beckmann(ax, ay).unwrap(), Fresnel::One)
                 .unwrap();
             for i in 0..=60 {
@@ -464,14 +468,7 @@ mod tests {
         // and Λ on the unnormalised mirror direction v against Λ on v/|v|.
         let mut compared = 0;
         let mut worst = 0.0f64;
-        for (ax, ay) in [
-            (1e-4, 1e-4),
-            (0.05, 0.05),
-            (0.2, 0.2),
-            (0.3, 0.1),
-            (1.0, 1.0),
-            (0.01, 0.9),
-        ] {
+        for (ax, ay) in BECKMANN_ALPHAS {
             let d = Distribution::beckmann(ax, ay).unwrap();
             for i in 0..=60 {
                 let theta = core::f64::consts::FRAC_PI_2 * (i as f64 / 60.0).min(1.0 - 1e-6);
