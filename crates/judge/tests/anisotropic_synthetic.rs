@@ -6,9 +6,10 @@
 //! orientation conventions of `fit` (map axes), `brdf` (φ₀ from x towards y) and the
 //! explicit BRDF together.
 
-use brdf::Metal;
 use fit::kc2d::{self, AnisoKcParams};
 use serde_json::Value;
+
+mod common;
 
 const UM: f64 = 1e-6;
 
@@ -26,16 +27,7 @@ fn model_error(j: &Value, key: &str) -> f64 {
 fn judged(truth: AnisoKcParams, seed: u64) -> Value {
     // 20 µm, 256², as the two AFM scans of the corpus judge compares.
     let t = kc2d::synth_surface(256, 256, 20.0 * UM / 256.0, truth, seed);
-    let opts = judge::Options {
-        metal: Some(Metal::Cu),
-        lambda_nm: vec![550.0],
-        theta_i_deg: vec![0.0, 45.0],
-        surrogate: false,
-        ..judge::Options::default()
-    };
-    judge::judge("synthetic", t, &opts, &mut |_| {})
-        .unwrap()
-        .json()
+    common::judge_cu(t)
 }
 
 #[test]

@@ -6,9 +6,10 @@
 //! (`ghs_aniso`), whose radial shape is wrong, and the isotropic measured PSD, which has no lay; for
 //! ratios 2–10, several azimuths and g from 0.01 to ~12.
 
-use brdf::Metal;
 use fit::kc2d;
 use serde_json::Value;
+
+mod common;
 
 const UM: f64 = 1e-6;
 
@@ -72,16 +73,7 @@ fn judged(c: &Case) -> Value {
     };
     // 20 µm, 256², as the two AFM scans of the corpus judge compares.
     let t = kc2d::synth_surface_with(256, 256, 20.0 * UM / 256.0, &psd, c.seed);
-    let opts = judge::Options {
-        metal: Some(Metal::Cu),
-        lambda_nm: vec![550.0],
-        theta_i_deg: vec![0.0, 45.0],
-        surrogate: false,
-        ..judge::Options::default()
-    };
-    judge::judge("synthetic", t, &opts, &mut |_| {})
-        .unwrap()
-        .json()
+    common::judge_cu(t)
 }
 
 #[test]

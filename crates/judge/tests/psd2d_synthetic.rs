@@ -10,6 +10,8 @@ use brdf::Metal;
 use fit::kc2d::{self, AnisoKcParams};
 use serde_json::Value;
 
+mod common;
+
 const UM: f64 = 1e-6;
 
 /// "key error, …" of every ranked model, for the log.
@@ -60,16 +62,7 @@ fn judged(c: &Case) -> Value {
     };
     let psd = move |zx: f64, zy: f64| a.psd(zx, zy) + b.psd(zx, zy);
     let t = kc2d::synth_surface_with(256, 256, 20.0 * UM / 256.0, &psd, c.seed);
-    let opts = judge::Options {
-        metal: Some(Metal::Cu),
-        lambda_nm: vec![550.0],
-        theta_i_deg: vec![0.0, 45.0],
-        surrogate: false,
-        ..judge::Options::default()
-    };
-    judge::judge("synthetic", t, &opts, &mut |_| {})
-        .unwrap()
-        .json()
+    common::judge_cu(t)
 }
 
 #[test]
