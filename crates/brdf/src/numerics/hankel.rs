@@ -75,6 +75,24 @@ pub trait Correlation {
     fn cusp_weight(&self) -> f64 {
         1.0
     }
+    /// A key naming M exactly (equal keys: the same M, cusp, envelopes and
+    /// p), so that work that depends on M alone, such as a full-GHS table's
+    /// diffraction orders, can be shared between tables of surfaces with
+    /// the same correlation but other σ and Lc. `None`, the default, shares
+    /// nothing (a measured spectrum).
+    fn identity(&self) -> Option<CorrelationKey> {
+        None
+    }
+}
+
+/// What [`Correlation::identity`] returns: a family name and its
+/// parameters' bits.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct CorrelationKey {
+    /// The family, e.g. `"matern"`.
+    pub family: &'static str,
+    /// The family's parameters as `f64::to_bits`.
+    pub params: [u64; 2],
 }
 
 /// An upper bound of |h(y)| over all y ≥ x for the GHS kernel h (or, with
@@ -823,11 +841,15 @@ mod fftlog {
         /// N-point transform runs as one N/2-point complex FFT plus an O(N)
         /// split (halves the build time of a transform).
         fft: Fft,
-        /// e^{−2πim/N}, m = 0…N/2: the split's twiddles.
-        split: Vec<(f64, f64)>,
+        /// e^{−2πim/N}, m = 0…N/2: the split's twiddles (real and
+        /// imaginary parts apart, so the split's loops vectorise).
+        split_re: Vec<f64>,
+        split_im: Vec<f64>,
         /// K(q + iω_m)·e^{−2πim/N}/N for the bins m = 0…N/2 (the rest are
-        /// their conjugates: the kernel is Hermitian in m).
-        pub(super) kernel: Vec<(f64, f64)>,
+        /// their conjugates: the kernel is Hermitian in m), real and
+        /// imaginary parts apart.
+        pub(super) kern_re: Vec<f64>,
+        pub(super) kern_im: Vec<f64>,
         /// e^{(2−q)iΔ} and e^{−qjΔ}: the bias weights x^{2−q}, u^{−q} up to
         /// a factor per transform, so a transform costs no exponentials.
         pub(super) bias_in: Vec<f64>,
@@ -867,18 +889,21 @@ mod fftlog {
                 let (s, c) = libm::sincos(ph);
                 *slot = (mag * c, mag * s);
             }
+            let (split_re, split_im) = (0..=n / 2)
+                .map(|m| {
+                    let (s, c) = libm::sincos(-2.0 * PI * m as f64 / n as f64);
+                    (c, s)
+                })
+                .unzip();
             FftLog {
                 n,
                 dt,
                 q,
                 fft: Fft::new(n / 2),
-                split: (0..=n / 2)
-                    .map(|m| {
-                        let (s, c) = libm::sincos(-2.0 * PI * m as f64 / n as f64);
-                        (c, s)
-                    })
-                    .collect(),
-                kernel,
+                split_re,
+                split_im,
+                kern_re: kernel.iter().map(|k| k.0).collect(),
+                kern_im: kernel.iter().map(|k| k.1).collect(),
                 bias_in: (0..n)
                     .map(|i| crate::numerics::math::exp((2.0 - q) * i as f64 * dt))
                     .collect(),
@@ -898,37 +923,37 @@ mod fftlog {
             self.dt
         }
 
-        /// Y_m = X_m·K_m from the half-length spectrum Z (see
-        /// [`FftLog::transform`]); `mask` = N/2 − 1.
-        #[inline(always)]
-        fn y_at(&self, zr: &[f64], zi: &[f64], m: usize, mask: usize) -> (f64, f64) {
-            let h = mask + 1;
-            let j = (h - m) & mask;
-            let (ar, ai) = (zr[m & mask], zi[m & mask]);
-            let (br, bi) = (zr[j], -zi[j]);
-            let (er, ei) = (0.5 * (ar + br), 0.5 * (ai + bi));
-            // (Z_m − Z̄_{h−m})/2i = (d_i − i d_r)/2 for d = Z_m − Z̄_{h−m}.
-            let (or_, oi) = (0.5 * (ai - bi), -0.5 * (ar - br));
-            let (wr, wi) = self.split[m];
-            let (xr, xi) = (er + wr * or_ - wi * oi, ei + wr * oi + wi * or_);
-            let (kr, ki) = self.kernel[m];
-            (xr * kr - xi * ki, xr * ki + xi * kr)
-        }
-
         /// Transforms samples `f[n] = f(e^{t0 + nΔ})`; returns F at
         /// u_j = e^{s0 + jΔ}, s0 = −(t0 + (N−1)Δ), in `out` (length N).
-        pub fn transform(&self, t0: f64, f: &[f64], re: &mut Vec<f64>, im: &mut Vec<f64>) {
+        /// `work` is scratch (any contents; reused across calls).
+        pub fn transform(&self, t0: f64, f: &[f64], out: &mut Vec<f64>, work: &mut Vec<f64>) {
+            self.transform_scaled(t0, f, 1.0, out, work);
+        }
+
+        /// [`FftLog::transform`] with the output multiplied by `factor`
+        /// (folded into the output weights: no pass of its own).
+        pub fn transform_scaled(
+            &self,
+            t0: f64,
+            f: &[f64],
+            factor: f64,
+            out: &mut Vec<f64>,
+            work: &mut Vec<f64>,
+        ) {
             let n = self.n;
             let h = n / 2;
-            re.clear();
-            im.clear();
-            re.resize(n, 0.0);
-            im.resize(h, 0.0);
+            // work = [z_re | z_im | y_re | y_im], the last two h + 1 long;
+            // only z past the samples needs clearing.
+            work.resize(4 * h + 2, 0.0);
+            let (zr, rest) = work.split_at_mut(h);
+            let (zi, rest) = rest.split_at_mut(h);
+            let (yr, yi) = rest.split_at_mut(h + 1);
             // x_n = f_n·bias, packed as z_k = x_{2k} + i x_{2k+1}.
             let scale_in = crate::numerics::math::exp((2.0 - self.q) * t0);
-            let (zr, zi) = (&mut re[..h], &mut im[..h]);
-            // Samples past f's end are zero (zr, zi start zeroed).
+            // Samples past f's end are zero.
             let given = f.len().min(n);
+            zr[given.div_ceil(2)..].fill(0.0);
+            zi[given / 2..].fill(0.0);
             for (k, pair) in f[..given].chunks(2).enumerate() {
                 zr[k] = pair[0] * scale_in * self.bias_in[2 * k];
                 if let Some(&v) = pair.get(1) {
@@ -936,48 +961,96 @@ mod fftlog {
                 }
             }
             self.fft.run(zr, zi);
-            // Spectrum of x from Z (E, O: spectra of the even and odd
-            // samples): E_m = (Z_m + Z̄_{h−m})/2, O_m = (Z_m − Z̄_{h−m})/2i,
-            // X_m = E_m + e^{−2πim/N} O_m for m = 0…h; then Y = X·K, and
-            // C_m = (Y_m + Y_{m+h}) + i e^{−2πim/N} (Y_m − Y_{m+h}) with
-            // Y_{m+h} = Ȳ_{h−m} (Y is Hermitian), whose h-point transform
-            // is y_{2k} + i y_{2k+1}: the real output. Pairs (m, h − m) are
-            // done together so the update is in place.
-            // h is a power of two: `& mask` is `% h` without a division
-            // (three per bin).
-            let mask = h - 1;
-            let y_at = |zr: &[f64], zi: &[f64], m: usize| self.y_at(zr, zi, m, mask);
-            for m in 0..=h / 2 {
-                let mp = h - m;
-                // Y at m, h − m (both from the same pair of Z values) and
-                // the mirrored Y_{m+h} = Ȳ_{h−m}, Y_{2h−m} = Ȳ_m.
-                let (y_m, y_h) = (y_at(zr, zi, m), y_at(zr, zi, mp));
-                let c_at = |m: usize, ym: (f64, f64), y_hm: (f64, f64)| -> (f64, f64) {
-                    // Y_{m+h} = conj(Y_{h−m}).
-                    let (sr, si) = (ym.0 + y_hm.0, ym.1 - y_hm.1);
-                    let (dr, di) = (ym.0 - y_hm.0, ym.1 + y_hm.1);
-                    let (wr, wi) = self.split[m];
-                    let (tr, ti) = (wr * dr - wi * di, wr * di + wi * dr);
-                    (sr - ti, si + tr)
-                };
-                let c_m = c_at(m, y_m, y_h);
-                let c_mp = c_at(mp & mask, y_h, y_m);
-                zr[m] = c_m.0;
-                zi[m] = c_m.1;
-                if mp < h && mp != m {
-                    zr[mp] = c_mp.0;
-                    zi[mp] = c_mp.1;
-                }
-            }
+            self.spectrum_times_kernel(zr, zi, yr, yi);
+            self.split_for_real_output(yr, yi, zr, zi);
             self.fft.run(zr, zi);
             let s0 = -(t0 + (n - 1) as f64 * self.dt);
-            let scale_out = crate::numerics::math::exp(-self.q * s0);
-            // Unpack from the back so the real parts in re[..h] are read
-            // before they are overwritten.
-            for k in (0..h).rev() {
-                let (a, b) = (re[k], im[k]);
-                re[2 * k] = a * scale_out * self.bias_out[2 * k];
-                re[2 * k + 1] = b * scale_out * self.bias_out[2 * k + 1];
+            let scale_out = crate::numerics::math::exp(-self.q * s0) * factor;
+            out.clear();
+            out.extend(
+                zr.iter()
+                    .zip(zi.iter())
+                    .zip(self.bias_out.chunks_exact(2))
+                    .flat_map(|((&a, &b), w)| [a * scale_out * w[0], b * scale_out * w[1]]),
+            );
+        }
+
+        /// Y_m = X_m·K_m for m = 0…h from the half-length spectrum Z of the
+        /// packed samples (E, O: spectra of the even and odd samples):
+        /// E_m = (Z_m + Z̄_{h−m})/2, O_m = (Z_m − Z̄_{h−m})/2i,
+        /// X_m = E_m + e^{−2πim/N} O_m (indices of Z mod h). Out of place,
+        /// with Z_{h−m} read backwards, so that the loop vectorises.
+        fn spectrum_times_kernel(&self, zr: &[f64], zi: &[f64], yr: &mut [f64], yi: &mut [f64]) {
+            let h = zr.len();
+            let y = |m: usize, (ar, ai): (f64, f64), (br, bi): (f64, f64)| {
+                Self::y_from(
+                    ar,
+                    ai,
+                    br,
+                    bi,
+                    self.split_re[m],
+                    self.split_im[m],
+                    self.kern_re[m],
+                    self.kern_im[m],
+                )
+            };
+            // m = 0 and m = h both pair Z_0 with itself.
+            let (y0, yh) = (
+                y(0, (zr[0], zi[0]), (zr[0], -zi[0])),
+                y(h, (zr[0], zi[0]), (zr[0], -zi[0])),
+            );
+            (yr[0], yi[0], yr[h], yi[h]) = (y0.0, y0.1, yh.0, yh.1);
+            let lanes = zr[1..h]
+                .iter()
+                .zip(&zi[1..h])
+                .zip(zr[1..h].iter().rev().zip(zi[1..h].iter().rev()))
+                .zip(self.split_re[1..h].iter().zip(&self.split_im[1..h]))
+                .zip(self.kern_re[1..h].iter().zip(&self.kern_im[1..h]))
+                .zip(yr[1..h].iter_mut().zip(yi[1..h].iter_mut()));
+            for (((((&ar, &ai), (&br, &bi)), (&wr, &wi)), (&kr, &ki)), (oyr, oyi)) in lanes {
+                let (vr, vi) = Self::y_from(ar, ai, br, -bi, wr, wi, kr, ki);
+                *oyr = vr;
+                *oyi = vi;
+            }
+        }
+
+        /// Y_m from a = Z_m and b = Z̄_{h−m}, the split twiddle w and kernel K.
+        #[inline(always)]
+        #[allow(clippy::too_many_arguments)]
+        fn y_from(
+            ar: f64,
+            ai: f64,
+            br: f64,
+            bi: f64,
+            wr: f64,
+            wi: f64,
+            kr: f64,
+            ki: f64,
+        ) -> (f64, f64) {
+            let (er, ei) = (0.5 * (ar + br), 0.5 * (ai + bi));
+            // (Z_m − Z̄_{h−m})/2i = (d_i − i d_r)/2 for d = Z_m − Z̄_{h−m}.
+            let (or_, oi) = (0.5 * (ai - bi), -0.5 * (ar - br));
+            let (xr, xi) = (er + wr * or_ - wi * oi, ei + wr * oi + wi * or_);
+            (xr * kr - xi * ki, xr * ki + xi * kr)
+        }
+
+        /// C_m = (Y_m + Y_{m+h}) + i e^{−2πim/N} (Y_m − Y_{m+h}), m = 0…h−1,
+        /// with Y_{m+h} = Ȳ_{h−m} (Y is Hermitian): its h-point transform is
+        /// y_{2k} + i y_{2k+1}, the real output.
+        fn split_for_real_output(&self, yr: &[f64], yi: &[f64], cr: &mut [f64], ci: &mut [f64]) {
+            let h = cr.len();
+            let lanes = yr[..h]
+                .iter()
+                .zip(&yi[..h])
+                .zip(yr[1..=h].iter().rev().zip(yi[1..=h].iter().rev()))
+                .zip(self.split_re[..h].iter().zip(&self.split_im[..h]))
+                .zip(cr.iter_mut().zip(ci.iter_mut()));
+            for ((((&ar, &ai), (&br, &bi)), (&wr, &wi)), (ocr, oci)) in lanes {
+                let (sr, si) = (ar + br, ai - bi);
+                let (dr, di) = (ar - br, ai + bi);
+                let (tr, ti) = (wr * dr - wi * di, wr * di + wi * dr);
+                *ocr = sr - ti;
+                *oci = si + tr;
             }
         }
     }
@@ -1100,9 +1173,9 @@ mod tests {
                 .map(|m| {
                     let (xr, xi) = dft(&|i| (x[i], 0.0), m);
                     let (kr, ki) = if m <= n / 2 {
-                        plan.kernel[m]
+                        (plan.kern_re[m], plan.kern_im[m])
                     } else {
-                        let (kr, ki) = plan.kernel[n - m];
+                        let (kr, ki) = (plan.kern_re[n - m], plan.kern_im[n - m]);
                         (kr, -ki)
                     };
                     (xr * kr - xi * ki, xr * ki + xi * kr)
@@ -1120,9 +1193,9 @@ mod tests {
             full.run(&mut fr, &mut fi);
             for m in 0..n {
                 let (kr, ki) = if m <= n / 2 {
-                    plan.kernel[m]
+                    (plan.kern_re[m], plan.kern_im[m])
                 } else {
-                    let (kr, ki) = plan.kernel[n - m];
+                    let (kr, ki) = (plan.kern_re[n - m], plan.kern_im[n - m]);
                     (kr, -ki)
                 };
                 let (a, b) = (fr[m], fi[m]);

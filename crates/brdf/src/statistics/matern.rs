@@ -192,6 +192,12 @@ impl Correlation for Matern {
     fn cusp_nu(&self) -> f64 {
         self.nu()
     }
+    fn identity(&self) -> Option<crate::numerics::hankel::CorrelationKey> {
+        Some(crate::numerics::hankel::CorrelationKey {
+            family: "matern",
+            params: [self.nu().to_bits(), 0],
+        })
+    }
 }
 
 #[cfg(test)]

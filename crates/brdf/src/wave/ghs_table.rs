@@ -340,6 +340,64 @@ fn shared_plan(n: usize, dt: f64) -> Arc<FftLog> {
 #[cfg(feature = "std")]
 const PLANS_KEPT: usize = 8;
 
+/// What a table's [`Orders`] depend on: the correlation function and the
+/// FFTLog grid.
+#[derive(Clone, Copy, PartialEq)]
+struct OrdersKey {
+    correlation: crate::numerics::hankel::CorrelationKey,
+    fft_n: usize,
+    fft_dt: u64,
+}
+
+impl OrdersKey {
+    /// `None` for a correlation without an [`Correlation::identity`].
+    fn of<C: Correlation + ?Sized>(c: &C, res: &TableResolution) -> Option<OrdersKey> {
+        c.identity().map(|correlation| OrdersKey {
+            correlation,
+            fft_n: res.fft_n,
+            fft_dt: res.fft_dt.to_bits(),
+        })
+    }
+}
+
+/// The orders of the last [`ORDERS_KEPT`] correlations tabulated (with
+/// `std`): a third of a table's transforms, and the same for every σ and
+/// Lc of one γ (fits and notebooks sweep those).
+#[cfg(feature = "std")]
+static KEPT_ORDERS: std::sync::Mutex<Vec<(OrdersKey, Arc<Orders>)>> =
+    std::sync::Mutex::new(Vec::new());
+
+#[cfg(feature = "std")]
+const ORDERS_KEPT: usize = 4;
+
+#[cfg(feature = "std")]
+fn cached_orders(key: &OrdersKey) -> Option<Arc<Orders>> {
+    // A panic elsewhere while the lock was held leaves a valid Vec.
+    let kept = KEPT_ORDERS.lock().unwrap_or_else(|e| e.into_inner());
+    kept.iter().find(|(k, _)| k == key).map(|(_, o)| o.clone())
+}
+
+#[cfg(feature = "std")]
+fn keep_orders(key: OrdersKey, orders: Arc<Orders>) {
+    let mut kept = KEPT_ORDERS.lock().unwrap_or_else(|e| e.into_inner());
+    if kept.iter().any(|(k, _)| *k == key) {
+        return;
+    }
+    if kept.len() >= ORDERS_KEPT {
+        kept.remove(0);
+    }
+    kept.push((key, orders));
+}
+
+/// Without `std` there is no lock to share orders between tables.
+#[cfg(not(feature = "std"))]
+fn cached_orders(_: &OrdersKey) -> Option<Arc<Orders>> {
+    None
+}
+
+#[cfg(not(feature = "std"))]
+fn keep_orders(_: OrdersKey, _: Arc<Orders>) {}
+
 /// x_j, M(x_j) and 1 − M(x_j) on the lattice points the rows of a table
 /// need: M costs Bessel functions, and each row would otherwise evaluate it
 /// at ~2500 points of which nearly all are shared with its neighbours.
@@ -456,28 +514,24 @@ impl Row {
         c: &C,
         plans: &Plans,
         g: f64,
-        scratch: &mut (Vec<f64>, Vec<f64>),
+        scratch: &mut Vec<f64>,
     ) -> Row {
         let rp = RowPlan::fitted(c, g, plans.n, plans.dt);
         let lattice = Lattice::build(c, core::slice::from_ref(&rp), plans.dt, None);
         Row::build(plans.get(rp.n), &rp, &lattice, scratch)
     }
 
-    fn build(
-        plan: &FftLog,
-        rp: &RowPlan,
-        lattice: &Lattice,
-        scratch: &mut (Vec<f64>, Vec<f64>),
-    ) -> Row {
+    fn build(plan: &FftLog, rp: &RowPlan, lattice: &Lattice, scratch: &mut Vec<f64>) -> Row {
         let n = plan.len();
         debug_assert_eq!(n, rp.n);
         let dt = plan.dt();
         let t0 = rp.j0 as f64 * dt;
         let g = rp.g;
-        let mut f = vec![0.0; n];
         let (mut m0, mut m2) = (0.0, 0.0);
         let first = (rp.j0 - lattice.j_lo) as usize;
         let end = rp.x_h.max(rp.x_e).min(n);
+        // The window past `end` is zero: the transform pads it.
+        let mut f = vec![0.0; end];
         let points = &lattice.at[first..first + end];
         // K(x_j/ε₁) = cusp[j − s₁ − k_lo], K(x_j/ε₂) the entry before it.
         let k1 = (rp.j0 - rp.cusp.s1 - lattice.k_lo) as usize;
@@ -501,8 +555,8 @@ impl Row {
             *slot = h - s;
         }
         let ell = libm::sqrt(m2 / m0);
-        plan.transform(t0, &f, &mut scratch.0, &mut scratch.1);
-        let rem = scratch.0.iter().map(|v| v / (2.0 * PI)).collect();
+        let mut rem = Vec::new();
+        plan.transform_scaled(t0, &f, 1.0 / (2.0 * PI), &mut rem, scratch);
         Row {
             ell,
             ln_u_flat: crate::numerics::math::ln(1e-6 / ell),
@@ -560,6 +614,11 @@ impl Row {
 
 /// Highest diffraction order the Poisson rows sum ([`Orders`]).
 const POISSON_ORDERS: usize = 16;
+
+/// Largest change, as a fraction of a Poisson row's S̃(0), that the orders a
+/// row leaves out of its sum may make together ([`Orders::terms`]): a tenth
+/// of the truncation after [`POISSON_ORDERS`] that [`POISSON_TOL`] allows.
+const ORDER_SKIP_TOL: f64 = 1e-17;
 
 /// Largest truncation error of a Poisson row, as a fraction of its S̃(0):
 /// 1e−4 relative even at the [`RELIABLE`] floor.
@@ -630,6 +689,9 @@ struct Orders {
     /// (at n − 1): each order's task writes its own, so nothing is copied
     /// after the fan-out.
     rem: Vec<Vec<f64>>,
+    /// max_j |(1/2π)·transform of fₙ|, at n − 1: what leaving order n out
+    /// of a row can change ([`Orders::terms`]).
+    max_abs: [f64; POISSON_ORDERS],
     /// Σ_j Mⁿ x_j² and Σ_j Mⁿ x_j⁴ over the window (∝ pₙ(0) and its
     /// second moment), at n − 1.
     m0: [f64; POISSON_ORDERS],
@@ -645,6 +707,10 @@ struct PoissonRow {
     coef: [f64; POISSON_ORDERS],
     /// Σ cₙaₙ and Σ cₙbₙ: the weights of p_K(u) and ε_b² p_K(ε_b u).
     cusp: [f64; 2],
+    /// The orders (at n − 1) whose transforms the row sums: the rest are
+    /// zero or below [`ORDER_SKIP_TOL`] of the row together
+    /// ([`Orders::terms`]; all of them until the transforms are known).
+    terms: core::ops::Range<usize>,
     ell: f64,
     ln_u_flat: f64,
     w: f64,
@@ -725,6 +791,7 @@ impl Orders {
             dt,
             len: n,
             rem: Vec::new(),
+            max_abs: [0.0; POISSON_ORDERS],
             m0,
             m2,
             lattice,
@@ -761,16 +828,14 @@ impl Orders {
             let mn = pow_int(m, order);
             *slot = mn - self.a[i] * k1[j] - self.b[i] * kb[j];
         }
-        let (mut re, mut im) = (Vec::new(), Vec::new());
+        let (mut re, mut work) = (Vec::new(), Vec::new());
         // f₁ = M − K vanishes where the subtracted K is M itself (the
         // closed-form covariances): its transform is 0.
         if order as usize >= self.n_lo && f.iter().any(|&v| v != 0.0) {
-            plan.transform(self.j0 as f64 * self.dt, &f, &mut re, &mut im);
+            let t0 = self.j0 as f64 * self.dt;
+            plan.transform_scaled(t0, &f, 1.0 / (2.0 * PI), &mut re, &mut work);
         } else {
             re.resize(n, 0.0);
-        }
-        for v in re.iter_mut() {
-            *v /= 2.0 * PI;
         }
         re
     }
@@ -778,7 +843,34 @@ impl Orders {
     /// Takes the transforms of the orders 1…N ([`Orders::transform`]).
     fn set_transforms(&mut self, outs: Vec<Vec<f64>>) {
         debug_assert!(outs.len() == POISSON_ORDERS && outs.iter().all(|v| v.len() == self.len));
+        for (m, v) in self.max_abs.iter_mut().zip(&outs) {
+            *m = v.iter().fold(0.0f64, |a, x| a.max(x.abs()));
+        }
         self.rem = outs;
+    }
+
+    /// The orders a row with coefficients `coef` needs: those whose
+    /// transform is not identically zero (f₁ = M − K is, for the closed-form
+    /// covariances), up to the last whose leaving out, with every order
+    /// after it, could change the row by more than [`ORDER_SKIP_TOL`] of
+    /// its S̃(0). At small g only the first few orders count (gⁿ/n! falls
+    /// by g/n per order), and the columns cost one interpolation per order
+    /// summed.
+    fn terms(&self, coef: &[f64; POISSON_ORDERS]) -> core::ops::Range<usize> {
+        let lo = self.max_abs.iter().position(|&m| m > 0.0).unwrap_or(0);
+        // pₙ(0) = (1/2π)∫Mⁿ x dx = m0·Δ/2π on the lattice.
+        let peak: f64 =
+            coef.iter().zip(&self.m0).map(|(c, m)| c * m).sum::<f64>() * self.dt / (2.0 * PI);
+        let mut hi = POISSON_ORDERS;
+        let mut dropped = 0.0;
+        while hi > lo {
+            dropped += coef[hi - 1] * self.max_abs[hi - 1];
+            if !(dropped <= ORDER_SKIP_TOL * peak) {
+                break;
+            }
+            hi -= 1;
+        }
+        lo..hi.max(lo)
     }
 
     /// gⁿ/n! for n = 1…N at n − 1 (those below the first order summed: 0).
@@ -826,6 +918,7 @@ impl Orders {
         PoissonRow {
             coef,
             cusp,
+            terms: 0..POISSON_ORDERS,
             ell,
             ln_u_flat: crate::numerics::math::ln(1e-6 / ell),
             w: if xs.is_finite() {
@@ -857,7 +950,12 @@ impl PoissonRow {
         // four partial sums: one chain of 64 dependent additions was most
         // of a column's cost.
         let mut lanes = [0.0; 4];
-        for (n, (c, rem)) in self.coef.iter().zip(&o.rem).enumerate() {
+        let terms = self.terms.clone();
+        for (n, (c, rem)) in self.coef[terms.clone()]
+            .iter()
+            .zip(&o.rem[terms])
+            .enumerate()
+        {
             let r = &rem[i - 1..i + 3];
             let v = wts[0] * r[0] + wts[1] * r[1] + wts[2] * r[2] + wts[3] * r[3];
             lanes[n % 4] += c * v;
@@ -1119,7 +1217,7 @@ struct ColumnGrid {
 }
 
 impl ColumnGrid {
-    /// w_k² of the cells' left edges, shared by all rows.
+    /// w_k² of the columns (the cells' left edges), shared by all rows.
     fn w2(&self) -> Vec<f64> {
         (0..self.n_w)
             .map(|k| {
@@ -1133,18 +1231,17 @@ impl ColumnGrid {
     /// interpolated log-linearly in ln w (a power law in each cell),
     /// constant inside w < w₀, and a power-law tail beyond the last column.
     /// Returns the normalised cumulative masses [disk, cells…, tail] (n_w + 1
-    /// entries) and the total mass.
-    fn row_cdf(&self, w2: &[f64], vals: &[f64]) -> (Vec<f64>, f64) {
+    /// entries) and the total mass. `dens` holds e^{vals}.
+    fn row_cdf(&self, w2: &[f64], vals: &[f64], dens: &[f64]) -> (Vec<f64>, f64) {
         let n_w = self.n_w;
         let mut cum = Vec::with_capacity(n_w + 1);
-        let w0 = crate::numerics::math::exp(self.ln_w0);
-        let mut acc = PI * w0 * w0 * crate::numerics::math::exp(vals[0]);
+        let mut acc = PI * w2[0] * dens[0];
         cum.push(acc);
-        for (k, &wk2) in w2[..n_w - 1].iter().enumerate() {
-            acc += self.cell_mass(vals, k, wk2);
+        for k in 0..n_w - 1 {
+            acc += self.cell_mass(vals, dens, w2, k);
             cum.push(acc);
         }
-        acc += self.tail_mass(vals);
+        acc += self.tail_mass(vals, dens);
         let total = acc;
         for c in cum.iter_mut() {
             *c /= total;
@@ -1158,10 +1255,17 @@ impl ColumnGrid {
         (vals[k + 1] - vals[k]) / self.d_w
     }
 
-    /// ∫ over cell k of 2π w ρ(w) dw with ρ = ρ_k (w/w_k)^β, given w_k².
-    fn cell_mass(&self, vals: &[f64], k: usize, wk2: f64) -> f64 {
+    /// ∫ over cell k of 2π w ρ(w) dw with ρ = ρ_k (w/w_k)^β:
+    /// 2π ρ_k w_k² (e^{(β+2)Δ} − 1)/(β+2) = 2π (ρ_{k+1} w_{k+1}² − ρ_k w_k²)/(β+2),
+    /// the difference wherever it does not cancel (|β+2|Δ > 0.1: it loses
+    /// at most a decimal digit there), the expm1 form elsewhere.
+    fn cell_mass(&self, vals: &[f64], dens: &[f64], w2: &[f64], k: usize) -> f64 {
         let b2 = self.cell_beta(vals, k) + 2.0;
-        2.0 * PI * crate::numerics::math::exp(vals[k]) * wk2 * expm1_over(b2, self.d_w)
+        if libm::fabs(b2 * self.d_w) > 0.1 {
+            2.0 * PI * (dens[k + 1] * w2[k + 1] - dens[k] * w2[k]) / b2
+        } else {
+            2.0 * PI * dens[k] * w2[k] * expm1_over(b2, self.d_w)
+        }
     }
 
     /// Tail slope (kept below −2.01 so the tail mass is finite).
@@ -1169,10 +1273,10 @@ impl ColumnGrid {
         self.cell_beta(vals, self.n_w - 2).min(-2.01)
     }
 
-    fn tail_mass(&self, vals: &[f64]) -> f64 {
+    fn tail_mass(&self, vals: &[f64], dens: &[f64]) -> f64 {
         let wl = crate::numerics::math::exp(self.ln_w0 + (self.n_w - 1) as f64 * self.d_w);
         let b2 = self.tail_beta(vals) + 2.0;
-        2.0 * PI * crate::numerics::math::exp(vals[self.n_w - 1]) * wl * wl / (-b2)
+        2.0 * PI * dens[self.n_w - 1] * wl * wl / (-b2)
     }
 }
 
@@ -1260,17 +1364,53 @@ impl GhsTable {
         let mut fft = Plans::new(res.fft_n, res.fft_dt);
         let g_at = |r: usize| crate::numerics::math::exp(ln_g0 + r as f64 * d_g);
         // The rows of small g from the diffraction orders, a prefix of the
-        // rows; the rest each from its own transform.
-        let mut orders = Orders::prepare(c, &mut fft, first_order_apart(c));
+        // rows; the rest each from its own transform. The orders depend on
+        // M alone, so a table of another surface with this correlation (σ
+        // and Lc aside) may have made them already.
+        let key = OrdersKey::of(c, &res);
+        let mut orders = key.as_ref().and_then(cached_orders);
+        let mut fresh = match orders {
+            Some(_) => None,
+            None => Orders::prepare(c, &mut fft, first_order_apart(c)),
+        };
         let n_poisson = orders
-            .as_ref()
+            .as_deref()
+            .or(fresh.as_ref())
             .map_or(0, |o| (0..n_g).take_while(|&r| o.covers(g_at(r))).count());
         let plans: Vec<RowPlan> = crate::parallel::map_rows(n_g - n_poisson, |r| {
             RowPlan::fitted(c, g_at(n_poisson + r), res.fft_n, res.fft_dt)
         });
         fft.cover(&plans);
-        let lattice = Lattice::build(c, &plans, res.fft_dt, orders.as_ref().map(|o| &o.lattice));
-        let rows = Self::transform_rows(c, &mut orders, &fft, &plans, &lattice, &g_at, n_poisson);
+        let (mut rows, transforms) = {
+            let o = orders.as_deref().or(fresh.as_ref());
+            let lattice = Lattice::build(c, &plans, res.fft_dt, o.map(|o| &o.lattice));
+            let to_transform = if fresh.is_some() { POISSON_ORDERS } else { 0 };
+            Self::transform_rows(
+                c,
+                o,
+                to_transform,
+                &fft,
+                (&plans, &lattice),
+                &g_at,
+                n_poisson,
+            )
+        };
+        if let Some(mut f) = fresh.take() {
+            f.set_transforms(transforms);
+            let f = Arc::new(f);
+            if let Some(k) = key {
+                keep_orders(k, f.clone());
+            }
+            orders = Some(f);
+        }
+        let orders = orders.as_deref();
+        if let Some(o) = orders {
+            for r in rows.iter_mut() {
+                if let TableRow::Poisson(p) = r {
+                    p.terms = o.terms(&p.coef);
+                }
+            }
+        }
         // Columns start where every row is flat to ~1e−7: w ≤ 1e−3/(ℓW). For
         // heavy-tailed surfaces (small ν) the core is far narrower than W.
         // Columns scale with the lobe width, but never past the hemisphere:
@@ -1305,7 +1445,7 @@ impl GhsTable {
             .map(|k| crate::numerics::math::exp(ln_w0 + k as f64 * d_w))
             .collect();
         let grid = ColumnGrid { ln_w0, d_w, n_w };
-        let (values, cdf, mass) = Self::columns(c, &rows, orders.as_ref(), &widths, grid, &col_w);
+        let (values, cdf, mass) = Self::columns(c, &rows, orders, &widths, grid, &col_w);
         Ok(GhsTable {
             ln_g0,
             d_g,
@@ -1354,11 +1494,26 @@ impl GhsTable {
             let w2 = width * width;
             // ln(S̃W²): the factor A = 1 − e^{−g} is kept inside (it is
             // smooth in ln g), which saves an expm1 per evaluation.
-            let mut vals: Vec<f64> = tail_safe_row(&parts, &us)
-                .map(|s| crate::numerics::math::ln((s * w2).max(f64::MIN_POSITIVE)))
+            let lin: Vec<f64> = tail_safe_row(&parts, &us)
+                .map(|s| (s * w2).max(f64::MIN_POSITIVE))
                 .collect();
+            let ln_lin: Vec<f64> = lin.iter().map(|&v| crate::numerics::math::ln(v)).collect();
+            let mut vals = ln_lin.clone();
             limit_steps_along_row(&mut vals);
-            let cdf = grid.row_cdf(&w2_cols, &vals);
+            // The CDF's densities e^{vals}: the values themselves where the
+            // limit left them (an exponential per entry saved).
+            let dens: Vec<f64> = vals
+                .iter()
+                .zip(ln_lin.iter().zip(&lin))
+                .map(|(&v, (&l, &x))| {
+                    if v == l {
+                        x
+                    } else {
+                        crate::numerics::math::exp(v)
+                    }
+                })
+                .collect();
+            let cdf = grid.row_cdf(&w2_cols, &vals, &dens);
             (vals, cdf)
         });
         let mut values = Vec::with_capacity(n_g * n_w);
@@ -1370,8 +1525,12 @@ impl GhsTable {
         let raised = limit_steps_across_rows(&mut values, n_g, n_w);
         let redo: Vec<usize> = (0..n_g).filter(|&r| raised[r]).collect();
         let again = crate::parallel::map_rows(redo.len(), |i| {
-            let r = redo[i];
-            grid.row_cdf(&w2_cols, &values[r * n_w..(r + 1) * n_w])
+            let vals = &values[redo[i] * n_w..(redo[i] + 1) * n_w];
+            let dens: Vec<f64> = vals
+                .iter()
+                .map(|&v| crate::numerics::math::exp(v))
+                .collect();
+            grid.row_cdf(&w2_cols, vals, &dens)
         });
         for (&r, cdf) in redo.iter().zip(again) {
             cdfs[r] = cdf;
@@ -1381,31 +1540,33 @@ impl GhsTable {
         (values, cdf, mass)
     }
 
-    /// Every row of the table: the orders' transforms and the rows' own in
-    /// one fan-out (all of a similar cost, so the threads stay balanced),
-    /// and the rows summed from the orders (cheap) after them in the same
-    /// one. `orders` receives its transforms.
+    /// Every row of the table: the first `n_orders` of the orders'
+    /// transforms (all or none) and the rows' own in one fan-out (all of a
+    /// similar cost, so the threads stay balanced), and the rows summed from
+    /// the orders (cheap) after them in the same one. Returns the rows and
+    /// the orders' transforms ([`Orders::set_transforms`]); the Poisson
+    /// rows' terms are left to the caller, which has the transforms.
     fn transform_rows<C: Correlation + Sync + ?Sized>(
         c: &C,
-        orders: &mut Option<Orders>,
+        orders: Option<&Orders>,
+        n_orders: usize,
         fft: &Plans,
-        plans: &[RowPlan],
-        lattice: &Lattice,
+        (plans, lattice): (&[RowPlan], &Lattice),
         g_at: &(impl Fn(usize) -> f64 + Sync),
         n_poisson: usize,
-    ) -> Vec<TableRow> {
+    ) -> (Vec<TableRow>, Vec<Vec<f64>>) {
         enum Out {
             Order(Vec<f64>),
             Row(TableRow),
         }
-        let n_orders = if orders.is_some() { POISSON_ORDERS } else { 0 };
+        let n_orders = if orders.is_some() { n_orders } else { 0 };
         let n_fft = plans.len();
-        let o = orders.as_ref();
+        let o = orders;
         let outs = crate::parallel::map_rows(n_orders + n_fft + n_poisson, |t| match o {
             Some(o) if t < n_orders => Out::Order(o.transform(fft, t)),
             _ if t < n_orders + n_fft => {
                 let rp = &plans[t - n_orders];
-                let mut scratch = (Vec::new(), Vec::new());
+                let mut scratch = Vec::new();
                 Out::Row(TableRow::Fft(Row::build(
                     fft.get(rp.n),
                     rp,
@@ -1426,11 +1587,8 @@ impl GhsTable {
                 Out::Row(r) => rows.push(r),
             }
         }
-        if let Some(o) = orders.as_mut() {
-            o.set_transforms(transforms);
-        }
         rows.extend(fft_rows);
-        rows
+        (rows, transforms)
     }
 
     /// Largest u the table was built for.
@@ -1688,7 +1846,7 @@ impl GhsTable {
     ) -> (f64, f64, f64, f64) {
         let mut plans = Plans::new(res.fft_n, res.fft_dt);
         plans.cover_all();
-        let mut scratch = (Vec::new(), Vec::new());
+        let mut scratch = Vec::new();
         let mut at = (0.0, 0.0, 0.0, 0.0);
         let lo = crate::numerics::math::ln(G_MIN);
         let hi = self.ln_g_hi;
@@ -1758,7 +1916,7 @@ pub(crate) fn s_tilde_fftlog<C: Correlation + Sync + ?Sized>(
     let mut plans = Plans::new(res.fft_n, res.fft_dt);
     let rp = RowPlan::fitted(c, g, res.fft_n, res.fft_dt);
     plans.cover(core::slice::from_ref(&rp));
-    let mut scratch = (Vec::new(), Vec::new());
+    let mut scratch = Vec::new();
     Row::build_single(c, &plans, g, &mut scratch).s_tilde(c, u)
 }
 
@@ -1835,7 +1993,7 @@ mod tests {
             plans.cover_all();
             let orders = Orders::build(&m, &mut plans, first_order_apart(&m)).unwrap();
             let mut covered = 0;
-            let mut scratch = (Vec::new(), Vec::new());
+            let mut scratch = Vec::new();
             for k in 0..=40 {
                 let g = 1e-4 * libm::pow(10.0, k as f64 * 0.1);
                 if !orders.covers(g) {
@@ -1857,6 +2015,18 @@ mod tests {
                     }
                     let (pa, prr) = pr.parts_ln(&orders, &m, u, crate::numerics::math::ln(u));
                     let e = ((pa + prr) / want - 1.0).abs();
+                    // The orders the table's row sums (Orders::terms) give
+                    // the same to ORDER_SKIP_TOL of S̃(0) and the round-off
+                    // of its two parts (which may cancel).
+                    let mut short = orders.row(&m, g);
+                    short.terms = orders.terms(&short.coef);
+                    let (sa, sr) = short.parts_ln(&orders, &m, u, crate::numerics::math::ln(u));
+                    let d = ((sa + sr) - (pa + prr)).abs();
+                    assert!(
+                        d <= 2.0 * ORDER_SKIP_TOL * peak + 1e-14 * (pa.abs() + prr.abs()),
+                        "ν = {nu}, g = {g}, u = {u}: orders {:?} change the row by {d:e}",
+                        short.terms
+                    );
                     let band = usize::from(want < 1e-6 * peak);
                     worst[band] = worst[band].max(e);
                     assert!(
@@ -1872,5 +2042,41 @@ mod tests {
         }
         // Measured: 1.5e−7 and 2.7e−6.
         assert!(worst[0] < 1e-6 && worst[1] < 1e-4, "{worst:?}");
+    }
+
+    /// A table whose orders come from the cache (another surface of the
+    /// same γ built them) equals one built from scratch, bit for bit.
+    #[cfg(feature = "std")]
+    #[test]
+    fn shared_orders_give_the_same_table() {
+        // A ν no other test uses, so the first build makes its orders.
+        let m = Matern::new(0.617_283_950_617);
+        let res = TableResolution::default();
+        let key = OrdersKey::of(&m, &res).unwrap();
+        assert!(cached_orders(&key).is_none());
+        let fresh = GhsTable::build_up_to(&m, 40.0, 30.0, res).unwrap();
+        assert!(
+            cached_orders(&key).is_some(),
+            "the first build keeps its orders"
+        );
+        let again = GhsTable::build_up_to(&m, 40.0, 30.0, res).unwrap();
+        // Another hemisphere (another Lc and σ) reuses them too.
+        let other = GhsTable::build_up_to(&m, 90.0, 12.0, res).unwrap();
+        assert_eq!(fresh.values, again.values);
+        assert_eq!(fresh.cdf, again.cdf);
+        assert_eq!(fresh.mass, again.mass);
+        let row = Row::build_single(
+            &m,
+            &{
+                let mut p = Plans::new(res.fft_n, res.fft_dt);
+                p.cover_all();
+                p
+            },
+            0.01,
+            &mut Vec::new(),
+        );
+        let (a, r) = row.parts(&m, 0.5);
+        let s = other.s_tilde(0.5, 0.01).unwrap();
+        assert!((s / (a + r) - 1.0).abs() < 1e-3, "{s} vs {}", a + r);
     }
 }
