@@ -12,10 +12,14 @@
 //!   between columns, values ≥ 1e−9 of the peak) and the mean eval time.
 //!
 //! * criterion group `new_surface`: building what a new surface needs, each
-//!   iteration from scratch: the full-GHS S̃ table of S138 (σ 0.138 µm,
+//!   iteration from scratch but for what a process keeps between tables
+//!   (FFTLog plans; per γ, the diffraction orders): the full-GHS S̃ table of S138 (σ 0.138 µm,
 //!   Lc 2 µm, γ 2, rows up to the g it reaches) and of S280, the whole
 //!   full-GHS model of S138 (table and energy tables), and the two-scale
-//!   model of S138 split at 100λ (its D̃_eff table). Targets (issue 34):
+//!   model of S138 split at 100λ (its D̃_eff table), and the full-GHS model
+//!   of S138 with a new γ at every iteration (`ghs_full_model_new_gamma`:
+//!   the diffraction orders, kept per γ, are made each time; the S138 lines
+//!   make them once). Targets (issue 34):
 //!   full-GHS table ≤ 2 ms, two-scale ≤ 5 ms. The builders spread rows over
 //!   the cores the process may use, so `taskset -c 0 cargo bench --bench ghs
 //!   -- new_surface` gives one core's time and the plain run the wall time on
@@ -187,6 +191,17 @@ fn new_surfaces(c: &mut Criterion) {
     });
     g.bench_function("ghs_full_model_s138", |b| {
         b.iter(|| GhsFull::new(black_box(s138), cu()).unwrap())
+    });
+    // S138 with another γ at every iteration (2 + 1e−7·i): nothing is
+    // shared with the tables before it (their diffraction orders are kept
+    // per correlation, i.e. per γ).
+    let mut count = 0u64;
+    g.bench_function("ghs_full_model_new_gamma", |b| {
+        b.iter(|| {
+            count += 1;
+            let gamma = 2.0 + (count % 10_000_000) as f64 * 1e-7;
+            GhsFull::new(KcPsd::new(0.138, 2.0, gamma).unwrap(), cu()).unwrap()
+        })
     });
     let sample = find_sample("S138").unwrap();
     let params = TwoScaleParams {
