@@ -10,7 +10,8 @@ import numpy as np
 import pytest
 
 import lustre
-from conftest import SURFACES
+from conftest import SURFACES, loads_lines
+from test_material import direction
 
 STATS_FILES = ["dektak-1.csv", "di-3.di", "matrix-3.txt", "formats/sdf-1.sdf", "formats/xy-2.txt"]
 
@@ -146,3 +147,67 @@ def test_from_fit_takes_a_parsed_file_and_names_a_bad_key(cli, tmp_path):
     assert a.eval([0, 0, 1], wo, 550.0)[0][0] == b.eval([0, 0, 1], wo, 550.0)[0][0]
     with pytest.raises(ValueError, match="alpha_z"):
         lustre.Material.from_fit(parsed, alpha_z=0.1)
+
+
+def _unit(rng, n, z_min=0.05):
+    v = rng.normal(size=(n, 3))
+    v[:, 2] = np.maximum(abs(v[:, 2]), z_min)
+    return v / np.linalg.norm(v, axis=1)[:, None]
+
+
+def test_a_crossing_lay_map_gives_the_2d_psd_model():
+    # Two lays 70° apart (correlation lengths 0.25 and 2 µm, 10 and 6 nm rms, on 20 µm): the
+    # PSD is not constant on ellipses, so fit writes its 2-D table.
+    dx = 20e-6 / 256
+    lays = [_stretched_map(a, dx=dx, lx=0.25e-6, ly=2e-6, seed=s) * r for a, s, r in ((0.0, 5, 0.5), (70.0, 6, 0.3))]
+    scan = lustre.Scan(lays[0] + lays[1], dx, dx, name="crossing")
+    got = lustre.fit(scan, metal="cu")
+    assert "map" in got["psd"], sorted(got["psd"])
+    m = lustre.Material.from_fit(got, model="measured_psd2d_ssa")
+    rng = np.random.default_rng(3)
+    wi, wo = _unit(rng, 256), _unit(rng, 256)
+    f, pdf = m.eval(wi, wo, 550.0)
+    assert np.all(np.isfinite(f)) and np.all(f >= 0) and np.all(pdf >= 0)
+    assert np.all(pdf[f > 0] > 0)
+    # Reciprocity: the scattering term depends on wi, wo through ζ and cosines only.
+    f_back, _ = m.eval(wo, wi, 550.0)
+    np.testing.assert_allclose(f_back, f, rtol=1e-9, atol=0)
+    # A sample's pdf and weight are those eval gives for its direction.
+    wi_s = np.repeat([[math.sin(0.6), 0.0, math.cos(0.6)]], 512, axis=0)
+    u = rng.uniform(size=(512, 3))
+    u[:, 0] = 0.999 + 0.001 * u[:, 0]  # past the delta lobe's share (g ~ 0.1: p_δ ~ 0.9)
+    wo_s, pdf_s, weight, is_delta = m.sample(wi_s, 550.0, u)
+    glossy = ~is_delta & (pdf_s > 0)
+    assert glossy.sum() > 100
+    f_s, pdf_e = m.eval(wi_s[glossy], wo_s[glossy], 550.0)
+    np.testing.assert_allclose(pdf_s[glossy], pdf_e, rtol=1e-9)
+    np.testing.assert_allclose(weight[glossy], f_s * wo_s[glossy, 2] / pdf_e, rtol=1e-9)
+    # The lays show: ζ along x and along y scatter differently.
+    z = math.sqrt(1 - 0.02**2)
+    along_x = m.eval([0, 0, 1], [0.02, 0.0, z], 550.0)[0][0]
+    along_y = m.eval([0, 0, 1], [0.0, 0.02, z], 550.0)[0][0]
+    assert abs(along_x / along_y - 1) > 0.05, (along_x, along_y)
+    a = m.albedo([0.0, 45.0], 550.0)
+    assert np.all((a > 0.3) & (a < 1.0)), a
+
+
+def test_the_2d_psd_model_from_a_fit_file_equals_brdf_eval(cli, tmp_path):
+    # corpus/mi-1 is flagged non-elliptical: `lustre fit` writes [psd.map] into the file.
+    out = tmp_path / "mi1.toml"
+    cli("fit", "data/surfaces/corpus/mi-1.mi", "--metal", "cu", "-o", str(out), "--no-plots")
+    assert "[psd.map]" in out.read_text()
+    keys = {"model": "measured_psd2d_ssa", "include": str(out)}
+    geometry = [(ti, to, po) for ti in (0.0, 40.0, 80.0) for to in (2.0, 30.0) for po in (180.0, 135.0, 90.0, 20.0)]
+    lines = [
+        json.dumps({"lambda_nm": 550.0, "theta_i_deg": ti, "theta_o_deg": to, "phi_o_deg": po, **keys})
+        for ti, to, po in geometry
+    ]
+    want = loads_lines(cli("brdf", "eval", input="\n".join(lines) + "\n"))
+    assert all("error" not in w for w in want), want[0]
+    m = lustre.Material(**keys)
+    wi = np.array([direction(ti, 0.0) for ti, _, _ in geometry])
+    wo = np.array([direction(to, po) for _, to, po in geometry])
+    f, pdf = m.eval(wi, wo, 550.0)
+    assert [w["f"] for w in want] == list(f)
+    assert [w["pdf"] for w in want] == list(pdf)
+    assert max(f) > 0
