@@ -449,16 +449,15 @@ impl EffTable {
         t
     }
 
+    /// The number of w nodes.
+    pub(crate) fn w_nodes(&self) -> usize {
+        self.nw
+    }
+
     /// Smith Λ of the normalised D̃_eff at every w node for tanθ (for
     /// [`EffTable::mix_nodes`] at many w brackets and one direction).
     pub(crate) fn lambda_nodes(&self, tan_t: f64) -> Vec<f64> {
         (0..self.nw).map(|i| self.lambda_node(i, tan_t)).collect()
-    }
-
-    /// The normalised D̃_eff at every w node for tanθh (for
-    /// [`EffTable::mix_nodes`] at many w brackets and one θh).
-    pub(crate) fn d_nodes(&self, tan_t: f64) -> Vec<f64> {
-        (0..self.nw).map(|i| self.d_node(i, tan_t)).collect()
     }
 
     /// Smith Λ of the normalised D̃_eff at node i for tanθ.
@@ -519,7 +518,7 @@ impl EffTable {
 
     /// D̃_eff at node i (tanθ, clamped to the top node beyond it).
     #[inline]
-    fn d_node(&self, i: usize, tan_t: f64) -> f64 {
+    pub(crate) fn d_node(&self, i: usize, tan_t: f64) -> f64 {
         let row = &self.log_d[i * self.nv..(i + 1) * self.nv];
         match self.v_position(i, tan_t) {
             Some((j, f)) => crate::numerics::math::exp(catmull_rom(row, j, f)),
