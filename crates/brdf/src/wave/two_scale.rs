@@ -63,7 +63,7 @@ use crate::statistics::kc::KcPsd;
 use crate::wave::albedo_cap::{self, AlbedoCap};
 pub use crate::wave::two_scale_table::TableResolution;
 use crate::wave::two_scale_table::{
-    Convolver, EffTable, LAMBDA_TOP_TAN, SINH_A, lambda_from_log1p_row,
+    Convolver, EffTable, LAMBDA_TOP_TAN, SINH_A, SharedLambdaGrid, lambda_from_log1p_row,
 };
 
 /// Where the coherent (specular) fraction A of each microfacet goes.
@@ -234,7 +234,14 @@ impl TwoScale {
         // The lobe's angular scale: the macro NDF's, widened by the KC lobe
         // at small w.
         let width = self.ndf.beta().clamp(1e-3, 1.0);
+        // Λ at wo, for the macro NDF (last row) and the w nodes: one grid
+        // position per node of the quadrature serves them all.
         let nw = self.table.w_nodes();
+        let grid = SharedLambdaGrid::new(self.table.lambda_rows().chain(core::iter::once((
+            self.macro_log1p_lambda.as_slice(),
+            self.macro_inv_scale,
+            self.macro_v_scale,
+        ))));
         AlbedoCap::build(k_lo, k_hi, |mu, ks, out| {
             let mu = mu.max(1e-3);
             let wi = DVec3::new(libm::sqrt(1.0 - mu * mu), 0.0, mu);
@@ -267,6 +274,7 @@ impl TwoScale {
                     }
                 };
                 let tan_o = libm::hypot(wo.x, wo.y) / wo.z;
+                let at_o = grid.position(tan_o);
                 let p = Pair {
                     zi: wi.z,
                     zo: wo.z,
@@ -277,7 +285,10 @@ impl TwoScale {
                     tan_o,
                     d_macro: *d_macro,
                     macro_lambda_i: at_i.macro_lambda_i,
-                    macro_lambda_o: self.macro_lambda_or_zero(tan_o),
+                    macro_lambda_o: match self.coherent {
+                        CoherentPart::MacroNdf => grid.lambda(nw, &at_o),
+                        CoherentPart::Delta => 0.0,
+                    },
                 };
                 for (v, &k) in values.iter_mut().zip(ks) {
                     let f = self.glossy_with(
@@ -285,7 +296,7 @@ impl TwoScale {
                         k,
                         |wb| self.table.mix_nodes(wb, d_eff_node),
                         |wb| self.table.mix_nodes(wb, |i| lambda_eff_i[i]),
-                        |wb| self.table.lambda(wb, tan_o),
+                        |wb| self.table.mix_nodes(wb, |i| grid.lambda(i, &at_o)),
                     );
                     *v = finite_nonneg(f);
                 }
