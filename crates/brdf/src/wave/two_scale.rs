@@ -47,7 +47,9 @@
 //! only costs variance. `Delta` adds the discrete mirror lobe with
 //! probability min(A(θi), 0.99).
 
+use alloc::vec;
 use alloc::vec::Vec;
+use core::cell::Cell;
 
 use glam::DVec3;
 
@@ -61,7 +63,7 @@ use crate::statistics::kc::KcPsd;
 use crate::wave::albedo_cap::{self, AlbedoCap};
 pub use crate::wave::two_scale_table::TableResolution;
 use crate::wave::two_scale_table::{
-    Convolver, EffTable, LAMBDA_TOP_TAN, SINH_A, lambda_from_log1p_row,
+    Convolver, EffTable, LAMBDA_TOP_TAN, SINH_A, SharedLambdaGrid, lambda_from_log1p_row,
 };
 
 /// Where the coherent (specular) fraction A of each microfacet goes.
@@ -232,6 +234,14 @@ impl TwoScale {
         // The lobe's angular scale: the macro NDF's, widened by the KC lobe
         // at small w.
         let width = self.ndf.beta().clamp(1e-3, 1.0);
+        // Λ at wo, for the macro NDF (last row) and the w nodes: one grid
+        // position per node of the quadrature serves them all.
+        let nw = self.table.w_nodes();
+        let grid = SharedLambdaGrid::new(self.table.lambda_rows().chain(core::iter::once((
+            self.macro_log1p_lambda.as_slice(),
+            self.macro_inv_scale,
+            self.macro_v_scale,
+        ))));
         AlbedoCap::build(k_lo, k_hi, |mu, ks, out| {
             let mu = mu.max(1e-3);
             let wi = DVec3::new(libm::sqrt(1.0 - mu * mu), 0.0, mu);
@@ -240,18 +250,31 @@ impl TwoScale {
             let at_i = Incidence::new(self, wi);
             let lambda_eff_i = self.table.lambda_nodes(at_i.tan_i);
             // Per polar ring of h: tanθh, the macro NDF there and D̃_eff at
-            // every w node, shared by all its azimuths and wavenumbers.
+            // the w nodes, shared by all its azimuths and wavenumbers. A ring's
+            // cosθd, and so its w, spans only part of the nodes: each is
+            // looked up when first needed.
             let per_ring = |ch: f64, sh: f64| {
                 let tan_h = sh / ch;
                 let d_macro = match self.coherent {
                     CoherentPart::MacroNdf => self.ndf.d_tan_cos(tan_h, ch),
                     CoherentPart::Delta => 0.0,
                 };
-                (tan_h, d_macro, self.table.d_nodes(tan_h))
+                (tan_h, d_macro, vec![Cell::new(f64::NAN); nw])
             };
             albedo_cap::albedo_many_half(mu, width, out, per_ring, |ring, h, wo, values| {
                 let (tan_h, d_macro, d_eff_h) = ring;
+                let d_eff_node = |i: usize| {
+                    let d = d_eff_h[i].get();
+                    if d.is_nan() {
+                        let d = self.table.d_node(i, *tan_h);
+                        d_eff_h[i].set(d);
+                        d
+                    } else {
+                        d
+                    }
+                };
                 let tan_o = libm::hypot(wo.x, wo.y) / wo.z;
+                let at_o = grid.position(tan_o);
                 let p = Pair {
                     zi: wi.z,
                     zo: wo.z,
@@ -262,15 +285,18 @@ impl TwoScale {
                     tan_o,
                     d_macro: *d_macro,
                     macro_lambda_i: at_i.macro_lambda_i,
-                    macro_lambda_o: self.macro_lambda_or_zero(tan_o),
+                    macro_lambda_o: match self.coherent {
+                        CoherentPart::MacroNdf => grid.lambda(nw, &at_o),
+                        CoherentPart::Delta => 0.0,
+                    },
                 };
                 for (v, &k) in values.iter_mut().zip(ks) {
                     let f = self.glossy_with(
                         &p,
                         k,
-                        |wb| self.table.mix_nodes(wb, |i| d_eff_h[i]),
+                        |wb| self.table.mix_nodes(wb, d_eff_node),
                         |wb| self.table.mix_nodes(wb, |i| lambda_eff_i[i]),
-                        |wb| self.table.lambda(wb, tan_o),
+                        |wb| self.table.mix_nodes(wb, |i| grid.lambda(i, &at_o)),
                     );
                     *v = finite_nonneg(f);
                 }
