@@ -14,7 +14,10 @@
 //!   and two-scale at Λ = m·550 nm (β from the KC slope variance below 2π/Λ,
 //!   micro scale = the sample's own KC);
 //! * material file (`--material`, as written by `lustre fit`): included as is,
-//!   with `model` set per row and one two-scale row per `[two_scale.*]` table.
+//!   with `model` set per row: every model the file offers (GGX, Beckmann, GHS
+//!   SSA, full GHS, and where the file carries their data the anisotropic GHS
+//!   and the measured-PSD models) and one two-scale row per `[two_scale.*]`
+//!   table.
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -98,8 +101,10 @@ fn sample_rows(s: &Surface, cutoffs: &[f64]) -> anyhow::Result<Vec<Row>> {
         .collect()
 }
 
-/// The rows of a `lustre fit` file: GGX, GHS SSA, full GHS and each two-scale split as the
-/// file offers them, splits ordered by their number (cutoff_50 < cutoff_100).
+/// The rows of a `lustre fit` file: every model it offers ([`brdf::spec::file::MaterialFile::offered`]:
+/// GGX, Beckmann, GHS SSA, full GHS, the anisotropic and measured-PSD models its tables
+/// allow) in that order, then each two-scale split ordered by its number
+/// (cutoff_50 < cutoff_100).
 fn material_rows(path: &Path) -> anyhow::Result<(String, Vec<Row>)> {
     use brdf::spec::ModelKind;
     let fit = models::read_fit_file(path)?;
@@ -109,13 +114,9 @@ fn material_rows(path: &Path) -> anyhow::Result<(String, Vec<Row>)> {
             .parse()
             .unwrap_or(f64::MAX)
     };
+    // The file's own `[material]` model is one of the others again.
     let mut offers: Vec<_> = (fit.file.offered().into_iter())
-        .filter(|o| {
-            matches!(
-                o.model,
-                Some(ModelKind::Ggx | ModelKind::GhsSsa | ModelKind::Ghs | ModelKind::TwoScale)
-            )
-        })
+        .filter(|o| o.model.is_some())
         .collect();
     offers.sort_by(|a, b| {
         let key = |o: &brdf::spec::file::Offer| o.cutoff.as_deref().map_or(-1.0, order);
@@ -130,8 +131,13 @@ fn material_rows(path: &Path) -> anyhow::Result<(String, Vec<Row>)> {
                     brdf::paper::short(mat.alpha.unwrap_or(f64::NAN))
                 )
             }
+            (Some(ModelKind::Beckmann), _) => "Beckmann".into(),
             (Some(ModelKind::GhsSsa), _) => "GHS SSA".into(),
             (Some(ModelKind::Ghs), _) => "full GHS".into(),
+            (Some(ModelKind::GhsAniso), _) => "full GHS\nanisotropic KC".into(),
+            (Some(ModelKind::MeasuredPsd), _) => "full GHS\nmeasured PSD".into(),
+            (Some(ModelKind::MeasuredPsdAniso), _) => "full GHS\nPSD on ellipses".into(),
+            (Some(ModelKind::MeasuredPsd2dSsa), _) => "GHS SSA\n2-D PSD grid".into(),
             (_, Some(c)) => {
                 let beta = fit.file.two_scale.get(c).map_or(f64::NAN, |t| t.beta);
                 let what = match order(c) {
@@ -140,7 +146,8 @@ fn material_rows(path: &Path) -> anyhow::Result<(String, Vec<Row>)> {
                 };
                 format!("two-scale {what}\nβ {}", brdf::paper::short(beta))
             }
-            _ => continue,
+            (Some(m), None) => m.name().to_string(),
+            (None, _) => continue,
         };
         rows.push(Row {
             label,

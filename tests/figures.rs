@@ -331,3 +331,64 @@ fn compare_grid_has_one_cell_per_model_and_view() {
         .collect();
     assert_eq!(views, [0.0, 80.0]);
 }
+
+/// A fit file of a scan flagged anisotropic and non-elliptical (corpus/mi-1) offers the
+/// anisotropic and measured-PSD models too, and `compare --material` draws every one:
+/// a row per offered model, in the file's order, then its two-scale splits.
+#[test]
+fn compare_of_a_fit_file_has_a_row_per_offered_model() {
+    let out = scratch("compare_fit");
+    let file = out.join("mi1.toml");
+    run(lustre()
+        .args([
+            "fit",
+            "data/surfaces/corpus/mi-1.mi",
+            "--metal",
+            "cu",
+            "--no-plots",
+            "-o",
+        ])
+        .arg(&file));
+    let png = out.join("mi1.png");
+    run(lustre()
+        .args([
+            "compare", "--views", "30", "--size", "16x12", "--spp", "1", "--quiet",
+        ])
+        .arg("--material")
+        .arg(&file)
+        .arg("--out")
+        .arg(&png));
+    let cells = read_csv(&out.join("mi1.cells.csv"));
+    let labels: Vec<String> = cells
+        .iter()
+        .map(|c| c["model"].replace('\n', " "))
+        .collect();
+    let doc: brdf::spec::MaterialFile =
+        toml::from_str(&std::fs::read_to_string(&file).unwrap()).unwrap();
+    let offered: Vec<_> = doc
+        .offered()
+        .into_iter()
+        .filter(|o| o.model.is_some())
+        .collect();
+    assert_eq!(labels.len(), offered.len(), "{labels:?}");
+    for want in [
+        "Beckmann",
+        "full GHS, anisotropic KC",
+        "full GHS, measured PSD",
+        "GHS SSA, 2-D PSD grid",
+    ] {
+        assert!(labels.iter().any(|l| l == want), "{want}: {labels:?}");
+    }
+    assert!(
+        labels.last().unwrap().starts_with("two-scale"),
+        "{labels:?}"
+    );
+    for c in &cells {
+        let (_, _, rgb) = render::output::read_exr(Path::new(&c["exr"])).unwrap();
+        assert!(
+            rgb.iter().flatten().all(|v| v.is_finite() && *v >= 0.0),
+            "{}",
+            c["model"]
+        );
+    }
+}
