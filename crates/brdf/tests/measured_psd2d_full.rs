@@ -348,3 +348,68 @@ fn finite_over_a_sweep() {
         }
     }
 }
+
+/// `model = "measured_psd2d"` through the material-file route scenes, `brdf eval`,
+/// `compare`, `preview` and `judge` use: a file with a `[psd.map]` offers it and builds
+/// the model of the same table; energy other than `raw` is refused naming `energy`;
+/// without a table the error names `psd_map`.
+#[test]
+fn a_material_file_with_a_map_offers_and_builds_the_full_model() {
+    use brdf::spec::{MaterialDesc, MaterialFile, ModelKind, NoFiles};
+    let (mx, my, dx, dy) = (6usize, 5usize, 0.8, 0.9);
+    let f = crossing_lays(0.05);
+    let mut p = Vec::new();
+    for j in 0..=my {
+        for i in 0..=2 * mx {
+            p.push(f((i as f64 - mx as f64) * dx, j as f64 * dy));
+        }
+    }
+    let map = serde_json::json!({
+        "source": "test", "usable": true, "tail_fraction": 0.1, "tail_exponent": 4.0,
+        "half_nx": mx, "half_ny": my, "dzx_rad_per_um": dx, "dzy_rad_per_um": dy, "p_um4": p,
+    });
+    let file: MaterialFile = serde_json::from_value(serde_json::json!({
+        "material": {"model": "ghs_ssa", "metal": "cu", "sigma_um": 0.05, "lc_um": 1.0,
+                     "gamma": 3.0},
+        "psd": {"zeta_rad_per_um": [1.0, 2.0], "p_um4": [1.0, 0.01], "map": map},
+    }))
+    .unwrap();
+    assert_eq!(
+        ModelKind::from_name("measured_psd2d"),
+        Some(ModelKind::MeasuredPsd2d)
+    );
+    assert!(
+        file.offered()
+            .iter()
+            .any(|o| o.model == Some(ModelKind::MeasuredPsd2d))
+    );
+    let desc: MaterialDesc =
+        serde_json::from_value(serde_json::json!({"model": "measured_psd2d"})).unwrap();
+    let m = file.resolve(&desc, &mut NoFiles).unwrap().build().unwrap();
+    let direct = GhsPsd2d::new(
+        TabulatedPsd2d::new(mx, my, dx, dy, &p, 4.0, 0.0).unwrap(),
+        Fresnel::conductor(Ior::metal(Metal::Cu)),
+        GhsOptions::default(),
+    )
+    .unwrap();
+    for (wi, wo) in [
+        (dir(0.0, 0.0), dir(20.0, 40.0)),
+        (dir(50.0, 10.0), dir(30.0, 250.0)),
+    ] {
+        let a = m.eval(wi, wo, 550.0);
+        assert!(a > 0.0);
+        assert_eq!(a, direct.eval(wi, wo, 550.0));
+    }
+    let krywonos: MaterialDesc = serde_json::from_value(
+        serde_json::json!({"model": "measured_psd2d", "energy": "krywonos"}),
+    )
+    .unwrap();
+    let e = file.resolve(&krywonos, &mut NoFiles).unwrap_err();
+    assert_eq!(e.field, "energy", "{e}");
+    let bare: MaterialDesc =
+        serde_json::from_value(serde_json::json!({"model": "measured_psd2d", "metal": "cu"}))
+            .unwrap();
+    let e = bare.into_spec(&mut NoFiles).unwrap_err();
+    assert_eq!(e.field, "psd_map", "{e}");
+    assert!(e.message.contains("measured_psd2d"), "{e}");
+}

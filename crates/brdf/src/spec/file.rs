@@ -98,7 +98,11 @@ impl MaterialFile {
                 .to_string(),
             );
         }
-        if model == Some(ModelKind::MeasuredPsd2dSsa) && base.psd_map.is_none() {
+        if matches!(
+            model,
+            Some(ModelKind::MeasuredPsd2dSsa | ModelKind::MeasuredPsd2d)
+        ) && base.psd_map.is_none()
+        {
             base.psd_map = Some(OWN_PSD_MAP.to_string());
             // The grid is in the scan's own axes: `[material].angle_deg` is the ellipse's.
             base.angle_deg = None;
@@ -199,6 +203,7 @@ impl MaterialFile {
             .is_some_and(|m| m.usable);
         if map {
             out.push(offer(ModelKind::MeasuredPsd2dSsa, None));
+            out.push(offer(ModelKind::MeasuredPsd2d, None));
         }
         for name in self.two_scale.names() {
             out.push(offer(ModelKind::TwoScale, Some(name)));
