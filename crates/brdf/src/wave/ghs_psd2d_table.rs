@@ -42,6 +42,9 @@ use crate::statistics::psd2d::TAIL_EXPONENT_MAX;
 /// The smallest slice, g₀.
 pub const G_MIN: f64 = 0.01;
 
+/// The largest slice: 1e6 (σ ≈ 29 µm at 360 nm).
+pub const G_TOP: f64 = 1e6;
+
 /// Largest FFT side.
 const N_MAX: usize = 256;
 
@@ -72,8 +75,17 @@ pub struct Psd2dGhsTable {
     ln_g0: f64,
     dln: f64,
     n_max: usize,
-    slices: Vec<TabulatedPsd2d>,
+    /// `None`: nothing of the orders n ≥ 2 within the kept square (all of
+    /// that g's lobe is beyond 2k(360 nm): a PSD whose mass lies above it).
+    slices: Vec<Option<TabulatedPsd2d>>,
+    /// The node-wise largest W of all slices: a share of every proposal, so the
+    /// pdf is positive wherever a slice is (slices of different g differ in
+    /// support).
+    envelope: Option<TabulatedPsd2d>,
 }
+
+/// The envelope's share of the glossy proposal.
+const ENVELOPE_SHARE: f64 = 0.05;
 
 /// The periodic grid of one build.
 struct Grid {
@@ -144,18 +156,29 @@ impl Psd2dGhsTable {
                 valid: "a power of two from 16 to 1024",
             });
         }
-        crate::error::check_range("g_max", g_max, 0.0, 1e7, "0 ≤ g_max ≤ 1e7")?;
+        crate::error::check_range("g_max", g_max, 0.0, f64::MAX, "a finite g_max ≥ 0")?;
         let dln = 1.0 / res.slices_per_ln_g;
-        let span = crate::numerics::math::ln(g_max.max(G_MIN) / G_MIN);
-        let n = (libm::ceil(span / dln) as usize + 1).clamp(2, 4000);
+        // Above G_TOP the lobe is the slopes' (its width k·slope does not grow with g):
+        // the last slice stands for every larger g.
+        let span = crate::numerics::math::ln(g_max.clamp(G_MIN, G_TOP) / G_MIN);
+        let n = (libm::ceil(span / dln) as usize + 1).max(2);
         let grid = Grid::new(&psd, res.n_max);
         let sigma2 = psd.sigma_um() * psd.sigma_um();
         let ln_g0 = crate::numerics::math::ln(G_MIN);
-        let slices = crate::parallel::map_rows(n, |j| {
-            grid.slice(libm::exp(ln_g0 + j as f64 * dln), psd.angle_rad())
-        })
-        .into_iter()
-        .collect::<Result<Vec<_>, _>>()?;
+        let values =
+            crate::parallel::map_rows(n, |j| grid.slice_values(libm::exp(ln_g0 + j as f64 * dln)));
+        let mut top = alloc::vec![0.0f64; values[0].len()];
+        for v in &values {
+            for (t, x) in top.iter_mut().zip(v) {
+                *t = t.max(*x);
+            }
+        }
+        let angle = psd.angle_rad();
+        let envelope = grid.table(&top, angle)?;
+        let slices = values
+            .iter()
+            .map(|v| grid.table(v, angle))
+            .collect::<Result<Vec<_>, _>>()?;
         Ok(Psd2dGhsTable {
             psd,
             sigma2,
@@ -163,6 +186,7 @@ impl Psd2dGhsTable {
             dln,
             n_max: res.n_max,
             slices,
+            envelope,
         })
     }
 
@@ -193,11 +217,12 @@ impl Psd2dGhsTable {
     /// W(ζ; g) of the orders n ≥ 2 (∫W d²ζ ≈ 1), ζ in the tangent frame.
     pub fn higher_density(&self, zx: f64, zy: f64, g: f64) -> f64 {
         let (j, t) = self.bracket(g);
-        let a = self.slices[j].psd(zx, zy);
+        let at = |i: usize| self.slices[i].as_ref().map_or(0.0, |s| s.psd(zx, zy));
+        let a = at(j);
         if !(t > 0.0) {
             return a;
         }
-        let b = self.slices[j + 1].psd(zx, zy);
+        let b = at(j + 1);
         if a > 0.0 && b > 0.0 {
             // Geometric: exact for a power law in g, which W follows where the
             // lobe widens (W(0) ∝ g^−1.8 on crossing lays: linear in ln g
@@ -219,22 +244,42 @@ impl Psd2dGhsTable {
     }
 
     /// The proposal density for the glossy lobe at g_s (∫ = 1 over the plane):
-    /// the first order's P₂/σ² and the slices bracketing g_s mixed by their
-    /// shares of the lobe at g_s, each kept between 5 % and 95 % so that the
+    /// 5 % the envelope of the slices, the rest the first order's P₂/σ² and the
+    /// slices bracketing g_s mixed by their shares of the lobe at g_s, each kept
+    /// between 5 % and 95 % (an empty slice's share goes to P₂/σ²); so the
     /// density is positive wherever S̃ is at any g.
     pub fn proposal_density(&self, zx: f64, zy: f64, gs: f64) -> f64 {
+        let mixed = self.mixed_density(zx, zy, gs);
+        match &self.envelope {
+            Some(e) => ENVELOPE_SHARE * e.unit_psd(zx, zy) + (1.0 - ENVELOPE_SHARE) * mixed,
+            None => mixed,
+        }
+    }
+
+    fn mixed_density(&self, zx: f64, zy: f64, gs: f64) -> f64 {
         let w1 = self.first_share(gs);
         let (j, t) = self.bracket(gs);
-        let mut w = (1.0 - t) * self.slices[j].unit_psd(zx, zy);
-        if t > 0.0 {
-            w += t * self.slices[j + 1].unit_psd(zx, zy);
+        let (mut first, mut w) = (w1, 0.0);
+        for (i, share) in [(j, 1.0 - t), (j + 1, t)] {
+            if !(share > 0.0) {
+                continue;
+            }
+            match &self.slices[i] {
+                Some(s) => w += (1.0 - w1) * share * s.unit_psd(zx, zy),
+                None => first += (1.0 - w1) * share,
+            }
         }
-        w1 * self.psd.unit_psd(zx, zy) + (1.0 - w1) * w
+        first * self.psd.unit_psd(zx, zy) + w
     }
 
     /// A frequency ζ (tangent frame) drawn from [`proposal_density`](Self::proposal_density)
     /// with three uniform numbers.
     pub fn proposal_sample(&self, gs: f64, v: f64, u1: f64, u2: f64) -> (f64, f64) {
+        let v = match &self.envelope {
+            Some(e) if v < ENVELOPE_SHARE => return e.sample_zeta(u1, u2),
+            Some(_) => ((v - ENVELOPE_SHARE) / (1.0 - ENVELOPE_SHARE)).clamp(0.0, 1.0),
+            None => v,
+        };
         let w1 = self.first_share(gs);
         if v < w1 {
             return self.psd.sample_zeta(u1, u2);
@@ -242,7 +287,10 @@ impl Psd2dGhsTable {
         let v = ((v - w1) / (1.0 - w1)).clamp(0.0, 1.0);
         let (j, t) = self.bracket(gs);
         let s = if t > 0.0 && v < t { j + 1 } else { j };
-        self.slices[s].sample_zeta(u1, u2)
+        match &self.slices[s] {
+            Some(s) => s.sample_zeta(u1, u2),
+            None => self.psd.sample_zeta(u1, u2),
+        }
     }
 
     fn first_share(&self, gs: f64) -> f64 {
@@ -256,9 +304,11 @@ impl Psd2dGhsTable {
     }
 
     /// W at one g computed afresh (no interpolation in ln g), at the grid
-    /// nodes of the kept square: for checking the slice spacing.
-    pub fn direct_slice(&self, g: f64) -> Result<TabulatedPsd2d, BrdfError> {
-        Grid::new(&self.psd, self.n_max).slice(g, self.psd.angle_rad())
+    /// nodes of the kept square (`None`: zero there): for checking the slice
+    /// spacing.
+    pub fn direct_slice(&self, g: f64) -> Result<Option<TabulatedPsd2d>, BrdfError> {
+        let grid = Grid::new(&self.psd, self.n_max);
+        grid.table(&grid.slice_values(g), self.psd.angle_rad())
     }
 }
 
@@ -268,7 +318,8 @@ impl Grid {
         let zp = 1.25 * zq;
         let (dx, dy) = psd.steps_rad_per_um();
         let side = |d: f64| {
-            let h = (0.5 * d).max(2.0 * zp / n_max as f64);
+            // At least two nodes per half axis of the kept square, whatever the step.
+            let h = (0.5 * d).max(2.0 * zp / n_max as f64).min(0.5 * zq);
             let n = (libm::ceil(2.0 * zp / h) as usize)
                 .next_power_of_two()
                 .min(n_max);
@@ -308,6 +359,13 @@ impl Grid {
         let mut im = vec![0.0; nx * ny];
         let plan = Fft2::new(nx, ny);
         plan.run(&mut re, &mut im);
+        // |C(τ)| ≤ C(0) ≤ σ² holds for the true PSD; the midpoint rule can put C(0)
+        // a little above σ² (a coarse grid over a peaked table), and then e^{g(c − 1)}
+        // overflows at large g: scale the sampled C down to C(0) = σ².
+        let c0 = re[0];
+        if c0 > 1.0 {
+            re.iter_mut().for_each(|c| *c /= c0);
+        }
         Grid {
             nx,
             ny,
@@ -320,8 +378,9 @@ impl Grid {
         }
     }
 
-    /// W at g on the kept square, as a table in the PSD's frame.
-    fn slice(&self, g: f64, angle_rad: f64) -> Result<TabulatedPsd2d, BrdfError> {
+    /// W at g at the nodes of the kept square's half plane (rows j = 0..=q_y,
+    /// each i = −q_x..=q_x).
+    fn slice_values(&self, g: f64) -> Vec<f64> {
         let (nx, ny) = (self.nx, self.ny);
         let mut re: Vec<f64> = self.c.iter().map(|&c| higher_orders(g * c, g)).collect();
         let mut im = vec![0.0; nx * ny];
@@ -336,14 +395,24 @@ impl Grid {
                 half.push((re[j * nx + col] * scale).max(0.0));
             }
         }
+        half
+    }
+
+    /// The half-plane values of the kept square as a table in the PSD's frame
+    /// (`None`: zero everywhere).
+    fn table(&self, half: &[f64], angle_rad: f64) -> Result<Option<TabulatedPsd2d>, BrdfError> {
+        if !half.iter().any(|v| *v > 0.0) {
+            return Ok(None);
+        }
         TabulatedPsd2d::new(
-            qx,
-            qy,
+            self.qx,
+            self.qy,
             self.hx,
             self.hy,
-            &half,
+            half,
             TAIL_EXPONENT_MAX,
             angle_rad,
         )
+        .map(Some)
     }
 }
