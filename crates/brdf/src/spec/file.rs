@@ -24,7 +24,7 @@ pub const OWN_PSD: &str = "[psd]";
 pub const OWN_PSD_DESTRETCHED: &str = "[psd.destretched]";
 
 /// The name under which `psd_map` refers to the file's `[psd.map]` (the 2-D PSD
-/// `model = "measured_psd2d_ssa"` reads).
+/// `model = "measured_psd2d_ssa"` and `"measured_psd2d"` read).
 pub const OWN_PSD_MAP: &str = "[psd.map]";
 
 impl MaterialFile {
@@ -607,14 +607,14 @@ pub struct PsdTable {
     /// (maps flagged anisotropic only).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub destretched: Option<DestretchedPsd>,
-    /// The 2-D PSD on a grid, for `model = "measured_psd2d_ssa"` (maps whose 2-D PSD is
-    /// not elliptical only).
+    /// The 2-D PSD on a grid, for `model = "measured_psd2d_ssa"` and `"measured_psd2d"`
+    /// (maps whose 2-D PSD is not elliptical only).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub map: Option<PsdMap>,
 }
 
 /// `[psd.map]`: a map's 2-D PSD on a regular grid of its own axes (x along a scan line),
-/// what `model = "measured_psd2d_ssa"` reads (physics.md §15.4).
+/// what `model = "measured_psd2d_ssa"` and `"measured_psd2d"` read (physics.md §15.4).
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct PsdMap {
