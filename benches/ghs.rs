@@ -16,10 +16,13 @@
 //!   (FFTLog plans; per γ, the diffraction orders): the full-GHS S̃ table of S138 (σ 0.138 µm,
 //!   Lc 2 µm, γ 2, rows up to the g it reaches) and of S280, the whole
 //!   full-GHS model of S138 (table and energy tables), and the two-scale
-//!   model of S138 split at 100λ (its D̃_eff table), and the full-GHS model
-//!   of S138 with a new γ at every iteration (`ghs_full_model_new_gamma`:
-//!   the diffraction orders, kept per γ, are made each time; the S138 lines
-//!   make them once). Targets (issue 34):
+//!   model of S138 split at 100λ (its D̃_eff table), the full-GHS model of
+//!   S138 with a new γ at every iteration (`ghs_full_model_new_gamma`: the
+//!   diffraction orders, kept per γ, are made each time; the S138 lines make
+//!   them once), and the ln-g slices of the full GHS of a 2-D PSD grid as
+//!   `lustre fit` writes one for a 20 µm 256² scan (`psd2d_table_lays`: two
+//!   crossing KC lays, σ 0.08 µm, 43 × 43 half-plane nodes 0.94 rad/µm
+//!   apart). Targets (issue 34):
 //!   full-GHS table ≤ 2 ms, two-scale ≤ 5 ms. The builders spread rows over
 //!   the cores the process may use, so `taskset -c 0 cargo bench --bench ghs
 //!   -- new_surface` gives one core's time and the plain run the wall time on
@@ -33,9 +36,10 @@ use std::time::{Duration, Instant};
 
 use brdf::microfacet::{Distribution, MicrofacetConductor};
 use brdf::paper::{find_sample, two_scale_beta};
-use brdf::statistics::KcPsd;
 use brdf::statistics::matern::Matern;
+use brdf::statistics::{AnisotropicKc, KcPsd, TabulatedPsd2d};
 use brdf::wave::ghs::{TableSource, hemisphere_g_max, hemisphere_u_max};
+use brdf::wave::ghs_psd2d_table::Psd2dGhsTable;
 use brdf::wave::ghs_table::{GhsTable, TableResolution};
 use brdf::wave::two_scale::{TwoScale, TwoScaleParams};
 use brdf::wave::{GhsFull, GhsOptions, GhsSsa};
@@ -216,7 +220,28 @@ fn new_surfaces(c: &mut Criterion) {
     g.bench_function("two_scale_s138", |b| {
         b.iter(|| TwoScale::new(black_box(params.clone())).unwrap())
     });
+    let lays = crossing_lays_grid(0.08);
+    let g_max = hemisphere_g_max(lays.sigma_um());
+    g.bench_function("psd2d_table_lays", |b| {
+        b.iter(|| Psd2dGhsTable::new(black_box(lays.clone()), g_max).unwrap())
+    });
     g.finish();
+}
+
+/// The 2-D PSD grid of a 20 µm, 256² scan of two crossing lays (the judge's synthetic
+/// maps): 43 half-plane nodes per axis, 3 periodogram bins (0.94 rad/µm) apart.
+fn crossing_lays_grid(sigma_um: f64) -> TabulatedPsd2d {
+    let a = AnisotropicKc::new(sigma_um * 0.8, 0.3, 3.0, 0.0, 3.0).unwrap();
+    let b = AnisotropicKc::new(sigma_um * 0.6, 0.4, 2.5, 70f64.to_radians(), 3.0).unwrap();
+    let (m, d) = (43usize, 3.0 * 2.0 * std::f64::consts::PI / 20.0);
+    let mut v = Vec::with_capacity((2 * m + 1) * (m + 1));
+    for j in 0..=m {
+        for i in 0..=2 * m {
+            let (x, y) = ((i as f64 - m as f64) * d, j as f64 * d);
+            v.push(a.psd(x, y) + b.psd(x, y));
+        }
+    }
+    TabulatedPsd2d::new(m, m, d, d, &v, 4.0, 0.0).unwrap()
 }
 
 fn config() -> Criterion {

@@ -274,7 +274,10 @@ fn fresnel_only_models_factor_and_the_others_do_not() {
         assert!(
             // The full measured models: slow tables, the same λ dependence as the SSA's.
             covered
-                || matches!(kind, ModelKind::MeasuredPsd | ModelKind::MeasuredPsdAniso)
+                || matches!(
+                    kind,
+                    ModelKind::MeasuredPsd | ModelKind::MeasuredPsdAniso | ModelKind::MeasuredPsd2d
+                )
                 || !kind.conductor(),
             "{kind:?} untested"
         );

@@ -101,13 +101,16 @@ pub enum Family {
     /// GHS smooth-surface approximation of the map's 2-D PSD on a grid (scans flagged
     /// anisotropic whose 2-D PSD is not elliptical).
     MeasuredPsd2dSsa,
+    /// Full GHS of the map's 2-D PSD on a grid (the same scans and grid as
+    /// [`Family::MeasuredPsd2dSsa`]).
+    MeasuredPsd2d,
     /// Two-scale at one split of the surface.
     TwoScale,
 }
 
 impl Family {
     /// Every recipe, in report order.
-    pub const ALL: [Family; 12] = [
+    pub const ALL: [Family; 13] = [
         Family::Ggx,
         Family::Beckmann,
         Family::GgxKc,
@@ -119,6 +122,7 @@ impl Family {
         Family::MeasuredPsd,
         Family::MeasuredPsdAniso,
         Family::MeasuredPsd2dSsa,
+        Family::MeasuredPsd2d,
         Family::TwoScale,
     ];
 
@@ -143,6 +147,7 @@ impl Family {
             Family::MeasuredPsd => ModelKind::MeasuredPsd,
             Family::MeasuredPsdAniso => ModelKind::MeasuredPsdAniso,
             Family::MeasuredPsd2dSsa => ModelKind::MeasuredPsd2dSsa,
+            Family::MeasuredPsd2d => ModelKind::MeasuredPsd2d,
             Family::TwoScale => ModelKind::TwoScale,
         }
     }
@@ -175,6 +180,7 @@ impl Family {
             Family::MeasuredPsd2dSsa => {
                 "Gaussian heights, measured 2-D PSD (any shape), smooth-surface (first-order) lobe"
             }
+            Family::MeasuredPsd2d => "Gaussian heights, measured 2-D PSD (any shape), all orders",
             Family::TwoScale => "exponential NDF above the cutoff period, KC diffraction below it",
         }
     }
@@ -194,7 +200,8 @@ pub fn candidates(a: &Analysis, fresnel: &FresnelSpec) -> Vec<Candidate> {
         ghs_aniso(a, fresnel),
         measured_psd(a, fresnel),
         measured_psd_aniso(a, fresnel),
-        measured_psd2d_ssa(a, fresnel),
+        measured_psd2d(a, fresnel, Family::MeasuredPsd2dSsa),
+        measured_psd2d(a, fresnel, Family::MeasuredPsd2d),
     ];
     out.extend(a.two_scale.iter().map(|t| two_scale(t, fresnel)));
     out
@@ -455,11 +462,14 @@ fn measured_psd_aniso(a: &Analysis, fresnel: &FresnelSpec) -> Candidate {
     c
 }
 
-/// GHS SSA of the map's 2-D PSD on a grid ([`crate::psd_map`]), for a scan flagged
-/// anisotropic whose 2-D PSD is not constant on ellipses ([`non_elliptical`]); the tail
-/// beyond the grid takes the exponent of the isotropic measured table's tail.
-fn measured_psd2d_ssa(a: &Analysis, fresnel: &FresnelSpec) -> Candidate {
-    let mut c = blank(Family::MeasuredPsd2dSsa, "GHS SSA, measured 2-D PSD".into());
+/// GHS SSA (`family` [`Family::MeasuredPsd2dSsa`]) or full GHS ([`Family::MeasuredPsd2d`])
+/// of the map's 2-D PSD on a grid ([`crate::psd_map`]), for a scan flagged anisotropic
+/// whose 2-D PSD is not constant on ellipses ([`non_elliptical`]); the tail beyond the
+/// grid takes the exponent of the isotropic measured table's tail.
+fn measured_psd2d(a: &Analysis, fresnel: &FresnelSpec, family: Family) -> Candidate {
+    let full = family == Family::MeasuredPsd2d;
+    let what = if full { "full GHS" } else { "GHS SSA" };
+    let mut c = blank(family, format!("{what}, measured 2-D PSD"));
     let Some(fit) = aniso_fit(a, &mut c) else {
         return c;
     };
@@ -489,7 +499,7 @@ fn measured_psd2d_ssa(a: &Analysis, fresnel: &FresnelSpec) -> Candidate {
         }
     };
     c.label = format!(
-        "GHS SSA, measured 2-D PSD ({}×{} nodes of the half plane, ellipse residual {:.2} ln)",
+        "{what}, measured 2-D PSD ({}×{} nodes of the half plane, ellipse residual {:.2} ln)",
         2 * grid.half_nx + 1,
         grid.half_ny + 1,
         fit.rms_log_residual_elliptical
@@ -500,18 +510,21 @@ fn measured_psd2d_ssa(a: &Analysis, fresnel: &FresnelSpec) -> Candidate {
         tail_exponent: -tail_exponent,
         tail_clamped: false,
     });
+    let surface = brdf::spec::Psd2dSpec {
+        half_nx: grid.half_nx,
+        half_ny: grid.half_ny,
+        dzx_rad_per_um: grid.dzx_rad_per_um,
+        dzy_rad_per_um: grid.dzy_rad_per_um,
+        psd_um4: grid.p_um4,
+        tail_exponent,
+        angle_deg: 0.0,
+    };
+    let options = GhsOptions::default();
     let spec = MaterialSpec {
-        model: ModelSpec::MeasuredPsd2dSsa {
-            surface: brdf::spec::Psd2dSpec {
-                half_nx: grid.half_nx,
-                half_ny: grid.half_ny,
-                dzx_rad_per_um: grid.dzx_rad_per_um,
-                dzy_rad_per_um: grid.dzy_rad_per_um,
-                psd_um4: grid.p_um4,
-                tail_exponent,
-                angle_deg: 0.0,
-            },
-            options: GhsOptions::default(),
+        model: if full {
+            ModelSpec::MeasuredPsd2d { surface, options }
+        } else {
+            ModelSpec::MeasuredPsd2dSsa { surface, options }
         },
         fresnel: fresnel.clone(),
     };

@@ -54,6 +54,7 @@ pub fn delta_by_cos_only(kind: ModelKind) -> bool {
             | ModelKind::MeasuredPsdSsaAniso
             | ModelKind::MeasuredPsdAniso
             | ModelKind::MeasuredPsd2dSsa
+            | ModelKind::MeasuredPsd2d
     )
 }
 

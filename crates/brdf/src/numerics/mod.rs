@@ -10,6 +10,8 @@
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 pub(crate) mod bessel01;
+#[cfg(feature = "alloc")]
+pub(crate) mod fft2;
 pub mod hankel;
 #[cfg(feature = "alloc")]
 pub mod interp;

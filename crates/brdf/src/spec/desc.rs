@@ -134,18 +134,18 @@ material_keys! {
     gamma: f64, Own, [GhsSsa, Ghs, TwoScale, RayleighRice, GhsSsaAniso, GhsAniso];
     /// GHS energy handling.
     energy: Energy, Own, [GhsSsa, Ghs, MeasuredPsd, GhsSsaAniso, GhsAniso, MeasuredPsdSsaAniso,
-        MeasuredPsdAniso, MeasuredPsd2dSsa];
+        MeasuredPsdAniso, MeasuredPsd2dSsa, MeasuredPsd2d];
     /// GHS Fresnel angle.
     fresnel_angle: FresnelAngle, Own, [GhsSsa, Ghs, MeasuredPsd, GhsSsaAniso, GhsAniso,
-        MeasuredPsdSsaAniso, MeasuredPsdAniso, MeasuredPsd2dSsa];
+        MeasuredPsdSsaAniso, MeasuredPsdAniso, MeasuredPsd2dSsa, MeasuredPsd2d];
     /// Incident polarisation (`unpolarized`, `s`, `p`).
     polarization: Polarization, Own,
         [GhsSsa, Ghs, MeasuredPsd, RayleighRice, GhsSsaAniso, GhsAniso, MeasuredPsdSsaAniso,
-        MeasuredPsdAniso, MeasuredPsd2dSsa];
+        MeasuredPsdAniso, MeasuredPsd2dSsa, MeasuredPsd2d];
     /// GHS reflectance factor of the scattered part (`r` or `q`).
     polarization_factor: PolarizationFactor, Own,
         [GhsSsa, Ghs, MeasuredPsd, GhsSsaAniso, GhsAniso, MeasuredPsdSsaAniso, MeasuredPsdAniso,
-        MeasuredPsd2dSsa];
+        MeasuredPsd2dSsa, MeasuredPsd2d];
     /// Anisotropic correlation length along the axis, µm (the stretched measured PSD
     /// reads only Ly/Lx).
     lx_um: f64, Own, [GhsSsaAniso, GhsAniso, MeasuredPsdSsaAniso, MeasuredPsdAniso];
@@ -154,13 +154,13 @@ material_keys! {
     /// Anisotropic axis angle (of `alpha_x`, of `lx_um`) from the tangent x towards y,
     /// degrees (default 0).
     angle_deg: f64, Orientation, [Ggx, Beckmann, GhsSsaAniso, GhsAniso, MeasuredPsdSsaAniso,
-        MeasuredPsdAniso, MeasuredPsd2dSsa];
+        MeasuredPsdAniso, MeasuredPsd2dSsa, MeasuredPsd2d];
     /// A CSV `zeta_rad_per_um,p_um4` (resolved by the caller; for the stretched
     /// models, the PSD of the de-stretched frame).
     psd_csv: String, Own, [MeasuredPsd, RayleighRice, MeasuredPsdSsaAniso, MeasuredPsdAniso];
     /// A measured 2-D PSD on a grid: `"[psd.map]"`, the table of an included `lustre fit`
     /// material file (the default there; resolved by the caller).
-    psd_map: String, Own, [MeasuredPsd2dSsa];
+    psd_map: String, Own, [MeasuredPsd2dSsa, MeasuredPsd2d];
     /// Two-scale macro NDF width β.
     beta: f64, Own, [TwoScale];
     /// Two-scale coherent part.
@@ -758,20 +758,27 @@ impl MaterialDesc {
                 surface: self.measured_aniso(model, files)?,
                 options,
             },
-            ModelKind::MeasuredPsd2dSsa => {
+            ModelKind::MeasuredPsd2dSsa | ModelKind::MeasuredPsd2d => {
                 let path = self.psd_map.as_deref().ok_or_else(|| {
                     SpecError::new(
                         "psd_map",
-                        "model `measured_psd2d_ssa` needs a 2-D PSD: include a `lustre fit` \
-                         material file with a [psd.map] table (written for maps whose 2-D \
-                         PSD is not elliptical)",
+                        format!(
+                            "model `{}` needs a 2-D PSD: include a `lustre fit` material file \
+                             with a [psd.map] table (written for maps whose 2-D PSD is not \
+                             elliptical)",
+                            model.name()
+                        ),
                     )
                 })?;
                 let mut surface = files
                     .psd_map(path)
                     .map_err(|e| SpecError::new("psd_map", e))?;
                 surface.angle_deg = self.angle_deg.unwrap_or(0.0);
-                ModelSpec::MeasuredPsd2dSsa { surface, options }
+                if model == ModelKind::MeasuredPsd2d {
+                    ModelSpec::MeasuredPsd2d { surface, options }
+                } else {
+                    ModelSpec::MeasuredPsd2dSsa { surface, options }
+                }
             }
             ModelKind::Diffuse => ModelSpec::Diffuse {
                 reflectance: self.reflectance_spec(model, None, files)?,
@@ -990,7 +997,8 @@ impl MaterialSpec {
                 d.angle_deg = Some(surface.angle_deg);
                 set_opts(&mut d, options);
             }
-            ModelSpec::MeasuredPsd2dSsa { surface, options } => {
+            ModelSpec::MeasuredPsd2dSsa { surface, options }
+            | ModelSpec::MeasuredPsd2d { surface, options } => {
                 d.angle_deg = Some(surface.angle_deg);
                 set_opts(&mut d, options);
             }

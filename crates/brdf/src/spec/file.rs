@@ -24,7 +24,7 @@ pub const OWN_PSD: &str = "[psd]";
 pub const OWN_PSD_DESTRETCHED: &str = "[psd.destretched]";
 
 /// The name under which `psd_map` refers to the file's `[psd.map]` (the 2-D PSD
-/// `model = "measured_psd2d_ssa"` reads).
+/// `model = "measured_psd2d_ssa"` and `"measured_psd2d"` read).
 pub const OWN_PSD_MAP: &str = "[psd.map]";
 
 impl MaterialFile {
@@ -98,7 +98,11 @@ impl MaterialFile {
                 .to_string(),
             );
         }
-        if model == Some(ModelKind::MeasuredPsd2dSsa) && base.psd_map.is_none() {
+        if matches!(
+            model,
+            Some(ModelKind::MeasuredPsd2dSsa | ModelKind::MeasuredPsd2d)
+        ) && base.psd_map.is_none()
+        {
             base.psd_map = Some(OWN_PSD_MAP.to_string());
             // The grid is in the scan's own axes: `[material].angle_deg` is the ellipse's.
             base.angle_deg = None;
@@ -199,6 +203,7 @@ impl MaterialFile {
             .is_some_and(|m| m.usable);
         if map {
             out.push(offer(ModelKind::MeasuredPsd2dSsa, None));
+            out.push(offer(ModelKind::MeasuredPsd2d, None));
         }
         for name in self.two_scale.names() {
             out.push(offer(ModelKind::TwoScale, Some(name)));
@@ -602,14 +607,14 @@ pub struct PsdTable {
     /// (maps flagged anisotropic only).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub destretched: Option<DestretchedPsd>,
-    /// The 2-D PSD on a grid, for `model = "measured_psd2d_ssa"` (maps whose 2-D PSD is
-    /// not elliptical only).
+    /// The 2-D PSD on a grid, for `model = "measured_psd2d_ssa"` and `"measured_psd2d"`
+    /// (maps whose 2-D PSD is not elliptical only).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub map: Option<PsdMap>,
 }
 
 /// `[psd.map]`: a map's 2-D PSD on a regular grid of its own axes (x along a scan line),
-/// what `model = "measured_psd2d_ssa"` reads (physics.md §15.4).
+/// what `model = "measured_psd2d_ssa"` and `"measured_psd2d"` read (physics.md §15.4).
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct PsdMap {

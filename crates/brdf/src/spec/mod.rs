@@ -13,7 +13,7 @@
 //!
 //! | key | models | meaning |
 //! |---|---|---|
-//! | `model` | all | `ggx`, `beckmann`, `smooth`, `ghs_ssa`, `ghs`, `two_scale`, `measured_psd`, `rayleigh_rice`, `ghs_ssa_aniso`, `ghs_aniso`, `measured_psd_ssa_aniso`, `measured_psd_aniso`, `measured_psd2d_ssa`, `diffuse`, `roughplastic` |
+//! | `model` | all | `ggx`, `beckmann`, `smooth`, `ghs_ssa`, `ghs`, `two_scale`, `measured_psd`, `rayleigh_rice`, `ghs_ssa_aniso`, `ghs_aniso`, `measured_psd_ssa_aniso`, `measured_psd_aniso`, `measured_psd2d_ssa`, `measured_psd2d`, `diffuse`, `roughplastic` |
 //! | `metal` / `nk` / `nk_csv` | all but diffuse, roughplastic | built-in metal, constant `[n, k]`, or a CSV `wavelength_nm,n,k` |
 //! | `fresnel` | all but diffuse, roughplastic | `conductor` (default) or `one` (R ≡ 1; alias `none`) |
 //! | `alpha`, or `alpha_x` + `alpha_y` | ggx, beckmann (roughplastic: `alpha` only) | roughness (αx along the axis at `angle_deg`, the surface tangent by default) |
@@ -24,11 +24,11 @@
 //! | `sigma_um`, `lc_um`, `gamma` | ghs_ssa, ghs, two_scale, rayleigh_rice | K-correlation σ (µm), Lc (µm), γ |
 //! | `sigma_um`, `lx_um`, `ly_um`, `angle_deg`, `gamma` | ghs_ssa_aniso, ghs_aniso | anisotropic K-correlation: Lx along the axis at `angle_deg` (from the tangent x towards y; default 0), Ly across it |
 //! | `psd_csv`, `lx_um`, `ly_um`, `angle_deg` | measured_psd_ssa_aniso, measured_psd_aniso | a measured radial PSD of the de-stretched frame stretched along the axis at `angle_deg` by the ratio Ly/Lx, areas kept (physics.md §15.2; only the ratio of the two lengths is read) |
-//! | `psd_map`, `angle_deg` | measured_psd2d_ssa | a measured 2-D PSD on a grid (physics.md §15.4): `"[psd.map]"` of an included `lustre fit` material file (the default there); `angle_deg` turns the grid's frame (default 0: the scan's axes) |
-//! | `energy` | ghs_ssa, ghs, measured_psd (the `_aniso` models and measured_psd2d_ssa: `raw` only) | `raw` (default), `krywonos`, `sigma_rel` |
-//! | `fresnel_angle` | ghs_ssa, ghs, measured_psd, `_aniso`, measured_psd2d_ssa | `halfway` (default) or `incident` |
-//! | `polarization` | ghs_ssa, ghs, measured_psd, rayleigh_rice, `_aniso`, measured_psd2d_ssa | `unpolarized` (default), `s`, `p` (incident; both scattered polarisations summed) |
-//! | `polarization_factor` | ghs_ssa, ghs, measured_psd, `_aniso`, measured_psd2d_ssa | `r` (default: scalar Fresnel R) or `q` (Rayleigh–Rice Q, physics.md §13.2) |
+//! | `psd_map`, `angle_deg` | measured_psd2d_ssa, measured_psd2d (full GHS) | a measured 2-D PSD on a grid (physics.md §15.4): `"[psd.map]"` of an included `lustre fit` material file (the default there); `angle_deg` turns the grid's frame (default 0: the scan's axes) |
+//! | `energy` | ghs_ssa, ghs, measured_psd (the `_aniso` and `measured_psd2d` models: `raw` only) | `raw` (default), `krywonos`, `sigma_rel` |
+//! | `fresnel_angle` | ghs_ssa, ghs, measured_psd, `_aniso`, measured_psd2d(_ssa) | `halfway` (default) or `incident` |
+//! | `polarization` | ghs_ssa, ghs, measured_psd, rayleigh_rice, `_aniso`, measured_psd2d(_ssa) | `unpolarized` (default), `s`, `p` (incident; both scattered polarisations summed) |
+//! | `polarization_factor` | ghs_ssa, ghs, measured_psd, `_aniso`, measured_psd2d(_ssa) | `r` (default: scalar Fresnel R) or `q` (Rayleigh–Rice Q, physics.md §13.2) |
 //! | `psd_csv` | measured_psd, rayleigh_rice, measured_psd_(ssa_)aniso | CSV `zeta_rad_per_um,p_um4` (rayleigh_rice: in place of the K-correlation keys, which must then not be set) |
 //! | `beta`, `coherent` | two_scale | macro NDF width β; `macro_ndf` (default) or `delta` |
 //! | `include`, `cutoff` | all | a `lustre fit` material file and its two-scale split (resolved by the caller) |
@@ -78,7 +78,7 @@ use crate::statistics::kc::KcPsd;
 use crate::statistics::{EllipticalPsd, TabulatedPsd, TabulatedPsd2d};
 use crate::wave::two_scale::{CoherentPart, TableResolution, TwoScale, TwoScaleParams};
 use crate::wave::{
-    GhsAnisotropic, GhsFull, GhsOptions, GhsSsa, GhsSsaPsd2d, Polarization, RayleighRice,
+    GhsAnisotropic, GhsFull, GhsOptions, GhsPsd2d, GhsSsa, GhsSsaPsd2d, Polarization, RayleighRice,
 };
 use crate::{
     BrdfError, Bxdf, Diffuse, Distribution, Fresnel, Ior, Metal, MicrofacetConductor, Reflectance,
@@ -153,6 +153,8 @@ pub enum ModelKind {
     MeasuredPsdAniso,
     /// GHS smooth-surface approximation of a measured 2-D PSD on a grid.
     MeasuredPsd2dSsa,
+    /// Full GHS of a measured 2-D PSD on a grid.
+    MeasuredPsd2d,
     /// Lambertian reflector (no Fresnel term).
     Diffuse,
     /// GGX dielectric coat over a Lambertian base (Mitsuba's `roughplastic`).
@@ -162,7 +164,7 @@ pub enum ModelKind {
 
 impl ModelKind {
     /// Every model, in the order the documentation lists them.
-    pub const ALL: [ModelKind; 15] = [
+    pub const ALL: [ModelKind; 16] = [
         ModelKind::Ggx,
         ModelKind::Beckmann,
         ModelKind::Smooth,
@@ -176,6 +178,7 @@ impl ModelKind {
         ModelKind::MeasuredPsdSsaAniso,
         ModelKind::MeasuredPsdAniso,
         ModelKind::MeasuredPsd2dSsa,
+        ModelKind::MeasuredPsd2d,
         ModelKind::Diffuse,
         ModelKind::RoughPlastic,
     ];
@@ -196,6 +199,7 @@ impl ModelKind {
             ModelKind::MeasuredPsdSsaAniso => "measured_psd_ssa_aniso",
             ModelKind::MeasuredPsdAniso => "measured_psd_aniso",
             ModelKind::MeasuredPsd2dSsa => "measured_psd2d_ssa",
+            ModelKind::MeasuredPsd2d => "measured_psd2d",
             ModelKind::Diffuse => "diffuse",
             ModelKind::RoughPlastic => "roughplastic",
         }
@@ -233,7 +237,7 @@ impl ModelKind {
     /// Whether the model describes an anisotropic surface whose parameters exist only for
     /// a scan `lustre fit` flags anisotropic: a surface stretched along two axes
     /// (`ghs_ssa_aniso`, `ghs_aniso`, `measured_psd_ssa_aniso`, `measured_psd_aniso`) or
-    /// a 2-D PSD that is not elliptical (`measured_psd2d_ssa`, its `[psd.map]`), so a fit
+    /// a 2-D PSD that is not elliptical (`measured_psd2d_ssa`, `measured_psd2d`, their `[psd.map]`), so a fit
     /// file cannot recommend it for every scan.
     pub fn stretched(self) -> bool {
         matches!(
@@ -243,6 +247,7 @@ impl ModelKind {
                 | ModelKind::MeasuredPsdSsaAniso
                 | ModelKind::MeasuredPsdAniso
                 | ModelKind::MeasuredPsd2dSsa
+                | ModelKind::MeasuredPsd2d
         )
     }
 
@@ -505,6 +510,13 @@ pub enum ModelSpec {
         /// Options (energy `raw` only).
         options: GhsOptions,
     },
+    /// Full GHS, measured 2-D PSD.
+    MeasuredPsd2d {
+        /// The table.
+        surface: Psd2dSpec,
+        /// Options (energy `raw` only).
+        options: GhsOptions,
+    },
     /// A Lambertian reflector.
     Diffuse {
         /// Its reflectance.
@@ -542,6 +554,7 @@ impl ModelSpec {
             ModelSpec::MeasuredPsdSsaAniso { .. } => ModelKind::MeasuredPsdSsaAniso,
             ModelSpec::MeasuredPsdAniso { .. } => ModelKind::MeasuredPsdAniso,
             ModelSpec::MeasuredPsd2dSsa { .. } => ModelKind::MeasuredPsd2dSsa,
+            ModelSpec::MeasuredPsd2d { .. } => ModelKind::MeasuredPsd2d,
             ModelSpec::Diffuse { .. } => ModelKind::Diffuse,
             ModelSpec::RoughPlastic { .. } => ModelKind::RoughPlastic,
         }
@@ -705,7 +718,8 @@ impl MaterialSpec {
                 surface.psd()?;
                 raw_only(options)?;
             }
-            ModelSpec::MeasuredPsd2dSsa { surface, options } => {
+            ModelSpec::MeasuredPsd2dSsa { surface, options }
+            | ModelSpec::MeasuredPsd2d { surface, options } => {
                 surface.psd()?;
                 raw_only(options)?;
             }
@@ -857,6 +871,9 @@ impl MaterialSpec {
             ModelSpec::MeasuredPsd2dSsa { surface, options } => {
                 Box::new(GhsSsaPsd2d::new(surface.psd()?, fresnel, *options)?)
             }
+            ModelSpec::MeasuredPsd2d { surface, options } => {
+                Box::new(GhsPsd2d::new(surface.psd()?, fresnel, *options)?)
+            }
             ModelSpec::Diffuse { reflectance } => Box::new(Diffuse::new(reflectance.build()?)),
             ModelSpec::RoughPlastic {
                 alpha,
@@ -925,7 +942,8 @@ impl MaterialSpec {
                 let z0 = surface.zeta_rad_per_um.first().copied().unwrap_or(1.0);
                 z0 / (k * libm::sqrt(ratio))
             }
-            ModelSpec::MeasuredPsd2dSsa { surface, .. } => {
+            ModelSpec::MeasuredPsd2dSsa { surface, .. }
+            | ModelSpec::MeasuredPsd2d { surface, .. } => {
                 surface.dzx_rad_per_um.min(surface.dzy_rad_per_um) / k
             }
             ModelSpec::Smooth => 1e-3,

@@ -314,6 +314,17 @@ impl TabulatedPsd2d {
         self.psd_frame(c * zx + s * zy, c * zy - s * zx)
     }
 
+    /// P₂ at (a, b) in the grid's own frame (turned by [`angle_rad`](Self::angle_rad)
+    /// from the tangent frame), µm⁴.
+    pub fn psd_in_frame(&self, a: f64, b: f64) -> f64 {
+        self.psd_frame(a, b)
+    }
+
+    /// The grid steps (Δζx, Δζy), rad/µm, in its own frame.
+    pub fn steps_rad_per_um(&self) -> (f64, f64) {
+        (self.dzx, self.dzy)
+    }
+
     /// P₂(ζ)/σ², the density of [`sample_zeta`](Self::sample_zeta), 1/(rad/µm)².
     pub fn unit_psd(&self, zx: f64, zy: f64) -> f64 {
         self.psd(zx, zy) / self.sigma2

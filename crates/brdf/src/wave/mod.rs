@@ -10,6 +10,9 @@
 //! * [`GhsAnisotropic`]: SSA and full GHS of a stretched surface: the
 //!   anisotropic K-correlation, or a measured radial PSD constant on ellipses
 //!   ([`crate::statistics::EllipticalPsd`]) (`alloc`);
+//! * [`GhsSsaPsd2d`], [`GhsPsd2d`]: SSA and full GHS of a measured 2-D PSD
+//!   on a grid ([`crate::statistics::TabulatedPsd2d`]; the full model's
+//!   slices over ln g are [`ghs_psd2d_table`]) (`alloc`);
 //! * [`RayleighRice`]: first-order vector perturbation theory for a
 //!   conductor, with the polarisation factor Q of [`polarization`];
 //! * [`ggx_kc`]: the GGX ↔ K-correlation identity;
@@ -30,6 +33,10 @@ pub mod ghs;
 pub mod ghs_aniso;
 #[cfg(feature = "alloc")]
 pub mod ghs_psd2d;
+#[cfg(feature = "alloc")]
+pub mod ghs_psd2d_full;
+#[cfg(feature = "alloc")]
+pub mod ghs_psd2d_table;
 pub mod ghs_ssa;
 #[cfg(feature = "alloc")]
 pub mod ghs_table;
@@ -47,6 +54,8 @@ pub use ghs::{GhsFull, TableSource};
 pub use ghs_aniso::GhsAnisotropic;
 #[cfg(feature = "alloc")]
 pub use ghs_psd2d::GhsSsaPsd2d;
+#[cfg(feature = "alloc")]
+pub use ghs_psd2d_full::GhsPsd2d;
 pub use ghs_ssa::GhsSsa;
 pub use polarization::{Polarization, PolarizationFactor};
 pub use rayleigh_rice::RayleighRice;
