@@ -16,8 +16,8 @@
 //! * material file (`--material`, as written by `lustre fit`): included as is,
 //!   with `model` set per row: every model the file offers (GGX, Beckmann, GHS
 //!   SSA, full GHS, and where the file carries their data the anisotropic GHS
-//!   and the measured-PSD models) and one two-scale row per `[two_scale.*]`
-//!   table.
+//!   and the measured-PSD models, the 2-D PSD grid's SSA and full GHS) and one
+//!   two-scale row per `[two_scale.*]` table.
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -138,6 +138,7 @@ fn material_rows(path: &Path) -> anyhow::Result<(String, Vec<Row>)> {
             (Some(ModelKind::MeasuredPsd), _) => "full GHS\nmeasured PSD".into(),
             (Some(ModelKind::MeasuredPsdAniso), _) => "full GHS\nPSD on ellipses".into(),
             (Some(ModelKind::MeasuredPsd2dSsa), _) => "GHS SSA\n2-D PSD grid".into(),
+            (Some(ModelKind::MeasuredPsd2d), _) => "full GHS\n2-D PSD grid".into(),
             (_, Some(c)) => {
                 let beta = fit.file.two_scale.get(c).map_or(f64::NAN, |t| t.beta);
                 let what = match order(c) {

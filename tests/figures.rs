@@ -376,6 +376,7 @@ fn compare_of_a_fit_file_has_a_row_per_offered_model() {
         "full GHS, anisotropic KC",
         "full GHS, measured PSD",
         "GHS SSA, 2-D PSD grid",
+        "full GHS, 2-D PSD grid",
     ] {
         assert!(labels.iter().any(|l| l == want), "{want}: {labels:?}");
     }

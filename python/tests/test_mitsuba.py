@@ -359,12 +359,13 @@ def test_a_plate_renders_in_llvm_ad_spectral():
     assert 0.2 < img.mean() < 1.0, img.mean()
 
 
-def test_a_fit_files_2d_psd_model_is_material_eval_and_sample(cli, tmp_path):
+@pytest.mark.parametrize("model", ["measured_psd2d_ssa", "measured_psd2d"])
+def test_a_fit_files_2d_psd_model_is_material_eval_and_sample(cli, tmp_path, model):
     # corpus/mi-1's fit file carries a [psd.map] table, which the plugin reads through
     # `include` as a scene or `brdf eval` does.
     out = tmp_path / "mi1.toml"
     cli("fit", "data/surfaces/corpus/mi-1.mi", "--metal", "cu", "-o", str(out), "--no-plots")
-    d = {"type": "lustre", "model": "measured_psd2d_ssa", "include": str(out)}
+    d = {"type": "lustre", "model": model, "include": str(out)}
     mi.set_variant("scalar_spectral")
     lustre.mitsuba.register()
     b = mi.load_dict(d)

@@ -155,7 +155,8 @@ def _unit(rng, n, z_min=0.05):
     return v / np.linalg.norm(v, axis=1)[:, None]
 
 
-def test_a_crossing_lay_map_gives_the_2d_psd_model():
+@pytest.mark.parametrize("model", ["measured_psd2d_ssa", "measured_psd2d"])
+def test_a_crossing_lay_map_gives_the_2d_psd_model(model):
     # Two lays 70° apart (correlation lengths 0.25 and 2 µm, 10 and 6 nm rms, on 20 µm): the
     # PSD is not constant on ellipses, so fit writes its 2-D table.
     dx = 20e-6 / 256
@@ -163,7 +164,7 @@ def test_a_crossing_lay_map_gives_the_2d_psd_model():
     scan = lustre.Scan(lays[0] + lays[1], dx, dx, name="crossing")
     got = lustre.fit(scan, metal="cu")
     assert "map" in got["psd"], sorted(got["psd"])
-    m = lustre.Material.from_fit(got, model="measured_psd2d_ssa")
+    m = lustre.Material.from_fit(got, model=model)
     rng = np.random.default_rng(3)
     wi, wo = _unit(rng, 256), _unit(rng, 256)
     f, pdf = m.eval(wi, wo, 550.0)
@@ -191,12 +192,13 @@ def test_a_crossing_lay_map_gives_the_2d_psd_model():
     assert np.all((a > 0.3) & (a < 1.0)), a
 
 
-def test_the_2d_psd_model_from_a_fit_file_equals_brdf_eval(cli, tmp_path):
+@pytest.mark.parametrize("model", ["measured_psd2d_ssa", "measured_psd2d"])
+def test_the_2d_psd_model_from_a_fit_file_equals_brdf_eval(cli, tmp_path, model):
     # corpus/mi-1 is flagged non-elliptical: `lustre fit` writes [psd.map] into the file.
     out = tmp_path / "mi1.toml"
     cli("fit", "data/surfaces/corpus/mi-1.mi", "--metal", "cu", "-o", str(out), "--no-plots")
     assert "[psd.map]" in out.read_text()
-    keys = {"model": "measured_psd2d_ssa", "include": str(out)}
+    keys = {"model": model, "include": str(out)}
     geometry = [(ti, to, po) for ti in (0.0, 40.0, 80.0) for to in (2.0, 30.0) for po in (180.0, 135.0, 90.0, 20.0)]
     lines = [
         json.dumps({"lambda_nm": 550.0, "theta_i_deg": ti, "theta_o_deg": to, "phi_o_deg": po, **keys})
