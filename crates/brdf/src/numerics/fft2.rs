@@ -2,95 +2,30 @@
 //! of a tabulated 2-D PSD (`wave::ghs_psd2d_table`).
 //!
 //! X[k, l] = Σ_{m, n} x[m, n] e^{−2πi(km/N_x + ln/N_y)}, rows of length N_x
-//! first, then columns. The 1-D transform is an iterative radix-2 FFT. (The
-//! FFTLog's 1-D FFT is private to `hankel`; the transforms here are of real,
-//! even sequences, for which the sign of the exponent does not matter.)
+//! first, then columns, each by the 1-D [`Fft`] the FFTLog transforms use.
 
 use alloc::vec;
-use alloc::vec::Vec;
-use core::f64::consts::PI;
 
-/// A 1-D radix-2 FFT plan of length n (a power of two).
-#[derive(Clone, Debug)]
-pub(crate) struct Fft1 {
-    n: usize,
-    /// e^{−2πik/n}, k < n/2.
-    tw: Vec<(f64, f64)>,
-    rev: Vec<usize>,
-}
-
-impl Fft1 {
-    pub(crate) fn new(n: usize) -> Self {
-        assert!(n.is_power_of_two());
-        let bits = n.trailing_zeros();
-        let rev = (0..n)
-            .map(|i| {
-                if bits == 0 {
-                    0
-                } else {
-                    i.reverse_bits() >> (usize::BITS - bits)
-                }
-            })
-            .collect();
-        let tw = (0..n / 2)
-            .map(|k| {
-                let (s, c) = libm::sincos(-2.0 * PI * k as f64 / n as f64);
-                (c, s)
-            })
-            .collect();
-        Fft1 { n, tw, rev }
-    }
-
-    /// In place on the first n entries of `re`, `im`.
-    pub(crate) fn run(&self, re: &mut [f64], im: &mut [f64]) {
-        let n = self.n;
-        let (re, im) = (&mut re[..n], &mut im[..n]);
-        for i in 0..n {
-            let j = self.rev[i];
-            if j > i {
-                re.swap(i, j);
-                im.swap(i, j);
-            }
-        }
-        let mut len = 2;
-        while len <= n {
-            let half = len / 2;
-            let stride = n / len;
-            for start in (0..n).step_by(len) {
-                for k in 0..half {
-                    let (wr, wi) = self.tw[k * stride];
-                    let (a, b) = (start + k, start + k + half);
-                    let tr = re[b] * wr - im[b] * wi;
-                    let ti = re[b] * wi + im[b] * wr;
-                    re[b] = re[a] - tr;
-                    im[b] = im[a] - ti;
-                    re[a] += tr;
-                    im[a] += ti;
-                }
-            }
-            len *= 2;
-        }
-    }
-}
+use super::fft::Fft;
 
 /// Plans for an N_x × N_y transform (row-major, row length N_x).
 #[derive(Clone, Debug)]
 pub(crate) struct Fft2 {
-    x: Fft1,
-    y: Fft1,
+    x: Fft,
+    y: Fft,
 }
 
 impl Fft2 {
     pub(crate) fn new(nx: usize, ny: usize) -> Self {
         Fft2 {
-            x: Fft1::new(nx),
-            y: Fft1::new(ny),
+            x: Fft::new(nx),
+            y: Fft::new(ny),
         }
     }
 
     /// In place on `re`, `im` of length N_x N_y.
     pub(crate) fn run(&self, re: &mut [f64], im: &mut [f64]) {
-        let (nx, ny) = (self.x.n, self.y.n);
+        let (nx, ny) = (self.x.len(), self.y.len());
         for (r, i) in re.chunks_exact_mut(nx).zip(im.chunks_exact_mut(nx)) {
             self.x.run(r, i);
         }
@@ -112,6 +47,8 @@ impl Fft2 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use alloc::vec::Vec;
+    use core::f64::consts::PI;
 
     /// The FFT against the defining sum, on a non-symmetric input.
     #[test]
