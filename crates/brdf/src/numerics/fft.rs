@@ -6,6 +6,7 @@ use alloc::vec::Vec;
 use core::f64::consts::PI;
 
 /// In-place iterative radix-2 FFT, X_k = Σ x_n e^{−2πikn/N}.
+#[derive(Clone, Debug)]
 pub(crate) struct Fft {
     n: usize,
     /// Twiddles e^{−2πik/len} for every stage len = 2, 4, …, n,
