@@ -12,6 +12,7 @@
 pub(crate) mod bessel01;
 #[cfg(feature = "alloc")]
 pub(crate) mod fft;
+#[cfg(feature = "alloc")]
 pub(crate) mod fft2;
 pub mod hankel;
 #[cfg(feature = "alloc")]
