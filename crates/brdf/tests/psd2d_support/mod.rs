@@ -1,0 +1,36 @@
+//! What the tests of the 2-D PSD models share: directions, a grid of a PSD's
+//! half-plane nodes, and the crossing-lay PSD they are tested on.
+
+use brdf::DVec3;
+use brdf::statistics::{AnisotropicKc, TabulatedPsd2d};
+
+pub fn dir(theta_deg: f64, phi_deg: f64) -> DVec3 {
+    let (t, p) = (theta_deg.to_radians(), phi_deg.to_radians());
+    DVec3::new(t.sin() * p.cos(), t.sin() * p.sin(), t.cos())
+}
+
+/// The half-plane nodes of `f` on a grid of half sizes (mx, my) and steps (dx, dy).
+pub fn table(
+    mx: usize,
+    my: usize,
+    dx: f64,
+    dy: f64,
+    alpha: f64,
+    angle_deg: f64,
+    f: impl Fn(f64, f64) -> f64,
+) -> TabulatedPsd2d {
+    let mut v = Vec::with_capacity((2 * mx + 1) * (my + 1));
+    for j in 0..=my {
+        for i in 0..=2 * mx {
+            v.push(f((i as f64 - mx as f64) * dx, j as f64 * dy));
+        }
+    }
+    TabulatedPsd2d::new(mx, my, dx, dy, &v, alpha, angle_deg.to_radians()).unwrap()
+}
+
+/// Two stretched K-correlation lays (γ 3, tails ζ^−4) crossing at 0° and 70°.
+pub fn crossing_lays(sigma_um: f64) -> impl Fn(f64, f64) -> f64 {
+    let a = AnisotropicKc::new(sigma_um * 0.8, 0.3, 3.0, 0.0, 3.0).unwrap();
+    let b = AnisotropicKc::new(sigma_um * 0.6, 0.4, 2.5, 70f64.to_radians(), 3.0).unwrap();
+    move |x, y| a.psd(x, y) + b.psd(x, y)
+}
