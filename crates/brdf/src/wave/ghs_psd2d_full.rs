@@ -51,15 +51,7 @@ impl GhsPsd2d {
         opts: GhsOptions,
         res: Psd2dResolution,
     ) -> Result<Self, BrdfError> {
-        fresnel.check_covers(WAVELENGTH_MIN_NM, WAVELENGTH_MAX_NM)?;
-        if opts.energy != Energy::Raw {
-            return Err(BrdfError::OutOfRange {
-                name: "energy",
-                value: f64::NAN,
-                valid: "\"raw\" for a 2-D PSD (the krywonos and sigma_rel tables are over θi \
-                        and λ, and this lobe depends on the incidence azimuth too)",
-            });
-        }
+        Self::check(&fresnel, opts)?;
         let g_max = hemisphere_g_max(psd.sigma_um());
         let table = Psd2dGhsTable::with_resolution(psd, g_max, res)?;
         Self::with_table(Arc::new(table), fresnel, opts)
@@ -71,17 +63,25 @@ impl GhsPsd2d {
         fresnel: Fresnel,
         opts: GhsOptions,
     ) -> Result<Self, BrdfError> {
+        Self::check(&fresnel, opts)?;
+        let psd = table.psd();
+        let common = GhsCommon::new(fresnel, opts, psd.sigma_um(), 1.0 / psd.step_rad_per_um());
+        Ok(GhsPsd2d { table, common })
+    }
+
+    /// What the model accepts besides its table: a Fresnel term over the
+    /// visible range and `raw` energy.
+    fn check(fresnel: &Fresnel, opts: GhsOptions) -> Result<(), BrdfError> {
         fresnel.check_covers(WAVELENGTH_MIN_NM, WAVELENGTH_MAX_NM)?;
         if opts.energy != Energy::Raw {
             return Err(BrdfError::OutOfRange {
                 name: "energy",
                 value: f64::NAN,
-                valid: "\"raw\" for a 2-D PSD",
+                valid: "\"raw\" for a 2-D PSD (the krywonos and sigma_rel tables are over θi \
+                        and λ, and this lobe depends on the incidence azimuth too)",
             });
         }
-        let psd = table.psd();
-        let common = GhsCommon::new(fresnel, opts, psd.sigma_um(), 1.0 / psd.step_rad_per_um());
-        Ok(GhsPsd2d { table, common })
+        Ok(())
     }
 
     /// The table.
