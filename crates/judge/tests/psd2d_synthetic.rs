@@ -66,6 +66,33 @@ fn judged(c: &Case) -> Value {
     common::judge_cu(t)
 }
 
+/// The judge of `c`'s map (logged), and the error of `key` in it; a failure is noted
+/// when `key` is not ranked or is more than `times_noise` × the reference's noise.
+fn judged_within(
+    c: &Case,
+    key: &str,
+    times_noise: f64,
+    failures: &mut Vec<String>,
+) -> Option<(Value, f64)> {
+    let j = judged(c);
+    let noise = j["window"]["noise_floor_log10"].as_f64().unwrap();
+    eprintln!(
+        "σ {} µm share {}: noise {noise:.3}; {}; skipped {}",
+        c.sigma_um,
+        c.share,
+        ranking(&j),
+        j["skipped"]
+    );
+    let Some(e) = model(&j, key) else {
+        failures.push(format!("σ {}: not ranked: {}", c.sigma_um, j["skipped"]));
+        return None;
+    };
+    if e > times_noise * noise {
+        failures.push(format!("σ {}: {e:.3} vs noise {noise:.3}", c.sigma_um));
+    }
+    Some((j, e))
+}
+
 #[test]
 fn the_2d_psd_model_beats_the_elliptical_ones_on_crossing_lays() {
     // g = (2kσ)² at normal incidence (550 nm): 0.034 and 0.21.
@@ -83,22 +110,9 @@ fn the_2d_psd_model_beats_the_elliptical_ones_on_crossing_lays() {
     ];
     let mut failures = Vec::new();
     for c in &cases {
-        let j = judged(c);
-        let noise = j["window"]["noise_floor_log10"].as_f64().unwrap();
-        eprintln!(
-            "σ {} µm share {}: noise {noise:.3}; {}; skipped {}",
-            c.sigma_um,
-            c.share,
-            ranking(&j),
-            j["skipped"]
-        );
-        let Some(e) = model(&j, "measured_psd2d_ssa") else {
-            failures.push(format!("σ {}: not ranked: {}", c.sigma_um, j["skipped"]));
+        let Some((j, e)) = judged_within(c, "measured_psd2d_ssa", 2.0, &mut failures) else {
             continue;
         };
-        if e > 2.0 * noise {
-            failures.push(format!("σ {}: {e:.3} vs noise {noise:.3}", c.sigma_um));
-        }
         for other in ["measured_psd_aniso", "ghs_aniso", "measured_psd"] {
             if let Some(o) = model(&j, other)
                 && e >= o
@@ -135,22 +149,9 @@ fn the_full_2d_psd_model_at_g_1_to_10() {
     ];
     let mut failures = Vec::new();
     for c in &cases {
-        let j = judged(c);
-        let noise = j["window"]["noise_floor_log10"].as_f64().unwrap();
-        eprintln!(
-            "σ {} µm share {}: noise {noise:.3}; {}; skipped {}",
-            c.sigma_um,
-            c.share,
-            ranking(&j),
-            j["skipped"]
-        );
-        let Some(e) = model(&j, "measured_psd2d") else {
-            failures.push(format!("σ {}: not ranked: {}", c.sigma_um, j["skipped"]));
+        let Some((j, e)) = judged_within(c, "measured_psd2d", 2.5, &mut failures) else {
             continue;
         };
-        if e > 2.5 * noise {
-            failures.push(format!("σ {}: {e:.3} vs noise {noise:.3}", c.sigma_um));
-        }
         for m in j["models"].as_array().unwrap() {
             let o = m["log10_rms_error"].as_f64().unwrap_or(f64::INFINITY);
             if m["key"] != "measured_psd2d" && e >= o {
