@@ -8,13 +8,13 @@
 
 use std::f64::consts::PI;
 
-use brdf::statistics::{AnisotropicKc, EllipticalPsd, TabulatedPsd, TabulatedPsd2d};
+use brdf::statistics::{AnisotropicKc, TabulatedPsd2d};
 use brdf::testing::{Chi2Config, Pcg32, albedo_quadrature, albedo_sampled, chi2_test, sidak};
 use brdf::wave::{GhsAnisotropic, GhsOptions, GhsSsaPsd2d};
 use brdf::{Bxdf, DVec3, Fresnel, Ior, Metal};
 
 mod psd2d_support;
-use psd2d_support::{crossing_lays, dir, table};
+use psd2d_support::{crossing_lays, dir, elliptical, table};
 
 /// An isotropic KC with a streak: a narrow ridge along the ζ direction at 25° (the
 /// power of straight edges across the plane).
@@ -116,18 +116,7 @@ fn the_sampler_draws_the_table() {
 /// bilinear interpolation's accuracy (grid step 0.1 rad/µm).
 #[test]
 fn an_elliptical_table_is_the_stretched_radial_model() {
-    let zeta: Vec<f64> = (0..120)
-        .map(|i| 0.05 * (1200.0f64).powf(i as f64 / 119.0))
-        .collect();
-    let p: Vec<f64> = zeta
-        .iter()
-        .map(|&z| {
-            1e-4 * (1.0 + (z / 0.5f64).powi(2)).powf(-1.25)
-                * (1.0 + (z / 4.0f64).powi(2)).powf(-1.25)
-        })
-        .collect();
-    let radial = TabulatedPsd::new(&zeta, &p).unwrap();
-    let e = EllipticalPsd::new(radial, 1.0, 3.0, 40f64.to_radians()).unwrap();
+    let e = elliptical(1e-4);
     let fresnel = || Fresnel::conductor(Ior::metal(Metal::Cu));
     let stretched = GhsAnisotropic::ssa(e.clone(), fresnel(), GhsOptions::default()).unwrap();
     let t = table(300, 300, 0.1, 0.1, 5.0, 0.0, |x, y| e.psd(x, y));

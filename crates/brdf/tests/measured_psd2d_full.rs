@@ -9,14 +9,14 @@
 
 use std::f64::consts::PI;
 
-use brdf::statistics::{EllipticalPsd, TabulatedPsd, TabulatedPsd2d};
+use brdf::statistics::TabulatedPsd2d;
 use brdf::testing::{Chi2Config, albedo_quadrature, chi2_test, sidak};
 use brdf::wave::ghs_psd2d_table::{Psd2dGhsTable, Psd2dResolution, second_order_share};
 use brdf::wave::{GhsAnisotropic, GhsOptions, GhsPsd2d, GhsSsaPsd2d};
 use brdf::{Bxdf, DVec3, Fresnel, Ior, Metal};
 
 mod psd2d_support;
-use psd2d_support::{crossing_lays, dir, table};
+use psd2d_support::{crossing_lays, dir, elliptical, table};
 
 /// A centred Gaussian density of covariance n·Σ, Σ given by its axes (sa, sb) at φ.
 struct Gauss {
@@ -192,18 +192,7 @@ fn the_small_g_limit_is_the_ssa() {
 /// table of the same law, stretched).
 #[test]
 fn an_elliptical_table_is_measured_psd_aniso() {
-    let zeta: Vec<f64> = (0..120)
-        .map(|i| 0.05 * (1200.0f64).powf(i as f64 / 119.0))
-        .collect();
-    let p: Vec<f64> = zeta
-        .iter()
-        .map(|&z| {
-            4e-3 * (1.0 + (z / 0.5f64).powi(2)).powf(-1.25)
-                * (1.0 + (z / 4.0f64).powi(2)).powf(-1.25)
-        })
-        .collect();
-    let radial = TabulatedPsd::new(&zeta, &p).unwrap();
-    let e = EllipticalPsd::new(radial, 1.0, 3.0, 40f64.to_radians()).unwrap();
+    let e = elliptical(4e-3);
     let fresnel = || Fresnel::conductor(Ior::metal(Metal::Cu));
     let stretched = GhsAnisotropic::full(e.clone(), fresnel(), GhsOptions::default()).unwrap();
     let t = table(300, 300, 0.1, 0.1, 5.0, 0.0, |x, y| e.psd(x, y));

@@ -2,7 +2,7 @@
 //! half-plane nodes, and the crossing-lay PSD they are tested on.
 
 use brdf::DVec3;
-use brdf::statistics::{AnisotropicKc, TabulatedPsd2d};
+use brdf::statistics::{AnisotropicKc, EllipticalPsd, TabulatedPsd, TabulatedPsd2d};
 
 pub fn dir(theta_deg: f64, phi_deg: f64) -> DVec3 {
     let (t, p) = (theta_deg.to_radians(), phi_deg.to_radians());
@@ -33,4 +33,22 @@ pub fn crossing_lays(sigma_um: f64) -> impl Fn(f64, f64) -> f64 {
     let a = AnisotropicKc::new(sigma_um * 0.8, 0.3, 3.0, 0.0, 3.0).unwrap();
     let b = AnisotropicKc::new(sigma_um * 0.6, 0.4, 2.5, 70f64.to_radians(), 3.0).unwrap();
     move |x, y| a.psd(x, y) + b.psd(x, y)
+}
+
+/// An elliptical PSD (axes 1 and 3 at 40°) whose radial law is a table of
+/// `amplitude`·(1 + (ζ/0.5)²)^−1.25 (1 + (ζ/4)²)^−1.25 over 0.05–60 rad/µm.
+pub fn elliptical(amplitude: f64) -> EllipticalPsd<TabulatedPsd> {
+    let zeta: Vec<f64> = (0..120)
+        .map(|i| 0.05 * (1200.0f64).powf(i as f64 / 119.0))
+        .collect();
+    let p: Vec<f64> = zeta
+        .iter()
+        .map(|&z| {
+            amplitude
+                * (1.0 + (z / 0.5f64).powi(2)).powf(-1.25)
+                * (1.0 + (z / 4.0f64).powi(2)).powf(-1.25)
+        })
+        .collect();
+    let radial = TabulatedPsd::new(&zeta, &p).unwrap();
+    EllipticalPsd::new(radial, 1.0, 3.0, 40f64.to_radians()).unwrap()
 }
