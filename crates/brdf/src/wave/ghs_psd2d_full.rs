@@ -102,10 +102,10 @@ impl GhsPsd2d {
         let (ci, co) = (wi.z.min(1.0), wo.z.min(1.0));
         let (zx, zy) = (k * (wo.x + wi.x), k * (wo.y + wi.y));
         let (p_delta, gs) = self.common.choice(ci, lambda_nm);
-        let q = self.table.proposal_density(zx, zy, gs);
-        let pdf = finite_nonneg((1.0 - p_delta) * k * k * co * q);
         let t = k * self.common.sigma * (ci + co);
-        let f = k * k * self.table.s_tilde(zx, zy, t * t);
+        let (s, q) = self.table.s_tilde_and_proposal(zx, zy, t * t, gs);
+        let pdf = finite_nonneg((1.0 - p_delta) * k * k * co * q);
+        let f = k * k * s;
         if !(f > 0.0) {
             return (0.0, pdf);
         }

@@ -71,7 +71,6 @@ impl Default for Psd2dResolution {
 #[derive(Clone, Debug)]
 pub struct Psd2dGhsTable {
     psd: TabulatedPsd2d,
-    sigma2: f64,
     ln_g0: f64,
     dln: f64,
     n_max: usize,
@@ -163,7 +162,6 @@ impl Psd2dGhsTable {
         let span = crate::numerics::math::ln(g_max.clamp(G_MIN, G_TOP) / G_MIN);
         let n = (libm::ceil(span / dln) as usize + 1).max(2);
         let grid = Grid::new(&psd, res.n_max);
-        let sigma2 = psd.sigma_um() * psd.sigma_um();
         let ln_g0 = crate::numerics::math::ln(G_MIN);
         let g_of = |j: usize| libm::exp(ln_g0 + j as f64 * dln);
         let values: Vec<Vec<f64>> = crate::parallel::map_rows(n.div_ceil(2), |p| {
@@ -186,7 +184,6 @@ impl Psd2dGhsTable {
             .collect::<Result<Vec<_>, _>>()?;
         Ok(Psd2dGhsTable {
             psd,
-            sigma2,
             ln_g0,
             dln,
             n_max: res.n_max,
@@ -241,11 +238,25 @@ impl Psd2dGhsTable {
     /// S̃(ζ; g), 1/(rad/µm)², ζ in the tangent frame: ∫S̃ d²ζ = 1 − e^{−g} less
     /// what lies beyond the kept square.
     pub fn s_tilde(&self, zx: f64, zy: f64, g: f64) -> f64 {
+        self.s_tilde_with(self.psd.unit_psd(zx, zy), zx, zy, g)
+    }
+
+    /// [`s_tilde`](Self::s_tilde) at g and [`proposal_density`](Self::proposal_density)
+    /// at g_s, with P₂/σ² at ζ looked up once (an evaluation needs both).
+    pub fn s_tilde_and_proposal(&self, zx: f64, zy: f64, g: f64, gs: f64) -> (f64, f64) {
+        let p = self.psd.unit_psd(zx, zy);
+        (
+            self.s_tilde_with(p, zx, zy, g),
+            self.proposal_with(p, zx, zy, gs),
+        )
+    }
+
+    /// S̃ given `p` = P₂(ζ)/σ².
+    fn s_tilde_with(&self, p: f64, zx: f64, zy: f64, g: f64) -> f64 {
         if !(g > 0.0) {
             return 0.0;
         }
-        let first = libm::exp(-g) * g * self.psd.psd(zx, zy) / self.sigma2;
-        first + second_order_share(g) * self.higher_density(zx, zy, g)
+        libm::exp(-g) * g * p + second_order_share(g) * self.higher_density(zx, zy, g)
     }
 
     /// The proposal density for the glossy lobe at g_s (∫ = 1 over the plane):
@@ -254,14 +265,19 @@ impl Psd2dGhsTable {
     /// between 5 % and 95 % (an empty slice's share goes to P₂/σ²); so the
     /// density is positive wherever S̃ is at any g.
     pub fn proposal_density(&self, zx: f64, zy: f64, gs: f64) -> f64 {
-        let mixed = self.mixed_density(zx, zy, gs);
+        self.proposal_with(self.psd.unit_psd(zx, zy), zx, zy, gs)
+    }
+
+    /// The proposal density given `p` = P₂(ζ)/σ².
+    fn proposal_with(&self, p: f64, zx: f64, zy: f64, gs: f64) -> f64 {
+        let mixed = self.mixed_density(p, zx, zy, gs);
         match &self.envelope {
             Some(e) => ENVELOPE_SHARE * e.unit_psd(zx, zy) + (1.0 - ENVELOPE_SHARE) * mixed,
             None => mixed,
         }
     }
 
-    fn mixed_density(&self, zx: f64, zy: f64, gs: f64) -> f64 {
+    fn mixed_density(&self, p: f64, zx: f64, zy: f64, gs: f64) -> f64 {
         let w1 = self.first_share(gs);
         let (j, t) = self.bracket(gs);
         let (mut first, mut w) = (w1, 0.0);
@@ -274,7 +290,7 @@ impl Psd2dGhsTable {
                 None => first += (1.0 - w1) * share,
             }
         }
-        first * self.psd.unit_psd(zx, zy) + w
+        first * p + w
     }
 
     /// A frequency ζ (tangent frame) drawn from [`proposal_density`](Self::proposal_density)
