@@ -16,7 +16,9 @@ use brdf::wave::{GhsAnisotropic, GhsOptions, GhsPsd2d, GhsSsaPsd2d};
 use brdf::{Bxdf, DVec3, Fresnel, Ior, Metal};
 
 mod psd2d_support;
-use psd2d_support::{against, crossing_lays, dir, elliptical, table};
+use psd2d_support::{
+    against, crossing_lays, dir, elliptical, random_grid, sound_over_random_directions, table,
+};
 
 /// A centred Gaussian density of covariance n·Σ, Σ given by its axes (sa, sb) at φ.
 struct Gauss {
@@ -400,36 +402,10 @@ proptest::proptest! {
         seed in 0u64..1_000_000,
     ) {
         let mut rng = brdf::testing::Pcg32::new(seed, 5);
-        let n = (2 * mx + 1) * (my + 1);
-        let mut v: Vec<f64> = (0..n)
-            .map(|_| {
-                let u = rng.next_f64();
-                if u < 0.2 { 0.0 } else { 10f64.powf(lscale) * u }
-            })
-            .collect();
-        v[rng.next_u32() as usize % n] = 10f64.powf(lscale);
-        let t = TabulatedPsd2d::new(
-            mx, my, 10f64.powf(ldx), 10f64.powf(ldy), &v, alpha, angle_deg.to_radians(),
-        )
-        .unwrap();
+        let t = random_grid(&mut rng, (mx, my), (ldx, ldy), alpha, angle_deg, lscale);
         let m = GhsPsd2d::new(t, Fresnel::conductor(Ior::metal(Metal::Au)), GhsOptions::default())
             .unwrap();
-        for _ in 0..48 {
-            let [a, b, c] = rng.uniform3();
-            let [d, e, _] = rng.uniform3();
-            let (wi, wo) = (dir(89.5 * a, 360.0 * b), dir(89.5 * d, 360.0 * e));
-            let lam = 360.0 + 470.0 * c;
-            let (f, pdf) = m.eval_pdf(wi, wo, lam);
-            proptest::prop_assert!(f.is_finite() && f >= 0.0 && pdf.is_finite() && pdf >= 0.0);
-            proptest::prop_assert!(f == 0.0 || pdf > 0.0, "f {f} pdf {pdf}");
-            let back = m.eval(wo, wi, lam);
-            proptest::prop_assert!((f - back).abs() <= 1e-9 * f.max(back), "{f} vs {back}");
-            if let Some(s) = m.sample(wi, lam, rng.uniform3())
-                && !s.is_delta
-            {
-                proptest::prop_assert!(s.weight.is_finite() && s.weight >= 0.0 && s.wo.z > 0.0);
-                proptest::prop_assert!(m.pdf(wi, s.wo, lam) > 0.0, "{s:?}");
-            }
-        }
+        let sound = sound_over_random_directions(&m, &mut rng, 48);
+        proptest::prop_assert!(sound.is_ok(), "{}", sound.unwrap_err());
     }
 }

@@ -4,7 +4,7 @@
 use std::f64::consts::PI;
 
 use brdf::statistics::{AnisotropicKc, EllipticalPsd, TabulatedPsd, TabulatedPsd2d};
-use brdf::testing::albedo_quadrature;
+use brdf::testing::{Pcg32, albedo_quadrature};
 use brdf::{Bxdf, DVec3};
 
 pub fn dir(theta_deg: f64, phi_deg: f64) -> DVec3 {
@@ -81,4 +81,70 @@ pub fn against(m: &dyn Bxdf, reference: &dyn Bxdf) -> (f64, Vec<(f64, DVec3, f64
         albedos.push((ti, wi, qa, qb));
     }
     (worst, albedos)
+}
+
+/// A grid as the property tests draw it: half sizes `half`, steps 10^`log_steps` rad/µm,
+/// values 10^`lscale`·u with a fifth of them zero and one at 10^`lscale`.
+pub fn random_grid(
+    rng: &mut Pcg32,
+    (mx, my): (usize, usize),
+    (ldx, ldy): (f64, f64),
+    alpha: f64,
+    angle_deg: f64,
+    lscale: f64,
+) -> TabulatedPsd2d {
+    let n = (2 * mx + 1) * (my + 1);
+    let mut v: Vec<f64> = (0..n)
+        .map(|_| {
+            let u = rng.next_f64();
+            if u < 0.2 { 0.0 } else { 10f64.powf(lscale) * u }
+        })
+        .collect();
+    v[rng.next_u32() as usize % n] = 10f64.powf(lscale);
+    TabulatedPsd2d::new(
+        mx,
+        my,
+        10f64.powf(ldx),
+        10f64.powf(ldy),
+        &v,
+        alpha,
+        angle_deg.to_radians(),
+    )
+    .unwrap()
+}
+
+/// Over `n` random direction pairs (θ to 89.5°) and wavelengths (360–830 nm): f and pdf
+/// finite and ≥ 0, pdf > 0 wherever f > 0, f reciprocal to 1e−9, and a glossy sample with
+/// a finite weight above the horizon where the pdf is positive; the first failure.
+pub fn sound_over_random_directions(m: &dyn Bxdf, rng: &mut Pcg32, n: usize) -> Result<(), String> {
+    for _ in 0..n {
+        let [a, b, c] = rng.uniform3();
+        let [d, e, _] = rng.uniform3();
+        let (wi, wo) = (dir(89.5 * a, 360.0 * b), dir(89.5 * d, 360.0 * e));
+        let lam = 360.0 + 470.0 * c;
+        let (f, pdf) = m.eval_pdf(wi, wo, lam);
+        if !(f.is_finite() && f >= 0.0 && pdf.is_finite() && pdf >= 0.0) {
+            return Err(format!("f {f} pdf {pdf}"));
+        }
+        if !(f == 0.0 || pdf > 0.0) {
+            return Err(format!("f {f} pdf {pdf}"));
+        }
+        let back = m.eval(wo, wi, lam);
+        let reciprocal = (f - back).abs() <= 1e-9 * f.max(back);
+        if !reciprocal {
+            return Err(format!("{f} vs {back}"));
+        }
+        if let Some(s) = m.sample(wi, lam, rng.uniform3())
+            && !s.is_delta
+        {
+            if !(s.weight.is_finite() && s.weight >= 0.0 && s.wo.z > 0.0) {
+                return Err(format!("{s:?}"));
+            }
+            let reached = m.pdf(wi, s.wo, lam) > 0.0;
+            if !reached {
+                return Err(format!("{s:?}"));
+            }
+        }
+    }
+    Ok(())
 }
