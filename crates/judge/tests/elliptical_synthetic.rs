@@ -10,17 +10,9 @@ use fit::kc2d;
 use serde_json::Value;
 
 mod common;
+use common::model;
 
 const UM: f64 = 1e-6;
-
-fn model(j: &Value, key: &str) -> Option<f64> {
-    j["models"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .find(|m| m["key"] == key)
-        .map(|m| m["log10_rms_error"].as_f64().unwrap())
-}
 
 fn params(j: &Value, key: &str) -> Value {
     j["models"]

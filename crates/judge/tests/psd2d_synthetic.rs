@@ -12,6 +12,7 @@ use fit::kc2d::{self, AnisoKcParams};
 use serde_json::Value;
 
 mod common;
+use common::model;
 
 const UM: f64 = 1e-6;
 
@@ -27,15 +28,6 @@ fn ranking(j: &Value) -> String {
         })
         .collect();
     table.join(", ")
-}
-
-fn model(j: &Value, key: &str) -> Option<f64> {
-    j["models"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .find(|m| m["key"] == key)
-        .map(|m| m["log10_rms_error"].as_f64().unwrap())
 }
 
 struct Case {

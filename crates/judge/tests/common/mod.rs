@@ -17,3 +17,15 @@ pub fn judge_cu(t: fit::Topography) -> Value {
         .unwrap()
         .json()
 }
+
+/// The log10 rms error of the model `key` in a judge report, if it was ranked.
+// Not every test file that shares this module looks models up.
+#[allow(dead_code)]
+pub fn model(j: &Value, key: &str) -> Option<f64> {
+    j["models"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|m| m["key"] == key)
+        .map(|m| m["log10_rms_error"].as_f64().unwrap())
+}
