@@ -369,7 +369,7 @@ pub(crate) fn material_spec(keys: &Map<String, Value>) -> Result<MaterialSpec, Q
         let here = std::path::Path::new(".");
         let mut inputs = render::inputs::Inputs::new(here);
         return render::material::resolve_spec(&desc, here, &mut inputs)
-            .map_err(|e| QueryError::new("include", e));
+            .map_err(|e| QueryError::new(e.field, e.message));
     }
     desc.into_spec(&mut EvalFiles).map_err(|e| {
         // A query's isotropic `alpha` is checked as α_x = α_y.

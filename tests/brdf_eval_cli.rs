@@ -207,7 +207,8 @@ fn angle_deg_turns_the_microfacet_axes() {
 
 /// A `lustre fit` material file through `include` (relative to the working
 /// directory), with the query's keys over it, gives the same bits as the
-/// same material written out in the query; a missing file is named.
+/// same material written out in the query; a missing file is named, and a bad key
+/// over the file is named as that key.
 #[test]
 fn include_reads_a_fit_material_file() {
     let dir = std::env::temp_dir().join(format!("lustre-eval-include-{}", std::process::id()));
@@ -229,11 +230,12 @@ fn include_reads_a_fit_material_file() {
         format!(r#"{{"model": "ggx", "alpha": 0.05, "metal": "brass", {geometry}}}"#),
         format!(r#"{{"include": "fit.toml", "model": "ggx", "alpha": 0.2, {geometry}}}"#),
         format!(r#"{{"include": "missing.toml", {geometry}}}"#),
+        format!(r#"{{"include": "fit.toml", "sigma_um": -1.0, {geometry}}}"#),
     ]
     .join("\n");
     let out = run_in(&dir, &input);
     let _ = std::fs::remove_dir_all(&dir);
-    assert_eq!(out.len(), 6, "{out:?}");
+    assert_eq!(out.len(), 7, "{out:?}");
     let bits = |i: usize, k: &str| {
         out[i][k]
             .as_f64()
@@ -252,4 +254,5 @@ fn include_reads_a_fit_material_file() {
         "{:?}",
         out[5]
     );
+    assert_eq!(out[6]["field"].as_str(), Some("sigma_um"), "{:?}", out[6]);
 }

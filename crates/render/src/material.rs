@@ -164,23 +164,49 @@ impl Included {
     }
 }
 
+/// Why a material description did not resolve: the message (with the file and line
+/// when an included file supplied the value) and the key it is about.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ResolveError {
+    /// The key as the user writes it (`include`, `cutoff`, `energy`, …).
+    pub field: &'static str,
+    /// What is wrong and the fix.
+    pub message: String,
+}
+
+impl std::fmt::Display for ResolveError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.message)
+    }
+}
+
+impl From<ResolveError> for String {
+    fn from(e: ResolveError) -> String {
+        e.message
+    }
+}
+
 /// Reads an included fit file and the `[material]` the scene's description builds on.
 fn read_include(
     desc: &MaterialDesc,
     inc: &str,
     base_dir: &Path,
     inputs: &mut Inputs,
-) -> Result<Included, String> {
+) -> Result<Included, ResolveError> {
+    let at_include = |message| ResolveError {
+        field: "include",
+        message,
+    };
     let path = base_dir.join(inc);
     let text = inputs
         .read_text(&path, "material file", MAX_TOML_BYTES)
-        .map_err(|e| format!("include = \"{inc}\": {e}"))?;
+        .map_err(|e| at_include(format!("include = \"{inc}\": {e}")))?;
     let mut file: MaterialFile = toml::from_str(&text).map_err(|e| {
         let pos = e.span().map(|s| crate::error::line_column(&text, s.start));
-        match pos {
+        at_include(match pos {
             Some((l, c)) => format!("{}:{l}:{c}: {}", path.display(), e.message().trim()),
             None => format!("{}: {}", path.display(), e.message().trim()),
-        }
+        })
     })?;
     // The include's own relative paths are relative to the include.
     let inc_dir = Path::new(inc).parent().unwrap_or(Path::new(""));
@@ -194,9 +220,10 @@ fn read_include(
     {
         *p = inc_dir.join(&*p).to_string_lossy().into_owned();
     }
-    let (base, split) = file
-        .base_for(desc)
-        .map_err(|e| format!("{}: {}", path.display(), e.message))?;
+    let (base, split) = file.base_for(desc).map_err(|e| ResolveError {
+        field: e.field,
+        message: format!("{}: {}", path.display(), e.message),
+    })?;
     Ok(Included {
         file,
         base,
@@ -214,15 +241,17 @@ pub fn resolve_spec(
     desc: &MaterialDesc,
     base_dir: &Path,
     inputs: &mut Inputs,
-) -> Result<MaterialSpec, String> {
+) -> Result<MaterialSpec, ResolveError> {
     let included = match &desc.include {
         Some(inc) => Some(read_include(desc, inc, base_dir, inputs)?),
         None => {
             if desc.cutoff.is_some() {
-                return Err(
-                    "`cutoff` picks a split of an `include`d fit file; this material has no `include`"
+                return Err(ResolveError {
+                    field: "cutoff",
+                    message: "`cutoff` picks a split of an `include`d fit file; this material \
+                              has no `include`"
                         .into(),
-                );
+                });
             }
             None
         }
@@ -244,12 +273,15 @@ pub fn resolve_spec(
             },
         ),
     };
-    desc.resolve(base, &mut files).map_err(|e| match &included {
-        // The value came from the include: say where it is, not only which key.
-        Some(inc) if desc.inherits(&inc.base, e.field) => {
-            format!("{}: {e}", inc.locate(e.field))
-        }
-        _ => e.to_string(),
+    desc.resolve(base, &mut files).map_err(|e| ResolveError {
+        field: e.field,
+        message: match &included {
+            // The value came from the include: say where it is, not only which key.
+            Some(inc) if desc.inherits(&inc.base, e.field) => {
+                format!("{}: {e}", inc.locate(e.field))
+            }
+            _ => e.to_string(),
+        },
     })
 }
 
