@@ -9,23 +9,13 @@
 
 use brdf::spec::{MaterialDesc, ModelKind, ModelSpec, NoFiles};
 use brdf::{Bxdf, DVec3, Distribution, Fresnel, MicrofacetConductor};
-use fit::kc2d::{self, AnisoKcParams};
-use fit::material_file::{self as material, Provenance};
+use fit::kc2d;
+use fit::material_file as material;
 use fit::pipeline::{Options, analyse};
 
-const UM: f64 = 1e-6;
-
-fn prov() -> Provenance<'static> {
-    Provenance {
-        file: "synthetic",
-        bytes: b"",
-        stylus: None,
-        merge_cutoff_rad_per_um: 1.0,
-        metal: "cu",
-        model: "auto",
-        notes: &[],
-    }
-}
+#[allow(dead_code)] // the file_of round trip is the other material tests'
+mod common;
+use common::{UM, prov, stretched};
 
 fn dir(theta_deg: f64, phi_deg: f64) -> DVec3 {
     let (t, p) = (theta_deg.to_radians(), phi_deg.to_radians());
@@ -69,17 +59,11 @@ fn the_written_angle_and_ggx_render_the_scan_as_it_lay() {
     let mut worst_angle: f64 = 0.0;
     let mut worst_brdf: f64 = 0.0;
     for (k, phi) in [0.0, 30.0, 75.0, -50.0, 120.0].into_iter().enumerate() {
-        let params = AnisoKcParams {
-            sigma: 0.01 * UM,
-            lx: 0.25 * UM,
-            ly: 0.25 * UM * ratio,
-            angle_rad: f64::to_radians(phi),
-            gamma: 3.0,
-        };
+        let params = stretched(ratio, phi, 0.01);
         let t = kc2d::synth_surface(256, 256, 20.0 * UM / 256.0, params, 40 + k as u64);
         let (su, sv) = slopes_in_frame(&t, phi);
         let a = analyse(t, None, &Options::default()).unwrap();
-        let doc = material::build(&a, &prov());
+        let doc = material::build(&a, &prov("synthetic"));
         assert!(doc.anisotropy.as_ref().unwrap().anisotropic, "φ {phi}");
         let m = &doc.material;
         let angle = m.angle_deg.unwrap();
@@ -159,15 +143,12 @@ fn the_written_angle_and_ggx_render_the_scan_as_it_lay() {
 /// A map not flagged anisotropic gets the isotropic `alpha` only, and its GGX is not turned.
 #[test]
 fn an_isotropic_map_writes_no_axes() {
-    let params = AnisoKcParams {
-        sigma: 0.01 * UM,
-        lx: 0.25 * UM,
-        ly: 0.25 * UM,
-        angle_rad: 0.0,
-        gamma: 3.0,
-    };
+    let params = stretched(1.0, 0.0, 0.01);
     let t = kc2d::synth_surface(256, 256, 20.0 * UM / 256.0, params, 7);
-    let doc = material::build(&analyse(t, None, &Options::default()).unwrap(), &prov());
+    let doc = material::build(
+        &analyse(t, None, &Options::default()).unwrap(),
+        &prov("synthetic"),
+    );
     assert!(!doc.anisotropy.as_ref().unwrap().anisotropic);
     assert_eq!((doc.material.alpha_x, doc.material.alpha_y), (None, None));
     let ggx = doc

@@ -8,6 +8,9 @@ use fit::pipeline::{Checks, Options, analyse, summarise, summarise_checked};
 use fit::quality::{self, InvalidPolicy};
 use fit::{Topography, synth};
 
+#[allow(dead_code)] // only its provenance is used here
+mod common;
+
 fn kc(n: usize, dx: f64, sigma: f64, lc: f64, seed: u64) -> Topography {
     synth::kc_surface(
         n,
@@ -89,21 +92,9 @@ fn a_mostly_invalid_scan_is_refused_with_the_overrides_named() {
         ..Options::default()
     };
     let a = analyse(read("formats/sur-3.sur"), None, &opts).unwrap();
-    let doc = fit::material_file::build(&a, &provenance());
+    let doc = fit::material_file::build(&a, &common::prov("scan"));
     assert!(doc.reliability.invalid.contains("filled anyway"));
     assert!(doc.reliability.unreliable.contains(&"invalid".to_string()));
-}
-
-fn provenance() -> fit::material_file::Provenance<'static> {
-    fit::material_file::Provenance {
-        file: "scan",
-        bytes: b"",
-        stylus: None,
-        merge_cutoff_rad_per_um: 1.0,
-        metal: "cu",
-        model: "auto",
-        notes: &[],
-    }
 }
 
 /// The largest valid rectangle against brute force over every rectangle of small random
@@ -210,7 +201,7 @@ fn corrupted_values_are_found_located_and_maskable() {
     );
     assert!(m.quality.outliers.unwrap().starts_with("masked"));
     let a = analyse(t_bad, None, &Options::default()).unwrap();
-    let doc = fit::material_file::build(&a, &provenance());
+    let doc = fit::material_file::build(&a, &common::prov("scan"));
     assert!(doc.reliability.outliers.contains("robust σ"));
     assert!(doc.reliability.unreliable.contains(&"outliers".to_string()));
 }
