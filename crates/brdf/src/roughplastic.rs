@@ -61,17 +61,30 @@ pub struct RoughPlastic {
     specular_weight: f64,
 }
 
-/// n-point Gauss–Legendre on [0, 1] (n = 2H): nodes and weights.
-fn gl01<const H: usize>() -> impl Iterator<Item = (f64, f64)> {
-    let (x, w) = gauss_legendre::<H>();
-    (0..2 * H).map(move |i| {
-        let (xi, wi) = if i < H {
-            (-x[i], w[i])
-        } else {
-            (x[i - H], w[i - H])
-        };
-        (0.5 + 0.5 * xi, 0.5 * wi)
-    })
+/// n-point Gauss–Legendre on [0, 1] (n = 2H): nodes and weights, made once
+/// per integral (Newton's iteration for the nodes cost more than the
+/// integrands when it ran inside the loops).
+struct Gl01<const H: usize> {
+    x: [f64; H],
+    w: [f64; H],
+}
+
+impl<const H: usize> Gl01<H> {
+    fn new() -> Self {
+        let (x, w) = gauss_legendre::<H>();
+        Gl01 { x, w }
+    }
+
+    fn iter(&self) -> impl Iterator<Item = (f64, f64)> + '_ {
+        (0..2 * H).map(move |i| {
+            let (xi, wi) = if i < H {
+                (-self.x[i], self.w[i])
+            } else {
+                (self.x[i - H], self.w[i - H])
+            };
+            (0.5 + 0.5 * xi, 0.5 * wi)
+        })
+    }
 }
 
 /// ∫∫_[0,1]² f(u) du by the tensor product of two n-point rules (n = 2H)
@@ -82,9 +95,10 @@ fn gl01<const H: usize>() -> impl Iterator<Item = (f64, f64)> {
 /// map's vanishing derivative at both ends makes the integrand smooth in s.
 fn integrate_unit_square<const H: usize>(mut f: impl FnMut([f64; 2]) -> f64) -> f64 {
     let smooth = |(s, w): (f64, f64)| (s * s * (3.0 - 2.0 * s), w * 6.0 * s * (1.0 - s));
+    let rule = Gl01::<H>::new();
     let mut sum = 0.0;
-    for (u0, w0) in gl01::<H>().map(smooth) {
-        for (u1, w1) in gl01::<H>().map(smooth) {
+    for (u0, w0) in rule.iter().map(smooth) {
+        for (u1, w1) in rule.iter().map(smooth) {
             sum += w0 * w1 * f([u0, u1]);
         }
     }
@@ -106,8 +120,9 @@ fn integrate_with_kinks(
     const SCAN: usize = 32;
     const MAX_EDGES: usize = 10;
     let smooth = |s: f64| s * s * (3.0 - 2.0 * s);
+    let rule = Gl01::<16>::new();
     let mut sum = 0.0;
-    for (u0, w0) in gl01::<16>() {
+    for (u0, w0) in rule.iter() {
         let mut edges = [0.0; MAX_EDGES];
         let mut n = 1;
         let mut prev = kinks([u0, 0.0]);
@@ -141,7 +156,7 @@ fn integrate_with_kinks(
             if b <= a {
                 continue;
             }
-            for (s, w1) in gl01::<16>() {
+            for (s, w1) in rule.iter() {
                 let u1 = a + (b - a) * smooth(s);
                 sum += w0 * w1 * (b - a) * 6.0 * s * (1.0 - s) * f([u0, u1]);
             }
@@ -188,8 +203,9 @@ impl RoughPlastic {
         // are integrated apart, with nodes drawn towards the step.
         let mu_c = libm::sqrt(1.0 - 1.0 / (m.eta * m.eta));
         let mut ri = 0.0;
+        let rule = Gl01::<12>::new();
         for (a, b) in [(0.0, mu_c), (mu_c, 1.0)] {
-            for (s, w) in gl01::<12>() {
+            for (s, w) in rule.iter() {
                 let mu = a + (b - a) * s * s * (3.0 - 2.0 * s);
                 let jac = (b - a) * 6.0 * s * (1.0 - s);
                 ri += w * jac * 2.0 * mu * m.internal_reflectance_at(mu);
