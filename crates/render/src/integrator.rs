@@ -235,9 +235,9 @@ pub fn camera_sample(scene: &Scene, x: u32, y: u32, sample: u64) -> CameraSample
     }
 }
 
-/// A camera sample's first draws: its sampler, its camera ray, and the
+/// A camera sample's first draws: its sampler, its camera ray, the
 /// reserved 2-D wavelength draw (the set's position and, jointly stratified
-/// with it, which member is the hero).
+/// with it, which member is the hero), and the ray's offset in the pixel.
 #[inline]
 fn camera_draws(
     scene: &Scene,
