@@ -386,6 +386,12 @@ impl SpectralTables {
         self.delta.get(m as usize).copied().flatten()
     }
 
+    /// Whether some material's delta lobe has a table.
+    #[inline]
+    pub fn has_delta(&self) -> bool {
+        self.delta.iter().any(Option::is_some)
+    }
+
     /// The table of material `m`, if its contributions are integrated exactly.
     #[inline]
     pub fn material(&self, m: u32) -> Option<u32> {

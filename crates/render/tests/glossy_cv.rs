@@ -145,6 +145,37 @@ fn the_tabulated_models_are_isotropic() {
     }
 }
 
+/// Near the mirror direction, where a narrow lobe peaks, the interpolant
+/// f̃ follows f·cosθo: the relative RMS residual over directions within
+/// 0.03 rad (the 3 cm light at 1 m) of the 45° mirror direction and λ over
+/// 380–780 nm. The peak at ρ = 0 is reachable only at cosθo = cosθi; with
+/// the other corners of a cell clamped to the smallest ρ their cosines
+/// allow (instead of continued below it) the residual was 0.09–0.25.
+#[test]
+fn the_interpolant_follows_the_lobe_at_the_mirror_direction() {
+    let mut u = xorshift(11);
+    for (name, body) in models() {
+        let s = plate(&body, "", 0.03, "d65", "");
+        let t = s.spectral.as_ref().unwrap().glossy(0).unwrap();
+        let bxdf = &s.materials[0].bxdf;
+        let (mut se, mut sf) = (0.0, 0.0);
+        for _ in 0..4000 {
+            let ti = std::f64::consts::FRAC_PI_4 + 0.02 * (u() - 0.5);
+            let wi = DVec3::new(ti.sin(), 0.0, ti.cos());
+            let (dx, dy) = (0.06 * (u() - 0.5), 0.06 * (u() - 0.5));
+            let wo = DVec3::new(-wi.x + dx, dy, wi.z).normalize();
+            let lambda = 380.0 + 400.0 * u();
+            let f = bxdf.eval(wi, wo, lambda) * wo.z;
+            let r = f - t.interpolant(&**bxdf, &corners(wi, wo), lambda);
+            se += r * r;
+            sf += f * f;
+        }
+        let rel = (se / sf).sqrt();
+        eprintln!("{name}: relative RMS residual {rel:.2e}");
+        assert!(rel < 0.02, "{name}: {rel}");
+    }
+}
+
 /// The table holds the model's f·cosθo at its nodes (to f32 rounding), for
 /// every model, at random nodes whose geometry is one the cosines allow.
 #[test]

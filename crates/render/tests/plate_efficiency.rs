@@ -111,7 +111,12 @@ fn reference(
 ) -> [Vec<[f64; 3]>; 2] {
     std::fs::create_dir_all(cache).unwrap();
     [0u64, 1].map(|h| {
-        let text = scene_text(model, root, 1000 + h, "");
+        let text = scene_text(
+            model,
+            root,
+            1000 + h,
+            &env("PLATE_REF_EXTRA", "").replace("\\n", "\n"),
+        );
         let key = {
             use std::hash::{Hash, Hasher};
             let mut s = std::collections::hash_map::DefaultHasher::new();
@@ -187,6 +192,20 @@ fn compare(img: &[[f64; 3]], refs: &[Vec<[f64; 3]>; 2]) -> Stats {
     }
 }
 
+/// Writes the image and the reference's two halves as little-endian f64
+/// (pixel-major, linear sRGB) for offline analysis of where the error is.
+fn dump(dir: &Path, model: &str, seed: u64, spp: u64, img: &[[f64; 3]], refs: &[Vec<[f64; 3]>; 2]) {
+    std::fs::create_dir_all(dir).unwrap();
+    for (name, data) in [("img", img), ("ref0", &refs[0][..]), ("ref1", &refs[1][..])] {
+        let bytes: Vec<u8> = data
+            .iter()
+            .flatten()
+            .flat_map(|v| v.to_le_bytes())
+            .collect();
+        std::fs::write(dir.join(format!("{model}_{seed}_{spp}_{name}.bin")), bytes).unwrap();
+    }
+}
+
 #[test]
 #[ignore = "a measurement of minutes in release; run it by name"]
 fn plate_efficiency() {
@@ -212,7 +231,11 @@ fn plate_efficiency() {
             for &spp in &spps {
                 cpu += render(&scene, &mut film, done..spp, threads);
                 done = spp;
-                let s = compare(&rgb(&film), &refs);
+                let img = rgb(&film);
+                let s = compare(&img, &refs);
+                if let Ok(dir) = std::env::var("PLATE_DUMP") {
+                    dump(Path::new(&dir), model, seed, spp, &img, &refs);
+                }
                 println!(
                     "{model} | {seed} | {spp} | {:.4e} | {cpu:.2} | {:.3e} | {:.2} | {:.4}/{:.4}/{:.4}",
                     s.rel_rmse,

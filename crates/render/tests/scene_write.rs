@@ -173,9 +173,10 @@ fn integrator() -> impl Strategy<Value = IntegratorDesc> {
         any::<bool>(),
         proptest::option::of(finite()),
         any::<bool>(),
+        proptest::option::of(any::<u32>()),
     )
         .prop_map(
-            |(depth, single, hero, rr, indep, balance, w, sampled)| IntegratorDesc {
+            |(depth, single, hero, rr, indep, balance, w, sampled, dps)| IntegratorDesc {
                 max_depth: spanless(depth),
                 wavelengths: if single {
                     WavelengthMode::Single
@@ -200,6 +201,7 @@ fn integrator() -> impl Strategy<Value = IntegratorDesc> {
                 } else {
                     SpectralIntegration::Auto
                 },
+                delta_pixel_samples: dps.map(spanless),
             },
         )
 }

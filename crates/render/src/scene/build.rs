@@ -237,6 +237,9 @@ struct Builder<'a> {
     material_index: HashMap<String, u32>,
 }
 
+/// Most `[integrator] delta_pixel_samples`.
+const DELTA_PIXEL_SAMPLES_MAX: u32 = 64;
+
 /// Range of `[integrator] mis_light_weight`: the factor multiplies light
 /// densities inside the MIS weights, and past these bounds the product leaves
 /// the range where both strategies' weights stay representable for the
@@ -387,6 +390,19 @@ impl<'a> Builder<'a> {
             None if integrator.sampler == SamplerKind::Independent => Some(1.0),
             None => None,
         };
+        let delta_pixel_samples = match &integrator.delta_pixel_samples {
+            Some(k) if !(1..=DELTA_PIXEL_SAMPLES_MAX).contains(k.get_ref()) => {
+                return Err(self.at(
+                    k.span(),
+                    format!(
+                        "delta_pixel_samples = {} is invalid: expected 1..={DELTA_PIXEL_SAMPLES_MAX}",
+                        k.get_ref()
+                    ),
+                ));
+            }
+            Some(k) => *k.get_ref() as usize,
+            None => 1,
+        };
         let spectral_bands = match &film.spectral_bands {
             Some(n) if *n.get_ref() as usize > crate::film::MAX_BANDS => {
                 return Err(self.at(
@@ -414,6 +430,7 @@ impl<'a> Builder<'a> {
             mis: integrator.mis,
             mis_light_weight,
             spectral_integration: integrator.spectral_integration,
+            delta_pixel_samples,
             exr: film.exr.clone(),
             png: film.png.clone(),
             exposure,

@@ -233,6 +233,11 @@ pub struct IntegratorDesc {
     /// `auto` (default), `glossy` or `sampled`.
     #[serde(default, skip_serializing_if = "is_default")]
     pub spectral_integration: SpectralIntegration,
+    /// Positions per camera sample at which a first vertex's exactly
+    /// integrated delta lobe is evaluated, 1–64 (default 1)
+    /// ([`Settings::delta_pixel_samples`](super::Settings::delta_pixel_samples)).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub delta_pixel_samples: Option<Spanned<u32>>,
 }
 
 /// How the integral over λ is estimated.
@@ -282,6 +287,7 @@ impl Default for IntegratorDesc {
             mis: MisHeuristic::Power,
             mis_light_weight: None,
             spectral_integration: SpectralIntegration::Auto,
+            delta_pixel_samples: None,
         }
     }
 }

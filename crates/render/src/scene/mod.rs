@@ -71,6 +71,12 @@ pub struct Settings {
     pub mis_light_weight: Option<f64>,
     /// Exact or sampled integration over λ.
     pub spectral_integration: SpectralIntegration,
+    /// `[integrator] delta_pixel_samples` (default 1): where a first
+    /// vertex's delta lobe is integrated over λ exactly, the emission it
+    /// reflects is averaged over this many positions in the pixel per camera
+    /// sample (a camera ray and a mirror ray each), for the sharp edge of a
+    /// small light's mirror image (`integrator::delta_over_pixel`).
+    pub delta_pixel_samples: usize,
     /// EXR output path.
     pub exr: Option<PathBuf>,
     /// PNG output path.
