@@ -49,16 +49,17 @@ pub(super) fn lambda(t: f64) -> f64 {
 
 /// [`lambda`] at t = q/z² from q = αx²x² + αy²y² > 0 and z = cosθ > 0
 /// (tangential components, exact as α → 0; any common scale of the
-/// direction cancels). Where the polynomial applies, a² = z²/q and
-/// x = √q/z come from two independent divisions, so the exp does not wait
-/// for the square root: Λ ends a sample's dependency chain.
+/// direction cancels), for sums with 1 ([`scaled_lambda_in_sum`]). Where
+/// the polynomial applies, a² = z²/q and x = √q/z come from two
+/// independent divisions, so the exp does not wait for the square root:
+/// Λ ends a sample's dependency chain.
 #[inline]
 pub(super) fn lambda_qz(q: f64, z: f64) -> f64 {
     let s = libm::sqrt(q);
     // z ≥ 1e−100 (z² stays normal) and, past the caller's negligible-Λ
     // test, q > z²/5.8²: neither quotient overflows or underflows.
     if s <= LAMBDA_POLY_MAX_X * z && z > 0.0 {
-        return exp(-(z * z / q)) * scaled_lambda(s / z);
+        return exp(-(z * z / q)) * scaled_lambda_in_sum(s / z);
     }
     lambda(q / (z * z))
 }
@@ -75,6 +76,46 @@ const LAMBDA_POLY_MAX_X: f64 = 0.8;
 fn scaled_lambda(x: f64) -> f64 {
     x * x * x * estrin(&LAMBDA_POLY, x * (2.0 / LAMBDA_POLY_MAX_X) - 1.0)
 }
+
+/// Upper end of [`LAMBDA_POLY_NEAR`]'s range in x = 1/a (a ≥ 3.33).
+const LAMBDA_NEAR_MAX_X: f64 = 0.3;
+
+/// [`scaled_lambda`] for a Λ that only enters sums with 1: the conductor's
+/// G1 = 1/(1 + Λ) and G2 = 1/(1 + Λi + Λo), the slope CDF's total
+/// cotθ (1 + Λ) and mass 1 − erfc(cotθ)/2. For x ≤ 0.3, where
+/// Λ < 5·10⁻⁸, the degree-12 [`LAMBDA_POLY_NEAR`] instead of the
+/// degree-28 polynomial: Λ to 2.2·10⁻¹⁹ absolute, a five-hundredth of an
+/// ulp of those sums (`near_polynomial_is_lambda_beside_one`).
+#[inline]
+fn scaled_lambda_in_sum(x: f64) -> f64 {
+    if x <= LAMBDA_NEAR_MAX_X {
+        return x * x * x * estrin(&LAMBDA_POLY_NEAR, x * (2.0 / LAMBDA_NEAR_MAX_X) - 1.0);
+    }
+    scaled_lambda(x)
+}
+
+/// H(x) on [0, 0.3] in powers of τ = 2x/0.3 − 1: Chebyshev interpolation
+/// of degree 12 in 50-digit arithmetic by
+/// `scripts/beckmann_lambda_poly.py near`. Its relative error (5.7·10⁻¹²)
+/// is far above [`LAMBDA_POLY`]'s, which is why only sums with 1 use it
+/// (see [`scaled_lambda_in_sum`]); H is not analytic at x = 0, so the
+/// degree falls slowly with the range.
+#[rustfmt::skip]
+static LAMBDA_POLY_NEAR: [f64; 13] = [
+    0.13653563306416083,
+    -0.008561314954780113,
+    -0.0034200678860009767,
+    0.0007438605258193373,
+    5.9709613997901364e-05,
+    -5.214926274189423e-05,
+    6.0034981523301636e-06,
+    2.5009125718764555e-06,
+    -1.0525768479235643e-06,
+    3.6179020220080146e-08,
+    8.7258564150326e-08,
+    -1.8988211826521815e-08,
+    -2.6726131991979985e-09,
+];
 
 /// H(x) = Λ(a) e^{a²} a³, x = 1/a, in powers of τ = 2x/0.8 − 1 ∈ [−1, 1]:
 /// Chebyshev interpolation of degree 28 at the Chebyshev points, computed
@@ -264,7 +305,7 @@ fn gaussian_start_and_target(cot: f64, tan: f64, u: f64) -> StartAndTarget {
 #[inline]
 fn polynomial_start_and_target(cot: f64, x: f64, u: f64) -> StartAndTarget {
     let e = exp(-cot * cot);
-    let s = scaled_lambda(x);
+    let s = scaled_lambda_in_sum(x);
     let lambda = e * s;
     let erfc = e * (x / SQRT_PI - 2.0 * s);
     StartAndTarget {
@@ -682,6 +723,37 @@ mod tests {
     }
 
     #[test]
+    fn near_polynomial_is_lambda_beside_one() {
+        // Λ = e^{−a²} x³ H(x) from the degree-12 polynomial against the
+        // degree-28 one (1.3e−15 relative, so its own absolute error here is
+        // below 1e−22), densely over x ∈ (0, 0.3] (a ≥ 3.33), and against
+        // 40-digit values: within 2.5e−19 absolute, a few hundredths of an ulp
+        // of the sums 1 + Λ it enters.
+        let mut worst = 0.0f64;
+        for i in 1..=30_000 {
+            let x = LAMBDA_NEAR_MAX_X * i as f64 / 30_000.0;
+            let e = exp(-1.0 / (x * x));
+            let (near, full) = (e * scaled_lambda_in_sum(x), e * scaled_lambda(x));
+            let err = (near - full).abs();
+            worst = worst.max(err);
+            assert!(err <= 2.5e-19, "x {x}: {near:e} vs {full:e}");
+        }
+        // mpmath's Λ(a) at a = 4 and 5 (`lambda_polynomial_matches_...`).
+        #[allow(clippy::excessive_precision)]
+        for (a, w) in [
+            (4.0, 2.277_677_197_765_894_916_4e-10),
+            (5.0, 1.481_342_933_684_934_031_8e-14),
+        ] {
+            let got = exp(-a * a) * scaled_lambda_in_sum(1.0 / a);
+            assert!((got - w).abs() <= 2.5e-19 + 1e-14 * w, "a {a}: {got:e}");
+        }
+        assert!(
+            worst > 1e-21,
+            "the two polynomials agree to {worst:e}: same one?"
+        );
+    }
+
+    #[test]
     fn lambda_from_q_and_z_is_lambda_from_t() {
         // a = z/√q from 0.01 to 6 (both sides of the polynomial's end at
         // 1.25), cosθ from 1e−100 to 1: the one-division form against t's.
@@ -694,10 +766,11 @@ mod tests {
                 let (got, want) = (lambda_qz(q, z), lambda(q / (z * z)));
                 assert!(got.is_finite() && got >= 0.0, "a {a} z {z}: {got}");
                 // e^{−a²} turns the argument's round-off (a few ulps of a²
-                // in either form) into a² times that, relative.
+                // in either form) into a² times that, relative; from
+                // a = 3.33 on the near polynomial's 2.2e−19 absolute.
                 let rel = (got - want).abs() / want;
                 worst = worst.max(rel);
-                let tol = 1e-14 + 1e-15 * a * a;
+                let tol = 1e-14 + 1e-15 * a * a + 2.5e-19 / want;
                 assert!(rel < tol, "a {a} z {z}: {got} against {want}");
             }
         }
@@ -787,10 +860,11 @@ mod tests {
                     for u in [[0.5, 0.5], [1e-9, 0.3], [0.999, 0.01]] {
                         let (h, got, _) = sample_visible_with_lambda(wi, ax, ay, u);
                         assert!(h.is_finite() && h.z > 0.0);
+                        // Λ for sums with 1: the near polynomial's 2.2e−19.
                         let tol = if a >= LAMBDA_NEGLIGIBLE_A {
                             1.8e-18
                         } else {
-                            3e-14 * want
+                            3e-14 * want + 2.5e-19
                         };
                         assert!(
                             (got - want).abs() <= tol,
