@@ -223,3 +223,27 @@ fn three_grazing_points_conserve_energy() {
         assert!(total <= 1.0 + EXCESS_MAX, "two-scale θi {th}°: {total}");
     }
 }
+
+/// A very steep surface (σ/Lc ≈ 46) whose two-scale albedo exceeds 1 at normal
+/// incidence (1.0087 at 360 nm) and not at the grazing angles the cap used to screen
+/// alone: found by `energy_options_never_exceed_one_long`.
+#[test]
+fn two_scale_cap_screens_normal_incidence() {
+    let m = TwoScale::new(TwoScaleParams {
+        beta: 1.97e-3,
+        sigma_um: 10.0,
+        lc_um: 0.217,
+        gamma: 7.45,
+        fresnel: Fresnel::One,
+        coherent: CoherentPart::MacroNdf,
+        resolution: Default::default(),
+    })
+    .unwrap();
+    for (th, lam) in [(0.0, 360.0), (0.0, 830.0), (30.0, 360.0), (89.0, 550.0)] {
+        let total = albedo(&m, th, lam);
+        assert!(
+            total <= 1.0 + EXCESS_MAX,
+            "θi {th}°, λ {lam} nm: albedo {total}"
+        );
+    }
+}

@@ -40,8 +40,10 @@ const THETA_DEG: [f64; 9] = [0.0, 60.0, 70.0, 80.0, 84.0, 87.0, 89.0, 89.5, 89.9
 /// capped albedo stays ≤ 1 between nodes too.
 const MARGIN: f64 = 1e-3;
 
-/// Indices into [`THETA_DEG`] screened first (84°, 89°, 89.9°).
-const SCREEN: [usize; 3] = [4, 6, 8];
+/// Indices into [`THETA_DEG`] screened first (0°, 84°, 89°, 89.9°): the
+/// excess is a grazing effect on most surfaces, but very steep ones (σ/Lc
+/// ≈ 46) exceed 1 at normal incidence and not at grazing.
+const SCREEN: [usize; 4] = [0, 4, 6, 8];
 
 /// Wavenumber nodes (uniform in k between the ends of the visible range):
 /// C is close to linear in k (4 nodes change no capped albedo by more
@@ -71,11 +73,11 @@ impl AlbedoCap {
     /// depends on them alone, are computed once); `None` when the ratio
     /// stays ≤ 1 (the model needs no cap).
     ///
-    /// The excess is a grazing-incidence effect (it grows monotonically
-    /// towards 90° in every case measured), so the ratio is first screened
-    /// at the [`SCREEN`] angles for the two extreme wavenumbers, and the
-    /// full table is built only when one of them exceeds 1: most materials
-    /// pay 6 albedo integrals instead of 27.
+    /// The excess is mostly a grazing-incidence effect, and on very steep
+    /// surfaces one at normal incidence, so the ratio is first screened at
+    /// the [`SCREEN`] angles for the two extreme wavenumbers, and the full
+    /// table is built only when one of them exceeds 1: most materials pay 8
+    /// albedo integrals instead of 20–30.
     pub(crate) fn build(
         k_lo: f64,
         k_hi: f64,
