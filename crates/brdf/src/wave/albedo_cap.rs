@@ -308,46 +308,30 @@ pub(crate) fn albedo(mu: f64, width: f64, f: impl Fn(DVec3) -> f64) -> f64 {
 #[cfg(test)]
 pub(crate) fn albedo_half(mu: f64, width: f64, f: impl Fn(DVec3) -> f64) -> f64 {
     let mut out = [0.0];
-    albedo_many_half(
-        HalfRule::CAP,
-        mu,
-        width,
-        &mut out,
-        |_, _| (),
-        |_, _, wo, v| v[0] = f(wo),
-    );
+    albedo_many_half(mu, width, &mut out, |_, _| (), |_, _, wo, v| v[0] = f(wo));
     out[0]
 }
 
-/// The panels of [`albedo_many_half`].
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub(crate) struct HalfRule {
-    /// Gauss–Legendre panels over φh ∈ [0, φc] per θh ring. The integrand
-    /// is smooth in φh (the lobe is isotropic in h; only cosθd, and through
-    /// it A and w, and the Smith term at wo vary along a ring) and vanishes
-    /// with cosθo at φc.
-    pub(crate) phi_panels: usize,
-    /// Widest θh panel, radians. The graded panels alone reach 0.6 rad,
-    /// where D̃_eff, cosθd and the Smith terms still vary.
-    pub(crate) theta_panel_max: f64,
-    /// Extent of the lobe's core in θh, in units of its width, where the
-    /// panels are at most one width wide.
-    pub(crate) core_widths: f64,
-}
+/// Gauss–Legendre panels over φh ∈ [0, φc] per θh ring of
+/// [`albedo_many_half`]. The integrand is smooth in φh (the lobe is
+/// isotropic in h; only cosθd, and through it A and w, and the Smith term
+/// at wo vary along a ring) and vanishes with cosθo at φc. Against a rule
+/// of 0.025 rad θh panels and 8 φ panels, over nine materials (β 1e−4–0.1)
+/// at 13 angles 0–89.9°, C is within 5.1e−4 with 2 panels and 4.6e−4 with
+/// 4 (both high, where the narrowest lobes' core panels are too wide), at
+/// half the nodes.
+const HALF_PHI_PANELS: usize = 2;
 
-impl HalfRule {
-    /// The cap's rule. On S138 (β 7.2e−4) at 89° panels up to 0.6 rad made
-    /// C 9e−4 high; with panels ≤ 0.1 rad it is within 1e−5 of a rule with
-    /// 0.025 rad panels and 8 φ panels (≤ 8e−5 at 89.9°). Against that fine
-    /// rule, over nine materials (β 1e−4–0.1) at 13 angles 0–89.9°, C is
-    /// within 5.1e−4 with 2 φ panels and 4.6e−4 with 4 (both high, where the
-    /// narrowest lobes' core panels are too wide), at half the nodes.
-    pub(crate) const CAP: HalfRule = HalfRule {
-        phi_panels: 2,
-        theta_panel_max: 0.1,
-        core_widths: 8.0,
-    };
-}
+/// Widest θh panel of [`albedo_many_half`], radians. The graded panels alone
+/// reach 0.6 rad, where D̃_eff, cosθd and the Smith terms still vary: on
+/// S138 (β 7.2e−4) at 89° their C was 9e−4 high; with panels ≤ 0.1 rad it is
+/// within 1e−5 of a rule with 0.025 rad panels and 8 φ panels (≤ 8e−5 at
+/// 89.9°).
+const HALF_THETA_PANEL_MAX: f64 = 0.1;
+
+/// Extent of the lobe's core in θh, in units of its width, where
+/// [`albedo_many_half`]'s panels are at most one width wide.
+const CORE_WIDTHS: f64 = 8.0;
 
 /// ∫ f(wo) cosθo dωo over the upper hemisphere for wi = (sinθi, 0, μ), for
 /// several integrands on the same nodes (`out` receives one integral per
@@ -362,7 +346,6 @@ impl HalfRule {
 /// cos φh ≥ c0(θh) = −μ cot(2θh)/sinθi, which holds on the whole ring below
 /// θ* = (90° − θi)/2 and on no part of it beyond 45° + θi/2.
 pub(crate) fn albedo_many_half<R>(
-    rule: HalfRule,
     mu: f64,
     width: f64,
     out: &mut [f64],
@@ -387,10 +370,10 @@ pub(crate) fn albedo_many_half<R>(
     // Within a few widths of the pole the lobe falls off like e^{−θ/β} or
     // e^{−θ²/β²}: panels there are at most one width wide.
     let ts = gl4_nodes(&split_wide(&e, |t| {
-        if t < rule.core_widths * width {
-            width.min(rule.theta_panel_max)
+        if t < CORE_WIDTHS * width {
+            width.min(HALF_THETA_PANEL_MAX)
         } else {
-            rule.theta_panel_max
+            HALF_THETA_PANEL_MAX
         }
     }));
     let n = out.len();
@@ -411,8 +394,8 @@ pub(crate) fn albedo_many_half<R>(
         }
         let shared = per_ring(ch, sh);
         ring.fill(0.0);
-        let dphi = phi_c / rule.phi_panels as f64;
-        for p in 0..rule.phi_panels {
+        let dphi = phi_c / HALF_PHI_PANELS as f64;
+        for p in 0..HALF_PHI_PANELS {
             let (c, r) = ((p as f64 + 0.5) * dphi, 0.5 * dphi);
             for j in 0..4 {
                 let x = if j < 2 { -GL4_X[j] } else { GL4_X[j - 2] };

@@ -231,15 +231,12 @@ impl TwoScale {
     fn build_cap(&self) -> Option<AlbedoCap> {
         let k_lo = super::wavenumber(WAVELENGTH_MAX_NM);
         let k_hi = super::wavenumber(WAVELENGTH_MIN_NM);
-        AlbedoCap::build(k_lo, k_hi, self.cap_ratio(albedo_cap::HalfRule::CAP))
+        AlbedoCap::build(k_lo, k_hi, self.cap_ratio())
     }
 
     /// The ratio E/(1 − S) the cap tabulates: `ratio(μ, ks, out)` writes it
     /// at incidence cosine μ for every wavenumber of `ks`, uncapped, F = 1.
-    fn cap_ratio(
-        &self,
-        rule: albedo_cap::HalfRule,
-    ) -> impl Fn(f64, &[f64], &mut [f64]) + Sync + '_ {
+    fn cap_ratio(&self) -> impl Fn(f64, &[f64], &mut [f64]) + Sync + '_ {
         // The lobe's angular scale: the macro NDF's, widened by the KC lobe
         // at small w.
         let width = self.ndf.beta().clamp(1e-3, 1.0);
@@ -270,7 +267,7 @@ impl TwoScale {
                 };
                 (tan_h, d_macro, vec![Cell::new(f64::NAN); nw])
             };
-            albedo_cap::albedo_many_half(rule, mu, width, out, per_ring, |ring, h, wo, values| {
+            albedo_cap::albedo_many_half(mu, width, out, per_ring, |ring, h, wo, values| {
                 let (tan_h, d_macro, d_eff_h) = ring;
                 let d_eff_node = |i: usize| {
                     let d = d_eff_h[i].get();
