@@ -247,3 +247,61 @@ fn two_scale_cap_screens_normal_incidence() {
         );
     }
 }
+
+/// A steep surface (σ/Lc 6.5) whose raw full-GHS lobe peaks all along the
+/// horizon (g ∝ (cosθi + cosθo)² is smallest there) as well as at the mirror
+/// direction: the build quadrature of the Krywonos table missed that band
+/// near grazing incidence and left the albedo at 1.0039 (86.8°, 830 nm; up to
+/// 1.0065 at 87°, 700 nm) and 0.9924 (89°, 830 nm). Found by
+/// `energy_options_never_exceed_one_long`; its neighbours in θi and λ too.
+#[test]
+fn krywonos_steep_surface_near_grazing() {
+    let psd = KcPsd::new(6.51, 1.0, 2.0).unwrap();
+    let (m, _) = ghs(psd, true, Energy::Krywonos);
+    for lam in [700.0, 780.0, 830.0] {
+        for th in [86.0, 86.8, 87.5, 89.0] {
+            let total = albedo(&*m, th, lam);
+            assert!(
+                (total - 1.0).abs() <= EXCESS_MAX,
+                "θi {th}°, λ {lam} nm: albedo {total}"
+            );
+        }
+    }
+}
+
+/// Steep surfaces near grazing incidence, where the raw lobe's band along the
+/// horizon carries most of its albedo: full GHS under Krywonos on a grid of
+/// σ 1–10 µm, Lc 0.3–3 µm, γ 1.1–8, θi 80–89.9°, λ 360–830 nm stays within
+/// 1 ± EXCESS_MAX (wherever the raw lobe is not treated as absorbed).
+#[test]
+#[ignore = "long: 48 surfaces × 28 points; run with --release -- --ignored"]
+fn krywonos_steep_grazing_sweep() {
+    let (mut lo, mut hi) = ((f64::INFINITY, String::new()), (0.0, String::new()));
+    for s in [1.0, 3.0, 6.51, 10.0] {
+        for lc in [0.3, 1.0, 3.0] {
+            for g in [1.1, 2.0, 4.0, 8.0] {
+                let psd = KcPsd::new(s, lc, g).unwrap();
+                let (m, raw) = ghs(psd, true, Energy::Krywonos);
+                for th in [80.0, 85.0, 86.8, 88.0, 89.0, 89.5, 89.9] {
+                    for lam in [360.0, 550.0, 700.0, 830.0] {
+                        let total = albedo(&*m, th, lam);
+                        let what = format!("σ {s} µm, Lc {lc} µm, γ {g}, θi {th}°, λ {lam} nm");
+                        if total > hi.0 {
+                            hi = (total, what.clone());
+                        }
+                        let a_s = m.specular(dir(th), lam).weight;
+                        if albedo(&*raw, th, lam) - a_s > 1e-4 * (1.0 - a_s) && total < lo.0 {
+                            lo = (total, what);
+                        }
+                    }
+                }
+            }
+        }
+    }
+    println!(
+        "largest albedo {} at {}; smallest {} at {}",
+        hi.0, hi.1, lo.0, lo.1
+    );
+    assert!(hi.0 <= 1.0 + EXCESS_MAX, "albedo {} at {}", hi.0, hi.1);
+    assert!(lo.0 >= 1.0 - EXCESS_MAX, "albedo {} at {}", lo.0, lo.1);
+}

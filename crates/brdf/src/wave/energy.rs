@@ -2,7 +2,7 @@
 //! (physics.md §5, §3.2), the (θi, λ) tables they need, and the
 //! deterministic hemispherical quadrature those tables are built with.
 
-use core::f64::consts::{FRAC_PI_2, PI};
+use core::f64::consts::{FRAC_PI_2, FRAC_PI_4, PI};
 
 use glam::DVec3;
 
@@ -186,86 +186,125 @@ fn weights(f: f64, n: usize) -> (usize, [f64; 4]) {
     )
 }
 
+/// First φ panel about the rim tangent, in units of cosθi (see
+/// [`hemispherical_integral`]).
+const PHI_FIRST: f64 = 3.0;
+/// First τ panel at the rim, in units of cosθi/sqrt(ρmax·w) (see
+/// [`hemispherical_integral`]).
+const TAU_FIRST: f64 = 0.25;
+/// Growth of the φ and τ panels away from the rim.
+const RIM_PANEL_GROWTH: f64 = 4.0;
+
 /// ∫_{H²} f(o) cosθo dω_o = ∫_{|o⊥|<1} f d²o⊥ for a lobe peaked at the
 /// mirror direction of `wi`, by the scheme of physics.md §4.3: polar
 /// coordinates about the mirror point, geometric panels in ρ from
 /// `lobe_rho`·1e−3 (the lobe's width in o⊥ units), a τ² substitution at the
 /// rim that removes the sqrt(1 − |o⊥|²) singularity, cosθo formed without
-/// cancellation, and 2×16-point Gauss–Legendre in φ ∈ [0, π] (doubled by
-/// symmetry). 8-point Gauss–Legendre per radial panel.
+/// cancellation. 8-point Gauss–Legendre per panel.
+///
+/// The rim is resolved too, because a steep surface's full-GHS lobe is not
+/// peaked at the mirror direction alone: at large g, S̃ ∝ g^{−p} and
+/// g ∝ (cosθi + cosθo)², so the lobe also peaks all along the horizon, over
+/// cosθo ~ cosθi. Near grazing incidence that is a thin band which the
+/// mirror point itself lies in, and the rays from the mirror point cross it
+/// over φ within ~cosθi of the rim tangent (φ = ±90°). So the φ panels grow
+/// geometrically (×4) from 3·cosθi either side of the tangent (at most 45°,
+/// so ≥ 32 nodes in φ), and the rim's τ panels grow (×4) from
+/// 0.25·cosθi/sqrt(ρmax·w), the band's width in τ along that ray. With the
+/// two fixed panels of each before, the raw albedo of σ 6.51 µm, Lc 1 µm,
+/// γ 2 was 0.4 % low at 86.8°, 830 nm (the Krywonos albedo 1.0039) and up
+/// to 20 % off for σ 3 µm, Lc 1 µm, γ 1.1.
 pub fn hemispherical_integral(wi: DVec3, lobe_rho: f64, mut f: impl FnMut(DVec3) -> f64) -> f64 {
-    let (gx8, gw8) = gauss_legendre::<4>();
-    let (gx16, gw16) = gauss_legendre::<8>();
     let sin_i = libm::sqrt((wi.x * wi.x + wi.y * wi.y).min(1.0));
+    let cos_i = wi.z.clamp(0.0, 1.0);
     // Frame: mirror point s⊥ = −i⊥; φ measured from the direction of −s⊥ = i⊥.
-    let (ex, ey) = if sin_i > 0.0 {
+    let e = if sin_i > 0.0 {
         (wi.x / sin_i, wi.y / sin_i)
     } else {
         (1.0, 0.0)
     };
-    let mut total = 0.0;
     let rho0 = (1e-3 * lobe_rho).clamp(1e-12, 1e-2);
-    for half in 0..2 {
-        for k in 0..16 {
-            let (node, w) = if k < 8 {
-                (-gx16[k], gw16[k])
-            } else {
-                (gx16[k - 8], gw16[k - 8])
-            };
-            let phi = FRAC_PI_2 * (half as f64 + 0.5 + 0.5 * node);
-            let wphi = FRAC_PI_2 * 0.5 * w;
-            let (sp, cp) = libm::sincos(phi);
-            // direction of the offset in the surface plane
-            let dx = cp * ex - sp * ey;
-            let dy = cp * ey + sp * ex;
-            // b = s⊥·e = −sinθi cosφ
-            let b = -sin_i * cp;
-            let rmax = -b + libm::sqrt((1.0 - sin_i * sin_i * sp * sp).max(0.0));
-            if !(rmax > 0.0) {
-                continue;
-            }
-            let mut eval_at = |rho: f64| -> f64 {
-                let oz2 = (rmax - rho) * (rho + rmax + 2.0 * b);
-                if !(oz2 > 0.0) {
-                    return 0.0;
-                }
-                let o = DVec3::new(-wi.x + rho * dx, -wi.y + rho * dy, libm::sqrt(oz2));
-                f(o) * rho
-            };
-            let mut panel = |lo: f64, hi: f64| -> f64 {
-                let h = 0.5 * (hi - lo);
-                let m = 0.5 * (hi + lo);
-                let mut s = 0.0;
-                for i in 0..4 {
-                    s += gw8[i] * (eval_at(m - h * gx8[i]) + eval_at(m + h * gx8[i]));
-                }
-                s * h
-            };
-            let split = 0.5 * rmax;
-            let mut acc = 0.0;
-            let mut lo = 0.0;
-            let mut hi = rho0.min(split);
-            while lo < split {
-                acc += panel(lo, hi);
-                lo = hi;
-                hi = (2.0 * hi).min(split);
-            }
-            // ρ = rmax(1 − τ²/2), τ ∈ [0, 1]: dρ = rmax·τ dτ
-            for (t0, t1) in [(0.0, 0.5), (0.5, 1.0)] {
-                let h = 0.5 * (t1 - t0);
-                let m = 0.5 * (t1 + t0);
-                let mut s = 0.0;
-                for i in 0..4 {
-                    for tau in [m - h * gx8[i], m + h * gx8[i]] {
-                        s += gw8[i] * eval_at(rmax * (1.0 - 0.5 * tau * tau)) * rmax * tau;
-                    }
-                }
-                acc += s * h;
-            }
-            total += wphi * acc;
-        }
+    let psi0 = (PHI_FIRST * cos_i).clamp(1e-6, FRAC_PI_4);
+    let mut total = 0.0;
+    // φ = 90° ∓ ψ, ψ ∈ [0, 90°]: the two sides of the rim tangent.
+    for side in [-1.0, 1.0] {
+        geometric_panels(psi0, FRAC_PI_2, |lo, hi| {
+            total += gauss8(lo, hi, |psi| {
+                let phi = FRAC_PI_2 + side * psi;
+                ray_integral(wi, e, sin_i, cos_i, phi, rho0, &mut f)
+            });
+        });
     }
     2.0 * total
+}
+
+/// Calls `panel(lo, hi)` over [0, end] in panels [0, first], then growing
+/// by [`RIM_PANEL_GROWTH`].
+fn geometric_panels(first: f64, end: f64, mut panel: impl FnMut(f64, f64)) {
+    let (mut lo, mut hi) = (0.0, first.min(end));
+    while lo < end {
+        panel(lo, hi);
+        lo = hi;
+        hi = (RIM_PANEL_GROWTH * hi).min(end);
+    }
+}
+
+/// 8-point Gauss–Legendre of `g` over [lo, hi].
+fn gauss8(lo: f64, hi: f64, mut g: impl FnMut(f64) -> f64) -> f64 {
+    let (gx, gw) = gauss_legendre::<4>();
+    let (h, m) = (0.5 * (hi - lo), 0.5 * (hi + lo));
+    let mut s = 0.0;
+    for i in 0..4 {
+        s += gw[i] * (g(m - h * gx[i]) + g(m + h * gx[i]));
+    }
+    s * h
+}
+
+/// ∫ f ρ dρ along the ray from the mirror point at angle `phi` (see
+/// [`hemispherical_integral`]) to the rim.
+fn ray_integral(
+    wi: DVec3,
+    (ex, ey): (f64, f64),
+    sin_i: f64,
+    cos_i: f64,
+    phi: f64,
+    rho0: f64,
+    f: &mut impl FnMut(DVec3) -> f64,
+) -> f64 {
+    let (sp, cp) = libm::sincos(phi);
+    // direction of the offset in the surface plane
+    let (dx, dy) = (cp * ex - sp * ey, cp * ey + sp * ex);
+    // b = s⊥·e = −sinθi cosφ; w = ρmax + b ≥ cosθi
+    let b = -sin_i * cp;
+    let w = libm::sqrt((1.0 - sin_i * sin_i * sp * sp).max(0.0));
+    let rmax = -b + w;
+    if !(rmax > 0.0) {
+        return 0.0;
+    }
+    let mut eval_at = |rho: f64| -> f64 {
+        let oz2 = (rmax - rho) * (rho + rmax + 2.0 * b);
+        if !(oz2 > 0.0) {
+            return 0.0;
+        }
+        let o = DVec3::new(-wi.x + rho * dx, -wi.y + rho * dy, libm::sqrt(oz2));
+        f(o) * rho
+    };
+    let split = 0.5 * rmax;
+    let mut acc = 0.0;
+    let (mut lo, mut hi) = (0.0, rho0.min(split));
+    while lo < split {
+        acc += gauss8(lo, hi, &mut eval_at);
+        lo = hi;
+        hi = (2.0 * hi).min(split);
+    }
+    // ρ = rmax(1 − τ²/2), τ ∈ [0, 1]: dρ = rmax·τ dτ, cosθo ≈ τ sqrt(rmax·w)
+    let tau0 = (TAU_FIRST * cos_i / libm::sqrt(rmax * w)).clamp(1e-6, 0.5);
+    geometric_panels(tau0, 1.0, |t0, t1| {
+        acc += gauss8(t0, t1, |tau| {
+            eval_at(rmax * (1.0 - 0.5 * tau * tau)) * rmax * tau
+        });
+    });
+    acc
 }
 
 /// Fraction of a unit-mass radial density (given by its radial CDF in u)
@@ -301,6 +340,23 @@ mod tests {
             assert!((a - PI).abs() < 1e-9, "{t}: {a}");
             let b = hemispherical_integral(wi, 0.01, |o| o.z);
             assert!((b - 2.0 * PI / 3.0).abs() < 1e-6, "{t}: {b}");
+        }
+    }
+
+    #[test]
+    fn quadrature_of_a_band_along_the_horizon() {
+        // f = (cosθi + cosθo)^−4, the large-g shape of a steep surface's
+        // full-GHS lobe: ∫ f cosθo dω = 2π ∫₀¹ μ/(c + μ)⁴ dμ
+        // = 2π [1/(6c²) − 1/(2(1 + c)²) + c/(3(1 + c)³)], c = cosθi.
+        for &t in &[0.0f64, 60.0, 80.0, 86.8, 88.0, 89.0, 89.5, 89.9] {
+            let wi = DVec3::new(libm::sin(t.to_radians()), 0.0, libm::cos(t.to_radians()));
+            let c = wi.z;
+            let want = 2.0
+                * PI
+                * (1.0 / (6.0 * c * c) - 0.5 / ((1.0 + c) * (1.0 + c))
+                    + c / (3.0 * (1.0 + c) * (1.0 + c) * (1.0 + c)));
+            let got = hemispherical_integral(wi, 0.13, |o| libm::pow(c + o.z, -4.0));
+            assert!((got / want - 1.0).abs() < 1e-6, "{t}°: {got} vs {want}");
         }
     }
 
