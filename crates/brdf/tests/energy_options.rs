@@ -269,6 +269,23 @@ fn krywonos_steep_surface_near_grazing() {
     }
 }
 
+/// A raw albedo that changes by 10× per degree near the rim (σ 3 µm, Lc 1 µm,
+/// γ 1.1: 1.2e−6 at 85°, 7.4e−6 at 86°, 700 nm): interpolated as a cubic in a,
+/// not in ln a, its Krywonos albedo was 1.0014 at 85°, 700 nm. Found by
+/// `krywonos_steep_grazing_sweep`.
+#[test]
+fn krywonos_albedo_steep_in_theta() {
+    let psd = KcPsd::new(3.0, 1.0, 1.1).unwrap();
+    let (m, _) = ghs(psd, true, Energy::Krywonos);
+    for (th, lam) in [(85.0, 700.0), (85.0, 750.0), (86.0, 650.0), (86.0, 700.0)] {
+        let total = albedo(&*m, th, lam);
+        assert!(
+            (total - 1.0).abs() <= EXCESS_MAX,
+            "θi {th}°, λ {lam} nm: albedo {total}"
+        );
+    }
+}
+
 /// Steep surfaces near grazing incidence, where the raw lobe's band along the
 /// horizon carries most of its albedo: full GHS under Krywonos on a grid of
 /// σ 1–10 µm, Lc 0.3–3 µm, γ 1.1–8, θi 80–89.9°, λ 360–830 nm stays within

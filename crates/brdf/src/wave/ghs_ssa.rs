@@ -274,7 +274,7 @@ impl GhsCommon {
                 // Cap: where σ_rel still leaves a total above 1 (the grazing
                 // gain of physics.md §5), the scattered part is scaled down to
                 // 1 − A_s (see `scatter_factor`); elsewhere left untouched.
-                let cap = EnergyTable::build(|th, lam| raw_albedo(&probe, th, lam));
+                let cap = EnergyTable::build_log(|th, lam| raw_albedo(&probe, th, lam));
                 self.energy_table = Some(frac);
                 self.cap_table = Some(cap);
             }
@@ -286,7 +286,9 @@ impl GhsCommon {
                     },
                     ..probe
                 };
-                self.energy_table = Some(EnergyTable::build(|th, lam| raw_albedo(&probe, th, lam)));
+                self.energy_table = Some(EnergyTable::build_log(|th, lam| {
+                    raw_albedo(&probe, th, lam)
+                }));
             }
         }
     }
