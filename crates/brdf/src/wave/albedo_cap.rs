@@ -400,7 +400,8 @@ pub(crate) fn albedo_many_half<R>(
             for j in 0..4 {
                 let x = if j < 2 { -GL4_X[j] } else { GL4_X[j - 2] };
                 let wp = r * GL4_W[j % 2];
-                let (sp, cp) = libm::sincos(c + r * x);
+                // φh ∈ [0, π]: sincos_2pi's exact reduction, a few ulp.
+                let (sp, cp) = crate::numerics::math::sincos_2pi((c + r * x) * (0.5 / PI));
                 let h = DVec3::new(sh * cp, sh * sp, ch);
                 let cos_d = wi.dot(h);
                 let wo = 2.0 * cos_d * h - wi;
