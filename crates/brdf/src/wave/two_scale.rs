@@ -279,7 +279,8 @@ impl TwoScale {
                         d
                     }
                 };
-                let tan_o = libm::hypot(wo.x, wo.y) / wo.z;
+                // |wo| = 1: no overflow for hypot to guard against.
+                let tan_o = libm::sqrt(wo.x * wo.x + wo.y * wo.y) / wo.z;
                 let at_o = grid.position(tan_o);
                 let p = Pair {
                     zi: wi.z,
