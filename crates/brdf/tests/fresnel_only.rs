@@ -320,3 +320,78 @@ fn single_lobe_models_ignore_the_lobe_choice() {
         assert!(!m.uses_lobe_choice() || reads, "{kind:?} never reads u[0]");
     }
 }
+
+/// Largest difference of value, pdf, sampled direction and weight between
+/// 400 nm and 700 nm over random directions: zero for a λ-free model.
+fn lambda_departure(m: &MaterialSpec, rng: &mut Rng) -> f64 {
+    let b = m.build().unwrap();
+    let mut worst = 0.0f64;
+    let dir = |rng: &mut Rng| {
+        let (ct, phi) = (rng.f64().max(1e-3), TAU * rng.f64());
+        let st = (1.0 - ct * ct).sqrt();
+        glam::DVec3::new(st * phi.cos(), st * phi.sin(), ct)
+    };
+    for _ in 0..200 {
+        let (wi, wo) = (dir(rng), dir(rng));
+        let (a, c) = (b.eval_pdf(wi, wo, 400.0), b.eval_pdf(wi, wo, 700.0));
+        worst = worst.max((a.0 - c.0).abs()).max((a.1 - c.1).abs());
+        let u = [rng.f64(), rng.f64(), rng.f64()];
+        match (b.sample(wi, 400.0, u), b.sample(wi, 700.0, u)) {
+            (Some(s), Some(t)) => {
+                worst = worst
+                    .max((s.wo - t.wo).length())
+                    .max((s.weight - t.weight).abs())
+                    .max((s.pdf - t.pdf).abs());
+            }
+            (None, None) => {}
+            _ => worst = f64::INFINITY,
+        }
+    }
+    worst
+}
+
+/// `MaterialSpec::lambda_free` lets a renderer carry a vertex's factor as
+/// one number for every wavelength: the models it names must not change
+/// with λ, and the ones it excludes must.
+#[test]
+fn lambda_free_models_do_not_change_with_wavelength() {
+    use brdf::spec::ReflectanceSpec;
+    let mut rng = Rng(0x5151_2323_abab_7777);
+    let plastic = |reflectance| ModelSpec::RoughPlastic {
+        alpha: 0.2,
+        int_ior: 1.5,
+        ext_ior: 1.0,
+        reflectance,
+        nonlinear: false,
+    };
+    let table = || ReflectanceSpec::Table(vec![[400.0, 0.1], [700.0, 0.9]]);
+    let one = |model| MaterialSpec {
+        model,
+        fresnel: FresnelSpec::One,
+    };
+    let mut cases = vec![
+        one(ModelSpec::Diffuse {
+            reflectance: ReflectanceSpec::Constant(0.4),
+        }),
+        one(ModelSpec::Diffuse {
+            reflectance: table(),
+        }),
+        one(plastic(ReflectanceSpec::Constant(0.4))),
+        one(plastic(table())),
+    ];
+    for model in models() {
+        cases.push(one(model.clone()));
+        cases.push(MaterialSpec {
+            model,
+            fresnel: FresnelSpec::Metal(Metal::Au),
+        });
+    }
+    for m in cases {
+        let worst = lambda_departure(&m, &mut rng);
+        if m.lambda_free() {
+            assert_eq!(worst, 0.0, "{m:?}");
+        } else {
+            assert!(worst > 1e-6, "{:?} is λ-free ({worst:e})", m.model.kind());
+        }
+    }
+}

@@ -737,14 +737,31 @@ fn survives(th: &mut Throughput, n: usize, m0: f64, sampler: &mut Sampler) -> bo
 /// Any wavelength: the λ-free part of a Fresnel-only model ignores it.
 const UNIT_LAMBDA: f64 = 550.0;
 
-/// A camera path whose first bounce is integrated over λ exactly where the
-/// material is Fresnel-only ([`crate::spectral_table`]): emission seen
-/// directly, next-event estimation and the BSDF sample's emission at the
-/// first vertex become XYZ with no sampled wavelength. A path that goes on
-/// to a second vertex draws its wavelengths then (from the camera sample's
-/// reserved draw) and carries the first vertex's Fresnel factor at each; a
-/// first vertex whose material is not Fresnel-only is traced with sampled
-/// wavelengths from the start.
+/// A Fresnel factor F(λ, cosθd) a λ-exact path carries: its table, the
+/// factor itself, and cos²θd = `num`/`den` at its vertex.
+#[derive(Clone, Copy)]
+struct Conductor<'a> {
+    table: u32,
+    fresnel: &'a brdf::Fresnel,
+    num: f64,
+    den: f64,
+}
+
+/// `xyz += w · e`.
+#[inline]
+fn add_scaled(xyz: &mut [f64; 3], e: [f64; 3], w: f64) {
+    for c in 0..3 {
+        xyz[c] += w * e[c];
+    }
+}
+
+/// A camera path integrated over λ exactly where its materials allow it:
+/// emission seen directly, and a path whose first vertex is λ-free or
+/// Fresnel-only ([`trace_flat`], which hands over to sampled
+/// wavelengths at the first vertex that needs them). A first vertex of
+/// any other material is traced with sampled wavelengths from the start,
+/// its delta lobe and glossy control variate integrated exactly where it
+/// has their tables.
 fn trace_exact(
     scene: &Scene,
     tables: &SpectralTables,
@@ -754,17 +771,7 @@ fn trace_exact(
     u_lambda: Reserved2d,
     delta_elsewhere: bool,
 ) -> SampleRadiance {
-    let lights = &scene.lights;
     let settings = &scene.settings;
-    // Only the XYZ of the exactly integrated part until a path needs
-    // sampled wavelengths: a whole `CameraSample` would be built and moved
-    // (memset and memcpy of 416 bytes) for every sample.
-    let mut xyz = [0.0; 3];
-    let add = |xyz: &mut [f64; 3], e: [f64; 3], w: f64| {
-        for c in 0..3 {
-            xyz[c] += w * e[c];
-        }
-    };
     let Some(
         hit @ Hit {
             surface: Surface::Material(m),
@@ -773,127 +780,325 @@ fn trace_exact(
     ) = first
     else {
         // Emission seen directly: the only strategy, weight 1.
-        let (em, _) = emission_at(lights, &ray, first.as_ref());
-        add(&mut xyz, tables.direct(&em), 1.0);
-        return SampleRadiance::Xyz(xyz);
+        let (em, _) = emission_at(&scene.lights, &ray, first.as_ref());
+        return SampleRadiance::Xyz(tables.direct(&em));
     };
-    let (Some(table), Some(split)) = (
-        tables.material(m),
-        scene.materials[m as usize].fresnel_only.as_ref(),
-    ) else {
-        let wavelengths = draw_wavelengths(scene, sampler, u_lambda);
-        let mut start = Throughput::camera(&wavelengths);
-        if let Some(delta) = tables.delta(m).filter(|_| settings.max_depth >= 1) {
-            if !delta_elsewhere {
-                add(&mut xyz, exact_delta(scene, tables, delta, &hit, &ray), 1.0);
-            }
-            start.delta_counted = true;
-        }
-        if let Some(glossy) = tables.glossy(m).filter(|_| settings.max_depth >= 1) {
-            let first = FirstVertex {
-                tables,
-                glossy,
-                m,
-                hit: &hit,
-                ray: &ray,
-            };
-            return first_vertex_cv(scene, first, &wavelengths, sampler, start, xyz);
-        }
-        let radiance = trace(scene, ray, Some(hit), &wavelengths, sampler, start, 0);
-        return SampleRadiance::Spectral(CameraSample {
-            wavelengths,
-            radiance,
-            xyz,
-        });
-    };
-    let unit = &split.unit;
-    let Some(v) = Vertex::new(&hit, &ray) else {
-        return SampleRadiance::Xyz(xyz);
-    };
-    let mis = VertexMis::new(settings, lobe_peak(settings.mis_light_weight, unit, v.wi));
-    let (u_light, u_bsdf) = vertex_draws(sampler, lights, unit);
-
-    next_event(
-        scene,
-        &v,
-        u_light,
-        mis,
-        |wo, is_delta| {
-            let (f, pdf) = unit.eval_pdf(v.wi, wo, UNIT_LAMBDA);
-            (f > 0.0).then_some((1.0, if is_delta { 0.0 } else { pdf }, f))
-        },
-        |ls, wo, w, f| {
-            let e = tables.reflected(table, (v.wi + wo).length_squared(), 4.0, &ls.emission);
-            add(&mut xyz, e, f * wo.z * w);
-        },
-    );
-
-    // BSDF sampling.
-    let Some(s) = unit.sample(v.wi, UNIT_LAMBDA, u_bsdf) else {
-        return SampleRadiance::Xyz(xyz);
-    };
-    if s.pdf.is_nan() || s.pdf <= 0.0 || s.wo.z <= 0.0 {
-        return SampleRadiance::Xyz(xyz);
+    let material = &scene.materials[m as usize];
+    // (A λ-free model with a delta lobe among others is handed over at
+    // once; it has no delta or glossy table to miss.)
+    if material.lambda_free || tables.material(m).is_some() && material.fresnel_only.is_some() {
+        return trace_flat(scene, tables, ray, hit, sampler, u_lambda);
     }
-    // cos²θd as a ratio: the mirror's θi, or |wi + wo|²/4.
-    let (num, den) = if s.is_delta {
-        (v.wi.z * v.wi.z, 1.0)
-    } else {
-        ((v.wi + s.wo).length_squared(), 4.0)
-    };
-    // The BSDF strategy's density relative to the light's for an emitter
-    // this edge reaches (no light sample can produce a delta direction).
-    let l_mis = if s.is_delta { 0.0 } else { 1.0 / s.pdf };
-    let Some(ray) = v.ray(s.wo) else {
-        return SampleRadiance::Xyz(xyz);
-    };
-    let next = scene.shapes.intersect(&ray, f64::INFINITY);
-    let (em, pdf_l) = emission_at(lights, &ray, next.as_ref());
-    if !matches!(em, Emission::None) {
-        let w = mis.bsdf(pdf_l, 1.0, l_mis);
-        if w > 0.0 {
-            add(
-                &mut xyz,
-                tables.reflected(table, num, den, &em),
-                s.weight * w,
-            );
-        }
-    }
-    let Some(next) = next.filter(|h| matches!(h.surface, Surface::Material(_))) else {
-        return SampleRadiance::Xyz(xyz);
-    };
-    if settings.max_depth == 1 {
-        return SampleRadiance::Xyz(xyz);
-    }
-
-    // The path goes on: its wavelengths now, each carrying the first
-    // vertex's Fresnel factor (the sampled estimator's state after that
-    // vertex, with every Q_k = 1 since no density depended on λ).
+    let mut xyz = [0.0; 3];
     let wavelengths = draw_wavelengths(scene, sampler, u_lambda);
-    let n = wavelengths.len();
-    let mut th = Throughput::camera(&wavelengths);
-    let m0 = roulette_scale(&wavelengths);
-    let mut fresnel = [0.0; N];
-    split
-        .fresnel
-        .reflectance_ratio_many(num, den, wavelengths.lambdas(), &mut fresnel[..n]);
-    for ((t, l), f) in th.t.iter_mut().zip(&mut th.l_mis).zip(&fresnel).take(n) {
-        *t *= s.weight * f;
-        *l = l_mis;
+    let mut start = Throughput::camera(&wavelengths);
+    if let Some(delta) = tables.delta(m).filter(|_| settings.max_depth >= 1) {
+        if !delta_elsewhere {
+            add_scaled(&mut xyz, exact_delta(scene, tables, delta, &hit, &ray), 1.0);
+        }
+        start.delta_counted = true;
     }
-    if 1 >= settings.rr_depth && !survives(&mut th, n, m0, sampler) {
-        return SampleRadiance::Spectral(CameraSample {
-            wavelengths,
-            radiance: [0.0; N],
-            xyz,
-        });
+    if let Some(glossy) = tables.glossy(m).filter(|_| settings.max_depth >= 1) {
+        let first = FirstVertex {
+            tables,
+            glossy,
+            m,
+            hit: &hit,
+            ray: &ray,
+        };
+        return first_vertex_cv(scene, first, &wavelengths, sampler, start, xyz);
     }
-    let radiance = trace(scene, ray, Some(next), &wavelengths, sampler, th, 1);
+    let radiance = trace(scene, ray, Some(hit), &wavelengths, sampler, start, 0);
     SampleRadiance::Spectral(CameraSample {
         wavelengths,
         radiance,
         xyz,
     })
+}
+
+// Camera paths integrated over λ exactly for as long as they allow it.
+//
+// A path's measurement at λ is the product of its vertices' factors times
+// the emission it reaches. While every vertex is λ-free
+// ([`Material::lambda_free`](crate::material::Material::lambda_free):
+// grey diffuse or rough plastic, a conductor with `fresnel = "one"`), the
+// product is one number T for every λ and each emission the path counts
+// is T·∫Le·cmf dλ, exact with [`SpectralTables::direct`]. One Fresnel-only
+// conductor vertex anywhere on the path adds the factor F(λ, cosθd) to
+// every later contribution, still exact with
+// [`SpectralTables::reflected`] at that vertex's cosθd. A vertex that
+// would add a second λ-dependent factor (a second conductor, a
+// wave-optical model, a tabulated reflectance) ends the exact part: the
+// path draws its wavelengths from the camera sample's reserved draw and
+// goes on in [`trace`] with the state the sampled estimator would have
+// there.
+//
+// Unbiased against the sampled estimator path by path: no density depends
+// on λ on such a path, so every `Q_k` is 1 and the sampled MIS weights,
+// summed over the n wavelengths, are the weights used here (one
+// wavelength's share, 1/n, of each strategy's density); Russian roulette
+// reads T, which is what the sampled estimator's hero-symmetric
+// throughput equals on a path without a conductor (with one, the factor
+// at [`UNIT_LAMBDA`] stands in for the sampled wavelengths' largest; any
+// survival probability above zero keeps the estimate unbiased).
+/// How a material enters a λ-exact path.
+#[derive(Clone, Copy)]
+enum FlatVertex<'a> {
+    /// A λ-free model: its factor is the same number at every λ.
+    Free(&'a dyn Bxdf),
+    /// A Fresnel-only model: its λ-free part, and the table and Fresnel
+    /// factor of the part that is not.
+    Fresnel(&'a dyn Bxdf, u32, &'a brdf::Fresnel),
+}
+
+/// How material `m` enters a λ-exact path at a vertex seen from `wi`
+/// that carries a conductor's factor already (`held`), or `None` where the
+/// path must sample λ.
+#[inline]
+fn flat_vertex<'a>(
+    scene: &'a Scene,
+    tables: &SpectralTables,
+    m: u32,
+    held: bool,
+    wi: DVec3,
+) -> Option<FlatVertex<'a>> {
+    let material = &scene.materials[m as usize];
+    let bxdf = &*material.bxdf;
+    // A delta lobe among others would need `delta_emission`; no λ-free
+    // model has one, but one that says it might is left to the sampled
+    // tracer rather than trusted.
+    if material.lambda_free
+        && (!bxdf.uses_lobe_choice() || bxdf.specular(wi, UNIT_LAMBDA).weight == 0.0)
+    {
+        return Some(FlatVertex::Free(bxdf));
+    }
+    if held {
+        return None;
+    }
+    let (table, split) = (tables.material(m)?, material.fresnel_only.as_ref()?);
+    Some(FlatVertex::Fresnel(&*split.unit, table, &split.fresnel))
+}
+
+/// The state of a λ-exact path.
+struct FlatPath<'a> {
+    /// The path's throughput, the same at every λ but for `conductor`.
+    tau: f64,
+    /// The one λ-dependent factor the path carries, if any.
+    conductor: Option<Conductor<'a>>,
+    /// The last edge's BSDF density relative to the light strategy's (0
+    /// for a delta direction, which light sampling cannot produce).
+    l_mis: f64,
+    /// The last vertex's lobe size ([`light_weight`]).
+    peak: Option<f64>,
+    /// What the path has counted.
+    xyz: [f64; 3],
+}
+
+impl<'a> FlatPath<'a> {
+    /// ∫ Le · cmf dλ, times the carried Fresnel factor `c` if any.
+    #[inline]
+    fn integral(tables: &SpectralTables, em: &Emission, c: Option<Conductor>) -> [f64; 3] {
+        match c {
+            None => tables.direct(em),
+            Some(c) => tables.reflected(c.table, c.num, c.den, em),
+        }
+    }
+
+    /// Counts the emission the last edge `ray` reaches at `hit` (an
+    /// emitter, or the environment), weighted as [`reached_emission`]
+    /// weighs it; seen from the camera (`depth` 0), weight 1.
+    #[inline]
+    fn reached(
+        &mut self,
+        scene: &Scene,
+        tables: &SpectralTables,
+        ray: &Ray,
+        hit: Option<&Hit>,
+        depth: u32,
+    ) {
+        let (em, pdf_l) = emission_at(&scene.lights, ray, hit);
+        if matches!(em, Emission::None) {
+            return;
+        }
+        let w = if depth == 0 {
+            1.0
+        } else {
+            VertexMis::new(&scene.settings, self.peak).bsdf(pdf_l, 1.0, self.l_mis)
+        };
+        if w > 0.0 {
+            let e = Self::integral(tables, &em, self.conductor);
+            add_scaled(&mut self.xyz, e, self.tau * w);
+        }
+    }
+
+    /// Next-event estimation and the BSDF sample at vertex `v` of material
+    /// `vertex`: the ray the path goes on along, if it does.
+    fn scatter(
+        &mut self,
+        scene: &Scene,
+        tables: &SpectralTables,
+        vertex: FlatVertex<'a>,
+        v: &Vertex,
+        sampler: &mut Sampler,
+    ) -> Option<Ray> {
+        let (bx, own) = match vertex {
+            FlatVertex::Free(b) => (b, None),
+            FlatVertex::Fresnel(b, table, fresnel) => (b, Some((table, fresnel))),
+        };
+        let settings = &scene.settings;
+        let wi = v.wi;
+        self.peak = lobe_peak(settings.mis_light_weight, bx, wi);
+        let mis = VertexMis::new(settings, self.peak);
+        let (u_light, u_bsdf) = vertex_draws(sampler, &scene.lights, bx);
+        // This vertex's Fresnel factor at cos²θd = |wi + wo|²/4, or the one
+        // the path carries.
+        let at = |num: f64, den: f64, held: Option<Conductor<'a>>| match own {
+            Some((table, fresnel)) => Some(Conductor {
+                table,
+                fresnel,
+                num,
+                den,
+            }),
+            None => held,
+        };
+        let (tau, held) = (self.tau, self.conductor);
+        let xyz = &mut self.xyz;
+        next_event(
+            scene,
+            v,
+            u_light,
+            mis,
+            |wo, is_delta| {
+                let (f, pdf) = bx.eval_pdf(wi, wo, UNIT_LAMBDA);
+                (f > 0.0).then_some((1.0, if is_delta { 0.0 } else { pdf }, f))
+            },
+            |ls, wo, w, f| {
+                let c = at((wi + wo).length_squared(), 4.0, held);
+                let e = Self::integral(tables, &ls.emission, c);
+                add_scaled(xyz, e, tau * f * wo.z * w);
+            },
+        );
+
+        let s = bx.sample(wi, UNIT_LAMBDA, u_bsdf)?;
+        if s.pdf.is_nan() || s.pdf <= 0.0 || s.wo.z <= 0.0 {
+            return None;
+        }
+        // cos²θd as a ratio: the mirror's θi, or |wi + wo|²/4.
+        let (num, den) = if s.is_delta {
+            (wi.z * wi.z, 1.0)
+        } else {
+            ((wi + s.wo).length_squared(), 4.0)
+        };
+        self.conductor = at(num, den, held);
+        self.tau *= s.weight;
+        self.l_mis = if s.is_delta { 0.0 } else { 1.0 / s.pdf };
+        v.ray(s.wo)
+    }
+
+    /// Russian roulette on the path's throughput (see the module
+    /// documentation); a survivor's throughput is divided by its survival
+    /// probability.
+    #[inline]
+    fn survives(&mut self, sampler: &mut Sampler) -> bool {
+        let f = self.conductor.map_or(1.0, |c| {
+            c.fresnel.reflectance_ratio(c.num, c.den, UNIT_LAMBDA)
+        });
+        let survive = (self.tau.abs() * f).min(1.0);
+        if survive.is_nan() || survive <= 0.0 || sampler.get_1d() >= survive {
+            return false;
+        }
+        self.tau /= survive;
+        true
+    }
+
+    /// Goes on with sampled wavelengths at `hit`, scattering event `depth`
+    /// (reached along `ray`): the wavelengths from the camera sample's
+    /// reserved draw `u_lambda`, and the state [`trace`] would have there,
+    /// T_j = T·F(λ_j)/p(λ_j), every Q_k = 1 and L_k the last edge's
+    /// relative density.
+    fn hand_over(
+        self,
+        scene: &Scene,
+        ray: Ray,
+        hit: Hit,
+        sampler: &mut Sampler,
+        u_lambda: Reserved2d,
+        depth: u32,
+    ) -> SampleRadiance {
+        let wavelengths = draw_wavelengths(scene, sampler, u_lambda);
+        let n = wavelengths.len();
+        let mut th = Throughput::camera(&wavelengths);
+        let mut f = [1.0; N];
+        if let Some(c) = self.conductor {
+            c.fresnel
+                .reflectance_ratio_many(c.num, c.den, wavelengths.lambdas(), &mut f[..n]);
+        }
+        let state = th.t.iter_mut().zip(&mut th.l_mis).zip(&f);
+        for ((t, l), f) in state.take(n) {
+            *t *= self.tau * f;
+            *l = self.l_mis;
+        }
+        th.peak = self.peak;
+        let radiance = trace(scene, ray, Some(hit), &wavelengths, sampler, th, depth);
+        SampleRadiance::Spectral(CameraSample {
+            wavelengths,
+            radiance,
+            xyz: self.xyz,
+        })
+    }
+}
+
+/// A camera path from its first hit `first` (a material that
+/// [`flat_vertex`] takes) along camera ray `ray`, integrated over λ
+/// exactly until a vertex needs sampled wavelengths (then handed over to
+/// [`trace`] with the reserved draw `u_lambda`).
+fn trace_flat(
+    scene: &Scene,
+    tables: &SpectralTables,
+    mut ray: Ray,
+    first: Hit,
+    sampler: &mut Sampler,
+    u_lambda: Reserved2d,
+) -> SampleRadiance {
+    let settings = &scene.settings;
+    let mut path = FlatPath {
+        tau: 1.0,
+        conductor: None,
+        l_mis: 0.0,
+        peak: None,
+        xyz: [0.0; 3],
+    };
+    let mut hit = Some(first);
+    for depth in 0..=settings.max_depth {
+        let Some(
+            h @ Hit {
+                surface: Surface::Material(m),
+                ..
+            },
+        ) = hit
+        else {
+            path.reached(scene, tables, &ray, hit.as_ref(), depth);
+            break;
+        };
+        if depth == settings.max_depth {
+            break;
+        }
+        let Some(v) = Vertex::new(&h, &ray) else {
+            break;
+        };
+        let Some(vertex) = flat_vertex(scene, tables, m, path.conductor.is_some(), v.wi) else {
+            return path.hand_over(scene, ray, h, sampler, u_lambda, depth);
+        };
+        let Some(next) = path.scatter(scene, tables, vertex, &v, sampler) else {
+            break;
+        };
+        if depth + 1 >= settings.rr_depth && !path.survives(sampler) {
+            break;
+        }
+        ray = next;
+        hit = scene.shapes.intersect(&ray, f64::INFINITY);
+    }
+    SampleRadiance::Xyz(path.xyz)
 }
 
 /// A first vertex whose glossy lobe has a control-variate table.

@@ -33,6 +33,12 @@ pub struct Material {
     /// at (`spectral_table.rs`). Whoever replaces `bxdf` clears it or
     /// replaces it too.
     pub delta_fresnel: Option<Fresnel>,
+    /// The model's value, density and sampling do not depend on λ
+    /// ([`MaterialSpec::lambda_free`]): a camera path whose vertices are
+    /// all such materials (and at most one Fresnel-only conductor) is
+    /// integrated over λ exactly (`integrator.rs`, `trace_flat`). Whoever replaces
+    /// `bxdf` clears it or sets it for the new model.
+    pub lambda_free: bool,
 }
 
 /// Whether a model's delta lobe (its [`brdf::Bxdf::specular`]) depends on
@@ -344,5 +350,6 @@ pub fn build_material(
         bxdf,
         fresnel_only,
         delta_fresnel,
+        lambda_free: spec.lambda_free(),
     })
 }

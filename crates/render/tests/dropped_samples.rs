@@ -72,6 +72,7 @@ fn scene(broken: bool) -> render::Scene {
         // The broken model is not Fresnel-only: its first bounce must not
         // be integrated through the split of the model it replaced.
         m.fresnel_only = None;
+        m.lambda_free = false;
         // Nor is it a conductor whose sampling covers its lobe: the
         // environment must be sampled by NEE too, as `build` would decide.
         s.lights.bsdf_only_environment = false;

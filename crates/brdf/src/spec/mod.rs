@@ -784,6 +784,22 @@ fn rough_plastic(
 }
 
 impl MaterialSpec {
+    /// Whether the built model's value, density and sampling do not depend
+    /// on λ at all: `diffuse` and `roughplastic` with a constant
+    /// reflectance (the coat's indices are constants), and the
+    /// Fresnel-only models ([`ModelKind::fresnel_only`]) with
+    /// [`FresnelSpec::One`]. A renderer can then carry such a vertex's
+    /// factor as one number for every wavelength. The wave-optical models
+    /// scatter by λ-dependent diffraction, so they are never λ-free.
+    pub fn lambda_free(&self) -> bool {
+        match &self.model {
+            ModelSpec::Diffuse { reflectance } | ModelSpec::RoughPlastic { reflectance, .. } => {
+                matches!(reflectance, ReflectanceSpec::Constant(_))
+            }
+            m => m.kind().fresnel_only() && self.fresnel == FresnelSpec::One,
+        }
+    }
+
     /// Builds the model (tables included: tens of ms for the wave models).
     pub fn build(&self) -> Result<DynBxdf, SpecError> {
         self.validate()?;

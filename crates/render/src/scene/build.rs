@@ -104,7 +104,8 @@ pub(super) fn build(path: &Path, text: &str, desc: &SceneDesc) -> Result<Scene, 
         };
     }
     let fingerprint = inputs::fingerprint(ESTIMATOR, &inputs);
-    // No tables when no material could use them.
+    // No tables when no material could use them: a λ-free material's
+    // paths use the emission integrals (`integrator.rs`, `trace_flat`).
     let tables_start = Instant::now();
     /// A delta lobe is integrated only where its emission would otherwise
     /// be traced by `delta_emission` (a model that chooses among lobes).
@@ -121,6 +122,7 @@ pub(super) fn build(path: &Path, text: &str, desc: &SceneDesc) -> Result<Scene, 
     let spectral = (settings.spectral_integration != SpectralIntegration::Sampled
         && materials.iter().any(|m| {
             m.fresnel_only.is_some()
+                || m.lambda_free
                 || delta_lobe(m).is_some()
                 || glossy_cv && crate::material::glossy_isotropic(m.model)
         }))
@@ -143,7 +145,7 @@ pub(super) fn build(path: &Path, text: &str, desc: &SceneDesc) -> Result<Scene, 
     let spectral_summary = match &spectral {
         None => String::new(),
         Some(t) => format!(
-            ", λ integrated exactly at the first bounce ({} Fresnel grid(s) and {} delta-lobe grid(s) of ≤ {} intervals, {} λ-free, {} refused, {} glossy control-variate table(s) built as used; {:.1} ms)",
+            ", λ integrated exactly on λ-flat paths and at the first bounce ({} Fresnel grid(s) and {} delta-lobe grid(s) of ≤ {} intervals, {} λ-free, {} refused, {} glossy control-variate table(s) built as used; {:.1} ms)",
             t.stats.grids,
             t.stats.delta_grids,
             t.stats.max_intervals,

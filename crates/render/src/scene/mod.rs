@@ -115,8 +115,9 @@ pub struct Scene {
     pub lights: Lights,
     /// Wavelength distribution over the emission range.
     pub wavelengths: WavelengthSampler,
-    /// The exact spectral integrals of the first bounce, when some material
-    /// is Fresnel-only and `spectral_integration = "auto"`.
+    /// The exact spectral integrals of λ-flat paths and the first bounce,
+    /// when some material is Fresnel-only or λ-free and
+    /// `spectral_integration = "auto"`.
     pub spectral: Option<SpectralTables>,
     /// Hash of everything that determines the per-sample values (not spp or outputs).
     pub fingerprint: u64,
