@@ -31,8 +31,9 @@ pub use psd2d::TabulatedPsd2d;
 
 /// An isotropic surface height PSD as the GHS models use it: in the
 /// dimensionless frequency u = L·ζ (ζ in rad/µm) with a length L of the
-/// surface's choosing (Lc for [`KcPsd`]).
-pub trait RadialPsd {
+/// surface's choosing (Lc for [`KcPsd`]). `Sync`, because the energy
+/// tables of a model over it are built on several threads.
+pub trait RadialPsd: Sync {
     /// rms height σ, µm.
     fn sigma_um(&self) -> f64;
     /// The length L, µm, with u = L·ζ.

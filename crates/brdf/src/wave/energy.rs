@@ -147,20 +147,34 @@ impl EnergyTable {
             + (WAVELENGTH_MAX_NM - WAVELENGTH_MIN_NM) * l as f64 / (TABLE_LAMBDA_NODES - 1) as f64
     }
 
-    /// Tabulates `f(θi, λ_nm)`.
-    pub fn build(mut f: impl FnMut(f64, f64) -> f64) -> Self {
-        let mut data = [0.0; TABLE_THETA_NODES * TABLE_LAMBDA_NODES];
-        for j in 0..TABLE_THETA_NODES {
-            for l in 0..TABLE_LAMBDA_NODES {
-                data[j * TABLE_LAMBDA_NODES + l] = f(Self::theta_node(j), Self::lambda_node(l));
+    /// Tabulates `f(θi, λ_nm)`, its θ rows spread over the cores with
+    /// `std` ([`crate::parallel::map_rows`]; the table is the same either
+    /// way: each value is computed by the same call).
+    pub fn build(f: impl Fn(f64, f64) -> f64 + Sync) -> Self {
+        let row = |j: usize| {
+            let th = Self::theta_node(j);
+            let mut row = [0.0; TABLE_LAMBDA_NODES];
+            for (l, v) in row.iter_mut().enumerate() {
+                *v = f(th, Self::lambda_node(l));
             }
+            row
+        };
+        let mut data = [0.0; TABLE_THETA_NODES * TABLE_LAMBDA_NODES];
+        let chunks = data.chunks_exact_mut(TABLE_LAMBDA_NODES);
+        #[cfg(feature = "alloc")]
+        for (chunk, r) in chunks.zip(crate::parallel::map_rows(TABLE_THETA_NODES, row)) {
+            chunk.copy_from_slice(&r);
+        }
+        #[cfg(not(feature = "alloc"))]
+        for (j, chunk) in chunks.enumerate() {
+            chunk.copy_from_slice(&row(j));
         }
         EnergyTable { data, log: false }
     }
 
     /// Tabulates a positive `f(θi, λ_nm)` (an albedo) by its logarithm, so
     /// that [`at`](Self::at) interpolates ln f.
-    pub fn build_log(f: impl FnMut(f64, f64) -> f64) -> Self {
+    pub fn build_log(f: impl Fn(f64, f64) -> f64 + Sync) -> Self {
         let mut t = Self::build(f);
         for v in &mut t.data {
             *v = libm::log(v.max(LOG_FLOOR));

@@ -245,8 +245,8 @@ impl GhsCommon {
     /// conductor's Q for the Rayleigh–Rice one), without the scatter factor.
     pub fn build_table(
         &mut self,
-        cdf_u: impl Fn(f64) -> f64,
-        mut raw_albedo: impl FnMut(&GhsCommon, f64, f64) -> f64,
+        cdf_u: impl Fn(f64) -> f64 + Sync,
+        raw_albedo: impl Fn(&GhsCommon, f64, f64) -> f64 + Sync,
     ) {
         let probe = GhsCommon {
             fresnel: Fresnel::One,
