@@ -186,11 +186,18 @@ fn two_scale_cap_never_exceeds_one() {
     two_scale_suite(16, 3);
 }
 
+// The long suites are separate tests so that a failure in one does not
+// hide the other's result.
 #[test]
 #[ignore = "long: 10x the materials; run with --release -- --ignored"]
 fn energy_options_never_exceed_one_long() {
     ghs_energy_suite(240, false, 11);
     ghs_energy_suite(120, true, 12);
+}
+
+#[test]
+#[ignore = "long (≈6 min): 10x the materials; run with --release -- --ignored"]
+fn two_scale_cap_never_exceeds_one_long() {
     two_scale_suite(160, 13);
 }
 

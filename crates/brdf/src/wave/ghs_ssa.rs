@@ -308,8 +308,9 @@ impl<P: RadialPsd> GhsSsa<P> {
     }
 
     /// With explicit energy and Fresnel-angle options. [`Energy::Krywonos`]
-    /// integrates the raw scattered albedo on a 64 × 16 (θi, λ) grid at
-    /// build time (about 1.5 M lobe evaluations).
+    /// integrates the raw scattered albedo on a 96 × 16 (θi, λ) grid at
+    /// build time (one hemispherical integral per node; rows in parallel
+    /// with `std`).
     pub fn with_options(psd: P, fresnel: Fresnel, opts: GhsOptions) -> Result<Self, BrdfError> {
         fresnel.check_covers(WAVELENGTH_MIN_NM, WAVELENGTH_MAX_NM)?;
         let common = GhsCommon::new(fresnel, opts, psd.sigma_um(), psd.length_um());
