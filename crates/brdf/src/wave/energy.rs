@@ -261,13 +261,15 @@ pub fn hemispherical_integral(wi: DVec3, lobe_rho: f64, mut f: impl FnMut(DVec3)
     };
     let rho0 = (1e-3 * lobe_rho).clamp(1e-12, 1e-2);
     let psi0 = (PHI_FIRST * cos_i).clamp(1e-6, FRAC_PI_4);
+    // Made once: Newton's iteration for the nodes costs more than a panel.
+    let rule = gauss_legendre::<4>();
     let mut total = 0.0;
     // φ = 90° ∓ ψ, ψ ∈ [0, 90°]: the two sides of the rim tangent.
     for side in [-1.0, 1.0] {
         geometric_panels(psi0, FRAC_PI_2, |lo, hi| {
-            total += gauss8(lo, hi, |psi| {
+            total += gauss8(&rule, lo, hi, |psi| {
                 let phi = FRAC_PI_2 + side * psi;
-                ray_integral(wi, e, sin_i, cos_i, phi, rho0, &mut f)
+                ray_integral(&rule, wi, e, sin_i, cos_i, phi, rho0, &mut f)
             });
         });
     }
@@ -285,9 +287,11 @@ fn geometric_panels(first: f64, end: f64, mut panel: impl FnMut(f64, f64)) {
     }
 }
 
+/// The positive half of the 8-point Gauss–Legendre rule ([`gauss_legendre`]).
+type Rule8 = ([f64; 4], [f64; 4]);
+
 /// 8-point Gauss–Legendre of `g` over [lo, hi].
-fn gauss8(lo: f64, hi: f64, mut g: impl FnMut(f64) -> f64) -> f64 {
-    let (gx, gw) = gauss_legendre::<4>();
+fn gauss8((gx, gw): &Rule8, lo: f64, hi: f64, mut g: impl FnMut(f64) -> f64) -> f64 {
     let (h, m) = (0.5 * (hi - lo), 0.5 * (hi + lo));
     let mut s = 0.0;
     for i in 0..4 {
@@ -298,7 +302,9 @@ fn gauss8(lo: f64, hi: f64, mut g: impl FnMut(f64) -> f64) -> f64 {
 
 /// ∫ f ρ dρ along the ray from the mirror point at angle `phi` (see
 /// [`hemispherical_integral`]) to the rim.
+#[allow(clippy::too_many_arguments)]
 fn ray_integral(
+    rule: &Rule8,
     wi: DVec3,
     (ex, ey): (f64, f64),
     sin_i: f64,
@@ -329,14 +335,14 @@ fn ray_integral(
     let mut acc = 0.0;
     let (mut lo, mut hi) = (0.0, rho0.min(split));
     while lo < split {
-        acc += gauss8(lo, hi, &mut eval_at);
+        acc += gauss8(rule, lo, hi, &mut eval_at);
         lo = hi;
         hi = (2.0 * hi).min(split);
     }
     // ρ = rmax(1 − τ²/2), τ ∈ [0, 1]: dρ = rmax·τ dτ, cosθo ≈ τ sqrt(rmax·w)
     let tau0 = (TAU_FIRST * cos_i / libm::sqrt(rmax * w)).clamp(1e-6, 0.5);
     geometric_panels(tau0, 1.0, |t0, t1| {
-        acc += gauss8(t0, t1, |tau| {
+        acc += gauss8(rule, t0, t1, |tau| {
             eval_at(rmax * (1.0 - 0.5 * tau * tau)) * rmax * tau
         });
     });
