@@ -11,6 +11,9 @@ use serde_json::Value;
 use std::io::Write;
 use std::path::PathBuf;
 
+mod samples;
+use samples::tiff;
+
 fn path(name: &str) -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
         .join("../../data/surfaces")
@@ -736,62 +739,6 @@ fn zmg_and_zon_read_from_the_format_descriptions() {
             panic!("read cut at {cut}");
         }
     }
-}
-
-/// A TIFF directory entry: tag, type, count, value bytes.
-pub type TiffEntry = (u16, u16, u32, Vec<u8>);
-/// A TIFF page: its entries and its one strip.
-pub type TiffPage = (Vec<TiffEntry>, Vec<u8>);
-
-/// A little-endian TIFF from pages of `(tag, type, count, value bytes)` entries, each page's
-/// strip given as bytes (tag 273/279 are filled in): for JPK files written from its
-/// description.
-pub fn tiff(pages: &[TiffPage]) -> Vec<u8> {
-    let mut b = b"II*\0\x08\0\0\0".to_vec();
-    // Lay out: each page's IFD, then its out-of-line values and its strip.
-    for (k, (entries, strip)) in pages.iter().enumerate() {
-        let mut entries = entries.clone();
-        entries.push((273, 4, 1, vec![0; 4]));
-        entries.push((279, 4, 1, (strip.len() as u32).to_le_bytes().to_vec()));
-        entries.sort_by_key(|e| e.0);
-        let ifd = b.len();
-        let n = entries.len();
-        let extra_start = ifd + 2 + 12 * n + 4;
-        let mut extra: Vec<u8> = Vec::new();
-        let mut dir: Vec<u8> = (n as u16).to_le_bytes().to_vec();
-        let mut strip_slot = 0;
-        for (tag, kind, count, value) in &entries {
-            dir.extend(tag.to_le_bytes());
-            dir.extend(kind.to_le_bytes());
-            dir.extend(count.to_le_bytes());
-            if *tag == 273 {
-                strip_slot = dir.len();
-            }
-            if value.len() <= 4 {
-                let mut v = value.clone();
-                v.resize(4, 0);
-                dir.extend(v);
-            } else {
-                dir.extend(((extra_start + extra.len()) as u32).to_le_bytes());
-                extra.extend(value);
-                if extra.len() % 2 == 1 {
-                    extra.push(0);
-                }
-            }
-        }
-        let strip_at = extra_start + extra.len();
-        dir[strip_slot..strip_slot + 4].copy_from_slice(&(strip_at as u32).to_le_bytes());
-        let next = if k + 1 < pages.len() {
-            strip_at + strip.len()
-        } else {
-            0
-        };
-        dir.extend((next as u32).to_le_bytes());
-        b.extend(dir);
-        b.extend(extra);
-        b.extend(strip);
-    }
-    b
 }
 
 fn ascii(s: &str) -> (u16, u32, Vec<u8>) {

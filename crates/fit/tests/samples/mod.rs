@@ -1,5 +1,9 @@
 //! Scan files written from their formats' descriptions, shared by the damaged-file and
-//! hostile-input tests (each damages or truncates them its own way).
+//! hostile-input tests (each damages or truncates them its own way), and the TIFF writer
+//! the format tests use too.
+
+// Each test binary that includes this module uses a part of it.
+#![allow(dead_code)]
 
 /// A 32 × 24 KLA Zeta ZMG file written from the format description.
 pub fn zmg_sample() -> Vec<u8> {
@@ -88,27 +92,44 @@ pub fn jpk_sample() -> Vec<u8> {
                 .collect(),
         ),
     ];
+    let pages: Vec<TiffPage> = pages
+        .into_iter()
+        .map(|(entries, strip)| {
+            let entries = entries.into_iter().map(|(t, (k, c, v))| (t, k, c, v));
+            (entries.collect(), strip)
+        })
+        .collect();
+    tiff(&pages)
+}
+
+/// A TIFF directory entry: tag, type, count, value bytes.
+pub type TiffEntry = (u16, u16, u32, Vec<u8>);
+/// A TIFF page: its entries and its one strip.
+pub type TiffPage = (Vec<TiffEntry>, Vec<u8>);
+
+/// A little-endian TIFF from pages of `(tag, type, count, value bytes)` entries, each page's
+/// strip given as bytes (tag 273/279 are filled in): for JPK files written from its
+/// description.
+pub fn tiff(pages: &[TiffPage]) -> Vec<u8> {
     let mut b = b"II*\0\x08\0\0\0".to_vec();
+    // Lay out: each page's IFD, then its out-of-line values and its strip.
     for (k, (entries, strip)) in pages.iter().enumerate() {
-        let mut entries: Vec<(u16, u16, u32, Vec<u8>)> = entries
-            .iter()
-            .map(|(t, (k, c, v))| (*t, *k, *c, v.clone()))
-            .collect();
+        let mut entries = entries.clone();
         entries.push((273, 4, 1, vec![0; 4]));
         entries.push((279, 4, 1, (strip.len() as u32).to_le_bytes().to_vec()));
         entries.sort_by_key(|e| e.0);
-        let extra_start = b.len() + 2 + 12 * entries.len() + 4;
-        let (mut extra, mut dir, mut slot) = (
-            Vec::<u8>::new(),
-            (entries.len() as u16).to_le_bytes().to_vec(),
-            0,
-        );
+        let ifd = b.len();
+        let n = entries.len();
+        let extra_start = ifd + 2 + 12 * n + 4;
+        let mut extra: Vec<u8> = Vec::new();
+        let mut dir: Vec<u8> = (n as u16).to_le_bytes().to_vec();
+        let mut strip_slot = 0;
         for (tag, kind, count, value) in &entries {
             dir.extend(tag.to_le_bytes());
             dir.extend(kind.to_le_bytes());
             dir.extend(count.to_le_bytes());
             if *tag == 273 {
-                slot = dir.len();
+                strip_slot = dir.len();
             }
             if value.len() <= 4 {
                 let mut v = value.clone();
@@ -117,10 +138,13 @@ pub fn jpk_sample() -> Vec<u8> {
             } else {
                 dir.extend(((extra_start + extra.len()) as u32).to_le_bytes());
                 extra.extend(value);
+                if extra.len() % 2 == 1 {
+                    extra.push(0);
+                }
             }
         }
         let strip_at = extra_start + extra.len();
-        dir[slot..slot + 4].copy_from_slice(&(strip_at as u32).to_le_bytes());
+        dir[strip_slot..strip_slot + 4].copy_from_slice(&(strip_at as u32).to_le_bytes());
         let next = if k + 1 < pages.len() {
             strip_at + strip.len()
         } else {
