@@ -45,6 +45,8 @@ pub mod rayleigh_rice;
 #[cfg(feature = "alloc")]
 pub mod two_scale;
 #[cfg(feature = "alloc")]
+mod two_scale_lambda;
+#[cfg(feature = "alloc")]
 mod two_scale_narrow;
 #[cfg(feature = "alloc")]
 mod two_scale_table;

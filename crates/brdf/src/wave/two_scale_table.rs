@@ -22,6 +22,7 @@ use crate::model::WAVELENGTH_MIN_NM;
 use crate::numerics::quadrature::{gl4, gl4_graded_from_zero, panel_edges};
 use crate::statistics::epd::ExponentialNdf;
 use crate::statistics::kc::KcPsd;
+use crate::wave::two_scale_lambda::RingSums;
 use crate::wave::two_scale_narrow::NarrowRule;
 
 /// Resolution of the per-material D̃_eff table.
@@ -321,21 +322,6 @@ struct EffRow {
 /// Points of the Smith Λ tables in v (θ = atan(τ a sinh(vV))).
 const LAMBDA_NODES: usize = 64;
 
-/// ∫₀^{2π} max(0, ω·m) dφ for ω, m at polar angles θ, θm (cosines `c`,
-/// `cm`, sines `s`, `sm`), φ the azimuth between them.
-#[inline]
-fn ring_projection(c: f64, s: f64, cm: f64, sm: f64) -> f64 {
-    let a = s * sm;
-    let b = c * cm;
-    if b >= a {
-        2.0 * PI * b
-    } else {
-        // ω·m > 0 for |φ| < φ0 = acos(−b/a).
-        let phi0 = libm::acos((-b / a).clamp(-1.0, 1.0));
-        2.0 * (b * phi0 + libm::sqrt((a * a - b * b).max(0.0)))
-    }
-}
-
 /// Quadrature nodes of ∫ D(m) g(θm) dω_m / 2π-ring for an isotropic,
 /// normalised NDF given as ln D on a sinh grid in tanθm (`row`, scale
 /// `tau_a` = τ·a, extent `v_ext`), by `rule` on each bin with the
@@ -512,17 +498,6 @@ impl SharedLambdaGrid {
     }
 }
 
-/// Smith 1 + Λ(θ) = (1/cosθ) ∫ D(m) max(0, ω·m) dω_m from [`ring_nodes`].
-fn one_plus_lambda(nodes: &[(f64, f64, f64)], tan_t: f64) -> f64 {
-    let c = 1.0 / libm::sqrt(1.0 + tan_t * tan_t);
-    let s = tan_t * c;
-    let sum: f64 = nodes
-        .iter()
-        .map(|&(w, cm, sm)| w * ring_projection(c, s, cm, sm))
-        .sum();
-    sum / c
-}
-
 /// t = a sinh(vV) is linear near the pole; a fixes where logarithmic
 /// spacing starts (in units of τ: past the exponential core of D).
 pub(crate) const SINH_A: f64 = 1.0;
@@ -609,10 +584,11 @@ impl EffTable {
             // Smith Λ of the normalised row.
             let tau_a = tau * SINH_A;
             let nodes = ring_nodes(&log_d, tau_a, v_ext, &LAMBDA_RULE);
+            let sums = RingSums::new(&nodes);
             let log1p_lambda = (0..LAMBDA_NODES)
                 .map(|l| {
                     let v = l as f64 / (LAMBDA_NODES - 1) as f64;
-                    let q = one_plus_lambda(&nodes, tau_a * libm::sinh(v * lambda_v_ext));
+                    let q = sums.one_plus_lambda(tau_a * libm::sinh(v * lambda_v_ext));
                     // Λ ≥ 0; quadrature round-off near the pole can dip below.
                     libm::log(q.max(1.0))
                 })
@@ -805,6 +781,7 @@ impl EffTable {
 mod tests {
     use super::*;
     use crate::numerics::quadrature::{GL4_W, GL4_X};
+    use crate::wave::two_scale_lambda::one_plus_lambda;
 
     /// The table's Smith Λ of every w node (the lobe's own G₂) against the
     /// same integral by 4-point Gauss–Legendre on each quarter of every bin,
