@@ -80,10 +80,17 @@ impl NarrowRule {
         &self.nodes
     }
 
-    /// Whether the rule holds at θh for w: the kernel is smooth on D's
-    /// support (β·w small) and no ring of it reaches ψ = 90°.
-    pub(crate) fn applies(&self, beta: f64, w: f64, theta_h: f64) -> bool {
-        beta * w <= NARROW_BW_MAX && theta_h + self.reach < core::f64::consts::FRAC_PI_2
+    /// Whether the rule holds for w: the kernel is smooth on D's support
+    /// (β·w small).
+    pub(crate) fn holds(&self, beta: f64, w: f64) -> bool {
+        beta * w <= NARROW_BW_MAX
+    }
+
+    /// Whether rings of D's support at θh reach ψ = 90°, where the ring
+    /// integral has a kink (the caller then integrates the kernel over
+    /// whole rings and takes the part beyond ψ = 90° off separately).
+    pub(crate) fn reaches_horizon(&self, theta_h: f64) -> bool {
+        theta_h + self.reach >= core::f64::consts::FRAC_PI_2
     }
 }
 
