@@ -27,6 +27,7 @@ use crate::film::{
 };
 use crate::geometry::Ray;
 use crate::glossy_lambda_table::GlossyTable;
+use crate::guide::{Cones, Guided};
 use crate::light::{Emission, LightSample, Lights};
 use crate::sampler::{Reserved2d, Sampler};
 use crate::scene::desc::MisHeuristic;
@@ -211,7 +212,11 @@ struct Pending {
     material: u32,
     wi: DVec3,
     wo: DVec3,
+    /// The hero's density of `wo` (a mixture's, where the vertex aimed at casters).
     pdf: f64,
+    /// (1 − c, c·p_cones(wo)) of a vertex that aimed a share c of its samples
+    /// at casters ([`crate::guide`]); (1, 0) where it did not.
+    guide: (f64, f64),
 }
 
 /// Traces camera sample `sample` of pixel (`x`, `y`).
@@ -702,9 +707,10 @@ impl Throughput {
             let mut fp = [(0.0, 0.0); N];
             bxdf.eval_pdf_many(p.wi, p.wo, &lambdas[1..n], &mut fp[1..n]);
             let pairs = self.t[1..n].iter_mut().zip(&mut self.q[1..n]);
+            let (keep, g) = p.guide;
             for ((t, q), &(f, pdf)) in pairs.zip(&fp[1..n]) {
                 *t *= f * p.wo.z / p.pdf;
-                *q *= pdf / p.pdf;
+                *q *= (keep * pdf + g) / p.pdf;
             }
         }
     }
@@ -939,11 +945,20 @@ impl<'a> FlatPath<'a> {
         tables: &SpectralTables,
         vertex: FlatVertex<'a>,
         v: &Vertex,
+        cones: Option<Cones>,
         sampler: &mut Sampler,
     ) -> Option<Ray> {
         let (bx, own) = match vertex {
             FlatVertex::Free(b) => (b, None),
             FlatVertex::Fresnel(b, table, fresnel) => (b, Some((table, fresnel))),
+        };
+        let guided;
+        let bx: &dyn Bxdf = match cones {
+            Some(cones) => {
+                guided = Guided { inner: bx, cones };
+                &guided
+            }
+            None => bx,
         };
         let settings = &scene.settings;
         let wi = v.wi;
@@ -1089,7 +1104,8 @@ fn trace_flat(
         let Some(vertex) = flat_vertex(scene, tables, m, path.conductor.is_some(), v.wi) else {
             return path.hand_over(scene, ray, h, sampler, u_lambda, depth);
         };
-        let Some(next) = path.scatter(scene, tables, vertex, &v, sampler) else {
+        let cones = scene.casters.cones(m, v.p, |d| v.frame.to_local(d));
+        let Some(next) = path.scatter(scene, tables, vertex, &v, cones, sampler) else {
             break;
         };
         if depth + 1 >= settings.rr_depth && !path.survives(sampler) {
@@ -1374,11 +1390,22 @@ fn trace(
         if depth == settings.max_depth {
             break;
         }
-        let bxdf = &scene.materials[m as usize].bxdf;
         let Some(v) = Vertex::new(&hit, &ray) else {
             break;
         };
         let wi = v.wi;
+        let cones = scene.casters.cones(m, v.p, |d| v.frame.to_local(d));
+        let guided;
+        let bxdf: &dyn Bxdf = match cones {
+            Some(cones) => {
+                guided = Guided {
+                    inner: &*scene.materials[m as usize].bxdf,
+                    cones,
+                };
+                &guided
+            }
+            None => &*scene.materials[m as usize].bxdf,
+        };
         th.resolve(scene, lambdas, n);
         th.peak = lobe_peak(settings.mis_light_weight, bxdf, wi);
         let mis = VertexMis::new(settings, th.peak);
@@ -1397,7 +1424,7 @@ fn trace(
             &v,
             u_light,
             mis,
-            |wo, is_delta| nee_bsdf(&**bxdf, wi, wo, is_delta, &lambdas[..n], &q[..n]),
+            |wo, is_delta| nee_bsdf(bxdf, wi, wo, is_delta, &lambdas[..n], &q[..n]),
             |ls, wo, w, fp| {
                 let mut e = [0.0; N];
                 ls.emission.eval_many(&lambdas[..n], &mut e[..n]);
@@ -1451,6 +1478,10 @@ fn trace(
                 wi,
                 wo: s.wo,
                 pdf: s.pdf,
+                guide: cones.map_or((1.0, 0.0), |c| {
+                    let (share, g) = c.weighted_pdf(s.wo);
+                    (1.0 - share, g)
+                }),
             });
         }
 
