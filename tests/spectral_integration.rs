@@ -13,8 +13,11 @@
 //! where the path goes on with sampled wavelengths. The two must agree in
 //! the mean within their statistical error, on every XYZ channel.
 
+#[path = "support/paired.rs"]
+mod paired;
+
+use paired::paired;
 use render::Scene;
-use render::integrator::sample_pixel;
 use std::path::Path;
 
 const CAMERA: &str = r#"
@@ -43,47 +46,6 @@ transform = {{ rotate_deg = [-90.0, 0.0, 0.0] }}
 "
     );
     render::load_str(path, &text).unwrap()
-}
-
-/// Per channel over the image: the means of the two scenes' estimates and
-/// the mean of their difference with its standard error. Both draw the same
-/// random numbers for the same sample (the wavelengths have their own
-/// reserved draw), so the difference is paired: its error is that of the
-/// part of the estimate that differs (the spectral noise), which makes the
-/// comparison far sharper than two independent means would be. The error
-/// comes from per-pixel variances, so pixel-to-pixel differences do not
-/// inflate it.
-fn paired(a: &Scene, b: &Scene, spp: u64) -> [(f64, f64, f64, f64); 3] {
-    let (w, h) = (a.camera.width, a.camera.height);
-    let pixels = (w * h) as f64;
-    let mut out = [(0.0, 0.0, 0.0, 0.0); 3];
-    for y in 0..h {
-        for x in 0..w {
-            let mut sum = [[0.0; 3]; 3];
-            let mut sq = [0.0; 3];
-            for s in 0..spp {
-                let va = sample_pixel(a, x, y, s);
-                let vb = sample_pixel(b, x, y, s);
-                for c in 0..3 {
-                    let d = va[c] - vb[c];
-                    sum[0][c] += va[c];
-                    sum[1][c] += vb[c];
-                    sum[2][c] += d;
-                    sq[c] += d * d;
-                }
-            }
-            let n = spp as f64;
-            for c in 0..3 {
-                let mean = sum[2][c] / n;
-                let var = (sq[c] / n - mean * mean).max(0.0) * n / (n - 1.0);
-                out[c].0 += sum[0][c] / n / pixels;
-                out[c].1 += sum[1][c] / n / pixels;
-                out[c].2 += mean / pixels;
-                out[c].3 += var / n / (pixels * pixels);
-            }
-        }
-    }
-    out.map(|(ma, mb, d, v)| (ma, mb, d, v.sqrt()))
 }
 
 fn agree(name: &str, body: &str, floor: (&str, f64), spp: u64) {

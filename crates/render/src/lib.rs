@@ -23,6 +23,7 @@ pub mod error;
 pub mod film;
 pub mod geometry;
 pub mod glossy_lambda_table;
+pub mod guide;
 pub mod inputs;
 pub mod integrator;
 pub mod interrupt;

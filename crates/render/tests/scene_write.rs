@@ -174,9 +174,10 @@ fn integrator() -> impl Strategy<Value = IntegratorDesc> {
         proptest::option::of(finite()),
         any::<bool>(),
         proptest::option::of(any::<u32>()),
+        proptest::option::of(finite()),
     )
         .prop_map(
-            |(depth, single, hero, rr, indep, balance, w, sampled, dps)| IntegratorDesc {
+            |(depth, single, hero, rr, indep, balance, w, sampled, dps, guide)| IntegratorDesc {
                 max_depth: spanless(depth),
                 wavelengths: if single {
                     WavelengthMode::Single
@@ -202,6 +203,7 @@ fn integrator() -> impl Strategy<Value = IntegratorDesc> {
                     SpectralIntegration::Auto
                 },
                 delta_pixel_samples: dps.map(spanless),
+                caustic_guiding: guide.map(spanless),
             },
         )
 }

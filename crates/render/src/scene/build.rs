@@ -12,6 +12,7 @@ use super::{ESTIMATOR, Scene, Settings};
 use crate::camera::Camera;
 use crate::error::SceneError;
 use crate::geometry::{Planar, Sphere, Transform};
+use crate::guide::{self, Casters};
 use crate::inputs::{self, Inputs};
 use crate::light::{EnvMap, Environment, LightKind, Lights};
 use crate::material::{Material, build_material};
@@ -54,6 +55,7 @@ pub(super) fn build(path: &Path, text: &str, desc: &SceneDesc) -> Result<Scene, 
     let mut settings = settings;
     let bands = std::mem::take(&mut settings.spectral_bands);
     let n_tris: usize = shapes.meshes.iter().map(|m| m.triangles.len()).sum();
+    let casters = casters(&shapes, &b.materials, settings.caustic_guiding);
     let shapes = Shapes {
         planars: shapes.planars,
         spheres: shapes.spheres,
@@ -161,7 +163,7 @@ pub(super) fn build(path: &Path, text: &str, desc: &SceneDesc) -> Result<Scene, 
         .map(|m| format!("{} ({})", m.name, m.model.name()))
         .collect();
     let prepared = format!(
-        "prepared {}: {}×{} px, {} material(s) [{}], {} analytic shape(s), {}, {} light(s){}, λ {lo:.0}–{hi:.0} nm{}, {} per path{}, in {:.1} ms",
+        "prepared {}: {}×{} px, {} material(s) [{}], {} analytic shape(s), {}, {} light(s){}, λ {lo:.0}–{hi:.0} nm{}, {} per path{}{}, in {:.1} ms",
         path.display(),
         camera.width,
         camera.height,
@@ -186,6 +188,15 @@ pub(super) fn build(path: &Path, text: &str, desc: &SceneDesc) -> Result<Scene, 
         },
         settings.wavelengths_per_path(),
         spectral_summary,
+        if casters.is_empty() {
+            String::new()
+        } else {
+            format!(
+                ", {:.0} % of diffuse samples aimed at {} glossy object(s)",
+                100.0 * settings.caustic_guiding,
+                casters.len()
+            )
+        },
         start.elapsed().as_secs_f64() * 1e3
     );
 
@@ -205,6 +216,7 @@ pub(super) fn build(path: &Path, text: &str, desc: &SceneDesc) -> Result<Scene, 
         lights,
         wavelengths,
         spectral,
+        casters,
         fingerprint,
         inputs,
         prepared,
@@ -216,6 +228,42 @@ pub(super) fn build(path: &Path, text: &str, desc: &SceneDesc) -> Result<Scene, 
             .map_err(|m| SceneError::new(path, format!("[film]: {m}")))?;
     }
     Ok(scene)
+}
+
+/// The glossy objects of `shapes` that diffuse and rough-plastic
+/// surfaces aim `share` of their samples at ([`crate::guide`]): one
+/// bounding sphere per analytic shape and per mesh file of a glossy
+/// material.
+fn casters(shapes: &ShapeLists, materials: &[Material], share: f64) -> Casters {
+    let roles: Vec<Option<bool>> = materials
+        .iter()
+        .map(|m| guide::role(m.model, m.bxdf.lobe_peak_pdf(DVec3::Z)))
+        .collect();
+    let glossy =
+        |s: &Surface| matches!(s, Surface::Material(m) if roles[*m as usize] == Some(false));
+    let mut spheres: Vec<(DVec3, f64)> = Vec::new();
+    for (p, s) in &shapes.planars {
+        if glossy(s) {
+            spheres.push((
+                p.center,
+                p.half.0.hypot(if p.disk { 0.0 } else { p.half.1 }),
+            ));
+        }
+    }
+    for (sp, s) in &shapes.spheres {
+        if glossy(s) {
+            spheres.push((sp.center, sp.radius));
+        }
+    }
+    for m in &shapes.meshes {
+        if glossy(&Surface::Material(m.surface)) {
+            spheres.extend(guide::bounding_sphere(
+                m.triangles.iter().flatten().copied(),
+            ));
+        }
+    }
+    let receivers = roles.iter().map(|r| *r == Some(true)).collect();
+    Casters::new(spheres, receivers, share)
 }
 
 /// Shapes as the shape and light stages collect them (meshes not yet in a BVH).
@@ -405,6 +453,21 @@ impl<'a> Builder<'a> {
             Some(k) => *k.get_ref() as usize,
             None => 1,
         };
+        let caustic_guiding = match &integrator.caustic_guiding {
+            Some(c) if !(0.0..=crate::guide::MAX_SHARE).contains(c.get_ref()) => {
+                return Err(self.at(
+                    c.span(),
+                    format!(
+                        "caustic_guiding = {} is invalid: expected 0 to {} (the share of a \
+                         diffuse surface's samples aimed at glossy objects; 0 turns it off)",
+                        c.get_ref(),
+                        crate::guide::MAX_SHARE
+                    ),
+                ));
+            }
+            Some(c) => *c.get_ref(),
+            None => super::DEFAULT_CAUSTIC_GUIDING,
+        };
         let spectral_bands = match &film.spectral_bands {
             Some(n) if *n.get_ref() as usize > crate::film::MAX_BANDS => {
                 return Err(self.at(
@@ -433,6 +496,7 @@ impl<'a> Builder<'a> {
             mis_light_weight,
             spectral_integration: integrator.spectral_integration,
             delta_pixel_samples,
+            caustic_guiding,
             exr: film.exr.clone(),
             png: film.png.clone(),
             exposure,

@@ -238,6 +238,11 @@ pub struct IntegratorDesc {
     /// ([`Settings::delta_pixel_samples`](super::Settings::delta_pixel_samples)).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub delta_pixel_samples: Option<Spanned<u32>>,
+    /// Share of the BSDF samples of diffuse and rough-plastic surfaces
+    /// aimed at glossy objects, 0–0.9 (default 0: off)
+    /// ([`Settings::caustic_guiding`](super::Settings::caustic_guiding)).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub caustic_guiding: Option<Spanned<f64>>,
 }
 
 /// How the integral over λ is estimated.
@@ -288,6 +293,7 @@ impl Default for IntegratorDesc {
             mis_light_weight: None,
             spectral_integration: SpectralIntegration::Auto,
             delta_pixel_samples: None,
+            caustic_guiding: None,
         }
     }
 }

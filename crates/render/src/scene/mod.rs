@@ -16,6 +16,7 @@ pub mod write;
 use crate::camera::Camera;
 use crate::film::Film;
 pub use crate::film::{MAX_EXPOSURE_STOPS, MAX_SPP};
+use crate::guide::Casters;
 pub use crate::inputs;
 use crate::inputs::InputFile;
 use crate::light::Lights;
@@ -40,6 +41,9 @@ pub const ESTIMATOR: &str = "lustre estimator 10";
 /// wavelengths, against ~10⁻⁴ of the peak density without; the second
 /// moment of a colour estimate grows by at most 1/(1 − ⅕).
 pub const BAND_UNIFORM_SHARE: f64 = 0.2;
+
+/// Default `[integrator] caustic_guiding`.
+pub const DEFAULT_CAUSTIC_GUIDING: f64 = 0.0;
 
 /// Render settings from `[film]` and `[integrator]`.
 #[derive(Clone, Debug)]
@@ -77,6 +81,11 @@ pub struct Settings {
     /// sample (a camera ray and a mirror ray each), for the sharp edge of a
     /// small light's mirror image (`integrator::delta_over_pixel`).
     pub delta_pixel_samples: usize,
+    /// `[integrator] caustic_guiding` (default [`DEFAULT_CAUSTIC_GUIDING`]):
+    /// the share of the BSDF samples of diffuse and rough-plastic surfaces
+    /// drawn toward glossy objects instead of from the BSDF, weighted by the
+    /// mixture's density ([`crate::guide`]). 0 turns it off.
+    pub caustic_guiding: f64,
     /// EXR output path.
     pub exr: Option<PathBuf>,
     /// PNG output path.
@@ -119,6 +128,8 @@ pub struct Scene {
     /// when some material is Fresnel-only or λ-free and
     /// `spectral_integration = "auto"`.
     pub spectral: Option<SpectralTables>,
+    /// The glossy objects diffuse surfaces aim a share of their samples at.
+    pub casters: Casters,
     /// Hash of everything that determines the per-sample values (not spp or outputs).
     pub fingerprint: u64,
     /// The files the scene was built from, with their hashes (the scene file
