@@ -80,6 +80,17 @@ impl Transform {
     }
 }
 
+/// Where a ray meets a [`Planar`] shape.
+#[derive(Clone, Copy, Debug)]
+pub struct PlanarHit {
+    /// Ray parameter.
+    pub t: f64,
+    /// In-plane coordinate of the hit along the shape's `u` axis, from its centre.
+    pub a: f64,
+    /// In-plane coordinate along `v`.
+    pub b: f64,
+}
+
 /// A planar shape: a rectangle or disk in the plane through `center`
 /// spanned by `u`, `v` with normal `n = u × v`.
 #[derive(Clone, Copy, Debug)]
@@ -138,6 +149,15 @@ impl Planar {
     /// Nearest hit with `t` in `(t_min, t_max)`.
     #[inline]
     pub fn intersect(&self, ray: &Ray, t_min: f64, t_max: f64) -> Option<SurfacePoint> {
+        let h = self.hit(ray, t_min, t_max)?;
+        Some(self.point_at(ray, h.t))
+    }
+
+    /// The `t` of [`Planar::intersect`] and the hit's in-plane coordinates,
+    /// without the surface point: what a shadow test, or a search for the
+    /// nearest of several shapes, needs.
+    #[inline]
+    pub fn hit(&self, ray: &Ray, t_min: f64, t_max: f64) -> Option<PlanarHit> {
         let denom = ray.d.dot(self.n);
         if denom.abs() < 1e-14 {
             return None;
@@ -146,20 +166,25 @@ impl Planar {
         if !(t > t_min && t < t_max) {
             return None;
         }
-        let p = ray.at(t);
-        let r = p - self.center;
+        let r = ray.at(t) - self.center;
         let (a, b) = (r.dot(self.u), r.dot(self.v));
         let inside = if self.disk {
             a * a + b * b <= self.half.0 * self.half.0
         } else {
             a.abs() <= self.half.0 && b.abs() <= self.half.1
         };
-        inside.then_some(SurfacePoint {
+        inside.then_some(PlanarHit { t, a, b })
+    }
+
+    /// The surface point at distance `t` along `ray` (a `t` from [`Planar::hit`]).
+    #[inline]
+    pub fn point_at(&self, ray: &Ray, t: f64) -> SurfacePoint {
+        SurfacePoint {
             t,
-            p,
+            p: ray.at(t),
             n: self.n,
             tangent: self.u,
-        })
+        }
     }
 
     /// Texture coordinates of a point on the shape, as Mitsuba's: a rectangle's
@@ -167,7 +192,13 @@ impl Planar {
     /// φ from `u` towards `v` in [0, 2π).
     pub fn uv(&self, p: DVec3) -> [f64; 2] {
         let r = p - self.center;
-        let (a, b) = (r.dot(self.u), r.dot(self.v));
+        self.uv_in_plane(r.dot(self.u), r.dot(self.v))
+    }
+
+    /// [`Planar::uv`] of the point at in-plane coordinates (`a`, `b`) (along
+    /// `u` and `v` from the centre; a [`PlanarHit`]'s).
+    #[inline]
+    pub fn uv_in_plane(&self, a: f64, b: f64) -> [f64; 2] {
         if self.disk {
             [a.hypot(b) / self.half.0, turn_fraction(b.atan2(a))]
         } else {
@@ -255,15 +286,16 @@ impl Sphere {
     pub fn hit_distance(&self, ray: &Ray, t_min: f64, t_max: f64) -> Option<f64> {
         let oc = ray.o - self.center;
         let b = oc.dot(ray.d);
-        // c via (|oc| − r)(|oc| + r) avoids cancellation for far origins.
-        let len = oc.length();
-        let c = (len - self.radius) * (len + self.radius);
         // Discriminant from the perpendicular distance (Haines et al., Ray Tracing Gems ch. 7).
         let perp = oc - b * ray.d;
         let disc = self.radius * self.radius - perp.length_squared();
         if disc < 0.0 {
             return None;
         }
+        // c via (|oc| − r)(|oc| + r) avoids cancellation for far origins;
+        // its square root only for rays that meet the sphere.
+        let len = oc.length();
+        let c = (len - self.radius) * (len + self.radius);
         let sq = disc.sqrt();
         let q = -b - sq.copysign(b);
         let (t0, t1) = {
