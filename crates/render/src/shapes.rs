@@ -57,8 +57,15 @@ impl Checker {
     /// Whether (u, v) lies on a ρ0 square.
     #[inline]
     pub fn color0_at(&self, uv: [f64; 2]) -> bool {
-        let i = (uv[0] * self.tiles[0]).floor();
-        let j = (uv[1] * self.tiles[1]).floor();
+        self.color0_in([
+            (uv[0] * self.tiles[0]).floor(),
+            (uv[1] * self.tiles[1]).floor(),
+        ])
+    }
+
+    /// Whether square (i, j) is a ρ0 square.
+    #[inline]
+    pub fn color0_in(&self, [i, j]: [f64; 2]) -> bool {
         (i + j).rem_euclid(2.0) == 0.0
     }
 }
@@ -146,11 +153,30 @@ impl Shapes {
         if !self.checkers.is_empty()
             && let Surface::Material(m) = hit.surface
             && let Some(Some(c)) = self.checkers.get(m as usize)
-            && c.color0_at(self.uv(struck, hit.geo.p))
+            && self.color0(c, struck, hit.geo.p)
         {
             hit.surface = Surface::Material(c.color0);
         }
         Some(hit)
+    }
+
+    /// Whether point `p` of the struck shape lies on checkerboard `c`'s ρ0
+    /// squares. The square from the shape's coordinates where they decide
+    /// it, which saves a disk's `hypot` and `atan2` and a sphere's `atan2`
+    /// and `acos`; the texture coordinates' rule near the squares' edges.
+    #[inline]
+    fn color0(&self, c: &Checker, struck: Struck, p: DVec3) -> bool {
+        let square = match struck {
+            Struck::Analytic(Analytic::Planar(k, a, b)) => {
+                self.planars[k].0.checker_square(a, b, c.tiles)
+            }
+            Struck::Analytic(Analytic::Sphere(k)) => self.spheres[k].0.checker_square(p, c.tiles),
+            Struck::Triangle(_) => None,
+        };
+        match square {
+            Some(square) => c.color0_in(square),
+            None => c.color0_at(self.uv(struck, p)),
+        }
     }
 
     /// Texture coordinates of point `p` on the struck shape.
