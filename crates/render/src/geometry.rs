@@ -80,6 +80,17 @@ impl Transform {
     }
 }
 
+/// Where a ray meets a [`Planar`] shape.
+#[derive(Clone, Copy, Debug)]
+pub struct PlanarHit {
+    /// Ray parameter.
+    pub t: f64,
+    /// In-plane coordinate of the hit along the shape's `u` axis, from its centre.
+    pub a: f64,
+    /// In-plane coordinate along `v`.
+    pub b: f64,
+}
+
 /// A planar shape: a rectangle or disk in the plane through `center`
 /// spanned by `u`, `v` with normal `n = u × v`.
 #[derive(Clone, Copy, Debug)]
@@ -138,6 +149,15 @@ impl Planar {
     /// Nearest hit with `t` in `(t_min, t_max)`.
     #[inline]
     pub fn intersect(&self, ray: &Ray, t_min: f64, t_max: f64) -> Option<SurfacePoint> {
+        let h = self.hit(ray, t_min, t_max)?;
+        Some(self.point_at(ray, h.t))
+    }
+
+    /// The `t` of [`Planar::intersect`] and the hit's in-plane coordinates,
+    /// without the surface point: what a shadow test, or a search for the
+    /// nearest of several shapes, needs.
+    #[inline]
+    pub fn hit(&self, ray: &Ray, t_min: f64, t_max: f64) -> Option<PlanarHit> {
         let denom = ray.d.dot(self.n);
         if denom.abs() < 1e-14 {
             return None;
@@ -146,20 +166,25 @@ impl Planar {
         if !(t > t_min && t < t_max) {
             return None;
         }
-        let p = ray.at(t);
-        let r = p - self.center;
+        let r = ray.at(t) - self.center;
         let (a, b) = (r.dot(self.u), r.dot(self.v));
         let inside = if self.disk {
             a * a + b * b <= self.half.0 * self.half.0
         } else {
             a.abs() <= self.half.0 && b.abs() <= self.half.1
         };
-        inside.then_some(SurfacePoint {
+        inside.then_some(PlanarHit { t, a, b })
+    }
+
+    /// The surface point at distance `t` along `ray` (a `t` from [`Planar::hit`]).
+    #[inline]
+    pub fn point_at(&self, ray: &Ray, t: f64) -> SurfacePoint {
+        SurfacePoint {
             t,
-            p,
+            p: ray.at(t),
             n: self.n,
             tangent: self.u,
-        })
+        }
     }
 
     /// Texture coordinates of a point on the shape, as Mitsuba's: a rectangle's
@@ -167,12 +192,41 @@ impl Planar {
     /// φ from `u` towards `v` in [0, 2π).
     pub fn uv(&self, p: DVec3) -> [f64; 2] {
         let r = p - self.center;
-        let (a, b) = (r.dot(self.u), r.dot(self.v));
+        self.uv_in_plane(r.dot(self.u), r.dot(self.v))
+    }
+
+    /// [`Planar::uv`] of the point at in-plane coordinates (`a`, `b`) (along
+    /// `u` and `v` from the centre; a [`PlanarHit`]'s).
+    #[inline]
+    pub fn uv_in_plane(&self, a: f64, b: f64) -> [f64; 2] {
         if self.disk {
             [a.hypot(b) / self.half.0, turn_fraction(b.atan2(a))]
         } else {
             [0.5 * (a / self.half.0 + 1.0), 0.5 * (b / self.half.1 + 1.0)]
         }
+    }
+
+    /// The square (⌊u·tiles₀⌋, ⌊v·tiles₁⌋) of a checkerboard over the
+    /// [`Planar::uv_in_plane`] of in-plane coordinates (`a`, `b`), or `None`
+    /// where a disk's point lies too close to a square's edge to decide it
+    /// without that rule's `hypot` and `atan2` (about one point in 10⁵).
+    /// A rectangle's square is the rule's own.
+    #[inline]
+    pub fn checker_square(&self, a: f64, b: f64, tiles: [f64; 2]) -> Option<[f64; 2]> {
+        if !self.disk {
+            let uv = self.uv_in_plane(a, b);
+            return Some([(uv[0] * tiles[0]).floor(), (uv[1] * tiles[1]).floor()]);
+        }
+        // √(a² + b²) is within a few ulps of `hypot` while a² + b² is a
+        // normal number.
+        let q = a * a + b * b;
+        if q.is_nan() || q < f64::MIN_POSITIVE {
+            return None;
+        }
+        let r = q.sqrt() / self.half.0 * tiles[0];
+        let i = floor_clear_of(r, 1e-12 * r.max(1.0))?;
+        let j = turn_square(approx_atan2(b, a), tiles[1])?;
+        Some([i, j])
     }
 
     /// A uniformly distributed point on the shape.
@@ -198,6 +252,64 @@ impl Planar {
                 + (2.0 * u[1] - 1.0) * self.half.1 * self.v
         }
     }
+}
+
+/// atan t ≈ t·P(t²) on [0, 1]: the coefficients of P (odd degree 15 in t,
+/// least squares reweighted toward equal ripple), off by at most 3.8·10⁻⁸ rad.
+const ATAN_P: [f64; 8] = [
+    0.999_999_335_560_249_4,
+    -0.333_298_607_124_270_23,
+    0.199_465_648_327_723_23,
+    -0.139_086_254_699_082_62,
+    0.096_421_869_398_986_31,
+    -0.055_912_185_655_117_35,
+    0.021_862_860_538_373_996,
+    -0.004_054_540_420_073_152,
+];
+
+/// How far [`approx_atan2`] may be from `atan2`, in radians: 26 times the
+/// polynomial's error, which leaves round-off far behind
+/// (`approx_atan2_is_within_its_tolerance`).
+const ATAN_TOLERANCE: f64 = 1e-6;
+
+/// atan2(`y`, `x`) in [−π, π] to within [`ATAN_TOLERANCE`], without libm:
+/// a polynomial on [0, 1] and the octant's reflections. NaN at the origin.
+/// Where a checkerboard's square is all that is wanted, this decides it
+/// for all but the points within the tolerance of an edge.
+#[inline]
+fn approx_atan2(y: f64, x: f64) -> f64 {
+    let (ax, ay) = (x.abs(), y.abs());
+    let t = ax.min(ay) / ax.max(ay);
+    let s = t * t;
+    let p = ATAN_P.iter().rev().fold(0.0, |acc, &c| acc * s + c);
+    let mut a = t * p;
+    if ay > ax {
+        a = std::f64::consts::FRAC_PI_2 - a;
+    }
+    if x < 0.0 {
+        a = std::f64::consts::PI - a;
+    }
+    if y < 0.0 { -a } else { a }
+}
+
+/// ⌊`s`⌋ if `s` is farther than `margin` from every integer (and not NaN).
+#[inline]
+fn floor_clear_of(s: f64, margin: f64) -> Option<f64> {
+    let i = s.floor();
+    (s - i > margin && i + 1.0 - s > margin).then_some(i)
+}
+
+/// ⌊turn_fraction(φ)·`tiles`⌋ from an [`approx_atan2`] angle `phi`: `None`
+/// within its tolerance of a square's edge or of the turn's wrap at φ = 0.
+#[inline]
+fn turn_square(phi: f64, tiles: f64) -> Option<f64> {
+    let m = ATAN_TOLERANCE / std::f64::consts::TAU;
+    let f = phi / std::f64::consts::TAU;
+    let f = if f < 0.0 { f + 1.0 } else { f };
+    if !(f > m && f < 1.0 - m) {
+        return None;
+    }
+    floor_clear_of(f * tiles, m * tiles)
 }
 
 /// An angle from `atan2` (in [−π, π]) as a fraction of a turn in [0, 1).
@@ -249,21 +361,43 @@ impl Sphere {
         [turn_fraction(d.y.atan2(d.x)), theta / std::f64::consts::PI]
     }
 
+    /// The square (⌊u·tiles₀⌋, ⌊v·tiles₁⌋) of a checkerboard over the
+    /// [`Sphere::uv`] of point `p`, or `None` where `p` lies too close to a
+    /// square's edge or a pole to decide it without that rule's `atan2` and
+    /// `acos` (about one point in 10⁵).
+    #[inline]
+    pub fn checker_square(&self, p: DVec3, tiles: [f64; 2]) -> Option<[f64; 2]> {
+        let d = (p - self.center) / self.radius;
+        let i = turn_square(approx_atan2(d.y, d.x), tiles[0])?;
+        // acos z = atan2(√((1 − z)(1 + z)), z): a function of z alone, as the
+        // rule's is, whether or not d is of unit length.
+        let z = d.z.clamp(-1.0, 1.0);
+        let theta = approx_atan2(((1.0 - z) * (1.0 + z)).sqrt(), z);
+        let m = ATAN_TOLERANCE / std::f64::consts::PI;
+        let v = theta / std::f64::consts::PI;
+        if v.is_nan() || v <= m {
+            return None;
+        }
+        let j = floor_clear_of(v * tiles[1], m * tiles[1])?;
+        Some([i, j])
+    }
+
     /// The `t` of [`Sphere::intersect`] alone (no point, normal or tangent):
     /// what a light sample or a shadow test needs.
     #[inline]
     pub fn hit_distance(&self, ray: &Ray, t_min: f64, t_max: f64) -> Option<f64> {
         let oc = ray.o - self.center;
         let b = oc.dot(ray.d);
-        // c via (|oc| − r)(|oc| + r) avoids cancellation for far origins.
-        let len = oc.length();
-        let c = (len - self.radius) * (len + self.radius);
         // Discriminant from the perpendicular distance (Haines et al., Ray Tracing Gems ch. 7).
         let perp = oc - b * ray.d;
         let disc = self.radius * self.radius - perp.length_squared();
         if disc < 0.0 {
             return None;
         }
+        // c via (|oc| − r)(|oc| + r) avoids cancellation for far origins;
+        // its square root only for rays that meet the sphere.
+        let len = oc.length();
+        let c = (len - self.radius) * (len + self.radius);
         let sq = disc.sqrt();
         let q = -b - sq.copysign(b);
         let (t0, t1) = {
@@ -314,6 +448,122 @@ mod tests {
         // Just below the −x axis the turn is just below 1, never 1 or above.
         let u = s.uv(DVec3::new(-2.0, -1e-300, 1.0))[0];
         assert!((0.5..1.0).contains(&u), "{u}");
+    }
+
+    #[test]
+    fn approx_atan2_is_within_its_tolerance() {
+        // Every direction around the circle (a million, at lengths from
+        // 1e−3 to 1e3), the axes and the octants' edges.
+        let mut worst: f64 = 0.0;
+        let n = 1_000_000;
+        for k in 0..=n {
+            let phi = -std::f64::consts::PI + std::f64::consts::TAU * k as f64 / n as f64;
+            let len = 10f64.powi(k % 7 - 3);
+            let (y, x) = (len * phi.sin(), len * phi.cos());
+            worst = worst.max((approx_atan2(y, x) - y.atan2(x)).abs());
+        }
+        for (y, x) in [
+            (0.0, 1.0),
+            (1.0, 0.0),
+            (0.0, -1.0),
+            (-1.0, 0.0),
+            (1.0, 1.0),
+            (-1.0, -1.0),
+        ] {
+            worst = worst.max((approx_atan2(y, x) - f64::atan2(y, x)).abs());
+        }
+        // The polynomial's own error, which the tolerance is 26 times.
+        assert!(worst < 3.9e-8, "{worst:e}");
+        assert!(worst * 25.0 < ATAN_TOLERANCE);
+        assert!(approx_atan2(0.0, 0.0).is_nan());
+    }
+
+    /// Where `checker_square` decides a square it is the square of the
+    /// texture coordinates' rule, ⌊uv·tiles⌋, for points all over disks and
+    /// spheres and at every square's edges (at and within 1e−15…1e−5 rad or
+    /// relative of them), and it decides nearly every point.
+    #[test]
+    fn checker_squares_are_the_texture_coordinates_squares() {
+        use std::f64::consts::{PI, TAU};
+        let rule = |uv: [f64; 2], tiles: [f64; 2]| {
+            [(uv[0] * tiles[0]).floor(), (uv[1] * tiles[1]).floor()]
+        };
+        let mut rng = brdf::numerics::splitmix::SplitMix64::new(11);
+        let offsets = [
+            0.0, 1e-15, -1e-15, 1e-12, -1e-12, 1e-9, -1e-9, 3e-8, -3e-8, 1e-7, -1e-7, 1e-6, -1e-6,
+            1e-5, -1e-5,
+        ];
+        let (mut decided, mut random) = (0usize, 0usize);
+        for tiles in [
+            [4.0, 6.0],
+            [8.0, 4.0],
+            [6.0, 4.0],
+            [3.7, 12.5],
+            [1.0, 7.0],
+            [16.0, 9.3],
+        ] {
+            let xf = Transform::new([30.0, -70.0, 10.0], 1.3, [0.2, -0.4, 0.1]);
+            let disk = Planar::disk(0.7, &xf);
+            let sphere = Sphere {
+                center: DVec3::new(0.3, 0.35, -0.2),
+                radius: 0.35,
+            };
+            let mut check = |r: f64, phi: f64, theta: f64, count: bool| {
+                // The disk at polar (r, φ), through the same arithmetic as a hit.
+                let p = disk.center + r * phi.cos() * disk.u + r * phi.sin() * disk.v;
+                let q = p - disk.center;
+                let (a, b) = (q.dot(disk.u), q.dot(disk.v));
+                if let Some(sq) = disk.checker_square(a, b, tiles) {
+                    assert_eq!(
+                        sq,
+                        rule(disk.uv_in_plane(a, b), tiles),
+                        "disk {tiles:?} {r} {phi}"
+                    );
+                    decided += usize::from(count);
+                }
+                let dir = DVec3::new(
+                    theta.sin() * phi.cos(),
+                    theta.sin() * phi.sin(),
+                    theta.cos(),
+                );
+                let p = sphere.center + sphere.radius * dir;
+                if let Some(sq) = sphere.checker_square(p, tiles) {
+                    assert_eq!(
+                        sq,
+                        rule(sphere.uv(p), tiles),
+                        "sphere {tiles:?} {phi} {theta}"
+                    );
+                    decided += usize::from(count);
+                }
+                random += 2 * usize::from(count);
+            };
+            for _ in 0..50_000 {
+                let (r, phi, theta) = (
+                    0.7 * rng.uniform().sqrt(),
+                    TAU * rng.uniform(),
+                    PI * rng.uniform(),
+                );
+                check(r, phi, theta, true);
+            }
+            // The edges: φ = 2πk/tiles, r = 0.7k/tiles₀, θ = πk/tiles₁.
+            for k in 0..=tiles[0].max(tiles[1]).ceil() as i32 {
+                for &e in &offsets {
+                    let phi_u = TAU * k as f64 / tiles[0] + e;
+                    let phi_v = TAU * k as f64 / tiles[1] + e;
+                    let r = 0.7 * (k as f64 / tiles[0]).min(1.0) * (1.0 - e.abs());
+                    let theta = (PI * k as f64 / tiles[1] + e).clamp(0.0, PI);
+                    let (r0, t0) = (0.7 * rng.uniform(), PI * rng.uniform());
+                    check(r, TAU * rng.uniform(), t0, false);
+                    check(r0, phi_v, t0, false);
+                    check(r0, phi_u, theta, false);
+                    check(r0 * (1.0 + e), -phi_v, PI - theta, false);
+                }
+            }
+        }
+        assert!(
+            decided as f64 > 0.9995 * random as f64,
+            "{decided} of {random}"
+        );
     }
 
     #[test]

@@ -57,8 +57,15 @@ impl Checker {
     /// Whether (u, v) lies on a ρ0 square.
     #[inline]
     pub fn color0_at(&self, uv: [f64; 2]) -> bool {
-        let i = (uv[0] * self.tiles[0]).floor();
-        let j = (uv[1] * self.tiles[1]).floor();
+        self.color0_in([
+            (uv[0] * self.tiles[0]).floor(),
+            (uv[1] * self.tiles[1]).floor(),
+        ])
+    }
+
+    /// Whether square (i, j) is a ρ0 square.
+    #[inline]
+    pub fn color0_in(&self, [i, j]: [f64; 2]) -> bool {
         (i + j).rem_euclid(2.0) == 0.0
     }
 }
@@ -78,11 +85,18 @@ pub struct Shapes {
     pub checkers: Vec<Option<Checker>>,
 }
 
+/// The nearest analytic shape along a ray.
+#[derive(Clone, Copy)]
+enum Analytic {
+    /// Planar shape `.0`, at in-plane coordinates (`.1`, `.2`).
+    Planar(usize, f64, f64),
+    Sphere(usize),
+}
+
 /// Which shape a hit is on, for its texture coordinates.
 #[derive(Clone, Copy)]
 enum Struck {
-    Planar(usize),
-    Sphere(usize),
+    Analytic(Analytic),
     Triangle(usize),
 }
 
@@ -95,31 +109,24 @@ impl Shapes {
     /// Nearest hit along `ray` in `(0, t_max)`.
     #[inline]
     pub fn intersect(&self, ray: &Ray, t_max: f64) -> Option<Hit> {
-        let mut best: Option<(Hit, Struck)> = None;
+        // The nearest analytic shape by distance alone; its point, normal
+        // and tangent (for a sphere a normalisation and a division each) only
+        // for the one that wins, instead of a 120-byte hit per candidate.
         let mut t_max = t_max;
-        for (k, (p, s)) in self.planars.iter().enumerate() {
-            if let Some(g) = p.intersect(ray, 0.0, t_max) {
-                t_max = g.t;
-                best = Some((Hit::analytic(g, *s), Struck::Planar(k)));
+        let mut nearest = None;
+        for (k, (p, _)) in self.planars.iter().enumerate() {
+            if let Some(h) = p.hit(ray, 0.0, t_max) {
+                t_max = h.t;
+                nearest = Some(Analytic::Planar(k, h.a, h.b));
             }
         }
-        // The nearest sphere by distance alone; its point, normal and tangent
-        // (a normalisation and a division each) only for the one that wins.
-        let mut nearest_sphere = None;
         for (i, (sp, _)) in self.spheres.iter().enumerate() {
             if let Some(t) = sp.hit_distance(ray, 0.0, t_max) {
                 t_max = t;
-                nearest_sphere = Some(i);
+                nearest = Some(Analytic::Sphere(i));
             }
         }
-        if let Some(i) = nearest_sphere {
-            let (sp, s) = &self.spheres[i];
-            best = Some((
-                Hit::analytic(sp.point_at(ray, t_max), *s),
-                Struck::Sphere(i),
-            ));
-        }
-        if let Some(m) = &self.mesh
+        let (mut hit, struck) = if let Some(m) = &self.mesh
             && let Some((g, mat, shading_n, id)) = m.intersect(ray, 0.0, t_max)
         {
             let hit = Hit {
@@ -128,24 +135,55 @@ impl Shapes {
                 mesh: true,
                 shading_n,
             };
-            best = Some((hit, Struck::Triangle(id)));
-        }
-        let (mut hit, struck) = best?;
+            (hit, Struck::Triangle(id))
+        } else {
+            let nearest = nearest?;
+            let hit = match nearest {
+                Analytic::Planar(k, ..) => {
+                    let (p, s) = &self.planars[k];
+                    Hit::analytic(p.point_at(ray, t_max), *s)
+                }
+                Analytic::Sphere(i) => {
+                    let (sp, s) = &self.spheres[i];
+                    Hit::analytic(sp.point_at(ray, t_max), *s)
+                }
+            };
+            (hit, Struck::Analytic(nearest))
+        };
         if !self.checkers.is_empty()
             && let Surface::Material(m) = hit.surface
             && let Some(Some(c)) = self.checkers.get(m as usize)
-            && c.color0_at(self.uv(struck, hit.geo.p))
+            && self.color0(c, struck, hit.geo.p)
         {
             hit.surface = Surface::Material(c.color0);
         }
         Some(hit)
     }
 
+    /// Whether point `p` of the struck shape lies on checkerboard `c`'s ρ0
+    /// squares. The square from the shape's coordinates where they decide
+    /// it, which saves a disk's `hypot` and `atan2` and a sphere's `atan2`
+    /// and `acos`; the texture coordinates' rule near the squares' edges.
+    #[inline]
+    fn color0(&self, c: &Checker, struck: Struck, p: DVec3) -> bool {
+        let square = match struck {
+            Struck::Analytic(Analytic::Planar(k, a, b)) => {
+                self.planars[k].0.checker_square(a, b, c.tiles)
+            }
+            Struck::Analytic(Analytic::Sphere(k)) => self.spheres[k].0.checker_square(p, c.tiles),
+            Struck::Triangle(_) => None,
+        };
+        match square {
+            Some(square) => c.color0_in(square),
+            None => c.color0_at(self.uv(struck, p)),
+        }
+    }
+
     /// Texture coordinates of point `p` on the struck shape.
     fn uv(&self, struck: Struck, p: DVec3) -> [f64; 2] {
         match struck {
-            Struck::Planar(k) => self.planars[k].0.uv(p),
-            Struck::Sphere(k) => self.spheres[k].0.uv(p),
+            Struck::Analytic(Analytic::Planar(k, a, b)) => self.planars[k].0.uv_in_plane(a, b),
+            Struck::Analytic(Analytic::Sphere(k)) => self.spheres[k].0.uv(p),
             Struck::Triangle(id) => self.mesh.as_ref().map_or([0.0; 2], |m| m.uv(id, p)),
         }
     }
@@ -160,7 +198,7 @@ impl Shapes {
         let other = |s: &Surface| own != Some(*s);
         self.planars
             .iter()
-            .any(|(p, s)| other(s) && p.intersect(ray, 0.0, t_max).is_some())
+            .any(|(p, s)| other(s) && p.hit(ray, 0.0, t_max).is_some())
             || self
                 .spheres
                 .iter()
@@ -175,7 +213,7 @@ impl Shapes {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::geometry::Transform;
+    use crate::geometry::{SurfacePoint, Transform};
     use crate::light::{LightKind, Lights};
     use crate::rng::Rng;
     use crate::spectrum::Spectrum;
@@ -294,5 +332,79 @@ mod tests {
             2.0,
             Some(Surface::Emitter(0))
         ));
+    }
+
+    #[test]
+    fn the_nearest_hit_is_the_nearest_of_every_shapes_own_hit() {
+        // Overlapping rectangles, disks and spheres, hit from all around:
+        // the search by distance then one surface point must give what
+        // each shape's own `intersect` gives for the nearest of them.
+        let mut rng = Rng::for_sample(3, 4, 5);
+        let mut u = || rng.uniform();
+        let mut planars = Vec::new();
+        let mut spheres = Vec::new();
+        for k in 0..6u32 {
+            let xf = Transform::new(
+                [360.0 * u(), 360.0 * u(), 360.0 * u()],
+                0.5 + u(),
+                [u() - 0.5, u() - 0.5, u() - 0.5],
+            );
+            let p = if k % 2 == 0 {
+                Planar::rectangle([1.0 + u(), 0.5 + u()], &xf)
+            } else {
+                Planar::disk(0.3 + u(), &xf)
+            };
+            planars.push((p, Surface::Material(k)));
+            let c = DVec3::new(u() - 0.5, u() - 0.5, u() - 0.5);
+            spheres.push((
+                Sphere {
+                    center: c,
+                    radius: 0.1 + 0.4 * u(),
+                },
+                Surface::Material(10 + k),
+            ));
+        }
+        let shapes = Shapes {
+            planars: planars.clone(),
+            spheres: spheres.clone(),
+            mesh: None,
+            checkers: Vec::new(),
+        };
+        let (mut hits, mut misses) = (0, 0);
+        for _ in 0..20_000 {
+            let o = (DVec3::new(u(), u(), u()) - 0.5) * 6.0;
+            let d = ((DVec3::new(u(), u(), u()) - 0.5) * 1.2 - o).normalize();
+            let ray = Ray { o, d };
+            let t_max = if u() < 0.2 { 3.0 * u() } else { f64::INFINITY };
+            let mut want: Option<(SurfacePoint, Surface)> = None;
+            let mut near = t_max;
+            for (p, s) in &planars {
+                if let Some(g) = p.intersect(&ray, 0.0, near) {
+                    near = g.t;
+                    want = Some((g, *s));
+                }
+            }
+            for (sp, s) in &spheres {
+                if let Some(g) = sp.intersect(&ray, 0.0, near) {
+                    near = g.t;
+                    want = Some((g, *s));
+                }
+            }
+            let got = shapes.intersect(&ray, t_max);
+            match (got, want) {
+                (None, None) => misses += 1,
+                (Some(h), Some((g, s))) => {
+                    hits += 1;
+                    assert_eq!(h.surface, s);
+                    assert!(h.geo.t == g.t && h.geo.p == g.p, "{:?} {:?}", h.geo, g);
+                    assert!(h.geo.n == g.n && h.geo.tangent == g.tangent);
+                }
+                (h, w) => panic!("ray {ray:?}: {h:?} against {w:?}"),
+            }
+        }
+        assert!(
+            hits > 5_000 && misses > 1_000,
+            "{hits} hits, {misses} misses"
+        );
     }
 }
