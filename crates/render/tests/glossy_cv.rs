@@ -5,12 +5,16 @@
 //! with the builder's), and the renders it changes agree in the mean with
 //! sampled wavelengths, sample by sample.
 
+// The paired comparison of the workspace's end-to-end tests.
+#[path = "../../../tests/support/paired.rs"]
+mod paired;
+
 use glam::DVec3;
+use paired::paired;
 use render::Scene;
 use render::glossy_lambda_table::{
     GEOMETRIC_NODES, LAMBDA_NODES, corners, lambda_node, node_directions, node_geometry,
 };
-use render::integrator::sample_pixel;
 use render::light::{Emission, LightKind};
 use render::spectrum::{Cie, LAMBDA_MAX, LAMBDA_MIN};
 use std::path::PathBuf;
@@ -267,43 +271,6 @@ fn the_exact_part_is_the_interpolants_integral() {
             }
         }
     }
-}
-
-/// Per channel over the image: both scenes' means and their paired
-/// difference with its standard error (as in `tests/spectral_integration.rs`:
-/// the same random numbers per sample, so the difference's noise is only
-/// the part that differs).
-fn paired(a: &Scene, b: &Scene, spp: u64) -> [(f64, f64, f64, f64); 3] {
-    let (w, h) = (a.camera.width, a.camera.height);
-    let pixels = (w * h) as f64;
-    let mut out = [(0.0, 0.0, 0.0, 0.0); 3];
-    for y in 0..h {
-        for x in 0..w {
-            let mut sum = [[0.0; 3]; 3];
-            let mut sq = [0.0; 3];
-            for s in 0..spp {
-                let va = sample_pixel(a, x, y, s);
-                let vb = sample_pixel(b, x, y, s);
-                for c in 0..3 {
-                    let d = va[c] - vb[c];
-                    sum[0][c] += va[c];
-                    sum[1][c] += vb[c];
-                    sum[2][c] += d;
-                    sq[c] += d * d;
-                }
-            }
-            let n = spp as f64;
-            for c in 0..3 {
-                let mean = sum[2][c] / n;
-                let var = (sq[c] / n - mean * mean).max(0.0) * n / (n - 1.0);
-                out[c].0 += sum[0][c] / n / pixels;
-                out[c].1 += sum[1][c] / n / pixels;
-                out[c].2 += mean / pixels;
-                out[c].3 += var / n / (pixels * pixels);
-            }
-        }
-    }
-    out.map(|(ma, mb, d, v)| (ma, mb, d, v.sqrt()))
 }
 
 /// The control variate against sampled wavelengths, sample by sample, on
