@@ -470,6 +470,63 @@ mod tests {
         }
     }
 
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(300))]
+        /// Over the whole accepted domain (shares up to the cap, casters
+        /// anywhere outside the vertex, incidence to grazing, both
+        /// receiving models, any draw): every sample the mixture returns
+        /// leaves above the horizon, with the density and weight that
+        /// `eval_pdf` gives its direction, finite and positive, and a
+        /// direction inside a cone has at least the cones' share of density.
+        #[test]
+        fn every_guided_sample_is_consistent(
+            share in 1e-3f64..=MAX_SHARE,
+            centres in proptest::collection::vec(
+                ((-1.0f64..1.0), (-1.0f64..1.0), (-1.0f64..1.0), (1.01f64..50.0), (1e-3f64..1.0)),
+                1..12,
+            ),
+            theta in 0.0f64..89.99,
+            plastic in proptest::bool::ANY,
+            u in proptest::array::uniform3(0.0f64..1.0),
+        ) {
+            let spheres: Vec<_> = centres
+                .iter()
+                .filter_map(|&(x, y, z, d, r)| {
+                    DVec3::new(x, y, z).try_normalize().map(|c| (c * d, r * d * 0.99))
+                })
+                .collect();
+            proptest::prop_assume!(!spheres.is_empty());
+            let diffuse = Diffuse::new(brdf::Reflectance::Constant(0.7));
+            let coat = RoughPlastic::new(RoughPlasticParams {
+                alpha: 0.15,
+                int_ior: 1.49,
+                ext_ior: 1.0,
+                reflectance: brdf::Reflectance::Constant(0.3),
+                nonlinear: false,
+            })
+            .unwrap();
+            let inner: &dyn Bxdf = if plastic { &coat } else { &diffuse };
+            // More than MAX_CASTERS spheres are merged into one, which may
+            // hold the vertex: then nothing aims.
+            let c = Casters::new(spheres, vec![true], share).cones(0, DVec3::ZERO, |d| d);
+            proptest::prop_assume!(c.is_some() || centres.len() > MAX_CASTERS);
+            let Some(c) = c else {
+                return Ok(());
+            };
+            let g = Guided { inner, cones: c };
+            let wi = unit(theta, 17.0);
+            if let Some(s) = g.sample(wi, 550.0, u) {
+                proptest::prop_assert!(s.wo.z > 0.0 && (s.wo.length() - 1.0).abs() < 1e-12);
+                let (f, p) = g.eval_pdf(wi, s.wo, 550.0);
+                proptest::prop_assert!(p > 0.0 && p.is_finite() && s.weight.is_finite());
+                proptest::prop_assert!((p - s.pdf).abs() <= 1e-12 * p, "{} vs {}", p, s.pdf);
+                proptest::prop_assert!((f * s.wo.z / p - s.weight).abs() <= 1e-12 * s.weight.max(1e-300));
+                let (c_share, cone) = c.weighted_pdf(s.wo);
+                proptest::prop_assert!(p >= cone && c_share == share.min(MAX_SHARE));
+            }
+        }
+    }
+
     #[test]
     fn roles_and_empty_cases() {
         assert_eq!(role(ModelKind::Diffuse, Some(0.3)), Some(true));
