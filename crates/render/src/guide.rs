@@ -16,11 +16,10 @@
 //! sampling, so both strategies see the same sampler ([`Guided`] is a
 //! [`Bxdf`], the integrator uses it in place of the material's).
 
-use brdf::frame::orthonormal_basis;
+use crate::light::{cone_one_minus_cos, cone_pdf, sample_cone};
 use brdf::spec::ModelKind;
 use brdf::{Bxdf, BxdfSample, Specular};
 use glam::DVec3;
-use std::f64::consts::PI;
 
 /// Most cones a vertex samples among: more glossy objects than this are
 /// aimed at through one sphere around them all.
@@ -58,35 +57,24 @@ pub fn role(model: ModelKind, peak: Option<f64>) -> Option<bool> {
     }
 }
 
-/// The smallest sphere about the centre of the boxes of `spheres` that
-/// holds them all.
-fn enclosing(spheres: &[(DVec3, f64)]) -> (DVec3, f64) {
-    let lo = spheres
-        .iter()
-        .fold(DVec3::INFINITY, |a, (c, r)| a.min(*c - DVec3::splat(*r)));
-    let hi = spheres.iter().fold(DVec3::NEG_INFINITY, |a, (c, r)| {
-        a.max(*c + DVec3::splat(*r))
-    });
-    let centre = 0.5 * (lo + hi);
-    let radius = spheres
-        .iter()
-        .fold(0.0f64, |a, (c, r)| a.max((*c - centre).length() + r));
-    (centre, radius)
-}
-
-/// Bounding sphere of a set of points (the centre of their box).
-pub fn bounding_sphere(points: impl Iterator<Item = DVec3> + Clone) -> Option<(DVec3, f64)> {
-    let (lo, hi) = points
-        .clone()
-        .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), p| {
-            (lo.min(p), hi.max(p))
-        });
+/// The smallest sphere about the centre of their box that holds all
+/// `balls` (centre, radius); `None` for none or a non-finite one.
+fn enclosing(balls: impl Iterator<Item = (DVec3, f64)> + Clone) -> Option<(DVec3, f64)> {
+    let (lo, hi) = balls.clone().fold(
+        (DVec3::INFINITY, DVec3::NEG_INFINITY),
+        |(lo, hi), (c, r)| (lo.min(c - DVec3::splat(r)), hi.max(c + DVec3::splat(r))),
+    );
     if !(lo.is_finite() && hi.is_finite()) {
         return None;
     }
     let centre = 0.5 * (lo + hi);
-    let radius = points.fold(0.0f64, |a, p| a.max((p - centre).length()));
+    let radius = balls.fold(0.0f64, |a, (c, r)| a.max((c - centre).length() + r));
     Some((centre, radius))
+}
+
+/// Bounding sphere of a set of points (about the centre of their box).
+pub fn bounding_sphere(points: impl Iterator<Item = DVec3> + Clone) -> Option<(DVec3, f64)> {
+    enclosing(points.map(|p| (p, 0.0)))
 }
 
 impl Casters {
@@ -98,7 +86,7 @@ impl Casters {
             .filter(|(c, r)| c.is_finite() && r.is_finite() && *r > 0.0)
             .collect();
         let spheres = if spheres.len() > MAX_CASTERS {
-            vec![enclosing(&spheres)]
+            enclosing(spheres.iter().copied()).into_iter().collect()
         } else {
             spheres
         };
@@ -135,7 +123,6 @@ impl Casters {
         }
         let mut c = Cones {
             axis: [DVec3::ZERO; MAX_CASTERS],
-            cos_max: [0.0; MAX_CASTERS],
             one_minus: [0.0; MAX_CASTERS],
             n: 0,
             share: self.share,
@@ -143,17 +130,12 @@ impl Casters {
         for (centre, radius) in &self.spheres {
             let d = *centre - p;
             let d2 = d.length_squared();
-            let r2 = radius * radius;
             // From inside (or on) a sphere its cone is every direction: no aim.
-            if d2 <= r2 * (1.0 + 1e-9) || d2.is_nan() {
+            let Some(one_minus) = cone_one_minus_cos(d2, radius * radius) else {
                 continue;
-            }
-            let cos_max = (1.0 - r2 / d2).max(0.0).sqrt();
-            let k = c.n;
-            c.axis[k] = to_local(d / d2.sqrt());
-            c.cos_max[k] = cos_max;
-            // 1 − cosθmax without cancellation for a small sphere.
-            c.one_minus[k] = (r2 / d2) / (1.0 + cos_max);
+            };
+            c.axis[c.n] = to_local(d / d2.sqrt());
+            c.one_minus[c.n] = one_minus;
             c.n += 1;
         }
         (c.n > 0).then_some(c)
@@ -164,32 +146,28 @@ impl Casters {
 #[derive(Clone, Copy, Debug)]
 pub struct Cones {
     axis: [DVec3; MAX_CASTERS],
-    cos_max: [f64; MAX_CASTERS],
+    /// 1 − cosθmax of each cone.
     one_minus: [f64; MAX_CASTERS],
     n: usize,
     share: f64,
 }
 
 impl Cones {
-    /// A direction uniform in one cone, chosen by `u[0]` with equal odds.
+    /// A direction uniform in one cone, chosen by `u[0]` with equal odds
+    /// (the sphere lights' cone draw, [`sample_cone`]).
     fn sample(&self, u: [f64; 3]) -> DVec3 {
         let k = ((u[0] * self.n as f64) as usize).min(self.n - 1);
-        let h = u[1] * self.one_minus[k];
-        let cos_t = 1.0 - h;
-        let sin_t = (h * (2.0 - h)).max(0.0).sqrt();
-        let (s, c) = (2.0 * PI * u[2]).sin_cos();
-        let (t, b) = orthonormal_basis(self.axis[k]);
-        (sin_t * c) * t + (sin_t * s) * b + cos_t * self.axis[k]
+        sample_cone(self.axis[k], self.one_minus[k], [u[1], u[2]]).0
     }
 
     /// Solid-angle density of [`Cones::sample`] toward unit `d`.
-    pub fn pdf(&self, d: DVec3) -> f64 {
+    fn pdf(&self, d: DVec3) -> f64 {
         let mut p = 0.0;
         for k in 0..self.n {
-            // A sample on a cone's rim may round to just outside it: a
-            // relative 1e−12 of slack keeps its own density.
-            if d.dot(self.axis[k]) >= self.cos_max[k] - 1e-12 {
-                p += 1.0 / (2.0 * PI * self.one_minus[k]);
+            // A sample on a cone's rim may round to just outside it: 1e−12
+            // of slack in the cosine keeps its own density.
+            if 1.0 - d.dot(self.axis[k]) <= self.one_minus[k] + 1e-12 {
+                p += cone_pdf(Some(self.one_minus[k]));
             }
         }
         p / self.n as f64
@@ -303,6 +281,7 @@ mod tests {
     use super::*;
     use brdf::testing::Pcg32;
     use brdf::{Diffuse, RoughPlastic, RoughPlasticParams};
+    use std::f64::consts::PI;
 
     fn unit(theta_deg: f64, phi_deg: f64) -> DVec3 {
         let (t, p) = (theta_deg.to_radians(), phi_deg.to_radians());

@@ -350,7 +350,8 @@ pub struct Lights {
 /// 1 − cosθmax of the cone `sphere` subtends from a point at squared
 /// distance `d2` from its centre, written without cancellation; `None` from
 /// inside the sphere, where it fills every direction.
-fn cone_one_minus_cos(d2: f64, r2: f64) -> Option<f64> {
+#[inline]
+pub(crate) fn cone_one_minus_cos(d2: f64, r2: f64) -> Option<f64> {
     if d2 <= r2 {
         return None;
     }
@@ -371,9 +372,28 @@ fn sphere_near_distance(d: f64, r: f64, cos_t: f64, sin2: f64) -> f64 {
     (d - r) * (d + r) / (d * cos_t + disc.sqrt())
 }
 
+/// A direction uniform in the cone of 1 − cosθmax = `one_minus` about unit
+/// `w`, and its 1 − cosθ, through the concentric disk: the disk's r² is
+/// uniform, so 1 − cosθ = r²(1 − cosθmax), and sinθ = r √((1 − cosθmax)(2 −
+/// r²(1 − cosθmax))) scales the disk point itself (no azimuth, no
+/// division). The strata of a low-discrepancy draw stay compact in the
+/// cone, where the polar map made thin wedges.
+#[inline]
+pub(crate) fn sample_cone(w: DVec3, one_minus: f64, uv: [f64; 2]) -> (DVec3, f64) {
+    let [x, y] = brdf::numerics::warp::concentric_disk(uv);
+    let h = (x * x + y * y) * one_minus;
+    let scale = (one_minus * (2.0 - h)).max(0.0).sqrt();
+    let (t, b) = frame(w);
+    // Unit by construction: scale²(x² + y²) + cos²θ = h(2 − h) + (1 − h)²
+    // = 1, so no normalisation (a square root and a division on the
+    // sample's critical path); what is left is round-off, checked to 1e−15
+    // in `sphere_light_samples_are_uniform_in_its_cone`.
+    (scale * x * t + scale * y * b + (1.0 - h) * w, h)
+}
+
 /// Solid-angle pdf of a direction drawn uniformly in that cone (uniformly
 /// over the sphere of directions from inside).
-fn cone_pdf(one_minus_cos: Option<f64>) -> f64 {
+pub(crate) fn cone_pdf(one_minus_cos: Option<f64>) -> f64 {
     one_minus_cos.map_or(1.0 / (4.0 * PI), |om| 1.0 / (2.0 * PI * om))
 }
 
@@ -450,28 +470,11 @@ impl Lights {
                 // expression `sphere_cone_pdf` gives a BSDF-sampled hit.
                 let cone = cone_one_minus_cos(d2, r2);
                 let (wi, dist) = if let Some(one_minus) = cone {
-                    // Uniform in the cone through the concentric disk: the
-                    // disk's r² is uniform, so 1 − cosθ = r²(1 − cosθmax),
-                    // and sinθ = r √((1 − cosθmax)(2 − r²(1 − cosθmax)))
-                    // scales the disk point itself (no azimuth, no division).
-                    // The strata of a low-discrepancy draw stay compact on
-                    // the light, where the polar map made thin wedges.
-                    let [x, y] = brdf::numerics::warp::concentric_disk(uv);
-                    let h = (x * x + y * y) * one_minus;
-                    let cos_t = 1.0 - h;
-                    let scale = (one_minus * (2.0 - h)).max(0.0).sqrt();
                     let d = d2.sqrt();
-                    let w = to_c / d;
-                    let (t, b) = frame(w);
-                    // Unit by construction: scale²(x² + y²) + cos²θ =
-                    // h(2 − h) + (1 − h)² = 1, so no normalisation (a square
-                    // root and a division on the sample's critical path);
-                    // what is left is round-off, checked to 1e−15 in
-                    // `sphere_light_samples_are_uniform_in_its_cone`.
-                    let wi = scale * x * t + scale * y * b + cos_t * w;
+                    let (wi, h) = sample_cone(to_c / d, one_minus, uv);
                     (
                         wi,
-                        sphere_near_distance(d, sphere.radius, cos_t, h * (2.0 - h)),
+                        sphere_near_distance(d, sphere.radius, 1.0 - h, h * (2.0 - h)),
                     )
                 } else {
                     let wi = uniform_sphere(uv);

@@ -235,6 +235,10 @@ pub(super) fn build(path: &Path, text: &str, desc: &SceneDesc) -> Result<Scene, 
 /// bounding sphere per analytic shape and per mesh file of a glossy
 /// material.
 fn casters(shapes: &ShapeLists, materials: &[Material], share: f64) -> Casters {
+    // Off (the default): no pass over the meshes' triangles.
+    if share <= 0.0 {
+        return Casters::default();
+    }
     let roles: Vec<Option<bool>> = materials
         .iter()
         .map(|m| guide::role(m.model, m.bxdf.lobe_peak_pdf(DVec3::Z)))
