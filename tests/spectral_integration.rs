@@ -33,11 +33,14 @@ spp = 1
 "#;
 
 /// The scene: `body` continues `[integrator]`, and every scene stands on
-/// a level square of side `size` made of `floor`.
+/// a level square of side `size` made of `floor`. The emission seen
+/// directly is not averaged over light outlines (`emitter_pixel_samples`
+/// 1): the sampled scene has no λ tables to average it with, and the
+/// pairing compares the λ integration alone.
 /// (Read as the file `path`, which relative file names follow.)
 fn scene_at(path: &Path, body: &str, (floor, size): (&str, f64), mode: &str) -> Scene {
     let text = format!(
-        "{CAMERA}\n[integrator]\nsampler = \"independent\"\nspectral_integration = \"{mode}\"\n{body}
+        "{CAMERA}\n[integrator]\nsampler = \"independent\"\nemitter_pixel_samples = 1\nspectral_integration = \"{mode}\"\n{body}
 [[shapes]]
 type = \"rectangle\"
 size = [{size}, {size}]

@@ -278,12 +278,102 @@ fn draw_wavelengths(scene: &Scene, sampler: &Sampler, u_lambda: Reserved2d) -> S
 fn traced(scene: &Scene, x: u32, y: u32, sample: u64) -> SampleRadiance {
     let (mut sampler, ray, u_lambda, u_pix) = camera_draws(scene, x, y, sample);
     let first = scene.shapes.intersect(&ray, f64::INFINITY);
+    if let Some(tables) = emitter_edge_tables(scene, x, y) {
+        let seen = emission_over_pixel(scene, tables, (x, y), u_pix, &ray, first.as_ref());
+        // The camera sample's own emission seen directly is in `seen`.
+        if !matches!(
+            first,
+            Some(Hit {
+                surface: Surface::Material(_),
+                ..
+            })
+        ) {
+            return with_xyz(SampleRadiance::Zero, seen);
+        }
+        return with_xyz(
+            traced_beyond(scene, (x, y), u_pix, ray, first, &mut sampler, u_lambda),
+            seen,
+        );
+    }
+    traced_beyond(scene, (x, y), u_pix, ray, first, &mut sampler, u_lambda)
+}
+
+/// [`traced_from`], with a first vertex's delta lobe averaged over the pixel
+/// where [`delta_over_pixel_tables`] says so.
+#[inline(always)]
+fn traced_beyond(
+    scene: &Scene,
+    xy: (u32, u32),
+    u_pix: [f64; 2],
+    ray: Ray,
+    first: Option<Hit>,
+    sampler: &mut Sampler,
+    u_lambda: Reserved2d,
+) -> SampleRadiance {
     let Some(tables) = delta_over_pixel_tables(scene) else {
-        return traced_from(scene, ray, first, &mut sampler, u_lambda, false);
+        return traced_from(scene, ray, first, sampler, u_lambda, false);
     };
-    let delta = delta_over_pixel(scene, tables, (x, y), u_pix, &ray, first.as_ref());
-    let radiance = traced_from(scene, ray, first, &mut sampler, u_lambda, true);
+    let delta = delta_over_pixel(scene, tables, xy, u_pix, &ray, first.as_ref());
+    let radiance = traced_from(scene, ray, first, sampler, u_lambda, true);
     with_xyz(radiance, delta)
+}
+
+/// Point `i` of `k` in the pixel: the 2-D Hammersley set shifted by the
+/// camera sample's own offset `u` modulo the pixel (point 0 is `u`), so
+/// every point is uniform over the pixel and the set stays stratified.
+#[inline]
+fn pixel_point(u: [f64; 2], i: usize, k: usize) -> [f64; 2] {
+    [
+        (u[0] + i as f64 / k as f64).fract(),
+        (u[1] + (i as u32).reverse_bits() as f64 * 2f64.powi(-32)).fract(),
+    ]
+}
+
+/// The scene's spectral tables where pixel (`x`, `y`) is on a directly
+/// seen emitter's outline ([`crate::emitter_edges`]) and the emission seen
+/// there is integrated over λ exactly.
+#[inline]
+fn emitter_edge_tables(scene: &Scene, x: u32, y: u32) -> Option<&SpectralTables> {
+    let edges = scene.emitter_edges.as_ref()?;
+    if !edges.contains(x, y) {
+        return None;
+    }
+    scene.spectral.as_ref()
+}
+
+/// The emission seen directly (an emitter or the environment, ∫Le·cmf dλ
+/// exactly) averaged over [`EmitterEdges::samples`](crate::emitter_edges::EmitterEdges::samples)
+/// positions of pixel `xy` ([`pixel_point`]; the first is the camera ray
+/// `ray`, whose hit is `first`): an unbiased estimate of that term's pixel
+/// integral (the film's filter is the pixel box), which the camera
+/// sample's own path then leaves out. Each extra position costs a camera
+/// ray and nothing else.
+fn emission_over_pixel(
+    scene: &Scene,
+    tables: &SpectralTables,
+    (x, y): (u32, u32),
+    u: [f64; 2],
+    ray: &Ray,
+    first: Option<&Hit>,
+) -> [f64; 3] {
+    let k = scene.emitter_edges.as_ref().map_or(1, |e| e.samples);
+    let seen = |r: &Ray, h: Option<&Hit>| match h {
+        Some(Hit {
+            surface: Surface::Material(_),
+            ..
+        }) => [0.0; 3],
+        _ => tables.direct(&emission_at(&scene.lights, r, h).0),
+    };
+    let mut sum = seen(ray, first);
+    for i in 1..k {
+        let [px, py] = pixel_point(u, i, k);
+        let r = scene.camera.ray(x as f64 + px, y as f64 + py);
+        let e = seen(&r, scene.shapes.intersect(&r, f64::INFINITY).as_ref());
+        for c in 0..3 {
+            sum[c] += e[c];
+        }
+    }
+    sum.map(|v| v / k as f64)
 }
 
 /// `radiance` with `xyz` added to its exactly integrated part.
@@ -338,8 +428,7 @@ fn delta_over_pixel(
     let k = scene.settings.delta_pixel_samples;
     let mut sum = first.map_or([0.0; 3], |h| delta_at(scene, tables, h, ray));
     for i in 1..k {
-        let px = (u[0] + i as f64 / k as f64).fract();
-        let py = (u[1] + (i as u32).reverse_bits() as f64 * 2f64.powi(-32)).fract();
+        let [px, py] = pixel_point(u, i, k);
         let r = scene.camera.ray(x as f64 + px, y as f64 + py);
         if let Some(h) = scene.shapes.intersect(&r, f64::INFINITY) {
             let e = delta_at(scene, tables, &h, &r);

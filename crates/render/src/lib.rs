@@ -19,6 +19,7 @@ pub mod camera;
 pub mod color;
 pub mod distribution;
 pub mod driver;
+pub mod emitter_edges;
 pub mod error;
 pub mod film;
 pub mod geometry;

@@ -175,35 +175,39 @@ fn integrator() -> impl Strategy<Value = IntegratorDesc> {
         any::<bool>(),
         proptest::option::of(any::<u32>()),
         proptest::option::of(finite()),
+        proptest::option::of(any::<u32>()),
     )
         .prop_map(
-            |(depth, single, hero, rr, indep, balance, w, sampled, dps, guide)| IntegratorDesc {
-                max_depth: spanless(depth),
-                wavelengths: if single {
-                    WavelengthMode::Single
-                } else {
-                    WavelengthMode::Hero
-                },
-                hero_wavelengths: hero.map(spanless),
-                rr_depth: rr,
-                sampler: if indep {
-                    SamplerKind::Independent
-                } else {
-                    SamplerKind::Sobol
-                },
-                mis: if balance {
-                    MisHeuristic::Balance
-                } else {
-                    MisHeuristic::Power
-                },
-                mis_light_weight: w.map(spanless),
-                spectral_integration: if sampled {
-                    SpectralIntegration::Sampled
-                } else {
-                    SpectralIntegration::Auto
-                },
-                delta_pixel_samples: dps.map(spanless),
-                caustic_guiding: guide.map(spanless),
+            |(depth, single, hero, rr, indep, balance, w, sampled, dps, guide, eps)| {
+                IntegratorDesc {
+                    max_depth: spanless(depth),
+                    wavelengths: if single {
+                        WavelengthMode::Single
+                    } else {
+                        WavelengthMode::Hero
+                    },
+                    hero_wavelengths: hero.map(spanless),
+                    rr_depth: rr,
+                    sampler: if indep {
+                        SamplerKind::Independent
+                    } else {
+                        SamplerKind::Sobol
+                    },
+                    mis: if balance {
+                        MisHeuristic::Balance
+                    } else {
+                        MisHeuristic::Power
+                    },
+                    mis_light_weight: w.map(spanless),
+                    spectral_integration: if sampled {
+                        SpectralIntegration::Sampled
+                    } else {
+                        SpectralIntegration::Auto
+                    },
+                    delta_pixel_samples: dps.map(spanless),
+                    emitter_pixel_samples: eps.map(spanless),
+                    caustic_guiding: guide.map(spanless),
+                }
             },
         )
 }

@@ -158,12 +158,16 @@ pub(super) fn build(path: &Path, text: &str, desc: &SceneDesc) -> Result<Scene, 
         ),
     };
 
+    // Averaging the emission seen directly needs its exact λ integral.
+    let emitter_edges = spectral.as_ref().and_then(|_| {
+        crate::emitter_edges::EmitterEdges::build(&camera, &lights, settings.emitter_pixel_samples)
+    });
     let models: Vec<String> = materials
         .iter()
         .map(|m| format!("{} ({})", m.name, m.model.name()))
         .collect();
     let prepared = format!(
-        "prepared {}: {}×{} px, {} material(s) [{}], {} analytic shape(s), {}, {} light(s){}, λ {lo:.0}–{hi:.0} nm{}, {} per path{}{}, in {:.1} ms",
+        "prepared {}: {}×{} px, {} material(s) [{}], {} analytic shape(s), {}, {} light(s){}, λ {lo:.0}–{hi:.0} nm{}, {} per path{}{}{}, in {:.1} ms",
         path.display(),
         camera.width,
         camera.height,
@@ -197,6 +201,14 @@ pub(super) fn build(path: &Path, text: &str, desc: &SceneDesc) -> Result<Scene, 
                 casters.len()
             )
         },
+        match &emitter_edges {
+            None => String::new(),
+            Some(e) => format!(
+                ", the emission seen directly averaged over {} points per sample on {} light-outline pixel(s)",
+                e.samples,
+                e.count()
+            ),
+        },
         start.elapsed().as_secs_f64() * 1e3
     );
 
@@ -217,6 +229,7 @@ pub(super) fn build(path: &Path, text: &str, desc: &SceneDesc) -> Result<Scene, 
         wavelengths,
         spectral,
         casters,
+        emitter_edges,
         fingerprint,
         inputs,
         prepared,
@@ -457,6 +470,21 @@ impl<'a> Builder<'a> {
             Some(k) => *k.get_ref() as usize,
             None => 1,
         };
+        let emitter_pixel_samples = match &integrator.emitter_pixel_samples {
+            Some(k) if !(1..=crate::emitter_edges::MAX_SAMPLES).contains(k.get_ref()) => {
+                return Err(self.at(
+                    k.span(),
+                    format!(
+                        "emitter_pixel_samples = {} is invalid: expected 1..={} (positions per \
+                         camera sample on a light's outline; 1 turns it off)",
+                        k.get_ref(),
+                        crate::emitter_edges::MAX_SAMPLES
+                    ),
+                ));
+            }
+            Some(k) => *k.get_ref() as usize,
+            None => crate::emitter_edges::DEFAULT_SAMPLES,
+        };
         let caustic_guiding = match &integrator.caustic_guiding {
             Some(c) if !(0.0..=crate::guide::MAX_SHARE).contains(c.get_ref()) => {
                 return Err(self.at(
@@ -500,6 +528,7 @@ impl<'a> Builder<'a> {
             mis_light_weight,
             spectral_integration: integrator.spectral_integration,
             delta_pixel_samples,
+            emitter_pixel_samples,
             caustic_guiding,
             exr: film.exr.clone(),
             png: film.png.clone(),

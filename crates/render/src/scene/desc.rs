@@ -238,6 +238,11 @@ pub struct IntegratorDesc {
     /// ([`Settings::delta_pixel_samples`](super::Settings::delta_pixel_samples)).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub delta_pixel_samples: Option<Spanned<u32>>,
+    /// Positions per camera sample at which the emission seen directly is
+    /// evaluated on a light's outline, 1–64 (default 16; 1: off)
+    /// ([`Settings::emitter_pixel_samples`](super::Settings::emitter_pixel_samples)).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub emitter_pixel_samples: Option<Spanned<u32>>,
     /// Share of the BSDF samples of diffuse and rough-plastic surfaces
     /// aimed at glossy objects, 0–0.9 (default 0: off)
     /// ([`Settings::caustic_guiding`](super::Settings::caustic_guiding)).
@@ -293,6 +298,7 @@ impl Default for IntegratorDesc {
             mis_light_weight: None,
             spectral_integration: SpectralIntegration::Auto,
             delta_pixel_samples: None,
+            emitter_pixel_samples: None,
             caustic_guiding: None,
         }
     }

@@ -33,7 +33,7 @@ use std::path::PathBuf;
 /// random-number sampling, other weights, other inputs hashed), so that
 /// films of an earlier estimator refuse to merge with or resume into new
 /// ones.
-pub const ESTIMATOR: &str = "lustre estimator 10";
+pub const ESTIMATOR: &str = "lustre estimator 11";
 
 /// The share of a scene-with-bands' wavelength density spread uniformly
 /// over its emission range ([`Scene::set_spectral_bands`]): with 256 bands a
@@ -81,6 +81,12 @@ pub struct Settings {
     /// sample (a camera ray and a mirror ray each), for the sharp edge of a
     /// small light's mirror image (`integrator::delta_over_pixel`).
     pub delta_pixel_samples: usize,
+    /// `[integrator] emitter_pixel_samples` (default
+    /// [`crate::emitter_edges::DEFAULT_SAMPLES`]; 1 turns it off): on the
+    /// pixels a directly seen light's outline may cross, the emission seen
+    /// directly is averaged over this many positions in the pixel per camera
+    /// sample (a camera ray each; `integrator::emission_over_pixel`).
+    pub emitter_pixel_samples: usize,
     /// `[integrator] caustic_guiding` (default [`DEFAULT_CAUSTIC_GUIDING`]):
     /// the share of the BSDF samples of diffuse and rough-plastic surfaces
     /// drawn toward glossy objects instead of from the BSDF, weighted by the
@@ -130,6 +136,11 @@ pub struct Scene {
     pub spectral: Option<SpectralTables>,
     /// The glossy objects diffuse surfaces aim a share of their samples at.
     pub casters: Casters,
+    /// The pixels a directly seen emitter's outline may cross, where the
+    /// emission seen directly is averaged over the pixel; `None` where no
+    /// outline is in view, `emitter_pixel_samples` is 1 or λ is not
+    /// integrated exactly.
+    pub emitter_edges: Option<crate::emitter_edges::EmitterEdges>,
     /// Hash of everything that determines the per-sample values (not spp or outputs).
     pub fingerprint: u64,
     /// The files the scene was built from, with their hashes (the scene file
