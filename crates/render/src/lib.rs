@@ -15,6 +15,7 @@
 //! # Ok::<(), render::RenderError>(())
 //! ```
 
+pub mod analytic_bvh;
 pub mod camera;
 pub mod color;
 pub mod distribution;

@@ -9,6 +9,7 @@ use super::desc::{
 };
 use super::tables;
 use super::{ESTIMATOR, Scene, Settings};
+use crate::analytic_bvh::AnalyticBvh;
 use crate::camera::Camera;
 use crate::error::SceneError;
 use crate::geometry::{Planar, Sphere, Transform};
@@ -57,6 +58,7 @@ pub(super) fn build(path: &Path, text: &str, desc: &SceneDesc) -> Result<Scene, 
     let n_tris: usize = shapes.meshes.iter().map(|m| m.triangles.len()).sum();
     let casters = casters(&shapes, &b.materials, settings.caustic_guiding);
     let shapes = Shapes {
+        analytic_bvh: AnalyticBvh::build(&shapes.planars, &shapes.spheres),
         planars: shapes.planars,
         spheres: shapes.spheres,
         mesh: (!shapes.meshes.is_empty()).then(|| MeshAccel::build(shapes.meshes)),
