@@ -49,10 +49,18 @@ impl EmitterEdges {
             samples,
         };
         let reach = pixel_reach(camera);
+        // Pixel tests, at most 16 image areas in all (a scene of many large
+        // lights in view stops marking, which only forgoes some averaging):
+        // load time stays a few hundred milliseconds at 4096².
+        let mut budget = 16 * width as u64 * height as u64;
         for light in &lights.lights {
             match light {
-                LightKind::Sphere { sphere, .. } => mask.mark_sphere(camera, sphere, reach),
-                LightKind::Rectangle { shape, .. } => mask.mark_rectangle(camera, shape),
+                LightKind::Sphere { sphere, .. } => {
+                    mask.mark_sphere(camera, sphere, reach, &mut budget)
+                }
+                LightKind::Rectangle { shape, .. } => {
+                    mask.mark_rectangle(camera, shape, &mut budget)
+                }
                 LightKind::Point { .. } | LightKind::Environment(_) => {}
             }
         }
@@ -83,7 +91,7 @@ impl EmitterEdges {
     /// silhouette cone: every direction of such a pixel's footprint is
     /// within `reach` of its centre's, so an unmarked pixel is wholly
     /// inside or wholly outside the silhouette.
-    fn mark_sphere(&mut self, camera: &Camera, sphere: &Sphere, reach: f64) {
+    fn mark_sphere(&mut self, camera: &Camera, sphere: &Sphere, reach: f64, budget: &mut u64) {
         let oc = sphere.center - camera.origin();
         let d = oc.length();
         // From inside (or on) the light every direction sees it: no outline.
@@ -97,6 +105,9 @@ impl EmitterEdges {
         let Some((x0, x1, y0, y1)) = self.cone_box(camera, axis, half + reach) else {
             return;
         };
+        if !spend(budget, x0, x1, y0, y1) {
+            return;
+        }
         for y in y0..y1 {
             for x in x0..x1 {
                 let c = camera.ray(x as f64 + 0.5, y as f64 + 0.5).d.dot(axis);
@@ -143,7 +154,7 @@ impl EmitterEdges {
     /// Pixels whose centre is within one pixel of a rectangle's projected
     /// edge (a pixel's footprint reaches 0.71 px from its centre). A
     /// rectangle reaching behind the camera's plane is left unmarked.
-    fn mark_rectangle(&mut self, camera: &Camera, shape: &Planar) {
+    fn mark_rectangle(&mut self, camera: &Camera, shape: &Planar, budget: &mut u64) {
         let (hu, hv) = shape.half;
         let corners = [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)]
             .map(|(a, b)| camera.project(shape.center + a * hu * shape.u + b * hv * shape.v));
@@ -160,6 +171,9 @@ impl EmitterEdges {
             let x1 = (a.x.max(b.x) + 3.0).max(0.0).min(self.width as f64) as u32;
             let y0 = (a.y.min(b.y) - 2.0).max(0.0).min(self.height as f64) as u32;
             let y1 = (a.y.max(b.y) + 3.0).max(0.0).min(self.height as f64) as u32;
+            if !spend(budget, x0, x1, y0, y1) {
+                return;
+            }
             for y in y0..y1 {
                 for x in x0..x1 {
                     let q = DVec2::new(x as f64 + 0.5, y as f64 + 0.5);
@@ -180,6 +194,16 @@ fn pixel_reach(camera: &Camera) -> f64 {
     let a = camera.ray(cx, cy).d;
     let b = camera.ray(cx + 0.5, cy + 0.5).d;
     1.5 * a.dot(b).clamp(-1.0, 1.0).acos()
+}
+
+/// Takes the pixel box's area from `budget` if it holds that much.
+fn spend(budget: &mut u64, x0: u32, x1: u32, y0: u32, y1: u32) -> bool {
+    let area = x1.saturating_sub(x0) as u64 * y1.saturating_sub(y0) as u64;
+    let ok = area <= *budget;
+    if ok {
+        *budget -= area;
+    }
+    ok
 }
 
 /// Distance from `q` to the segment `ab`.
