@@ -7,9 +7,10 @@
 //! with f64 barycentrics; otherwise triangles are shaded flat.
 
 use crate::geometry::{Ray, SurfacePoint, Transform};
+use crate::mesh_traverse::{any_hit, closest};
 use glam::{DVec3, Vec3A};
 use obvhs::cwbvh::CwBvh;
-use obvhs::ray::{Ray as BvhRay, RayHit};
+use obvhs::ray::Ray as BvhRay;
 use obvhs::rt_triangle::RtTriangle;
 use obvhs::triangle::Triangle;
 use std::path::Path;
@@ -272,13 +273,19 @@ impl MeshAccel {
         self.tris.is_empty()
     }
 
-    fn bvh_ray(ray: &Ray, t_min: f64, t_max: f64) -> BvhRay {
+    pub(crate) fn bvh_ray(ray: &Ray, t_min: f64, t_max: f64) -> BvhRay {
         let t_max = if t_max.is_finite() {
             t_max as f32
         } else {
             f32::INFINITY
         };
         BvhRay::new(to_f32(ray.o), to_f32(ray.d), t_min as f32, t_max)
+    }
+
+    /// The BVH and its triangles in leaf order, for the traversal's tests.
+    #[cfg(test)]
+    pub(crate) fn bvh_parts(&self) -> (&CwBvh, &[RtTriangle]) {
+        (&self.bvh, &self.rt)
     }
 
     /// Nearest hit in `(t_min, t_max)`, its surface id, for triangles with
@@ -290,15 +297,8 @@ impl MeshAccel {
         t_min: f64,
         t_max: f64,
     ) -> Option<(SurfacePoint, u32, Option<DVec3>, usize)> {
-        let mut hit = RayHit::none();
-        let r = Self::bvh_ray(ray, t_min, t_max);
-        if !self
-            .bvh
-            .ray_traverse(r, &mut hit, |r, id| self.rt[id].intersect(r))
-        {
-            return None;
-        }
-        let id = hit.primitive_id as usize;
+        let (id, t_f32) = closest(&self.bvh, &self.rt, Self::bvh_ray(ray, t_min, t_max))?;
+        let id = id as usize;
         let [a, b, c] = self.tris[id];
         let n = (b - a).cross(c - a).normalize();
         // f64 plane intersection of the triangle the f32 traversal found.
@@ -306,12 +306,12 @@ impl MeshAccel {
         let t = if denom.abs() > 1e-300 {
             (a - ray.o).dot(n) / denom
         } else {
-            hit.t as f64
+            t_f32 as f64
         };
         let t = if t.is_finite() && t > t_min {
             t
         } else {
-            hit.t as f64
+            t_f32 as f64
         };
         let tangent = (b - a).normalize();
         let p = ray.at(t);
@@ -343,11 +343,7 @@ impl MeshAccel {
 
     /// Whether anything blocks the segment `(t_min, t_max)` of `ray`.
     pub fn occluded(&self, ray: &Ray, t_min: f64, t_max: f64) -> bool {
-        !self
-            .bvh
-            .ray_traverse_miss(Self::bvh_ray(ray, t_min, t_max), |r, id| {
-                self.rt[id].intersect(r)
-            })
+        any_hit(&self.bvh, &self.rt, Self::bvh_ray(ray, t_min, t_max))
     }
 }
 
