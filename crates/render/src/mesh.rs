@@ -7,9 +7,8 @@
 //! with f64 barycentrics; otherwise triangles are shaded flat.
 
 use crate::geometry::{Ray, SurfacePoint, Transform};
-use crate::mesh_traverse::{any_hit, closest};
+use crate::mesh_traverse::{Bvh, any_hit, closest};
 use glam::{DVec3, Vec3A};
-use obvhs::cwbvh::CwBvh;
 use obvhs::ray::Ray as BvhRay;
 use obvhs::rt_triangle::RtTriangle;
 use obvhs::triangle::Triangle;
@@ -216,7 +215,10 @@ fn number(x: f64) -> String {
 
 /// All mesh triangles of a scene in one BVH, stored in leaf order.
 pub struct MeshAccel {
-    bvh: CwBvh,
+    bvh: Bvh,
+    /// The obvhs tree `bvh` was copied from, for the traversal's tests.
+    #[cfg(test)]
+    cw: obvhs::cwbvh::CwBvh,
     rt: Vec<RtTriangle>,
     facets: Vec<Facet>,
     normals: Vec<Option<[DVec3; 3]>>,
@@ -285,7 +287,9 @@ impl MeshAccel {
             Vec::new()
         };
         MeshAccel {
-            bvh,
+            bvh: Bvh::new(&bvh),
+            #[cfg(test)]
+            cw: bvh,
             rt,
             facets,
             normals: normals_leaf,
@@ -316,8 +320,8 @@ impl MeshAccel {
 
     /// The BVH and its triangles in leaf order, for the traversal's tests.
     #[cfg(test)]
-    pub(crate) fn bvh_parts(&self) -> (&CwBvh, &[RtTriangle]) {
-        (&self.bvh, &self.rt)
+    pub(crate) fn bvh_parts(&self) -> (&obvhs::cwbvh::CwBvh, &Bvh, &[RtTriangle]) {
+        (&self.cw, &self.bvh, &self.rt)
     }
 
     /// Nearest hit in `(t_min, t_max)`, its surface id, for triangles with

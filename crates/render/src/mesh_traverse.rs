@@ -1,19 +1,21 @@
-//! Ray queries over the mesh BVH (obvhs's compressed 8-wide nodes) with the
-//! triangle test inlined into the loop.
+//! Ray queries over the mesh BVH with the triangle test inlined into the
+//! loop.
 //!
-//! obvhs's `ray_traverse` reaches the triangle test through a closure that
-//! the compiler did not always inline, and tests a node's eight child boxes
-//! four at a time from bytes converted one by one. Here, where the build has
-//! AVX2, the eight boxes are tested at once from one byte-to-float
-//! conversion per plane array. The order in which nodes and triangles are
-//! visited, the box test's arithmetic (same operations in the same order,
-//! multiplies and adds unfused) and the triangle test (obvhs's own) are
-//! obvhs's, so a query finds the same triangle at the same f32 distance as
-//! `CwBvh::ray_traverse` / `ray_traverse_miss` (checked in the tests against
-//! both and against a loop over all triangles).
+//! The tree is obvhs's compressed 8-wide BVH (CWBVH), copied into nodes laid
+//! out for a CPU: obvhs stores a child box's planes as bytes on a per-node
+//! grid (80-byte nodes, built for GPU bandwidth) and converts them to floats
+//! on every visit; here they are converted once, exactly (a byte is an
+//! f32), with the grid's origin and cell size and the child bookkeeping
+//! pre-split by what the octant changes, 256 bytes per node. With AVX2 the
+//! eight child boxes are tested at once. The order in which nodes and
+//! triangles are visited, the box test's arithmetic (the same operations in
+//! the same order, multiplies and adds unfused) and the triangle test
+//! (obvhs's own) are obvhs's, so a query finds the same triangle at the same
+//! f32 distance as `CwBvh::ray_traverse` / `ray_traverse_miss` (the tests
+//! check both, and against a loop over all triangles).
 
+use glam::Vec3A;
 use obvhs::cwbvh::CwBvh;
-use obvhs::cwbvh::node::CwBvhNode;
 use obvhs::ray::Ray as BvhRay;
 use obvhs::rt_triangle::RtTriangle;
 
@@ -21,6 +23,80 @@ use obvhs::rt_triangle::RtTriangle;
 /// below this; a deeper tree (never built) would overwrite the top entry,
 /// as obvhs's own stack does, rather than index out of bounds.
 const STACK: usize = 32;
+
+/// obvhs clamps a child box's entry distance to this (its `EPSILON`, not
+/// the ray's `tmin`): a box the ray leaves before it is skipped. Kept, so
+/// that the same triangles are found.
+const BOX_T_MIN: f32 = 1e-4;
+
+/// Bits 24–31 of a hit mask: inner children; bits 0–23: leaf triangles.
+const NODE_BITS: u32 = 0xff00_0000;
+
+/// One CWBVH node (child j in lane j of every array).
+#[derive(Clone, Copy)]
+#[repr(C, align(32))]
+struct Node {
+    /// Child box planes in grid cells: min x, max x, min y, max y, min z, max z.
+    q: [[f32; 8]; 6],
+    /// Grid origin and cell size per axis (a plane at q lies at origin + q·cell).
+    origin: Vec3A,
+    cell: Vec3A,
+    /// Per child byte: a leaf's triangle count in unary, or 1 for an inner
+    /// child, in bits 0–2; in bits 5–7, 7 for an inner child, whose slot is
+    /// XORed with the ray's octant to visit children front to back.
+    child_bits: u64,
+    /// Per child byte: where the child's bits go in the hit mask: a leaf's
+    /// first triangle (0–23), an inner child's slot + 24 before the flip.
+    bit_index: u64,
+    /// First child node and first triangle (leaf order); which slots hold
+    /// inner children.
+    child_base: u32,
+    prim_base: u32,
+    imask: u32,
+}
+
+/// The mesh BVH in [`Node`]s.
+pub(crate) struct Bvh {
+    nodes: Vec<Node>,
+}
+
+impl Bvh {
+    /// The nodes of an obvhs CWBVH (see `CwBvhNode`'s documentation for its
+    /// child metadata byte: an inner child is 0b001 in bits 5–7 and its
+    /// slot + 24 in bits 0–4; a leaf has its triangle count in unary in bits
+    /// 5–7 and its first triangle's offset in bits 0–4).
+    pub(crate) fn new(cw: &CwBvh) -> Bvh {
+        let lanes = |b: [u8; 8]| b.map(f32::from);
+        let bytes = |meta: [u8; 8], f: &dyn Fn(u8) -> u8| u64::from_le_bytes(meta.map(f));
+        let inner = |m: u8| m & 0x18 == 0x18;
+        let nodes = cw
+            .nodes
+            .iter()
+            .map(|n| {
+                let meta = n.child_meta;
+                let cell = n.compute_extent();
+                Node {
+                    q: [
+                        lanes(n.child_min_x),
+                        lanes(n.child_max_x),
+                        lanes(n.child_min_y),
+                        lanes(n.child_max_y),
+                        lanes(n.child_min_z),
+                        lanes(n.child_max_z),
+                    ],
+                    origin: n.p.into(),
+                    cell,
+                    child_bits: bytes(meta, &|m| m >> 5 | if inner(m) { 7 << 5 } else { 0 }),
+                    bit_index: bytes(meta, &|m| m & 0x1f),
+                    child_base: n.child_base_idx,
+                    prim_base: n.primitive_base_idx,
+                    imask: n.imask.into(),
+                }
+            })
+            .collect();
+        Bvh { nodes }
+    }
+}
 
 /// A group of pending children: the index of the first child node and a
 /// mask whose top byte flags the children still to visit (and whose low
@@ -31,31 +107,28 @@ struct Group {
     bits: u32,
 }
 
-/// Bits 24–31: child nodes still to visit.
-const NODE_BITS: u32 = 0xff00_0000;
-
-/// The ray octant in obvhs's encoding (`ray_get_octant_inv4`, private
-/// there): one bit per axis set for a non-negative direction, in all four
-/// bytes, XORed into a child's slot to visit children front to back.
+/// The ray octant as obvhs encodes it: one bit per axis, set for a
+/// non-negative direction, XORed into an inner child's slot.
 #[inline(always)]
-fn octant_inv4(ray: &BvhRay) -> u32 {
+fn octant(ray: &BvhRay) -> u32 {
     let d = ray.direction;
-    (if d.x < 0.0 { 0 } else { 0x0404_0404 })
-        | (if d.y < 0.0 { 0 } else { 0x0202_0202 })
-        | (if d.z < 0.0 { 0 } else { 0x0101_0101 })
+    (if d.x < 0.0 { 0 } else { 4 })
+        | (if d.y < 0.0 { 0 } else { 2 })
+        | (if d.z < 0.0 { 0 } else { 1 })
 }
 
 /// Walks the BVH front to back, calling `prim(ray, index)` for every
 /// triangle (leaf-order index) whose leaf box the ray crosses within
 /// `ray.tmax`; `prim` may shorten `ray.tmax`, and returning `true` stops
-/// the walk. The loop is obvhs's `traverse!` order: a node's triangles
-/// before its children, children nearest first by the ray's octant.
+/// the walk. The order is obvhs's `traverse!`: a node's triangles before
+/// its children, children nearest first by the ray's octant.
 #[inline(always)]
-fn walk<F: FnMut(&mut BvhRay, u32) -> bool>(bvh: &CwBvh, ray: &mut BvhRay, mut prim: F) {
+fn walk<F: FnMut(&mut BvhRay, u32) -> bool>(bvh: &Bvh, ray: &mut BvhRay, mut prim: F) {
     if bvh.nodes.is_empty() {
         return;
     }
-    let oct = octant_inv4(ray);
+    let oct = octant(ray);
+    let slab = Slabs::new(ray);
     let mut stack = [Group::default(); STACK];
     let mut depth = 0usize;
     // The root is the only child of a virtual group at index 0.
@@ -81,18 +154,18 @@ fn walk<F: FnMut(&mut BvhRay, u32) -> bool>(bvh: &CwBvh, ray: &mut BvhRay, mut p
                 depth = (depth + 1).min(STACK - 1);
             }
             // The visited child's rank among the parent's inner children.
-            let slot = (offset - 24) ^ (oct & 0xff);
+            let slot = (offset - 24) ^ oct;
             let rank = (hits & !(u32::MAX << slot)).count_ones();
             let Some(node) = bvh.nodes.get((nodes.base + rank) as usize) else {
                 return;
             };
-            let mask = child_hits(node, ray, oct);
+            let mask = hit_mask(node, child_hits(node, &slab, ray.tmax), oct);
             nodes = Group {
-                base: node.child_base_idx,
-                bits: (mask & NODE_BITS) | node.imask as u32,
+                base: node.child_base,
+                bits: (mask & NODE_BITS) | node.imask,
             };
             prims = Group {
-                base: node.primitive_base_idx,
+                base: node.prim_base,
                 bits: mask & !NODE_BITS,
             };
         } else {
@@ -111,7 +184,7 @@ fn walk<F: FnMut(&mut BvhRay, u32) -> bool>(bvh: &CwBvh, ray: &mut BvhRay, mut p
 /// The nearest triangle hit within `(ray.tmin, ray.tmax)`: its leaf-order
 /// index and f32 distance.
 #[inline]
-pub(crate) fn closest(bvh: &CwBvh, tris: &[RtTriangle], mut ray: BvhRay) -> Option<(u32, f32)> {
+pub(crate) fn closest(bvh: &Bvh, tris: &[RtTriangle], mut ray: BvhRay) -> Option<(u32, f32)> {
     let mut best = None;
     walk(bvh, &mut ray, |r, i| {
         if let Some(tri) = tris.get(i as usize) {
@@ -128,7 +201,7 @@ pub(crate) fn closest(bvh: &CwBvh, tris: &[RtTriangle], mut ray: BvhRay) -> Opti
 
 /// Whether any triangle is hit within `(ray.tmin, ray.tmax)`.
 #[inline]
-pub(crate) fn any_hit(bvh: &CwBvh, tris: &[RtTriangle], mut ray: BvhRay) -> bool {
+pub(crate) fn any_hit(bvh: &Bvh, tris: &[RtTriangle], mut ray: BvhRay) -> bool {
     let mut hit = false;
     walk(bvh, &mut ray, |r, i| {
         hit = tris
@@ -139,91 +212,103 @@ pub(crate) fn any_hit(bvh: &CwBvh, tris: &[RtTriangle], mut ray: BvhRay) -> bool
     hit
 }
 
-/// The node's hit mask for the ray (obvhs's `CwBvhNode::intersect_ray`
-/// layout: bits 24–31 the inner children hit, by traversal priority; bits
-/// 0–23 the triangles of the leaves hit).
-#[cfg(all(target_arch = "x86_64", target_feature = "avx2"))]
-#[inline(always)]
-fn child_hits(node: &CwBvhNode, ray: &BvhRay, oct: u32) -> u32 {
-    use core::arch::x86_64::*;
-    // SAFETY: AVX2 is enabled for this build (the cfg above), and no
-    // intrinsic here reads or writes memory.
-    unsafe {
-        // The child planes are bytes on the node's grid: a plane at q lies at
-        // p + q·extent, so its distance is q·(extent/d) + (p − o)/d.
-        let scale = node.compute_extent() * ray.inv_direction;
-        let shift = (glam::Vec3A::from(node.p) - ray.origin) * ray.inv_direction;
-        // Eight bytes to eight f32 lanes (child j in lane j).
-        let lanes = |b: [u8; 8]| {
-            _mm256_cvtepi32_ps(_mm256_cvtepu8_epi32(_mm_cvtsi64_si128(i64::from_le_bytes(
-                b,
-            ))))
-        };
-        let slab = |lo: [u8; 8], hi: [u8; 8], neg: bool, s: f32, o: f32| {
-            let (near, far) = if neg { (hi, lo) } else { (lo, hi) };
-            let (s, o) = (_mm256_set1_ps(s), _mm256_set1_ps(o));
-            (
-                _mm256_add_ps(_mm256_mul_ps(lanes(near), s), o),
-                _mm256_add_ps(_mm256_mul_ps(lanes(far), s), o),
-            )
-        };
+/// The ray's part of the box test.
+struct Slabs {
+    origin: Vec3A,
+    inv_d: Vec3A,
+    /// Per axis, 1 where the direction is negative: the near plane is then
+    /// the box's max (index 2·axis + 1 in [`Node::q`]).
+    neg: [usize; 3],
+}
+
+impl Slabs {
+    #[inline(always)]
+    fn new(ray: &BvhRay) -> Slabs {
         let d = ray.direction;
-        let (x0, x1) = slab(
-            node.child_min_x,
-            node.child_max_x,
-            d.x < 0.0,
-            scale.x,
-            shift.x,
-        );
-        let (y0, y1) = slab(
-            node.child_min_y,
-            node.child_max_y,
-            d.y < 0.0,
-            scale.y,
-            shift.y,
-        );
-        let (z0, z1) = slab(
-            node.child_min_z,
-            node.child_max_z,
-            d.z < 0.0,
-            scale.z,
-            shift.z,
-        );
-        // obvhs's operand order (it matters only for NaN) and its entry clamp.
-        let t0 = _mm256_max_ps(x0, _mm256_max_ps(y0, z0));
-        let t1 = _mm256_min_ps(x1, _mm256_min_ps(y1, z1));
-        let t0 = _mm256_max_ps(t0, _mm256_set1_ps(BOX_T_MIN));
-        let t1 = _mm256_min_ps(t1, _mm256_set1_ps(ray.tmax));
-        let hit = _mm256_castps_si256(_mm256_cmp_ps::<_CMP_LE_OS>(t0, t1));
-        // Each hit child's bits (1 for an inner node, its triangle count in
-        // unary for a leaf) shifted to its bit index. A loop over the hit
-        // children: its branches are predicted, where a branch-free OR of
-        // eight shifted lanes put ~10 cycles of shuffles on the path to the
-        // next node's address (2.5 % more CPU time on the preview scene).
-        let (child_bits, bit_index) = node.get_child_and_index_bits(oct);
-        let mut h = _mm256_movemask_ps(_mm256_castsi256_ps(hit)) as u32;
-        let mut mask = 0u32;
-        while h != 0 {
-            let j = h.trailing_zeros();
-            h &= h - 1;
-            mask |= (((child_bits >> (8 * j)) & 0xff) as u32) << ((bit_index >> (8 * j)) & 0xff);
+        Slabs {
+            origin: ray.origin,
+            inv_d: ray.inv_direction,
+            neg: [d.x, d.y, d.z].map(|c| usize::from(c < 0.0)),
         }
-        mask
     }
 }
 
-/// obvhs's node test where the build has no AVX2.
-#[cfg(not(all(target_arch = "x86_64", target_feature = "avx2")))]
+/// The hit mask from the children hit (`hits`, bit j for child j): bits
+/// 24–31 the inner children by traversal priority, bits 0–23 the triangles
+/// of the leaves hit. A loop over the hit children: its branches are
+/// predicted, where a branch-free OR of eight shifted lanes put ~10 cycles
+/// of shuffles on the path to the next node's address (2.5 % more CPU time
+/// on the preview scene).
 #[inline(always)]
-fn child_hits(node: &CwBvhNode, ray: &BvhRay, oct: u32) -> u32 {
-    node.intersect_ray(ray, oct)
+fn hit_mask(node: &Node, mut hits: u32, oct: u32) -> u32 {
+    let flip = (node.child_bits >> 5) & 0x0707_0707_0707_0707;
+    let index = node.bit_index ^ (flip & (u64::from(oct) * 0x0101_0101_0101_0101));
+    let mut mask = 0u32;
+    while hits != 0 {
+        let j = 8 * hits.trailing_zeros();
+        hits &= hits - 1;
+        mask |= (((node.child_bits >> j) & 7) as u32) << ((index >> j) & 0xff);
+    }
+    mask
 }
 
-/// obvhs clamps a child box's entry distance to this (its `EPSILON`, not
-/// the ray's `tmin`): a box the ray leaves before it is skipped. Kept so
-/// both node tests agree.
+/// Which children's boxes the ray crosses within `(BOX_T_MIN, t_max)`: bit
+/// j for child j. A plane q cells from the node's origin lies at distance
+/// q·(cell/d) + (origin − o)/d, multiplied and added in that order as obvhs
+/// does.
 #[cfg(all(target_arch = "x86_64", target_feature = "avx2"))]
-const BOX_T_MIN: f32 = 1e-4;
+#[inline(always)]
+fn child_hits(node: &Node, slab: &Slabs, t_max: f32) -> u32 {
+    use core::arch::x86_64::*;
+    let scale = node.cell * slab.inv_d;
+    let shift = (node.origin - slab.origin) * slab.inv_d;
+    // SAFETY: AVX2 is enabled for this build (the cfg above); the loads read
+    // one 32-byte aligned [f32; 8] of `node.q` each.
+    unsafe {
+        let lanes = |k: usize| _mm256_load_ps(node.q[k].as_ptr());
+        let axis = |a: usize, s: f32, o: f32| {
+            let near = 2 * a + slab.neg[a];
+            let (s, o) = (_mm256_set1_ps(s), _mm256_set1_ps(o));
+            (
+                _mm256_add_ps(_mm256_mul_ps(lanes(near), s), o),
+                _mm256_add_ps(_mm256_mul_ps(lanes(near ^ 1), s), o),
+            )
+        };
+        let (x0, x1) = axis(0, scale.x, shift.x);
+        let (y0, y1) = axis(1, scale.y, shift.y);
+        let (z0, z1) = axis(2, scale.z, shift.z);
+        // obvhs's operand order (it matters only for NaN).
+        let t0 = _mm256_max_ps(x0, _mm256_max_ps(y0, z0));
+        let t1 = _mm256_min_ps(x1, _mm256_min_ps(y1, z1));
+        let t0 = _mm256_max_ps(t0, _mm256_set1_ps(BOX_T_MIN));
+        let t1 = _mm256_min_ps(t1, _mm256_set1_ps(t_max));
+        _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OS>(t0, t1)) as u32
+    }
+}
+
+/// [`child_hits`] one child at a time, where the build has no AVX2 (and in
+/// the tests, against the AVX2 version): the same operations, with `maxps`
+/// and `minps`'s choice of operand.
+#[cfg(any(test, not(all(target_arch = "x86_64", target_feature = "avx2"))))]
+#[inline(always)]
+fn child_hits_scalar(node: &Node, slab: &Slabs, t_max: f32) -> u32 {
+    let max = |a: f32, b: f32| if a > b { a } else { b };
+    let min = |a: f32, b: f32| if a < b { a } else { b };
+    let scale = node.cell * slab.inv_d;
+    let shift = (node.origin - slab.origin) * slab.inv_d;
+    let (s, o) = (scale.to_array(), shift.to_array());
+    let mut hits = 0;
+    for j in 0..8 {
+        let t = |a: usize, far: usize| node.q[(2 * a + slab.neg[a]) ^ far][j] * s[a] + o[a];
+        let t0 = max(max(t(0, 0), max(t(1, 0), t(2, 0))), BOX_T_MIN);
+        let t1 = min(min(t(0, 1), min(t(1, 1), t(2, 1))), t_max);
+        hits |= u32::from(t0 <= t1) << j;
+    }
+    hits
+}
+
+#[cfg(not(all(target_arch = "x86_64", target_feature = "avx2")))]
+use child_hits_scalar as child_hits;
 
 #[cfg(test)]
 mod tests {
@@ -367,18 +452,18 @@ mod tests {
     fn check(sources: Vec<MeshSource>, seed: u64, count: usize) -> usize {
         let all: Vec<[DVec3; 3]> = sources.iter().flat_map(|s| s.triangles.clone()).collect();
         let accel = MeshAccel::build(sources);
-        let (bvh, tris) = accel.bvh_parts();
+        let (cw, bvh, tris) = accel.bvh_parts();
         let mut rng = Rng::for_sample(seed, 0, 0);
         let mut hits = 0;
         for k in 0..count {
             let (r, t_min, t_max) = ray(&mut rng, &all, k);
             let br = MeshAccel::bvh_ray(&r, t_min, t_max);
             let mut want = obvhs::ray::RayHit::none();
-            let found = bvh.ray_traverse(br, &mut want, |r, i| tris[i].intersect(r));
+            let found = cw.ray_traverse(br, &mut want, |r, i| tris[i].intersect(r));
             let got = closest(bvh, tris, br);
             let want = found.then_some((want.primitive_id, want.t.to_bits()));
             assert_eq!(got.map(|(i, t)| (i, t.to_bits())), want, "ray {k}: {r:?}");
-            let blocked = !bvh.ray_traverse_miss(br, |r, i| tris[i].intersect(r));
+            let blocked = !cw.ray_traverse_miss(br, |r, i| tris[i].intersect(r));
             assert_eq!(any_hit(bvh, tris, br), blocked, "ray {k}: {r:?}");
             assert_eq!(blocked, got.is_some(), "ray {k}");
             // The BVH skips boxes the ray leaves within obvhs's 1e−4 of its
@@ -387,6 +472,15 @@ mod tests {
             if bf >= 2e-4 {
                 let bf = bf.is_finite().then_some(bf);
                 assert_eq!(got.map(|g| g.1), bf, "ray {k}: {r:?}");
+            }
+            // Every node's box test, vectorised and one child at a time.
+            let slab = Slabs::new(&br);
+            for node in &bvh.nodes {
+                let t_max = got.map_or(br.tmax, |g| g.1);
+                assert_eq!(
+                    child_hits(node, &slab, t_max),
+                    child_hits_scalar(node, &slab, t_max)
+                );
             }
             hits += usize::from(got.is_some());
         }
