@@ -107,14 +107,23 @@ struct Group {
     bits: u32,
 }
 
+/// Per axis, whether the direction's sign bit is set. obvhs tests `d < 0`,
+/// false for −0, while its reciprocal of a component within ε of zero is
+/// ±1/ε by the sign bit (`safe_inverse`), −1/ε for −0: the near and far
+/// planes then swap and every box with extent along that axis is missed,
+/// so a ray with a −0 component missed the whole mesh.
+#[inline(always)]
+fn negative(ray: &BvhRay) -> [bool; 3] {
+    let d = ray.direction;
+    [d.x, d.y, d.z].map(f32::is_sign_negative)
+}
+
 /// The ray octant as obvhs encodes it: one bit per axis, set for a
 /// non-negative direction, XORed into an inner child's slot.
 #[inline(always)]
 fn octant(ray: &BvhRay) -> u32 {
-    let d = ray.direction;
-    (if d.x < 0.0 { 0 } else { 4 })
-        | (if d.y < 0.0 { 0 } else { 2 })
-        | (if d.z < 0.0 { 0 } else { 1 })
+    let [x, y, z] = negative(ray);
+    (if x { 0 } else { 4 }) | (if y { 0 } else { 2 }) | (if z { 0 } else { 1 })
 }
 
 /// Walks the BVH front to back, calling `prim(ray, index)` for every
@@ -224,11 +233,10 @@ struct Slabs {
 impl Slabs {
     #[inline(always)]
     fn new(ray: &BvhRay) -> Slabs {
-        let d = ray.direction;
         Slabs {
             origin: ray.origin,
             inv_d: ray.inv_direction,
-            neg: [d.x, d.y, d.z].map(|c| usize::from(c < 0.0)),
+            neg: negative(ray).map(usize::from),
         }
     }
 }
@@ -485,6 +493,46 @@ mod tests {
             hits += usize::from(got.is_some());
         }
         hits
+    }
+
+    /// Rays with zero direction components of either sign find what
+    /// testing every triangle finds (obvhs's traversal misses every box for
+    /// a −0 component).
+    #[test]
+    fn signed_zero_directions_find_the_nearest_triangle() {
+        let mut rng = Rng::for_sample(4, 0, 0);
+        let accel = MeshAccel::build(preview_meshes());
+        let (_, bvh, tris) = accel.bvh_parts();
+        let mut hits = 0;
+        for k in 0..3000 {
+            let mut d = unit(&mut rng).to_array();
+            // One or two components zero, with either sign; unit length.
+            for (axis, c) in d.iter_mut().enumerate() {
+                if (k >> axis) & 1 == 1 && axis != k % 3 {
+                    *c = if (k >> (axis + 3)) & 1 == 1 {
+                        -0.0
+                    } else {
+                        0.0
+                    };
+                }
+            }
+            let o = DVec3::new(
+                rng.uniform() - 0.5,
+                1.5 * rng.uniform(),
+                rng.uniform() - 0.5,
+            );
+            // Unit, as the renderer's: a short direction scales the 1/ε that
+            // obvhs's reciprocal gives a near-zero component down against
+            // the distances, and boxes are then culled wrongly.
+            let d = DVec3::from(d).normalize();
+            let br = MeshAccel::bvh_ray(&Ray { o, d }, 0.0, f64::INFINITY);
+            let bf = brute_force(tris, &br);
+            let got = closest(bvh, tris, br);
+            assert_eq!(got.map(|g| g.1), bf.is_finite().then_some(bf), "{o} {d:?}");
+            assert_eq!(any_hit(bvh, tris, br), bf.is_finite(), "{o} {d:?}");
+            hits += usize::from(got.is_some());
+        }
+        assert!(hits > 600, "{hits} hits");
     }
 
     #[test]
