@@ -107,15 +107,16 @@ struct Group {
     bits: u32,
 }
 
-/// Per axis, whether the direction's sign bit is set. obvhs tests `d < 0`,
-/// false for −0, while its reciprocal of a component within ε of zero is
-/// ±1/ε by the sign bit (`safe_inverse`), −1/ε for −0: the near and far
-/// planes then swap and every box with extent along that axis is missed,
-/// so a ray with a −0 component missed the whole mesh.
+/// Per axis, whether the reciprocal direction is negative: then the box's
+/// max plane is the near one. obvhs tests `d < 0`, false for −0, while its
+/// reciprocal of a component within ε of zero is ±1/ε by the sign bit
+/// (`safe_inverse`), −1/ε for −0: the near and far planes then swapped and
+/// every box with extent along that axis was missed, so a ray with a −0
+/// component missed the whole mesh.
 #[inline(always)]
 fn negative(ray: &BvhRay) -> [bool; 3] {
-    let d = ray.direction;
-    [d.x, d.y, d.z].map(f32::is_sign_negative)
+    let inv = ray.inv_direction;
+    [inv.x < 0.0, inv.y < 0.0, inv.z < 0.0]
 }
 
 /// The ray octant as obvhs encodes it: one bit per axis, set for a
