@@ -7,9 +7,9 @@
 //! with f64 barycentrics; otherwise triangles are shaded flat.
 
 use crate::geometry::{Ray, SurfacePoint, Transform};
+use crate::mesh_traverse::{Bvh, any_hit, closest};
 use glam::{DVec3, Vec3A};
-use obvhs::cwbvh::CwBvh;
-use obvhs::ray::{Ray as BvhRay, RayHit};
+use obvhs::ray::Ray as BvhRay;
 use obvhs::rt_triangle::RtTriangle;
 use obvhs::triangle::Triangle;
 use std::path::Path;
@@ -163,13 +163,45 @@ pub fn obj_from_bytes(
     })
 }
 
-/// Barycentric coordinates of `p` (in the triangle's plane) from sub-triangle areas.
-fn barycentric([a, b, c]: [DVec3; 3], p: DVec3) -> [f64; 3] {
-    let area = (b - a).cross(c - a);
-    let inv = 1.0 / area.length_squared();
-    let w1 = (p - a).cross(c - a).dot(area) * inv;
-    let w2 = (b - a).cross(p - a).dot(area) * inv;
-    [1.0 - w1 - w2, w1, w2]
+/// What a hit on a triangle needs in f64, computed once per triangle
+/// instead of per hit (152 bytes; the vertices alone took 72).
+#[derive(Clone, Copy)]
+struct Facet {
+    /// First vertex, and the edges from it to the second and third.
+    a: DVec3,
+    ab: DVec3,
+    ac: DVec3,
+    /// `ab × ac` (twice the area, along the normal) and 1/|ab × ac|².
+    area: DVec3,
+    inv_area2: f64,
+    /// Unit normal and unit tangent (along `ab`).
+    n: DVec3,
+    tangent: DVec3,
+}
+
+impl Facet {
+    fn new([a, b, c]: [DVec3; 3]) -> Facet {
+        let (ab, ac) = (b - a, c - a);
+        let area = ab.cross(ac);
+        Facet {
+            a,
+            ab,
+            ac,
+            area,
+            inv_area2: 1.0 / area.length_squared(),
+            n: area.normalize(),
+            tangent: ab.normalize(),
+        }
+    }
+
+    /// Barycentric coordinates of `p` (in the triangle's plane) from sub-triangle areas.
+    #[inline]
+    fn barycentric(&self, p: DVec3) -> [f64; 3] {
+        let ap = p - self.a;
+        let w1 = ap.cross(self.ac).dot(self.area) * self.inv_area2;
+        let w2 = self.ab.cross(ap).dot(self.area) * self.inv_area2;
+        [1.0 - w1 - w2, w1, w2]
+    }
 }
 
 /// A coordinate for messages: plain where that is short, else in e-notation.
@@ -183,9 +215,12 @@ fn number(x: f64) -> String {
 
 /// All mesh triangles of a scene in one BVH, stored in leaf order.
 pub struct MeshAccel {
-    bvh: CwBvh,
+    bvh: Bvh,
+    /// The obvhs tree `bvh` was copied from, for the traversal's tests.
+    #[cfg(test)]
+    cw: obvhs::cwbvh::CwBvh,
     rt: Vec<RtTriangle>,
-    tris: Vec<[DVec3; 3]>,
+    facets: Vec<Facet>,
     normals: Vec<Option<[DVec3; 3]>>,
     /// Per triangle, when some source has texture coordinates; else empty.
     uvs: Vec<[[f64; 2]; 3]>,
@@ -243,7 +278,7 @@ impl MeshAccel {
             .map(|&i| RtTriangle::from(&f32_tris[i]))
             .collect();
         let triangles = tris.len();
-        let tris_leaf = order.iter().map(|&i| tris[i]).collect();
+        let facets = order.iter().map(|&i| Facet::new(tris[i])).collect();
         let surface_leaf = order.iter().map(|&i| surface[i]).collect();
         let normals_leaf = order.iter().map(|&i| normals[i]).collect();
         let uvs_leaf = if any_uv {
@@ -252,9 +287,11 @@ impl MeshAccel {
             Vec::new()
         };
         MeshAccel {
-            bvh,
+            bvh: Bvh::new(&bvh),
+            #[cfg(test)]
+            cw: bvh,
             rt,
-            tris: tris_leaf,
+            facets,
             normals: normals_leaf,
             uvs: uvs_leaf,
             surface: surface_leaf,
@@ -269,16 +306,22 @@ impl MeshAccel {
 
     /// Whether there are no triangles.
     pub fn is_empty(&self) -> bool {
-        self.tris.is_empty()
+        self.facets.is_empty()
     }
 
-    fn bvh_ray(ray: &Ray, t_min: f64, t_max: f64) -> BvhRay {
+    pub(crate) fn bvh_ray(ray: &Ray, t_min: f64, t_max: f64) -> BvhRay {
         let t_max = if t_max.is_finite() {
             t_max as f32
         } else {
             f32::INFINITY
         };
         BvhRay::new(to_f32(ray.o), to_f32(ray.d), t_min as f32, t_max)
+    }
+
+    /// The BVH and its triangles in leaf order, for the traversal's tests.
+    #[cfg(test)]
+    pub(crate) fn bvh_parts(&self) -> (&obvhs::cwbvh::CwBvh, &Bvh, &[RtTriangle]) {
+        (&self.cw, &self.bvh, &self.rt)
     }
 
     /// Nearest hit in `(t_min, t_max)`, its surface id, for triangles with
@@ -290,33 +333,26 @@ impl MeshAccel {
         t_min: f64,
         t_max: f64,
     ) -> Option<(SurfacePoint, u32, Option<DVec3>, usize)> {
-        let mut hit = RayHit::none();
-        let r = Self::bvh_ray(ray, t_min, t_max);
-        if !self
-            .bvh
-            .ray_traverse(r, &mut hit, |r, id| self.rt[id].intersect(r))
-        {
-            return None;
-        }
-        let id = hit.primitive_id as usize;
-        let [a, b, c] = self.tris[id];
-        let n = (b - a).cross(c - a).normalize();
+        let (id, t_f32) = closest(&self.bvh, &self.rt, Self::bvh_ray(ray, t_min, t_max))?;
+        let id = id as usize;
+        let f = &self.facets[id];
+        let n = f.n;
         // f64 plane intersection of the triangle the f32 traversal found.
         let denom = ray.d.dot(n);
         let t = if denom.abs() > 1e-300 {
-            (a - ray.o).dot(n) / denom
+            (f.a - ray.o).dot(n) / denom
         } else {
-            hit.t as f64
+            t_f32 as f64
         };
         let t = if t.is_finite() && t > t_min {
             t
         } else {
-            hit.t as f64
+            t_f32 as f64
         };
-        let tangent = (b - a).normalize();
+        let tangent = f.tangent;
         let p = ray.at(t);
         let shading = self.normals[id].and_then(|[na, nb, nc]| {
-            let [w0, w1, w2] = barycentric([a, b, c], p);
+            let [w0, w1, w2] = f.barycentric(p);
             (w0 * na + w1 * nb + w2 * nc).try_normalize()
         });
         Some((
@@ -331,7 +367,7 @@ impl MeshAccel {
     /// [`MeshAccel::intersect`]): its vertices' `vt` interpolated, or its
     /// barycentric coordinates (w₁, w₂) where the file has no `vt`.
     pub fn uv(&self, id: usize, p: DVec3) -> [f64; 2] {
-        let [w0, w1, w2] = barycentric(self.tris[id], p);
+        let [w0, w1, w2] = self.facets[id].barycentric(p);
         match self.uvs.get(id) {
             Some([ua, ub, uc]) => [
                 w0 * ua[0] + w1 * ub[0] + w2 * uc[0],
@@ -343,11 +379,7 @@ impl MeshAccel {
 
     /// Whether anything blocks the segment `(t_min, t_max)` of `ray`.
     pub fn occluded(&self, ray: &Ray, t_min: f64, t_max: f64) -> bool {
-        !self
-            .bvh
-            .ray_traverse_miss(Self::bvh_ray(ray, t_min, t_max), |r, id| {
-                self.rt[id].intersect(r)
-            })
+        any_hit(&self.bvh, &self.rt, Self::bvh_ray(ray, t_min, t_max))
     }
 }
 
@@ -446,6 +478,56 @@ mod tests {
             .err()
             .expect("refused");
         assert!(e.contains("no triangles of non-zero area"), "{e}");
+    }
+
+    /// The hit's f64 values from per-triangle data computed at build time
+    /// are, bit for bit, those of the formulas on the vertices: every
+    /// triangle its own source, so the surface id names it.
+    #[test]
+    fn precomputed_triangle_data_gives_the_vertex_formulas_values() {
+        let mut rng = crate::rng::Rng::for_sample(5, 0, 0);
+        let mut point = || DVec3::from(rng.uniform3()) * 2.0 - 1.0;
+        let tris: Vec<([DVec3; 3], [DVec3; 3])> = (0..300)
+            .map(|_| {
+                let a = point();
+                let (b, c) = (a + point() * 0.3, a + point() * 0.3);
+                (
+                    [a, b, c],
+                    [point(), point(), point()].map(|v| v.normalize()),
+                )
+            })
+            .collect();
+        let sources = tris.iter().enumerate().map(|(k, &(t, vn))| MeshSource {
+            triangles: vec![t],
+            normals: vec![Some(vn)],
+            uvs: None,
+            surface: k as u32,
+        });
+        let accel = MeshAccel::build(sources.collect());
+        let mut hits = 0;
+        for _ in 0..5000 {
+            let ray = Ray {
+                o: point() * 2.0,
+                d: point().normalize(),
+            };
+            let Some((h, s, shading, id)) = accel.intersect(&ray, 0.0, f64::INFINITY) else {
+                continue;
+            };
+            let ([a, b, c], [na, nb, nc]) = tris[s as usize];
+            let n = (b - a).cross(c - a).normalize();
+            let t = (a - ray.o).dot(n) / ray.d.dot(n);
+            assert_eq!(h.t.to_bits(), t.to_bits());
+            assert_eq!((h.n, h.tangent), (n, (b - a).normalize()));
+            let area = (b - a).cross(c - a);
+            let inv = 1.0 / area.length_squared();
+            let w1 = (h.p - a).cross(c - a).dot(area) * inv;
+            let w2 = (b - a).cross(h.p - a).dot(area) * inv;
+            let want = ((1.0 - w1 - w2) * na + w1 * nb + w2 * nc).try_normalize();
+            assert_eq!(shading, want);
+            assert_eq!(accel.uv(id, h.p), [w1, w2]);
+            hits += 1;
+        }
+        assert!(hits > 500, "{hits} hits");
     }
 
     #[test]
