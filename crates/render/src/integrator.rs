@@ -364,11 +364,26 @@ fn emission_over_pixel(
         }) => [0.0; 3],
         _ => tables.direct(&emission_at(&scene.lights, r, h).0),
     };
-    let mut sum = seen(ray, first);
+    average_over_pixel(scene, (x, y), u, k, seen(ray, first), seen)
+}
+
+/// The average of `value` (of a camera ray and its hit) over `k` positions
+/// of pixel `xy` ([`pixel_point`] with the camera sample's offset `u`),
+/// the first of which is the camera sample's own ray, whose value is
+/// `first`.
+fn average_over_pixel(
+    scene: &Scene,
+    (x, y): (u32, u32),
+    u: [f64; 2],
+    k: usize,
+    first: [f64; 3],
+    value: impl Fn(&Ray, Option<&Hit>) -> [f64; 3],
+) -> [f64; 3] {
+    let mut sum = first;
     for i in 1..k {
         let [px, py] = pixel_point(u, i, k);
         let r = scene.camera.ray(x as f64 + px, y as f64 + py);
-        let e = seen(&r, scene.shapes.intersect(&r, f64::INFINITY).as_ref());
+        let e = value(&r, scene.shapes.intersect(&r, f64::INFINITY).as_ref());
         for c in 0..3 {
             sum[c] += e[c];
         }
@@ -425,19 +440,9 @@ fn delta_over_pixel(
     ray: &Ray,
     first: Option<&Hit>,
 ) -> [f64; 3] {
+    let at = |r: &Ray, h: Option<&Hit>| h.map_or([0.0; 3], |h| delta_at(scene, tables, h, r));
     let k = scene.settings.delta_pixel_samples;
-    let mut sum = first.map_or([0.0; 3], |h| delta_at(scene, tables, h, ray));
-    for i in 1..k {
-        let [px, py] = pixel_point(u, i, k);
-        let r = scene.camera.ray(x as f64 + px, y as f64 + py);
-        if let Some(h) = scene.shapes.intersect(&r, f64::INFINITY) {
-            let e = delta_at(scene, tables, &h, &r);
-            for c in 0..3 {
-                sum[c] += e[c];
-            }
-        }
-    }
-    sum.map(|v| v / k as f64)
+    average_over_pixel(scene, (x, y), u, k, at(ray, first), at)
 }
 
 /// [`exact_delta`] at a camera ray's hit, zero unless it is a material
