@@ -353,29 +353,17 @@ mod tests {
             24,
         )
         .unwrap();
-        let behind = lights(vec![LightKind::Sphere {
-            sphere: Sphere {
-                center: DVec3::new(0.0, 0.0, 6.0),
-                radius: 0.3,
-            },
-            spectrum: Spectrum::Constant(1.0),
-        }]);
+        let sphere = |center: DVec3, radius: f64| {
+            lights(vec![LightKind::Sphere {
+                sphere: Sphere { center, radius },
+                spectrum: Spectrum::Constant(1.0),
+            }])
+        };
+        let behind = sphere(DVec3::new(0.0, 0.0, 6.0), 0.3);
         assert!(EmitterEdges::build(&cam, &behind, 8).is_none());
-        let inside = lights(vec![LightKind::Sphere {
-            sphere: Sphere {
-                center: DVec3::new(0.0, 0.0, 3.0),
-                radius: 1.0,
-            },
-            spectrum: Spectrum::Constant(1.0),
-        }]);
+        let inside = sphere(DVec3::new(0.0, 0.0, 3.0), 1.0);
         assert!(EmitterEdges::build(&cam, &inside, 8).is_none());
-        let ahead = lights(vec![LightKind::Sphere {
-            sphere: Sphere {
-                center: DVec3::ZERO,
-                radius: 0.3,
-            },
-            spectrum: Spectrum::Constant(1.0),
-        }]);
+        let ahead = sphere(DVec3::ZERO, 0.3);
         assert!(EmitterEdges::build(&cam, &ahead, 1).is_none());
         let m = EmitterEdges::build(&cam, &ahead, 8).unwrap();
         assert!(
