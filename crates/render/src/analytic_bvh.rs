@@ -247,3 +247,99 @@ impl AnalyticBvh {
         (enter <= exit).then_some(enter)
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geometry::Transform;
+    use proptest::prelude::*;
+
+    /// The nearest shape along `ray` within (0, t_max) and its distance, by
+    /// the tree or by testing every shape.
+    fn nearest(
+        bvh: Option<&AnalyticBvh>,
+        planars: &[(Planar, ())],
+        spheres: &[(Sphere, ())],
+        ray: &Ray,
+    ) -> Option<(Prim, f64)> {
+        let mut best = None;
+        let mut test = |p: Prim, t: f64| {
+            let d = match p {
+                Prim::Planar(k) => planars[k as usize].0.hit(ray, 0.0, t).map(|h| h.t),
+                Prim::Sphere(i) => spheres[i as usize].0.hit_distance(ray, 0.0, t),
+            }?;
+            best = Some((p, d));
+            Some(d)
+        };
+        match bvh {
+            Some(b) => b.visit(ray, f64::INFINITY, test),
+            None => {
+                let mut t = f64::INFINITY;
+                let all = (0..planars.len() as u32)
+                    .map(Prim::Planar)
+                    .chain((0..spheres.len() as u32).map(Prim::Sphere));
+                for p in all {
+                    if let Some(d) = test(p, t) {
+                        t = d;
+                    }
+                }
+            }
+        }
+        best
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(64))]
+        /// At every scale from 1e−6 to 1e6 and offset from the origin up to
+        /// 1e6 of it, with shapes from a hundredth to a tenth of the
+        /// scene, thin and round: the tree finds the loop's nearest shape
+        /// at the loop's distance for rays from outside and inside.
+        #[test]
+        fn the_tree_finds_the_loops_nearest_shape(
+            scale_exp in -6.0f64..6.0,
+            offset in -1e6f64..1e6,
+            shapes in proptest::collection::vec(
+                (proptest::array::uniform3(-1.0f64..1.0), 0.01f64..0.1, 0usize..3,
+                 proptest::array::uniform3(0.0f64..360.0)),
+                32..64,
+            ),
+            rays in proptest::collection::vec(
+                (proptest::array::uniform3(-1.5f64..1.5), 0usize..64,
+                 proptest::array::uniform3(-1.3f64..1.3)),
+                64,
+            ),
+        ) {
+            let s = 10f64.powf(scale_exp);
+            let o = DVec3::splat(offset * s);
+            let (mut planars, mut spheres) = (Vec::new(), Vec::new());
+            for (c, size, kind, rot) in &shapes {
+                let c = o + DVec3::from_array(*c) * s;
+                match kind {
+                    0 => spheres.push((Sphere { center: c, radius: size * s }, ())),
+                    k => {
+                        let xf = Transform::new(*rot, s, (c).to_array());
+                        let p = if *k == 1 {
+                            Planar::rectangle([2.0 * size, *size], &xf)
+                        } else {
+                            Planar::disk(*size, &xf)
+                        };
+                        planars.push((p, ()));
+                    }
+                }
+            }
+            let bvh = AnalyticBvh::build_always(&planars, &spheres);
+            prop_assert!(bvh.is_some());
+            for (p, j, jitter) in &rays {
+                // Aimed at a shape, to its edge and past it.
+                let (c, size, ..) = shapes[j % shapes.len()];
+                let at = o + (DVec3::from_array(c) + DVec3::from_array(*jitter) * size) * s;
+                let from = o + DVec3::from_array(*p) * s;
+                let Some(d) = (at - from).try_normalize() else { continue };
+                let ray = Ray { o: from, d };
+                let want = nearest(None, &planars, &spheres, &ray);
+                let got = nearest(bvh.as_ref(), &planars, &spheres, &ray);
+                prop_assert_eq!(got.map(|g| g.1), want.map(|w| w.1));
+            }
+        }
+    }
+}
