@@ -22,15 +22,13 @@ pub const DEFAULT_SAMPLES: usize = 16;
 /// Most `[integrator] emitter_pixel_samples`.
 pub const MAX_SAMPLES: u32 = 64;
 
-/// Pixels whose footprint an emitter's outline may cross, and how many
-/// positions per camera sample the emission seen there is averaged over.
+/// Pixels whose footprint an emitter's outline may cross (the positions
+/// per camera sample averaged there are `Settings::emitter_pixel_samples`).
 #[derive(Clone, Debug)]
 pub struct EmitterEdges {
     width: u32,
     height: u32,
     bits: Vec<u64>,
-    /// Positions per camera sample (≥ 2).
-    pub samples: usize,
 }
 
 impl EmitterEdges {
@@ -46,7 +44,6 @@ impl EmitterEdges {
             width,
             height,
             bits: vec![0; words],
-            samples,
         };
         let reach = pixel_reach(camera);
         // Pixel tests, at most 16 image areas in all (a scene of many large

@@ -192,7 +192,21 @@ pub struct Guided<'a> {
     pub cones: Cones,
 }
 
-impl Guided<'_> {
+impl<'a> Guided<'a> {
+    /// `inner` guided by `cones` when a vertex has them, else `inner`
+    /// itself; `slot` holds the guided model for as long as it is used.
+    #[inline]
+    pub fn over(
+        slot: &'a mut Option<Guided<'a>>,
+        inner: &'a dyn Bxdf,
+        cones: Option<Cones>,
+    ) -> &'a dyn Bxdf {
+        match cones {
+            Some(cones) => slot.insert(Guided { inner, cones }),
+            None => inner,
+        }
+    }
+
     #[inline]
     fn mix(&self, p_bsdf: f64, wo: DVec3) -> f64 {
         let (c, g) = self.cones.weighted_pdf(wo);

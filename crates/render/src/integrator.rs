@@ -342,12 +342,12 @@ fn emitter_edge_tables(scene: &Scene, x: u32, y: u32) -> Option<&SpectralTables>
 }
 
 /// The emission seen directly (an emitter or the environment, ∫Le·cmf dλ
-/// exactly) averaged over [`EmitterEdges::samples`](crate::emitter_edges::EmitterEdges::samples)
-/// positions of pixel `xy` ([`pixel_point`]; the first is the camera ray
-/// `ray`, whose hit is `first`): an unbiased estimate of that term's pixel
-/// integral (the film's filter is the pixel box), which the camera
-/// sample's own path then leaves out. Each extra position costs a camera
-/// ray and nothing else.
+/// exactly) averaged over `emitter_pixel_samples` positions of pixel `xy`
+/// ([`pixel_point`]; the first is the camera ray `ray`, whose hit is
+/// `first`): an unbiased estimate of that term's pixel integral (the
+/// film's filter is the pixel box), which the camera sample's own path
+/// then leaves out. Each extra position costs a camera ray and nothing
+/// else.
 fn emission_over_pixel(
     scene: &Scene,
     tables: &SpectralTables,
@@ -356,7 +356,7 @@ fn emission_over_pixel(
     ray: &Ray,
     first: Option<&Hit>,
 ) -> [f64; 3] {
-    let k = scene.emitter_edges.as_ref().map_or(1, |e| e.samples);
+    let k = scene.settings.emitter_pixel_samples;
     let seen = |r: &Ray, h: Option<&Hit>| match h {
         Some(Hit {
             surface: Surface::Material(_),
@@ -1052,14 +1052,8 @@ impl<'a> FlatPath<'a> {
             FlatVertex::Free(b) => (b, None),
             FlatVertex::Fresnel(b, table, fresnel) => (b, Some((table, fresnel))),
         };
-        let guided;
-        let bx: &dyn Bxdf = match cones {
-            Some(cones) => {
-                guided = Guided { inner: bx, cones };
-                &guided
-            }
-            None => bx,
-        };
+        let mut guided = None;
+        let bx = Guided::over(&mut guided, bx, cones);
         let settings = &scene.settings;
         let wi = v.wi;
         self.peak = lobe_peak(settings.mis_light_weight, bx, wi);
@@ -1495,17 +1489,8 @@ fn trace(
         };
         let wi = v.wi;
         let cones = scene.casters.cones(m, v.p, |d| v.frame.to_local(d));
-        let guided;
-        let bxdf: &dyn Bxdf = match cones {
-            Some(cones) => {
-                guided = Guided {
-                    inner: &*scene.materials[m as usize].bxdf,
-                    cones,
-                };
-                &guided
-            }
-            None => &*scene.materials[m as usize].bxdf,
-        };
+        let mut guided = None;
+        let bxdf = Guided::over(&mut guided, &*scene.materials[m as usize].bxdf, cones);
         th.resolve(scene, lambdas, n);
         th.peak = lobe_peak(settings.mis_light_weight, bxdf, wi);
         let mis = VertexMis::new(settings, th.peak);

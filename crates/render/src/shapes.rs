@@ -225,34 +225,35 @@ impl Shapes {
     #[inline]
     pub fn occluded(&self, ray: &Ray, t_max: f64, own: Option<Surface>) -> bool {
         let other = |s: &Surface| own != Some(*s);
-        if let Some(bvh) = &self.analytic_bvh {
-            let mut blocked = false;
-            bvh.visit(ray, t_max, |prim, t| {
-                blocked = match prim {
-                    Prim::Planar(k) => {
-                        let (p, s) = &self.planars[k as usize];
-                        other(s) && p.hit(ray, 0.0, t).is_some()
-                    }
-                    Prim::Sphere(i) => {
-                        let (sp, s) = &self.spheres[i as usize];
-                        other(s) && sp.hit_distance(ray, 0.0, t).is_some()
-                    }
-                };
-                blocked.then_some(-1.0)
-            });
-            return blocked
-                || self
-                    .mesh
-                    .as_ref()
-                    .is_some_and(|m| m.occluded(ray, 0.0, t_max));
-        }
-        self.planars
-            .iter()
-            .any(|(p, s)| other(s) && p.hit(ray, 0.0, t_max).is_some())
-            || self
-                .spheres
-                .iter()
-                .any(|(sp, s)| other(s) && sp.hit_distance(ray, 0.0, t_max).is_some())
+        let analytic = match &self.analytic_bvh {
+            Some(bvh) => {
+                let mut blocked = false;
+                bvh.visit(ray, t_max, |prim, t| {
+                    blocked = match prim {
+                        Prim::Planar(k) => {
+                            let (p, s) = &self.planars[k as usize];
+                            other(s) && p.hit(ray, 0.0, t).is_some()
+                        }
+                        Prim::Sphere(i) => {
+                            let (sp, s) = &self.spheres[i as usize];
+                            other(s) && sp.hit_distance(ray, 0.0, t).is_some()
+                        }
+                    };
+                    blocked.then_some(-1.0)
+                });
+                blocked
+            }
+            None => {
+                self.planars
+                    .iter()
+                    .any(|(p, s)| other(s) && p.hit(ray, 0.0, t_max).is_some())
+                    || self
+                        .spheres
+                        .iter()
+                        .any(|(sp, s)| other(s) && sp.hit_distance(ray, 0.0, t_max).is_some())
+            }
+        };
+        analytic
             || self
                 .mesh
                 .as_ref()

@@ -207,7 +207,7 @@ pub(super) fn build(path: &Path, text: &str, desc: &SceneDesc) -> Result<Scene, 
             None => String::new(),
             Some(e) => format!(
                 ", the emission seen directly averaged over {} points per sample on {} light-outline pixel(s)",
-                e.samples,
+                settings.emitter_pixel_samples,
                 e.count()
             ),
         },
@@ -342,6 +342,30 @@ impl<'a> Builder<'a> {
         SceneError::at(self.path, self.text, span.start, msg)
     }
 
+    /// An `[integrator]` count of positions per camera sample (`key`):
+    /// `default` when unset, else 1..=`max`, or an error at the value
+    /// ending with `why`.
+    fn pixel_samples(
+        &self,
+        key: &str,
+        value: &Option<toml::Spanned<u32>>,
+        max: u32,
+        default: usize,
+        why: &str,
+    ) -> Result<usize, SceneError> {
+        match value {
+            Some(k) if !(1..=max).contains(k.get_ref()) => Err(self.at(
+                k.span(),
+                format!(
+                    "{key} = {} is invalid: expected 1..={max}{why}",
+                    k.get_ref()
+                ),
+            )),
+            Some(k) => Ok(*k.get_ref() as usize),
+            None => Ok(default),
+        }
+    }
+
     /// Stage 1: the camera, with its resolution checked against the film's limits.
     fn camera(&self) -> Result<Camera, SceneError> {
         let cam = &self.desc.camera;
@@ -459,34 +483,20 @@ impl<'a> Builder<'a> {
             None if integrator.sampler == SamplerKind::Independent => Some(1.0),
             None => None,
         };
-        let delta_pixel_samples = match &integrator.delta_pixel_samples {
-            Some(k) if !(1..=DELTA_PIXEL_SAMPLES_MAX).contains(k.get_ref()) => {
-                return Err(self.at(
-                    k.span(),
-                    format!(
-                        "delta_pixel_samples = {} is invalid: expected 1..={DELTA_PIXEL_SAMPLES_MAX}",
-                        k.get_ref()
-                    ),
-                ));
-            }
-            Some(k) => *k.get_ref() as usize,
-            None => 1,
-        };
-        let emitter_pixel_samples = match &integrator.emitter_pixel_samples {
-            Some(k) if !(1..=crate::emitter_edges::MAX_SAMPLES).contains(k.get_ref()) => {
-                return Err(self.at(
-                    k.span(),
-                    format!(
-                        "emitter_pixel_samples = {} is invalid: expected 1..={} (positions per \
-                         camera sample on a light's outline; 1 turns it off)",
-                        k.get_ref(),
-                        crate::emitter_edges::MAX_SAMPLES
-                    ),
-                ));
-            }
-            Some(k) => *k.get_ref() as usize,
-            None => crate::emitter_edges::DEFAULT_SAMPLES,
-        };
+        let delta_pixel_samples = self.pixel_samples(
+            "delta_pixel_samples",
+            &integrator.delta_pixel_samples,
+            DELTA_PIXEL_SAMPLES_MAX,
+            1,
+            "",
+        )?;
+        let emitter_pixel_samples = self.pixel_samples(
+            "emitter_pixel_samples",
+            &integrator.emitter_pixel_samples,
+            crate::emitter_edges::MAX_SAMPLES,
+            crate::emitter_edges::DEFAULT_SAMPLES,
+            " (positions per camera sample on a light's outline; 1 turns it off)",
+        )?;
         let caustic_guiding = match &integrator.caustic_guiding {
             Some(c) if !(0.0..=crate::guide::MAX_SHARE).contains(c.get_ref()) => {
                 return Err(self.at(
