@@ -139,6 +139,12 @@ impl EmitterEdges {
             lo = lo.min(DVec2::new(px, py));
             hi = hi.max(DVec2::new(px, py));
         }
+        self.pixel_box(lo, hi)
+    }
+
+    /// The pixels (x0..x1, y0..y1) within two of the image-plane box
+    /// `lo`–`hi`, clipped to the image; `None` if none are.
+    fn pixel_box(&self, lo: DVec2, hi: DVec2) -> Option<(u32, u32, u32, u32)> {
         let clamp = |v: f64, n: u32| (v.max(0.0).min(n as f64)) as u32;
         let (x0, x1) = (clamp(lo.x - 2.0, self.width), clamp(hi.x + 3.0, self.width));
         let (y0, y1) = (
@@ -164,10 +170,9 @@ impl EmitterEdges {
         };
         for i in 0..4 {
             let (a, b) = (p[i], p[(i + 1) % 4]);
-            let x0 = (a.x.min(b.x) - 2.0).max(0.0).min(self.width as f64) as u32;
-            let x1 = (a.x.max(b.x) + 3.0).max(0.0).min(self.width as f64) as u32;
-            let y0 = (a.y.min(b.y) - 2.0).max(0.0).min(self.height as f64) as u32;
-            let y1 = (a.y.max(b.y) + 3.0).max(0.0).min(self.height as f64) as u32;
+            let Some((x0, x1, y0, y1)) = self.pixel_box(a.min(b), a.max(b)) else {
+                continue;
+            };
             if !spend(budget, x0, x1, y0, y1) {
                 return;
             }
