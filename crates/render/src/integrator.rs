@@ -148,7 +148,8 @@ const MAX_LIGHT_COUNT: f64 = 3.0;
 /// 16 (α 0.3 and the other peer scenes within 1 %). Models that do not
 /// know their lobe keep the textbook weight, and so does the independent
 /// sampler (the scene sets `fixed` to 1 for it): without strata the
-/// argument fails, and the same plates measured 1.02–1.07.
+/// argument fails, and the same plates measured 1.02–1.07. Lights at
+/// infinity keep it too ([`VertexMis::at_infinity`]).
 #[inline]
 fn light_weight(fixed: Option<f64>, peak: Option<f64>, p_light: f64) -> f64 {
     if let Some(c) = fixed {
@@ -190,6 +191,22 @@ impl VertexMis {
             heuristic: settings.mis,
             fixed: settings.mis_light_weight,
             peak,
+        }
+    }
+
+    /// The weights toward a light at infinity (an environment or sky) or
+    /// reached by escaping: the textbook count (or the scene's fixed one).
+    /// [`light_weight`]'s argument needs a light whose samples are strata
+    /// of a compact emitter; a map's or sky's samples are strata of its
+    /// luminance, scattered over the sphere (an HDR map's sun among its sky),
+    /// and counting them up to three times raised an HDR-lit scene's
+    /// variance 11–23 % (`benches/peer/generality_scenes_2.toml`).
+    #[inline]
+    fn at_infinity(self, yes: bool) -> VertexMis {
+        if yes {
+            VertexMis { peak: None, ..self }
+        } else {
+            self
         }
     }
 
@@ -743,7 +760,9 @@ fn next_event<'s, E>(
     if !unoccluded(scene, v.p, &ls) {
         return;
     }
-    let w = mis.light(ls.pdf, q_sum, p_bsdf);
+    let w = mis
+        .at_infinity(ls.dist.is_infinite())
+        .light(ls.pdf, q_sum, p_bsdf);
     if w > 0.0 {
         add(&ls, wo, w, eval);
     }
@@ -1029,7 +1048,9 @@ impl<'a> FlatPath<'a> {
         let w = if depth == 0 {
             1.0
         } else {
-            VertexMis::new(&scene.settings, self.peak).bsdf(pdf_l, 1.0, self.l_mis)
+            VertexMis::new(&scene.settings, self.peak)
+                .at_infinity(hit.is_none())
+                .bsdf(pdf_l, 1.0, self.l_mis)
         };
         if w > 0.0 {
             let e = Self::integral(tables, &em, self.conductor);
@@ -1363,7 +1384,9 @@ fn first_vertex_cv(
         bxdf.eval_pdf_many(wi, s.wo, &lambdas[..n], &mut fp[..n]);
         if !matches!(em, Emission::None) {
             let own: f64 = fp[..n].iter().map(|v| v.1).sum::<f64>() / s.pdf;
-            let w = mis.bsdf(pdf_l, own, q_sum / s.pdf);
+            let w = mis
+                .at_infinity(next.is_none())
+                .bsdf(pdf_l, own, q_sum / s.pdf);
             if w > 0.0 {
                 glossy(&mut xyz, s.wo, &fp, &em, w / s.pdf);
             }
@@ -1604,7 +1627,9 @@ fn reached_emission(
     th.resolve(scene, lambdas, n);
     let own: f64 = th.q[..n].iter().sum();
     let l_sum: f64 = th.l_mis[..n].iter().sum();
-    let w = VertexMis::new(&scene.settings, th.peak).bsdf(pdf_l, own, l_sum);
+    let w = VertexMis::new(&scene.settings, th.peak)
+        .at_infinity(hit.is_none())
+        .bsdf(pdf_l, own, l_sum);
     if w > 0.0 {
         let mut e = [0.0; N];
         em.eval_many(&lambdas[..n], &mut e[..n]);
