@@ -83,7 +83,7 @@ def die(msg: str) -> None:
 
 
 def absolute_csv_paths(sc: dict, folder: Path) -> None:
-    """Makes a material's `reflectance_csv` and a mesh's `file` absolute (they are relative to
+    """Makes a material's `reflectance_csv`, a mesh's and an environment map's `file` absolute (they are relative to
     the scene file), so the Mitsuba translation and the lustre scene written into a temporary
     folder both find them."""
     for m in sc.get("materials", {}).values():
@@ -92,6 +92,9 @@ def absolute_csv_paths(sc: dict, folder: Path) -> None:
     for s in sc.get("shapes", []):
         if isinstance(s, dict) and s.get("type") == "mesh" and isinstance(s.get("file"), str):
             s["file"] = str((folder / s["file"]).resolve())
+    for l in sc.get("lights", []):
+        if isinstance(l, dict) and l.get("type") == "environment" and isinstance(l.get("file"), str):
+            l["file"] = str((folder / l["file"]).resolve())
 
 
 def load_scenes(path: Path) -> list[dict]:
@@ -288,6 +291,26 @@ def mitsuba_scene_dict(mi, sc: dict, spp: int, resolution=None, sampler: str = "
         elif l["type"] == "point":
             d[f"light{i}"] = {"type": "point", "position": l["position"],
                               "intensity": spectrum(spec, l["intensity"], where, y_fix)}
+        elif l["type"] == "rectangle":
+            if l.get("two_sided", False):
+                raise Unsupported(f"{where}: two_sided rectangle lights have no Mitsuba area-emitter "
+                                  "equivalent here")
+            sx, sy = l["size"]
+            to_world = shape_transform(mi, l.get("transform")) @ T().scale([sx / 2, sy / 2, 1.0])
+            # lustre's emitters reflect nothing; Mitsuba's default BSDF would be a 0.5 diffuse.
+            d[f"light{i}"] = {"type": "rectangle", "to_world": to_world,
+                              "bsdf": {"type": "diffuse", "reflectance": {"type": "uniform", "value": 0.0}},
+                              "emitter": {"type": "area",
+                                          "radiance": spectrum(spec, l["radiance"], where, y_fix)}}
+        elif l["type"] == "environment" and "file" in l:
+            if float(l.get("rotate_deg", 0.0)) != 0.0:
+                raise Unsupported(f"{where}: rotate_deg of an environment map not translated")
+            # Both map u = atan2(x, -z) / 2π, v = acos(y) / π (+y up). lustre looks the map up
+            # texel by texel and lifts RGB onto the colour-matching functions; Mitsuba 3.9
+            # interpolates bilinearly (no nearest option) and upsamples RGB its own way, so
+            # images differ by that much and lustre is measured against its own reference.
+            d[f"light{i}"] = {"type": "envmap", "filename": str(l["file"]),
+                              "scale": float(l.get("radiance", 1.0))}
         elif l["type"] == "environment" and "file" not in l:
             d[f"light{i}"] = {"type": "constant", "radiance": spectrum(spec, l["radiance"], where, y_fix)}
         else:
