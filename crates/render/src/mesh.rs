@@ -219,6 +219,8 @@ pub struct MeshAccel {
     /// The obvhs tree `bvh` was copied from, for the traversal's tests.
     #[cfg(test)]
     cw: obvhs::cwbvh::CwBvh,
+    /// The triangles in leaf order as obvhs tests them, for the tests.
+    #[cfg(test)]
     rt: Vec<RtTriangle>,
     facets: Vec<Facet>,
     normals: Vec<Option<[DVec3; 3]>>,
@@ -273,7 +275,7 @@ impl MeshAccel {
         );
         // Reorder into leaf order once so traversal indexes directly.
         let order: Vec<usize> = bvh.primitive_indices.iter().map(|&i| i as usize).collect();
-        let rt = order
+        let rt: Vec<RtTriangle> = order
             .iter()
             .map(|&i| RtTriangle::from(&f32_tris[i]))
             .collect();
@@ -287,9 +289,10 @@ impl MeshAccel {
             Vec::new()
         };
         MeshAccel {
-            bvh: Bvh::new(&bvh),
+            bvh: Bvh::new(&bvh, &rt),
             #[cfg(test)]
             cw: bvh,
+            #[cfg(test)]
             rt,
             facets,
             normals: normals_leaf,
@@ -333,7 +336,7 @@ impl MeshAccel {
         t_min: f64,
         t_max: f64,
     ) -> Option<(SurfacePoint, u32, Option<DVec3>, usize)> {
-        let (id, t_f32) = closest(&self.bvh, &self.rt, Self::bvh_ray(ray, t_min, t_max))?;
+        let (id, t_f32) = closest(&self.bvh, Self::bvh_ray(ray, t_min, t_max))?;
         let id = id as usize;
         let f = &self.facets[id];
         let n = f.n;
@@ -379,7 +382,7 @@ impl MeshAccel {
 
     /// Whether anything blocks the segment `(t_min, t_max)` of `ray`.
     pub fn occluded(&self, ray: &Ray, t_min: f64, t_max: f64) -> bool {
-        any_hit(&self.bvh, &self.rt, Self::bvh_ray(ray, t_min, t_max))
+        any_hit(&self.bvh, Self::bvh_ray(ray, t_min, t_max))
     }
 }
 
