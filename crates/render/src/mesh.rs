@@ -286,10 +286,14 @@ impl MeshAccel {
         );
         // Reorder into leaf order once so traversal indexes directly.
         let order: Vec<usize> = bvh.primitive_indices.iter().map(|&i| i as usize).collect();
-        let rt: Vec<RtTriangle> = order
-            .iter()
-            .map(|&i| RtTriangle::from(&f32_tris[i]))
-            .collect();
+        let rt_of = |k: usize| Some(RtTriangle::from(f32_tris.get(*order.get(k)?)?));
+        let leaf_bvh = Bvh::new(&bvh, rt_of);
+        #[cfg(test)]
+        let rt: Vec<RtTriangle> = (0..order.len()).filter_map(rt_of).collect();
+        // Freed before the f64 data are built: they set the peak memory.
+        drop(f32_tris);
+        #[cfg(not(test))]
+        drop(bvh);
         let triangles = tris.len();
         let facets = order.iter().map(|&i| Facet::new(tris[i])).collect();
         let surface_leaf = order.iter().map(|&i| surface[i]).collect();
@@ -300,7 +304,7 @@ impl MeshAccel {
             Vec::new()
         };
         MeshAccel {
-            bvh: Bvh::new(&bvh, &rt),
+            bvh: leaf_bvh,
             #[cfg(test)]
             cw: bvh,
             #[cfg(test)]

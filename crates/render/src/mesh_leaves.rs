@@ -30,9 +30,9 @@ const _: () = assert!(size_of::<Block>() == 384);
 
 impl Block {
     /// Up to eight triangles in lanes 0, 1, …
-    pub(crate) fn new(tris: &[RtTriangle]) -> Block {
+    pub(crate) fn new(tris: impl IntoIterator<Item = RtTriangle>) -> Block {
         let mut lanes = [[0.0; 8]; FIELDS];
-        for (j, t) in tris.iter().take(8).enumerate() {
+        for (j, t) in tris.into_iter().take(8).enumerate() {
             for (k, v) in [t.v0, t.e1, t.e2, t.ng].into_iter().enumerate() {
                 lanes[3 * k][j] = v.x;
                 lanes[3 * k + 1][j] = v.y;
@@ -276,7 +276,7 @@ mod tests {
     /// Checks one block against obvhs's test of its triangles; whether any
     /// was hit.
     fn check_block(tris: &[RtTriangle], ray: &BvhRay, bits: u32) -> bool {
-        let block = [Block::new(tris)];
+        let block = [Block::new(tris.iter().copied())];
         let tr = TriRay::new(ray);
         let (t, h) = block_hits(&block[0], bits, &tr, ray.tmax);
         let (ts, hs) = block_hits_scalar(&block[0], bits, &tr, ray.tmax);

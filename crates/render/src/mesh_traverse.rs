@@ -74,8 +74,10 @@ impl Bvh {
     /// child metadata byte: an inner child is 0b001 in bits 5–7 and its
     /// slot + 24 in bits 0–4; a leaf has its triangle count in unary in bits
     /// 5–7 and its first triangle's offset in bits 0–4).
-    /// `tris` are the triangles in leaf order (`cw.primitive_indices`).
-    pub(crate) fn new(cw: &CwBvh, tris: &[RtTriangle]) -> Bvh {
+    /// `tri(i)` is the triangle in leaf order (`cw.primitive_indices`) `i`,
+    /// `None` past the last: the blocks are filled from it, with no copy of
+    /// all triangles beside them (500 k triangles take 32 MB as obvhs's).
+    pub(crate) fn new(cw: &CwBvh, tri: impl Fn(usize) -> Option<RtTriangle>) -> Bvh {
         let lanes = |b: [u8; 8]| b.map(f32::from);
         let bytes = |meta: [u8; 8], f: &dyn Fn(u8) -> u8| u64::from_le_bytes(meta.map(f));
         let inner = |m: u8| m & 0x18 == 0x18;
@@ -96,8 +98,8 @@ impl Bvh {
                 let block_base = blocks.len() as u32;
                 let first = n.primitive_base_idx as usize;
                 for b in (0..slots).step_by(8) {
-                    let end = (first + slots).min(tris.len());
-                    blocks.push(Block::new(tris.get(first + b..end).unwrap_or(&[])));
+                    let lanes = (first + b..first + slots.min(b + 8)).map_while(&tri);
+                    blocks.push(Block::new(lanes));
                 }
                 Node {
                     q: [
