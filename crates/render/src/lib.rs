@@ -33,6 +33,7 @@ pub mod light;
 pub mod material;
 pub mod memory;
 pub mod mesh;
+mod mesh_leaves;
 mod mesh_traverse;
 pub mod output;
 pub mod preview_mesh;

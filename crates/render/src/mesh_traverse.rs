@@ -19,6 +19,8 @@ use obvhs::cwbvh::CwBvh;
 use obvhs::ray::Ray as BvhRay;
 use obvhs::rt_triangle::RtTriangle;
 
+use crate::mesh_leaves::{Block, TriRay, any, nearest};
+
 /// Depth of the node-group stack: obvhs's CWBVH validation bounds the depth
 /// below this; a deeper tree (never built) would overwrite the top entry,
 /// as obvhs's own stack does, rather than index out of bounds.
@@ -53,14 +55,18 @@ struct Node {
     child_base: u32,
     prim_base: u32,
     imask: u32,
+    /// The node's first [`Block`] of leaf triangles (slots 0–7, then 8–15,
+    /// 16–23 in the next ones, as many as its leaves fill).
+    block_base: u32,
 }
 
 // Four cache lines; the layout's comments and the doc above count on it.
 const _: () = assert!(size_of::<Node>() == 256);
 
-/// The mesh BVH in [`Node`]s.
+/// The mesh BVH in [`Node`]s, with the leaf triangles in [`Block`]s.
 pub(crate) struct Bvh {
     nodes: Vec<Node>,
+    blocks: Vec<Block>,
 }
 
 impl Bvh {
@@ -68,16 +74,33 @@ impl Bvh {
     /// child metadata byte: an inner child is 0b001 in bits 5–7 and its
     /// slot + 24 in bits 0–4; a leaf has its triangle count in unary in bits
     /// 5–7 and its first triangle's offset in bits 0–4).
-    pub(crate) fn new(cw: &CwBvh) -> Bvh {
+    /// `tri(i)` is the triangle in leaf order (`cw.primitive_indices`) `i`,
+    /// `None` past the last: the blocks are filled from it, with no copy of
+    /// all triangles beside them (500 k triangles take 32 MB as obvhs's).
+    pub(crate) fn new(cw: &CwBvh, tri: impl Fn(usize) -> Option<RtTriangle>) -> Bvh {
         let lanes = |b: [u8; 8]| b.map(f32::from);
         let bytes = |meta: [u8; 8], f: &dyn Fn(u8) -> u8| u64::from_le_bytes(meta.map(f));
         let inner = |m: u8| m & 0x18 == 0x18;
+        let mut blocks = Vec::new();
         let nodes = cw
             .nodes
             .iter()
             .map(|n| {
                 let meta = n.child_meta;
                 let cell = n.compute_extent();
+                // The node's leaf slots: up to the last leaf's last triangle.
+                let slots = meta
+                    .iter()
+                    .filter(|&&m| m != 0 && !inner(m))
+                    .map(|&m| (m & 0x1f) as usize + (m >> 5).count_ones() as usize)
+                    .max()
+                    .unwrap_or(0);
+                let block_base = blocks.len() as u32;
+                let first = n.primitive_base_idx as usize;
+                for b in (0..slots).step_by(8) {
+                    let lanes = (first + b..first + slots.min(b + 8)).map_while(&tri);
+                    blocks.push(Block::new(lanes));
+                }
                 Node {
                     q: [
                         lanes(n.child_min_x),
@@ -94,10 +117,19 @@ impl Bvh {
                     child_base: n.child_base_idx,
                     prim_base: n.primitive_base_idx,
                     imask: n.imask.into(),
+                    block_base,
                 }
             })
             .collect();
-        Bvh { nodes }
+        Bvh { nodes, blocks }
+    }
+
+    /// The blocks of `node`'s leaf triangles (up to three; an empty slice
+    /// for a node without leaves is never indexed: its hit mask has no
+    /// triangle bits).
+    #[inline(always)]
+    fn blocks(&self, node: &Node) -> &[Block] {
+        self.blocks.get(node.block_base as usize..).unwrap_or(&[])
     }
 }
 
@@ -130,13 +162,14 @@ fn octant(ray: &BvhRay) -> u32 {
     (if x { 0 } else { 4 }) | (if y { 0 } else { 2 }) | (if z { 0 } else { 1 })
 }
 
-/// Walks the BVH front to back, calling `prim(ray, index)` for every
-/// triangle (leaf-order index) whose leaf box the ray crosses within
-/// `ray.tmax`; `prim` may shorten `ray.tmax`, and returning `true` stops
-/// the walk. The order is obvhs's `traverse!`: a node's triangles before
-/// its children, children nearest first by the ray's octant.
+/// Walks the BVH front to back, calling `leaf(ray, node, mask)` for every
+/// node with leaves whose box the ray crosses within `ray.tmax`: `mask` has
+/// bit i set for the node's triangle slot i (in [`Bvh::blocks`]) to test; `leaf`
+/// may shorten `ray.tmax`, and returning `true` stops the walk. The order is
+/// obvhs's `traverse!`: a node's triangles before its children, children
+/// nearest first by the ray's octant.
 #[inline(always)]
-fn walk<F: FnMut(&mut BvhRay, u32) -> bool>(bvh: &Bvh, ray: &mut BvhRay, mut prim: F) {
+fn walk<F: FnMut(&mut BvhRay, &Node, u32) -> bool>(bvh: &Bvh, ray: &mut BvhRay, mut leaf: F) {
     if bvh.nodes.is_empty() {
         return;
     }
@@ -149,15 +182,7 @@ fn walk<F: FnMut(&mut BvhRay, u32) -> bool>(bvh: &Bvh, ray: &mut BvhRay, mut pri
         base: 0,
         bits: 0x8000_0000,
     };
-    let mut prims = Group::default();
     loop {
-        while prims.bits != 0 {
-            let local = 31 - prims.bits.leading_zeros();
-            prims.bits &= !(1 << local);
-            if prim(ray, prims.base + local) {
-                return;
-            }
-        }
         if nodes.bits & NODE_BITS != 0 {
             let hits = nodes.bits;
             let offset = 31 - hits.leading_zeros();
@@ -177,14 +202,12 @@ fn walk<F: FnMut(&mut BvhRay, u32) -> bool>(bvh: &Bvh, ray: &mut BvhRay, mut pri
                 base: node.child_base,
                 bits: (mask & NODE_BITS) | node.imask,
             };
-            prims = Group {
-                base: node.prim_base,
-                bits: mask & !NODE_BITS,
-            };
-        } else {
-            nodes = Group::default();
+            let prims = mask & !NODE_BITS;
+            if prims != 0 && leaf(ray, node, prims) {
+                return;
+            }
         }
-        if prims.bits == 0 && nodes.bits & NODE_BITS == 0 {
+        if nodes.bits & NODE_BITS == 0 {
             if depth == 0 {
                 return;
             }
@@ -197,15 +220,13 @@ fn walk<F: FnMut(&mut BvhRay, u32) -> bool>(bvh: &Bvh, ray: &mut BvhRay, mut pri
 /// The nearest triangle hit within `(ray.tmin, ray.tmax)`: its leaf-order
 /// index and f32 distance.
 #[inline]
-pub(crate) fn closest(bvh: &Bvh, tris: &[RtTriangle], mut ray: BvhRay) -> Option<(u32, f32)> {
+pub(crate) fn closest(bvh: &Bvh, mut ray: BvhRay) -> Option<(u32, f32)> {
+    let tri_ray = TriRay::new(&ray);
     let mut best = None;
-    walk(bvh, &mut ray, |r, i| {
-        if let Some(tri) = tris.get(i as usize) {
-            let t = tri.intersect(r);
-            if t < r.tmax {
-                r.tmax = t;
-                best = Some((i, t));
-            }
+    walk(bvh, &mut ray, |r, node, mask| {
+        if let Some((slot, t)) = nearest(bvh.blocks(node), mask, &tri_ray, r.tmax) {
+            r.tmax = t;
+            best = Some((node.prim_base + slot, t));
         }
         false
     });
@@ -214,17 +235,15 @@ pub(crate) fn closest(bvh: &Bvh, tris: &[RtTriangle], mut ray: BvhRay) -> Option
 
 /// Whether any triangle is hit within `(ray.tmin, ray.tmax)`.
 #[inline]
-pub(crate) fn any_hit(bvh: &Bvh, tris: &[RtTriangle], mut ray: BvhRay) -> bool {
+pub(crate) fn any_hit(bvh: &Bvh, mut ray: BvhRay) -> bool {
+    let tri_ray = TriRay::new(&ray);
     let mut hit = false;
-    walk(bvh, &mut ray, |r, i| {
-        hit = tris
-            .get(i as usize)
-            .is_some_and(|t| t.intersect(r) < r.tmax);
+    walk(bvh, &mut ray, |r, node, mask| {
+        hit = any(bvh.blocks(node), mask, &tri_ray, r.tmax);
         hit
     });
     hit
 }
-
 /// The ray's part of the box test.
 struct Slabs {
     origin: Vec3A,
@@ -472,11 +491,11 @@ mod tests {
             let br = MeshAccel::bvh_ray(&r, t_min, t_max);
             let mut want = obvhs::ray::RayHit::none();
             let found = cw.ray_traverse(br, &mut want, |r, i| tris[i].intersect(r));
-            let got = closest(bvh, tris, br);
+            let got = closest(bvh, br);
             let want = found.then_some((want.primitive_id, want.t.to_bits()));
             assert_eq!(got.map(|(i, t)| (i, t.to_bits())), want, "ray {k}: {r:?}");
             let blocked = !cw.ray_traverse_miss(br, |r, i| tris[i].intersect(r));
-            assert_eq!(any_hit(bvh, tris, br), blocked, "ray {k}: {r:?}");
+            assert_eq!(any_hit(bvh, br), blocked, "ray {k}: {r:?}");
             assert_eq!(blocked, got.is_some(), "ray {k}");
             // The BVH skips boxes the ray leaves within obvhs's 1e−4 of its
             // origin; beyond that it finds what testing every triangle does.
@@ -531,9 +550,9 @@ mod tests {
             let d = DVec3::from(d).normalize();
             let br = MeshAccel::bvh_ray(&Ray { o, d }, 0.0, f64::INFINITY);
             let bf = brute_force(tris, &br);
-            let got = closest(bvh, tris, br);
+            let got = closest(bvh, br);
             assert_eq!(got.map(|g| g.1), bf.is_finite().then_some(bf), "{o} {d:?}");
-            assert_eq!(any_hit(bvh, tris, br), bf.is_finite(), "{o} {d:?}");
+            assert_eq!(any_hit(bvh, br), bf.is_finite(), "{o} {d:?}");
             hits += usize::from(got.is_some());
         }
         assert!(hits > 600, "{hits} hits");
