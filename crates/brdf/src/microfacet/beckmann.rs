@@ -57,16 +57,20 @@ pub(super) fn lambda(t: f64) -> f64 {
 pub(super) fn lambda_qz(q: f64, z: f64) -> f64 {
     let s = libm::sqrt(q);
     // z ≥ 1e−100 (z² stays normal) and, past the caller's negligible-Λ
-    // test, q > z²/5.8²: neither quotient overflows or underflows.
+    // test, q > z²/4.7²: neither quotient overflows or underflows.
     if s <= LAMBDA_POLY_MAX_X * z && z > 0.0 {
         return exp(-(z * z / q)) * scaled_lambda_in_sum(s / z);
     }
     lambda(q / (z * z))
 }
 
-/// From a = 1/(α tanθ) = 5.8 on, Λ < 1.8·10⁻¹⁸ is taken as 0 (see
-/// [`super::Distribution::lambda_frac`]).
-pub(super) const LAMBDA_NEGLIGIBLE_A: f64 = 5.8;
+/// From a = 1/(α tanθ) = 4.7 on, Λ < 3.26·10⁻¹³ (mpmath) is taken as 0
+/// (see [`super::Distribution::lambda_frac`]): Λ enters only sums with 1,
+/// so G1 = 1/(1 + Λ) moves by less than 3.3·10⁻¹³ and G2 by less than
+/// 6.6·10⁻¹³ relative, and from a = 5.8 on (Λ < 1.8·10⁻¹⁸) by no bit. The
+/// cut saves an exp and a polynomial per Λ for a quarter to a third of a
+/// plate's directions (α 0.2 seen at 40°–47°).
+pub(super) const LAMBDA_NEGLIGIBLE_A: f64 = 4.7;
 
 /// Upper end of the polynomial's range in x = 1/a (a ≥ 1.25).
 const LAMBDA_POLY_MAX_X: f64 = 0.8;
@@ -180,45 +184,41 @@ fn estrin<const N: usize>(c: &[f64; N], tau: f64) -> f64 {
 }
 
 /// Visible-normal sampling: stretch to unit roughness, draw the slope along
-/// the view azimuth from its visible marginal by inverting its CDF, draw the
-/// orthogonal slope from the (independent) Gaussian marginal, unstretch.
+/// the view azimuth from its visible marginal (by rejection from a Gaussian),
+/// draw the orthogonal slope from the (independent) Gaussian marginal,
+/// unstretch.
 pub(super) fn sample_visible(wi: DVec3, ax: f64, ay: f64, u: [f64; 2]) -> DVec3 {
     super::normalize_or_none(sample_visible_with_lambda(wi, ax, ay, u).0).unwrap_or(DVec3::Z)
 }
 
 /// [`sample_visible`] up to a positive factor (h.z = 1: the unstretched
-/// normal (−s, 1) of the sampled slopes s), Smith Λ(wi), which the
-/// inversion computes on the way (its normalisation is cotθ (1 + Λ) in the
-/// stretched frame), and e^{−|s|²} of the stretched slopes, D's exponential:
-/// the sampler's caller needs G1(wi) and D(h), would otherwise evaluate both
-/// again, and works with an unnormalised h, as for GGX. With h.z = 1,
-/// D(h/|h|) = e^{−|s|²} |h|⁴ / (π αx αy).
-/// Λ is 0 from a = cotθ ≥ 5.8 on, as in [`super::Distribution::lambda_frac`].
+/// normal (−s, 1) of the sampled slopes s), Smith Λ(wi) and e^{−|s|²} of the
+/// stretched slopes, D's exponential: the sampler's caller needs G1(wi) and
+/// D(h), and works with an unnormalised h, as for GGX. With h.z = 1,
+/// D(h/|h|) = e^{−|s|²} |h|⁴ / (π αx αy). Λ is the one
+/// [`super::Distribution::lambda_frac`] gives at `wi`, to the bit (0 from
+/// a = cotθ ≥ [`LAMBDA_NEGLIGIBLE_A`] on), so the sample's pdf and NEE's
+/// agree exactly.
 pub(super) fn sample_visible_with_lambda(
     wi: DVec3,
     ax: f64,
     ay: f64,
     u: [f64; 2],
 ) -> (DVec3, f64, f64) {
-    // The stretched view (αx x, αy y, z), left unnormalised: the inversion
-    // needs only its azimuth and cotθ, ratios of its components, so one
-    // square root and one division give both (normalising first put two
-    // more of each on the sample's critical path).
+    // The stretched view (αx x, αy y, z), left unnormalised: the sampler
+    // needs only its azimuth and cotθ, ratios of its components.
     let (vx, vy, vz) = (ax * wi.x, ay * wi.y, wi.z);
     let r2 = vx * vx + vy * vy;
     let (rx, ry, lambda, s2) = if r2 > 0.0 && r2 >= 1e-14 * (r2 + vz * vz) {
         let r = libm::sqrt(r2);
         let inv_r = 1.0 / r;
-        // tanθ = r/vz alongside cotθ = vz/r, not as 1/cotθ: two divisions
-        // side by side instead of one after the other on the chain.
-        let tan = r / vz;
         let (cos_phi, sin_phi) = (vx * inv_r, vy * inv_r);
-        let (sx, sy, lambda) = sample_slopes_unit(vz * inv_r, tan, vz, r2 * inv_r, u);
+        let (sx, sy) = sample_slopes_unit(vz * inv_r, u);
         // Rotate back to the view azimuth.
         (
             cos_phi * sx - sin_phi * sy,
             sin_phi * sx + cos_phi * sy,
-            lambda,
+            lambda_at_view(r2, vz),
             sx * sx + sy * sy,
         )
     } else {
@@ -233,204 +233,90 @@ pub(super) fn sample_visible_with_lambda(
     (DVec3::new(-rx * ax, -ry * ay, 1.0), lambda, exp(-s2))
 }
 
-/// Slopes of the visible normals of a unit-roughness Beckmann surface, for a
-/// view along +x at cotθ = `cot` (= `c`/`s`, with `c`, `s` any positive
-/// multiple of cosθ, sinθ; `tan` = 1/cotθ), and Λ at that view. The x-slope
-/// density is ∝ (cotθ − x) e^{−x²} on x < cotθ, with CDF
-/// C(x) = [cotθ (1 + erf x) + e^{−x²}/√π] / 2; y is Gaussian with variance ½.
-fn sample_slopes_unit(cot: f64, tan: f64, c: f64, s: f64, u: [f64; 2]) -> (f64, f64, f64) {
-    // Per-axis slope variance ½ at unit roughness: a standard normal / √2.
-    let sy = normal_quantile(u[1]) * FRAC_1_SQRT_2;
-    // Start from the cotθ → ∞ limit, moved by the tabulated difference
-    // between it and the root: within 1e−4 of the root for nine draws in
-    // ten, so one Halley step usually finishes (from the limit alone it
-    // takes four to five, each an erfc and an exp).
-    let st = gaussian_start_and_target(cot, tan, u[0]);
-    let start = st.start + start_correction(c, s, u[0]);
-    (solve_slope(cot, st.target, start, true), sy, st.lambda)
-}
-
-/// From cotθ = 6 on the slope CDF is the Gaussian one to double precision
-/// (up to the factor cotθ): erfc(cotθ) and Λ are below half an ulp of the
-/// terms they are added to.
-const GAUSSIAN_LIMIT_COT: f64 = 6.0;
-
-/// What the slope inversion needs at one view, and Λ at it.
-struct StartAndTarget {
-    /// The exact inverse at `u` of the cotθ → ∞ limit (the Gaussian CDF
-    /// rescaled to the mass below cotθ).
-    start: f64,
-    /// u·C(cotθ), the value of C the root must reach.
-    target: f64,
-    /// Smith Λ at a = cotθ (0 from 5.8 on).
-    lambda: f64,
-}
-
-/// The start, target and Λ of one inversion: one erfc, 1 + erf(cotθ),
-/// serves all three.
-///
-/// From cotθ ≥ 1.25 on, C(cotθ) = cotθ (1 + Λ) and
-/// erfc(cotθ) = e^{−cot²θ} (x/√π − 2x³H(x)) with x = tanθ (see [`lambda`]):
-/// one exp and the polynomial instead of erfc's two exps and another, and
-/// Λ = e^{−cot²θ} x³H(x) is [`lambda`]'s own expression. Below 1.25,
-/// Λ = (e^{−cot²θ}/(cotθ √π) − (2 − (1 + erf cotθ)))/2: the same difference
-/// as [`lambda`]'s, with erfc(cotθ) taken from 1 + erf, whose rounding
-/// (2·10⁻¹⁶ absolute) is below 2.5·10⁻¹⁴ of Λ there (Λ ≥ 0.0087).
+/// Λ at a view with stretched tangential length² `q` = αx²x² + αy²y² and
+/// normal component `z` > 0: the expressions of
+/// [`super::Distribution::lambda_frac`], so the same bits.
 #[inline]
-fn gaussian_start_and_target(cot: f64, tan: f64, u: f64) -> StartAndTarget {
-    if cot >= GAUSSIAN_LIMIT_COT {
-        // e^{−cot²θ} < 2.4·10⁻¹⁶: erfc(cotθ) < 2.2·10⁻¹⁷ vanishes beside 2
-        // and Λ < 1.2·10⁻¹⁹ beside 1, so the branch below would give these
-        // values to the last bit; its exp and polynomial are skipped.
-        return StartAndTarget {
-            start: normal_quantile(u) * FRAC_1_SQRT_2,
-            target: u * cot,
-            lambda: 0.0,
-        };
-    }
-    if cot >= 1.0 / LAMBDA_POLY_MAX_X {
-        return polynomial_start_and_target(cot, tan, u);
-    }
-    let one_plus_erf = libm::erfc(-cot);
-    let e = exp(-cot * cot) / SQRT_PI;
-    let total = 0.5 * (cot * one_plus_erf + e);
-    StartAndTarget {
-        start: normal_quantile(0.5 * u * one_plus_erf) * FRAC_1_SQRT_2,
-        target: u * total,
-        lambda: (0.5 * (e / cot - (2.0 - one_plus_erf))).max(0.0),
-    }
-}
-
-/// [`gaussian_start_and_target`] for cotθ ≥ 1.25 (see there); `x` = tanθ.
-#[inline]
-fn polynomial_start_and_target(cot: f64, x: f64, u: f64) -> StartAndTarget {
-    let e = exp(-cot * cot);
-    let s = scaled_lambda_in_sum(x);
-    let lambda = e * s;
-    let erfc = e * (x / SQRT_PI - 2.0 * s);
-    StartAndTarget {
-        start: normal_quantile(u * (1.0 - 0.5 * erfc)) * FRAC_1_SQRT_2,
-        target: u * (cot * (1.0 + lambda)),
-        lambda: if cot >= LAMBDA_NEGLIGIBLE_A {
-            0.0
-        } else {
-            lambda
-        },
-    }
-}
-
-/// The root of C(x) = `target` on (−8, cotθ] (C(x) < 1e−30 below −8 for
-/// every cotθ) by safeguarded Halley iteration from `start`.
-///
-/// Halley's error after a step δ is of order δ³ (C″/2C′)², and C″/C′ =
-/// −1/(cotθ − x) − 2x: with ℓ = min(cotθ − x, 1/(1 + |x|)) the local scale,
-/// a Halley step below 1e−4 ℓ leaves an error below ~1e−12 ℓ, so with
-/// `early` it is accepted without the evaluation that would confirm it.
-/// Otherwise the iteration stops when a step or the bracket falls below
-/// 1e−11 relative (slopes to 1e−11 are far below any visible or statistical
-/// effect; asking for more makes the step chase round-off in C(x) − target).
-fn solve_slope(cot: f64, target: f64, start: f64, early: bool) -> f64 {
-    let mut lo = (-8.0f64).min(cot - 1.0);
-    let mut hi = cot;
-    let mut x = start;
-    if !(x > lo && x < hi) {
-        // A start below the bracket (u so small that the root lies below
-        // C's 1e−30 floor at −8, where the Gaussian quantile goes on to
-        // −26) starts at its end, which is then the answer; others, and NaN,
-        // at the midpoint.
-        x = if x <= lo { lo } else { 0.5 * (lo + hi) };
-    }
-    for _ in 0..40 {
-        let e = exp(-x * x) / SQRT_PI;
-        let f = 0.5 * (cot * libm::erfc(-x) + e) - target;
-        if f == 0.0 {
-            break;
-        }
-        if f > 0.0 {
-            hi = x;
-        } else {
-            lo = x;
-        }
-        // Halley's step (cubic convergence; C″ = −(1 + 2x(cotθ − x)) e^{−x²}/√π
-        // comes free with C′).
-        let dens = (cot - x) * e;
-        let curv = -(1.0 + 2.0 * x * (cot - x)) * e;
-        let denom = 2.0 * dens * dens - f * curv;
-        let mut next = if dens > 0.0 && denom > 0.0 {
-            x - 2.0 * f * dens / denom
-        } else {
-            f64::NAN
-        };
-        // A step of zero (the start already at the root to round-off) is a
-        // valid Halley step: the bracket has just closed on x, so it must be
-        // accepted, not replaced by the midpoint of a possibly wide bracket.
-        let halley = next >= lo && next <= hi;
-        if !halley {
-            next = 0.5 * (lo + hi);
-        }
-        let step = (next - x).abs();
-        x = next;
-        if early && halley && step <= 1e-4 * (cot - x).min(1.0 / (1.0 + x.abs())) {
-            break;
-        }
-        if step <= 1e-11 * (1.0 + x.abs()) || hi - lo <= 1e-12 * (1.0 + x.abs()) {
-            break;
-        }
-    }
-    x
-}
-
-/// Nodes per axis of [`START`]: t = sinθ/(sinθ + cosθ) (close to linear in
-/// θ, without an atan2) and v = √(1 − u) (the root approaches cotθ as
-/// √(1 − u), the Gaussian start linearly, so their difference is smooth in v).
-const START_N: usize = 65;
-
-/// Root of the slope CDF minus the Gaussian-limit start, at node (t, v) of
-/// the grid (row-major in t), as f32: it only has to start the iteration.
-/// Written by `write_start_table` (an ignored test) from [`solve_slope`];
-/// `start_table_matches_the_solver` checks every entry against it.
-static START: [f32; START_N * START_N] = include!("beckmann_start.in");
-
-/// Bilinear interpolation in [`START`].
-#[inline]
-fn start_correction(c: f64, s: f64, u: f64) -> f64 {
-    let last = (START_N - 1) as f64;
-    let ft = (s / (s + c)).clamp(0.0, 1.0) * last;
-    let fv = libm::sqrt((1.0 - u).clamp(0.0, 1.0)) * last;
-    // Through u32 (both lie in [0, 64]): shorter than f64 → usize.
-    let (it, iv) = (
-        (ft as u32 as usize).min(START_N - 2),
-        (fv as u32 as usize).min(START_N - 2),
-    );
-    let (at, av) = (ft - it as f64, fv - iv as f64);
-    let row = |i: usize| {
-        let (a, b) = (
-            START[i * START_N + iv] as f64,
-            START[i * START_N + iv + 1] as f64,
-        );
-        a + av * (b - a)
-    };
-    let (r0, r1) = (row(it), row(it + 1));
-    let r = r0 + at * (r1 - r0);
-    if r.is_finite() { r } else { 0.0 }
-}
-
-/// The exact value behind `START[i · START_N + j]`.
-#[cfg(test)]
-fn start_table_entry(i: usize, j: usize) -> f64 {
-    let last = (START_N - 1) as f64;
-    let t = (i as f64 / last).clamp(1e-9, 1.0 - 1e-12);
-    let h = libm::sqrt(t * t + (1.0 - t) * (1.0 - t));
-    let (c, s) = ((1.0 - t) / h, t / h);
-    let v = j as f64 / last;
-    let u = (1.0 - v * v).clamp(1e-12, 1.0);
-    if j == 0 {
-        // u = 1: root and start are both cotθ.
+fn lambda_at_view(q: f64, z: f64) -> f64 {
+    const A2: f64 = LAMBDA_NEGLIGIBLE_A * LAMBDA_NEGLIGIBLE_A;
+    if q * A2 <= z * z {
         return 0.0;
     }
-    let cot = c / s;
-    let st = gaussian_start_and_target(cot, s / c, u);
-    solve_slope(cot, st.target, st.start, false) - st.start
+    lambda_qz(q, z)
+}
+
+/// Proposals after which [`sample_slopes_unit`] gives up and keeps the
+/// last one: each is accepted with probability ≥ 0.66, so all 64 are
+/// rejected with probability < 10⁻³⁰.
+const MAX_PROPOSALS: usize = 64;
+
+/// Slopes (x, y) of the visible normals of a unit-roughness Beckmann
+/// surface, for a view along +x at cotθ = `cot` > 0. y is Gaussian with
+/// variance ½; x has the density p(x) ∝ (cotθ − x) e^{−x²} on x < cotθ.
+///
+/// x is drawn by rejection, exactly: for any k > 0 and t = k (cotθ − x),
+/// log t ≤ t − 1 gives t ≤ e^{t−1} = e^{k cotθ − 1} e^{−kx}, so
+/// p(x) ∝ t e^{−x²} ≤ const · e^{−(x + k/2)²}: propose x from the Gaussian
+/// N(−k/2, ½) and accept it with probability t e^{1−t} (≤ 1; 0 for t ≤ 0).
+/// k = √(cot²θ + 2) − cotθ, the tangent at the proposal's mean, maximises
+/// the acceptance: 0.99 at cotθ = 5, 0.97 at 3, 0.86 at 1, 0.67 as
+/// cotθ → 0. No erfc, no root finding: a normal quantile (which does not
+/// wait for the view) and, mostly, a cubic instead of the exp.
+fn sample_slopes_unit(cot: f64, u: [f64; 2]) -> (f64, f64) {
+    // Per-axis slope variance ½ at unit roughness: a standard normal / √2.
+    let sy = normal_quantile(u[1]) * FRAC_1_SQRT_2;
+    // √(cot² + 2) − cotθ without its cancellation at large cotθ.
+    let k = 2.0 / (cot + libm::sqrt(cot * cot + 2.0));
+    let mut more = Draws::new(u);
+    let mut z = normal_quantile(u[0]);
+    let mut x = 0.0;
+    for _ in 0..MAX_PROPOSALS {
+        x = z * FRAC_1_SQRT_2 - 0.5 * k;
+        if accept(k * (cot - x), more.next()) {
+            break;
+        }
+        z = normal_quantile(more.next());
+    }
+    (x, sy)
+}
+
+/// Whether uniform `v` accepts a proposal at t: v < t e^{1−t}, for t > 0.
+/// e^s ≥ 1 + s + s²/2 + s³/6 for every s (the remainder e^ξ s⁴/24 is
+/// ≥ 0), so below t times that the answer is yes without the exp; the exp
+/// decides only in the gap, under 7·10⁻⁵ wide for |1 − t| ≤ 0.2.
+#[inline]
+fn accept(t: f64, v: f64) -> bool {
+    // t ≤ 0 (x ≥ cotθ, a back-facing normal) and NaN: never.
+    if t.is_nan() || t <= 0.0 {
+        return false;
+    }
+    let s = 1.0 - t;
+    let lower = t * (1.0 + s * (1.0 + s * (0.5 + s * (1.0 / 6.0))));
+    v < lower || v < t * exp(s)
+}
+
+/// Uniform numbers in [0, 1) for the rejection tests and the proposals
+/// after a rejection: a splitmix64 sequence seeded with the bits of the
+/// sample's two numbers. The sampler is given two numbers; each test needs
+/// one independent of the proposal it tests, and a mixed hash of (u0, u1)
+/// is (the first proposal comes from u0 alone, y from u1 alone).
+struct Draws(u64);
+
+impl Draws {
+    #[inline]
+    fn new(u: [f64; 2]) -> Draws {
+        Draws(u[0].to_bits() ^ u[1].to_bits().rotate_left(32))
+    }
+
+    #[inline]
+    fn next(&mut self) -> f64 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^= z >> 31;
+        (z >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
+    }
 }
 
 /// The standard normal quantile Φ⁻¹(p) for p in (0, 1), to about 1e−16
@@ -528,97 +414,6 @@ const AS241_F: [f64; 8] = [
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    /// Regenerates `beckmann_start.in`:
-    /// `cargo test -p brdf --lib write_start_table -- --ignored`.
-    #[test]
-    #[ignore]
-    fn write_start_table() {
-        extern crate std;
-        use std::fmt::Write;
-        let mut out = std::string::String::from(
-            "// Written by `write_start_table` in beckmann.rs; do not edit.\n[\n",
-        );
-        for i in 0..START_N {
-            for j in 0..START_N {
-                write!(out, "{:e}_f32,", start_table_entry(i, j) as f32).unwrap();
-                out.push(if j % 8 == 7 || j + 1 == START_N {
-                    '\n'
-                } else {
-                    ' '
-                });
-            }
-        }
-        out.push_str("]\n");
-        let path = concat!(
-            env!("CARGO_MANIFEST_DIR"),
-            "/src/microfacet/beckmann_start.in"
-        );
-        std::fs::write(path, out).unwrap();
-    }
-
-    #[test]
-    fn start_table_matches_the_solver() {
-        for i in 0..START_N {
-            for j in 0..START_N {
-                let want = start_table_entry(i, j);
-                let got = START[i * START_N + j] as f64;
-                assert!(
-                    (got - want).abs() <= 1e-6 * (1.0 + want.abs()),
-                    "({i}, {j}): {got} vs {want}"
-                );
-            }
-        }
-    }
-
-    #[test]
-    fn early_stop_finds_the_root_over_the_domain() {
-        // Every incidence from normal to grazing and every u, the tails
-        // included: the accepted slope agrees with the fully converged root.
-        for a in 0..=160 {
-            // (Below sinθ = 1e−7 the normal-view branch draws without inversion.)
-            let theta = core::f64::consts::FRAC_PI_2 * (a as f64 / 160.0).clamp(1e-6, 1.0 - 1e-12);
-            let (s, c) = libm::sincos(theta);
-            for b in 0..=400 {
-                let u0 = match b {
-                    0 => 1e-300,
-                    400 => 1.0 - 1e-16,
-                    _ => b as f64 / 400.0,
-                };
-                for u0 in [u0, u0 * 1e-6, 1.0 - (1.0 - u0) * 1e-6] {
-                    let cot = c / s;
-                    let (x, _, _) = sample_slopes_unit(cot, s / c, c, s, [u0, 0.5]);
-                    // Bisection to adjacent floats: independent of Halley.
-                    let cdf = |x: f64| 0.5 * (cot * libm::erfc(-x) + exp(-x * x) / SQRT_PI);
-                    let total = cdf(cot);
-                    let (mut lo, mut hi) = ((-8.0f64).min(cot - 1.0), cot);
-                    for _ in 0..2000 {
-                        let mid = 0.5 * (lo + hi);
-                        if mid <= lo || mid >= hi {
-                            break;
-                        }
-                        if cdf(mid) > u0 * total {
-                            hi = mid;
-                        } else {
-                            lo = mid;
-                        }
-                    }
-                    let exact = 0.5 * (lo + hi);
-                    if exact <= -8.0 + 1e-6 {
-                        // Below C(−8) < 1e−30 both stop at the bracket's end.
-                        assert!(x <= -7.999);
-                        continue;
-                    }
-                    // C is a sum of order `total`, so its round-off limits
-                    // any root to ~ε·total/C′ (both solvers share that floor).
-                    let dens = (cot - exact) * exp(-exact * exact) / SQRT_PI;
-                    let floor = 8.0 * f64::EPSILON * total.max(1.0) / dens;
-                    let err = (x - exact).abs() / (1e-10 * (1.0 + exact.abs()) + floor);
-                    assert!(err <= 1.0, "θ {theta} u {u0}: {x} vs {exact}");
-                }
-            }
-        }
-    }
 
     #[test]
     fn normal_quantile_inverts_the_normal_cdf() {
@@ -832,7 +627,8 @@ mod tests {
         // Λ(wi) returned with the sample against `lambda` from t = α² tan²θ,
         // over views from the normal to 1e−9 of the horizon, anisotropic
         // roughness, both branches (a = cotθ of the stretched view ≷ 1.25)
-        // and the cut at a = 5.8.
+        // and the cut at a = 4.7; and to the bit `lambda_frac`'s, which the
+        // pdf of NEE's evaluation takes.
         let mut branches = [0usize; 3];
         for (ax, ay) in [
             (0.05, 0.05),
@@ -841,6 +637,7 @@ mod tests {
             (0.01, 0.9),
             (1e-4, 1e-4),
         ] {
+            let dist = crate::microfacet::Distribution::beckmann(ax, ay).unwrap();
             for i in 0..=400 {
                 let theta =
                     core::f64::consts::FRAC_PI_2 * (i as f64 / 400.0).min(1.0 - 1e-9 / 1.57);
@@ -860,9 +657,10 @@ mod tests {
                     for u in [[0.5, 0.5], [1e-9, 0.3], [0.999, 0.01]] {
                         let (h, got, _) = sample_visible_with_lambda(wi, ax, ay, u);
                         assert!(h.is_finite() && h.z > 0.0);
+                        assert_eq!(got.to_bits(), dist.lambda_frac(wi).0.to_bits());
                         // Λ for sums with 1: the near polynomial's 2.2e−19.
                         let tol = if a >= LAMBDA_NEGLIGIBLE_A {
-                            1.8e-18
+                            3.3e-13
                         } else {
                             3e-14 * want + 2.5e-19
                         };
@@ -877,44 +675,113 @@ mod tests {
         assert!(branches.iter().all(|&n| n > 100), "{branches:?}");
     }
 
-    #[test]
-    fn the_gaussian_limit_is_the_polynomial_branch_to_the_bit() {
-        for i in 0..=20000 {
-            let cot = GAUSSIAN_LIMIT_COT * (1.0 + i as f64 / 1000.0);
-            for j in 0..=64 {
-                let u = (j as f64 / 64.0).clamp(1e-300, 1.0 - 1e-16);
-                let (a, b) = (
-                    gaussian_start_and_target(cot, 1.0 / cot, u),
-                    polynomial_start_and_target(cot, 1.0 / cot, u),
-                );
-                assert_eq!(a.start.to_bits(), b.start.to_bits(), "{cot} {u}");
-                assert_eq!(a.target.to_bits(), b.target.to_bits(), "{cot} {u}");
-                assert_eq!(a.lambda, 0.0);
-                assert!(b.lambda == 0.0, "{cot}: {}", b.lambda);
+    /// The visible x-slope CDF at unit roughness, C(x)/C(cotθ) with
+    /// C(x) = [cotθ (1 + erf x) + e^{−x²}/√π]/2, from libm's erfc and exp.
+    fn slope_cdf(cot: f64, x: f64) -> f64 {
+        let c = |x: f64| 0.5 * (cot * libm::erfc(-x) + libm::exp(-x * x) / SQRT_PI);
+        if x >= cot { 1.0 } else { c(x) / c(cot) }
+    }
+
+    /// Pearson's χ² of `draw`'s x slopes at `cot` over 64 cells of equal
+    /// probability under [`slope_cdf`] (edges by bisection).
+    fn slope_chi2(cot: f64, n: usize, draw: impl Fn(f64, [f64; 2]) -> f64) -> f64 {
+        const CELLS: usize = 64;
+        let mut edges = [0.0f64; CELLS - 1];
+        for (i, e) in edges.iter_mut().enumerate() {
+            let p = (i + 1) as f64 / CELLS as f64;
+            let (mut lo, mut hi) = (-10.0f64, cot);
+            for _ in 0..200 {
+                let mid = 0.5 * (lo + hi);
+                if slope_cdf(cot, mid) < p {
+                    lo = mid;
+                } else {
+                    hi = mid;
+                }
             }
+            *e = 0.5 * (lo + hi);
+        }
+        let mut counts = [0usize; CELLS];
+        let mut rng = Draws(0x2545_F491_4F6C_DD1D ^ cot.to_bits());
+        for _ in 0..n {
+            let x = draw(cot, [rng.next(), rng.next()]);
+            assert!(x.is_finite() && x < cot, "cot {cot}: {x}");
+            counts[edges.partition_point(|&e| e <= x)] += 1;
+        }
+        let want = n as f64 / CELLS as f64;
+        counts
+            .iter()
+            .map(|&c| (c as f64 - want).powi(2) / want)
+            .sum()
+    }
+
+    /// χ² with 63 degrees of freedom: mean 63, standard deviation 11.2;
+    /// 140 is exceeded with probability ~1e−8.
+    const CHI2_63_LIMIT: f64 = 140.0;
+
+    #[test]
+    fn rejection_draws_the_visible_slope_density() {
+        // From grazing (cotθ → 0, acceptance 0.67) to near the normal, the
+        // plate's cotθ ≈ 5 included; a million draws each.
+        for cot in [1e-3, 0.1, 0.5, 1.0, 2.5, 5.0, 12.0, 1e4] {
+            let chi2 = slope_chi2(cot, 1_000_000, |c, u| sample_slopes_unit(c, u).0);
+            extern crate std;
+            std::println!("cot {cot}: χ² = {chi2:.1}");
+            assert!(chi2 < CHI2_63_LIMIT, "cot {cot}: χ² = {chi2}");
         }
     }
 
     #[test]
-    fn start_and_target_agree_with_their_erfc_forms() {
-        // The polynomial branch of `gaussian_start_and_target` against the
-        // erfc expressions it replaces.
-        for i in 0..=4000 {
-            let cot = 1.25 + 30.0 * i as f64 / 4000.0;
-            for u in [1e-12, 0.03, 0.5, 0.97, 1.0 - 1e-12] {
-                let StartAndTarget {
-                    start: x0, target, ..
-                } = gaussian_start_and_target(cot, 1.0 / cot, u);
-                let one_plus_erf = libm::erfc(-cot);
-                let total = 0.5 * (cot * one_plus_erf + exp(-cot * cot) / SQRT_PI);
-                let rel = (target - u * total).abs() / (u * total);
-                assert!(rel <= 1e-15, "{cot} {u}: {rel:e}");
-                let x_ref = normal_quantile(0.5 * u * one_plus_erf) * FRAC_1_SQRT_2;
-                assert!(
-                    (x0 - x_ref).abs() <= 1e-12 * (1.0 + x_ref.abs()),
-                    "{cot} {u}"
-                );
+    fn the_slope_chi_square_sees_a_wrong_acceptance() {
+        // The test above must fail for a sampler that is wrong by a little:
+        // acceptance t e^{1−t} replaced by t^1.1 e^{1.1(1−t)} (the density
+        // times (t e^{1−t})^0.1, 1–10 % off in the tails) at cotθ = 1, and
+        // by the proposal alone (no rejection) at cotθ = 0.5.
+        let tilted = |cot: f64, u: [f64; 2]| {
+            let k = 2.0 / (cot + libm::sqrt(cot * cot + 2.0));
+            let mut more = Draws::new(u);
+            let mut z = normal_quantile(u[0]);
+            loop {
+                let x = z * FRAC_1_SQRT_2 - 0.5 * k;
+                let t = k * (cot - x);
+                if t > 0.0 && more.next() < libm::pow(t * libm::exp(1.0 - t), 1.1) {
+                    return x;
+                }
+                z = normal_quantile(more.next());
+            }
+        };
+        let chi2 = slope_chi2(1.0, 1_000_000, tilted);
+        assert!(
+            chi2 > CHI2_63_LIMIT,
+            "tilted acceptance passed: χ² = {chi2}"
+        );
+        let proposal = |cot: f64, u: [f64; 2]| {
+            let k = 2.0 / (cot + libm::sqrt(cot * cot + 2.0));
+            (normal_quantile(u[0]) * FRAC_1_SQRT_2 - 0.5 * k).min(cot * (1.0 - 1e-15))
+        };
+        let chi2 = slope_chi2(0.5, 1_000_000, proposal);
+        assert!(chi2 > CHI2_63_LIMIT, "proposal alone passed: χ² = {chi2}");
+    }
+
+    #[test]
+    fn the_acceptance_test_is_t_exp_one_minus_t() {
+        // The cubic shortcut never accepts what the exp would reject: over
+        // t from 1e−6 to 40 and v on a grid, `accept` equals v < t e^{1−t}
+        // except within an ulp of the boundary.
+        let mut shortcut = 0;
+        for i in 1..=4000 {
+            let t = 1e-6 + 40.0 * (i as f64 / 4000.0).powi(2);
+            let f = t * libm::exp(1.0 - t);
+            for j in 0..=200 {
+                let v = j as f64 / 200.0;
+                if (v - f).abs() <= 4.0 * f64::EPSILON {
+                    continue;
+                }
+                assert_eq!(accept(t, v), v < f, "t {t} v {v}");
+                let s = 1.0 - t;
+                shortcut += usize::from(v < t * (1.0 + s * (1.0 + s * (0.5 + s / 6.0))));
             }
         }
+        assert!(shortcut > 10_000, "{shortcut}");
+        assert!(!accept(0.0, 0.0) && !accept(-1.0, 0.0) && !accept(f64::NAN, 0.0));
     }
 }

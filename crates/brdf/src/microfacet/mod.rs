@@ -196,11 +196,12 @@ impl Distribution {
     /// a / (2z(z + √(a + z²))): no cancellation, no division. Both parts are
     /// homogeneous of degree 2 in w, so for GGX `w` need not be normalised.
     ///
-    /// Beckmann: Λ(a) < 1.8·10⁻¹⁸ for a = 1/(α tanθ) ≥ 5.8 (mpmath), below a
-    /// sixtieth of an ulp of 1, and the conductor formulas use Λ only in sums
-    /// with 1 (G1 = 1/(1 + Λ), G2 = 1/(1 + Λi + Λo)): there it is 0 to the
-    /// last bit, without the exp and erfc. Near the normal, and for every
-    /// direction of a smooth surface (α ≤ 0.05 up to 74°), that is most calls.
+    /// Beckmann: Λ(a) < 3.3·10⁻¹³ for a = 1/(α tanθ) ≥ 4.7 (mpmath), and the
+    /// conductor formulas use Λ only in sums with 1 (G1 = 1/(1 + Λ),
+    /// G2 = 1/(1 + Λi + Λo)): there it is taken as 0 (G1 and G2 within
+    /// 6.6·10⁻¹³ relative, to the last bit from a = 5.8 on), without the exp
+    /// and erfc. Near the normal, and for every direction of a smooth surface
+    /// (α ≤ 0.05 up to 77°), that is most calls.
     #[inline]
     pub(crate) fn lambda_frac(&self, w: DVec3) -> (f64, f64) {
         match self.kind {
@@ -208,7 +209,7 @@ impl Distribution {
             NdfKind::Beckmann => {
                 let ax = self.alpha_x * w.x;
                 let ay = self.alpha_y * w.y;
-                // a² = z² / (αx²x² + αy²y²) ≥ 5.8².
+                // a² = z² / (αx²x² + αy²y²) ≥ 4.7².
                 const A2: f64 = beckmann::LAMBDA_NEGLIGIBLE_A * beckmann::LAMBDA_NEGLIGIBLE_A;
                 let q = ax * ax + ay * ay;
                 if w.z > 0.0 && q * A2 <= w.z * w.z {
