@@ -524,28 +524,35 @@ impl SharedLambdaGrid {
     /// Resamples `sources` (each a row of ln(1 + Λ) on its own sinh grid
     /// tanθ = s·sinh(vV), given with 1/s and (points − 1)/V as its lookup
     /// takes them, all topped at [`LAMBDA_TOP_TAN`]) onto one grid.
-    pub(crate) fn new<'a>(sources: impl Iterator<Item = (&'a [f64], f64, f64)> + Clone) -> Self {
+    pub(crate) fn new<'a>(sources: impl Iterator<Item = (&'a [f64], f64, f64)>) -> Self {
+        let sources: Vec<_> = sources.collect();
         let mut scale = f64::INFINITY;
         let mut step = f64::INFINITY;
-        for (_, inv_s, v_scale) in sources.clone() {
+        for &(_, inv_s, v_scale) in &sources {
             scale = scale.min(1.0 / inv_s);
             step = step.min(1.0 / v_scale);
         }
         let v_ext = libm::asinh(LAMBDA_TOP_TAN / scale);
         let n = (libm::ceil(v_ext / (0.5 * step)) as usize + 1).max(8);
-        let mut rows = Vec::new();
-        for (row, inv_s, row_v_scale) in sources {
-            let at = |l: usize| {
-                let t = scale * libm::sinh(l as f64 / (n - 1) as f64 * v_ext);
-                log1p_from_row(row, t * inv_s, row_v_scale)
-            };
-            let start = rows.len();
-            rows.push(0.0);
-            rows.extend((0..n).map(at));
-            rows[start] = rows[start + 2];
-            let (a, b) = (rows[start + n - 1], rows[start + n]);
-            rows.push(2.0 * b - a);
-        }
+        // The grid's tanθ, shared by every row.
+        let tans: Vec<f64> = (0..n)
+            .map(|l| scale * libm::sinh(l as f64 / (n - 1) as f64 * v_ext))
+            .collect();
+        // Each row resampled on its own (in parallel with `std`).
+        let padded = crate::parallel::map_rows(sources.len(), |r| {
+            let (row, inv_s, row_v_scale) = sources[r];
+            let mut out = Vec::with_capacity(n + 2);
+            out.push(0.0);
+            out.extend(
+                tans.iter()
+                    .map(|&t| log1p_from_row(row, t * inv_s, row_v_scale)),
+            );
+            out[0] = out[2];
+            let (a, b) = (out[n - 1], out[n]);
+            out.push(2.0 * b - a);
+            out
+        });
+        let rows = padded.concat();
         SharedLambdaGrid {
             inv_scale: 1.0 / scale,
             v_scale: (n - 1) as f64 / v_ext,
