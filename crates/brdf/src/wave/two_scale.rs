@@ -309,7 +309,7 @@ impl TwoScale {
                         k,
                         |wb| self.table.mix_nodes(wb, d_eff_node),
                         |wb| self.table.mix_nodes(wb, |i| lambda_eff_i[i]),
-                        |wb| self.table.mix_nodes(wb, |i| grid.lambda(i, &at_o)),
+                        |wb| grid.lambda_mix(wb, &at_o),
                     );
                     *v = finite_nonneg(f);
                 }
