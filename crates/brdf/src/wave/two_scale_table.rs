@@ -425,11 +425,12 @@ fn ring_nodes(row: &[f64], tau_a: f64, v_ext: f64, rule: &BinRule) -> Vec<(f64, 
             for (x, w) in rule.x.iter().zip(rule.w) {
                 for f in [lo + width * (0.5 - 0.5 * x), lo + width * (0.5 + 0.5 * x)] {
                     let v = (j as f64 + f) / (nv - 1) as f64;
-                    let tm = tau_a * libm::sinh(v * v_ext);
+                    let (sh, ch) = sinh_cosh(v * v_ext);
+                    let tm = tau_a * sh;
                     let cm = 1.0 / libm::sqrt(1.0 + tm * tm);
                     let sm = tm * cm;
                     // dθm/dv = τ a V cosh(vV) cos²θm; dv/df = 1/(nv − 1); GL on [0, 1].
-                    let dth = tau_a * v_ext * libm::cosh(v * v_ext) * cm * cm / (nv - 1) as f64;
+                    let dth = tau_a * v_ext * ch * cm * cm / (nv - 1) as f64;
                     let d = libm::exp(catmull_rom(row, j, f));
                     out.push((0.5 * width * w * d * sm * dth, cm, sm));
                 }
@@ -437,6 +438,28 @@ fn ring_nodes(row: &[f64], tau_a: f64, v_ext: f64, rule: &BinRule) -> Vec<(f64, 
         }
     }
     out
+}
+
+/// (sinh x, cosh x) for x ≥ 0 from one platform exponential (libm's sinh
+/// and cosh are an expm1 and an exp each, and the table build takes both at
+/// every quadrature point of its bin masses and Λ nodes); sinh by its series
+/// below 1/4, where (eˣ − e⁻ˣ)/2 would cancel. Within 2 ulp of libm.
+#[inline]
+fn sinh_cosh(x: f64) -> (f64, f64) {
+    let e = crate::numerics::math::exp(x);
+    let inv = 1.0 / e;
+    let s = if x < 0.25 {
+        // x(1 + x²/3!(1 + x²/(4·5)(1 + …))), to x¹³/13! (below 3e−18·x).
+        let x2 = x * x;
+        let mut t = 1.0;
+        for d in [156.0, 110.0, 72.0, 42.0, 20.0, 6.0] {
+            t = 1.0 + x2 / d * t;
+        }
+        x * t
+    } else {
+        0.5 * (e - inv)
+    };
+    (s, 0.5 * (e + inv))
 }
 
 /// A Gauss–Legendre rule (positive nodes on [−1, 1] and their weights)
@@ -524,28 +547,35 @@ impl SharedLambdaGrid {
     /// Resamples `sources` (each a row of ln(1 + Λ) on its own sinh grid
     /// tanθ = s·sinh(vV), given with 1/s and (points − 1)/V as its lookup
     /// takes them, all topped at [`LAMBDA_TOP_TAN`]) onto one grid.
-    pub(crate) fn new<'a>(sources: impl Iterator<Item = (&'a [f64], f64, f64)> + Clone) -> Self {
+    pub(crate) fn new<'a>(sources: impl Iterator<Item = (&'a [f64], f64, f64)>) -> Self {
+        let sources: Vec<_> = sources.collect();
         let mut scale = f64::INFINITY;
         let mut step = f64::INFINITY;
-        for (_, inv_s, v_scale) in sources.clone() {
+        for &(_, inv_s, v_scale) in &sources {
             scale = scale.min(1.0 / inv_s);
             step = step.min(1.0 / v_scale);
         }
         let v_ext = libm::asinh(LAMBDA_TOP_TAN / scale);
         let n = (libm::ceil(v_ext / (0.5 * step)) as usize + 1).max(8);
-        let mut rows = Vec::new();
-        for (row, inv_s, row_v_scale) in sources {
-            let at = |l: usize| {
-                let t = scale * libm::sinh(l as f64 / (n - 1) as f64 * v_ext);
-                log1p_from_row(row, t * inv_s, row_v_scale)
-            };
-            let start = rows.len();
-            rows.push(0.0);
-            rows.extend((0..n).map(at));
-            rows[start] = rows[start + 2];
-            let (a, b) = (rows[start + n - 1], rows[start + n]);
-            rows.push(2.0 * b - a);
-        }
+        // The grid's tanθ, shared by every row.
+        let tans: Vec<f64> = (0..n)
+            .map(|l| scale * libm::sinh(l as f64 / (n - 1) as f64 * v_ext))
+            .collect();
+        // Each row resampled on its own (in parallel with `std`).
+        let padded = crate::parallel::map_rows(sources.len(), |r| {
+            let (row, inv_s, row_v_scale) = sources[r];
+            let mut out = Vec::with_capacity(n + 2);
+            out.push(0.0);
+            out.extend(
+                tans.iter()
+                    .map(|&t| log1p_from_row(row, t * inv_s, row_v_scale)),
+            );
+            out[0] = out[2];
+            let (a, b) = (out[n - 1], out[n]);
+            out.push(2.0 * b - a);
+            out
+        });
+        let rows = padded.concat();
         SharedLambdaGrid {
             inv_scale: 1.0 / scale,
             v_scale: (n - 1) as f64 / v_ext,
@@ -581,9 +611,63 @@ impl SharedLambdaGrid {
     /// Λ of row `r` at a position.
     #[inline]
     pub(crate) fn lambda(&self, r: usize, p: &GridPosition) -> f64 {
-        let y = &self.rows[r * (self.n + 2) + p.j..][..4];
-        lambda_from_log1p(p.w[0] * y[0] + p.w[1] * y[1] + p.w[2] * y[2] + p.w[3] * y[3])
+        lambda_from_log1p(self.log1p_lambda(r, p))
     }
+
+    /// ln(1 + Λ) of row `r` at a position.
+    #[inline]
+    fn log1p_lambda(&self, r: usize, p: &GridPosition) -> f64 {
+        let y = &self.rows[r * (self.n + 2) + p.j..][..4];
+        p.w[0] * y[0] + p.w[1] * y[1] + p.w[2] * y[2] + p.w[3] * y[3]
+    }
+
+    /// (1 − f)·Λ_r + f·Λ_{r+1} at a position, as [`EffTable::mix_nodes`]
+    /// of [`SharedLambdaGrid::lambda`] takes it (a row with zero weight is
+    /// not evaluated), for the rows of a w bracket `(r, f)`: their ln(1 + Λ)
+    /// are close, so e^{y_{r+1}} is e^{y_r} times a short series in
+    /// y_{r+1} − y_r instead of a second exponential.
+    #[inline]
+    pub(crate) fn lambda_mix(&self, (r, f): (usize, f64), p: &GridPosition) -> f64 {
+        if !(f > 0.0 && f < 1.0) {
+            return if f > 0.0 {
+                f * self.lambda(r + 1, p)
+            } else {
+                (1.0 - f) * self.lambda(r, p)
+            };
+        }
+        let (ya, yb) = (self.log1p_lambda(r, p), self.log1p_lambda(r + 1, p));
+        let ea = crate::numerics::math::exp(ya);
+        let d = yb - ya;
+        let eb = if d.abs() <= EXP_SERIES_MAX {
+            ea * exp_series(d)
+        } else {
+            crate::numerics::math::exp(yb)
+        };
+        (1.0 - f) * (ea - 1.0).max(0.0) + f * (eb - 1.0).max(0.0)
+    }
+}
+
+/// Largest |x| of [`exp_series`].
+const EXP_SERIES_MAX: f64 = 0.125;
+
+/// eˣ for |x| ≤ [`EXP_SERIES_MAX`] by its Taylor series to x¹⁰ (the rest is
+/// below 3e−18 there): a few ulp, a third of a library call's instructions.
+#[inline]
+fn exp_series(x: f64) -> f64 {
+    // 1 + x(1 + x/2(1 + x/3(…))), by the reciprocals of 1 … 10.
+    const INV: [f64; 10] = [
+        1.0,
+        0.5,
+        1.0 / 3.0,
+        0.25,
+        0.2,
+        1.0 / 6.0,
+        1.0 / 7.0,
+        0.125,
+        1.0 / 9.0,
+        0.1,
+    ];
+    INV.iter().rev().fold(1.0, |s, &inv| 1.0 + x * inv * s)
 }
 
 /// t = a sinh(vV) is linear near the pole; a fixes where logarithmic
@@ -633,7 +717,7 @@ impl EffTable {
             let mut log_d: Vec<f64> = (0..nv)
                 .map(|j| {
                     let v = j as f64 / (nv - 1) as f64;
-                    let theta = libm::atan(tau * SINH_A * libm::sinh(v * v_ext));
+                    let theta = libm::atan(tau * SINH_A * sinh_cosh(v * v_ext).0);
                     libm::log(conv.d_eff_fast(theta, w).max(1e-300))
                 })
                 .collect();
@@ -642,11 +726,11 @@ impl EffTable {
                 .map(|j| {
                     gl4(0.0, 1.0, |f| {
                         let v = (j as f64 + f) / (nv - 1) as f64;
-                        let sh = libm::sinh(v * v_ext);
+                        let (sh, ch) = sinh_cosh(v * v_ext);
                         let tan_t = tau * SINH_A * sh;
                         let c2 = 1.0 / (1.0 + tan_t * tan_t);
                         // dT/dv = 2 tanθ · τ a V cosh(vV); dv/df = 1/(nv−1).
-                        let dt_dv = 2.0 * tan_t * tau * SINH_A * v_ext * libm::cosh(v * v_ext);
+                        let dt_dv = 2.0 * tan_t * tau * SINH_A * v_ext * ch;
                         let d = libm::exp(catmull_rom(&log_d, j, f));
                         PI * d * c2 * c2 * dt_dv / (nv - 1) as f64
                     })
@@ -676,7 +760,7 @@ impl EffTable {
             let log1p_lambda = (0..LAMBDA_NODES)
                 .map(|l| {
                     let v = l as f64 / (LAMBDA_NODES - 1) as f64;
-                    let q = sums.one_plus_lambda(tau_a * libm::sinh(v * lambda_v_ext));
+                    let q = sums.one_plus_lambda(tau_a * sinh_cosh(v * lambda_v_ext).0);
                     // Λ ≥ 0; quadrature round-off near the pole can dip below.
                     libm::log(q.max(1.0))
                 })
@@ -870,6 +954,61 @@ mod tests {
     use super::*;
     use crate::numerics::quadrature::{GL4_W, GL4_X};
     use crate::wave::two_scale_lambda::one_plus_lambda;
+
+    /// [`sinh_cosh`] against libm's sinh and cosh over 0–40 (the table's
+    /// arguments reach V ≈ 20), through the series' end at 1/4.
+    #[test]
+    fn sinh_cosh_matches_libm() {
+        let mut worst = 0.0f64;
+        for e in 0..=4000 {
+            let x = if e < 2000 {
+                0.25 * e as f64 / 2000.0
+            } else {
+                0.25 + 40.0 * (e - 2000) as f64 / 2000.0
+            };
+            let (s, c) = sinh_cosh(x);
+            if x > 0.0 {
+                worst = worst.max((s / libm::sinh(x) - 1.0).abs());
+            }
+            worst = worst.max((c / libm::cosh(x) - 1.0).abs());
+        }
+        assert!(worst < 5e-16, "{worst:e}");
+    }
+
+    /// The shared grid's mixture of two rows with one exponential equals
+    /// the mixture of each row's Λ (two exponentials) to a few ulp of 1 + Λ,
+    /// over every w bracket of S138's table and tanθ 1e−4–1e6 (the x²
+    /// coefficient 1e−6 off fails it at 3.5e−9).
+    #[test]
+    fn lambda_mix_matches_two_exponentials() {
+        let ndf = ExponentialNdf::new(7.2e-4).unwrap();
+        let psd = KcPsd::new(0.138, 2.0, 2.0).unwrap();
+        let t = EffTable::build(ndf, &psd, TableResolution::default());
+        let grid = SharedLambdaGrid::new(t.lambda_rows());
+        let (mut worst, mut series) = (0.0f64, 0usize);
+        for e in 0..=400 {
+            let tan_t = if e == 0 {
+                0.0
+            } else {
+                1e-4 * libm::pow(1e10, e as f64 / 400.0)
+            };
+            let p = grid.position(tan_t);
+            for r in 0..t.nw - 1 {
+                let d = grid.log1p_lambda(r + 1, &p) - grid.log1p_lambda(r, &p);
+                series += usize::from(d.abs() <= EXP_SERIES_MAX);
+                for f in [0.0, 0.3, 0.77, 1.0] {
+                    let want = t.mix_nodes((r, f), |i| grid.lambda(i, &p));
+                    let got = grid.lambda_mix((r, f), &p);
+                    worst = worst.max((got - want).abs() / (1.0 + want));
+                }
+            }
+        }
+        assert!(series > 1000, "{series}");
+        assert!(worst < 2e-15, "{worst:e}");
+        for x in [-0.125, -0.05, 1e-9, 0.07, 0.125] {
+            assert!((exp_series(x) / libm::exp(x) - 1.0).abs() < 4e-16, "{x}");
+        }
+    }
 
     /// The table's Smith Λ of every w node (the lobe's own G₂) against the
     /// same integral by 4-point Gauss–Legendre on each quarter of every bin,
