@@ -204,22 +204,33 @@ fn diffuse_and_plastic_plates_leave_a_constant_environment_to_bsdf_sampling() {
         let text = plate_at_45deg("", material, &format!("{env}\n\n{sphere}"));
         let mut scene = render::load_str(&scene_path("env_sphere.toml"), &text).unwrap();
         assert!(scene.lights.bsdf_only_environment, "{name}");
-        let mut got = Vec::new();
-        for bsdf_only in [true, false] {
-            scene.lights.bsdf_only_environment = bsdf_only;
-            let (y, sigma) = pixel_y(&scene, 5, 9, n);
-            eprintln!("{name}, BSDF only {bsdf_only}: Y {y:.5} (σ {sigma:.4})");
-            got.push((y, sigma));
-        }
-        let (a, b) = (got[0], got[1]);
-        // 4 standard errors of the difference of two independent means.
-        let tol = 4.0 * (a.1 * a.1 + b.1 * b.1).sqrt() / (n as f64).sqrt();
-        assert!(
-            (a.0 - b.0).abs() < tol,
-            "{name}: {a:?} vs {b:?} (tolerance {tol})"
-        );
+        let (a, b) = with_and_without_environment_nee(&mut scene, name, n);
         assert!(a.1 < b.1, "{name}: σ {} not below {}", a.1, b.1);
     }
+}
+
+/// Pixel (5, 9)'s Y as (mean, σ) with the environment left to BSDF sampling
+/// and with environment NEE, asserted equal within 4 standard errors of the
+/// difference of the two independent means.
+fn with_and_without_environment_nee(
+    scene: &mut render::Scene,
+    name: &str,
+    n: u64,
+) -> ((f64, f64), (f64, f64)) {
+    let mut got = Vec::new();
+    for bsdf_only in [true, false] {
+        scene.lights.bsdf_only_environment = bsdf_only;
+        let (y, sigma) = pixel_y(scene, 5, 9, n);
+        eprintln!("{name}, BSDF only {bsdf_only}: Y {y:.5} (σ {sigma:.4})");
+        got.push((y, sigma));
+    }
+    let (a, b) = (got[0], got[1]);
+    let tol = 4.0 * (a.1 * a.1 + b.1 * b.1).sqrt() / (n as f64).sqrt();
+    assert!(
+        (a.0 - b.0).abs() < tol,
+        "{name}: {a:?} vs {b:?} (tolerance {tol})"
+    );
+    (a, b)
 }
 
 /// Environment NEE and BSDF samples that escape to the environment weigh a
@@ -262,19 +273,7 @@ fn environment_weights_agree_on_every_kind_of_vertex() {
     for (name, material) in &materials {
         let text = plate_at_45deg("", material, &format!("{env}\n\n{sphere}"));
         let mut scene = render::load_str(&scene_path("env_mis.toml"), &text).unwrap();
-        let mut got = Vec::new();
-        for bsdf_only in [true, false] {
-            scene.lights.bsdf_only_environment = bsdf_only;
-            let (y, sigma) = pixel_y(&scene, 5, 9, n);
-            eprintln!("{name}, BSDF only {bsdf_only}: Y {y:.5} (σ {sigma:.4})");
-            got.push((y, sigma));
-        }
-        let (a, b) = (got[0], got[1]);
-        let tol = 4.0 * (a.1 * a.1 + b.1 * b.1).sqrt() / (n as f64).sqrt();
-        assert!(
-            (a.0 - b.0).abs() < tol,
-            "{name}: {a:?} vs {b:?} (tolerance {tol})"
-        );
+        with_and_without_environment_nee(&mut scene, name, n);
     }
     let _ = std::fs::remove_file(&csv);
 }
