@@ -244,6 +244,7 @@ pub(crate) fn any_hit(bvh: &Bvh, mut ray: BvhRay) -> bool {
     });
     hit
 }
+
 /// The ray's part of the box test.
 struct Slabs {
     origin: Vec3A,

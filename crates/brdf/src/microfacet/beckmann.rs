@@ -265,19 +265,27 @@ const MAX_PROPOSALS: usize = 64;
 fn sample_slopes_unit(cot: f64, u: [f64; 2]) -> (f64, f64) {
     // Per-axis slope variance ½ at unit roughness: a standard normal / √2.
     let sy = normal_quantile(u[1]) * FRAC_1_SQRT_2;
+    (propose_until(cot, u[0], Draws::new(u), accept), sy)
+}
+
+/// The x slope of [`sample_slopes_unit`]: Gaussian proposals (the first
+/// from `u0`, the rest from `more`) until `accepts(t, v)` takes one, or the
+/// last of [`MAX_PROPOSALS`]. The tests pass a wrong acceptance to show the
+/// chi-square test sees it.
+#[inline(always)]
+fn propose_until(cot: f64, u0: f64, mut more: Draws, accepts: impl Fn(f64, f64) -> bool) -> f64 {
     // √(cot² + 2) − cotθ without its cancellation at large cotθ.
     let k = 2.0 / (cot + libm::sqrt(cot * cot + 2.0));
-    let mut more = Draws::new(u);
-    let mut z = normal_quantile(u[0]);
+    let mut z = normal_quantile(u0);
     let mut x = 0.0;
     for _ in 0..MAX_PROPOSALS {
         x = z * FRAC_1_SQRT_2 - 0.5 * k;
-        if accept(k * (cot - x), more.next()) {
+        if accepts(k * (cot - x), more.next()) {
             break;
         }
         z = normal_quantile(more.next());
     }
-    (x, sy)
+    x
 }
 
 /// Whether uniform `v` accepts a proposal at t: v < t e^{1−t}, for t > 0.
@@ -737,17 +745,9 @@ mod tests {
         // times (t e^{1−t})^0.1, 1–10 % off in the tails) at cotθ = 1, and
         // by the proposal alone (no rejection) at cotθ = 0.5.
         let tilted = |cot: f64, u: [f64; 2]| {
-            let k = 2.0 / (cot + libm::sqrt(cot * cot + 2.0));
-            let mut more = Draws::new(u);
-            let mut z = normal_quantile(u[0]);
-            loop {
-                let x = z * FRAC_1_SQRT_2 - 0.5 * k;
-                let t = k * (cot - x);
-                if t > 0.0 && more.next() < libm::pow(t * libm::exp(1.0 - t), 1.1) {
-                    return x;
-                }
-                z = normal_quantile(more.next());
-            }
+            propose_until(cot, u[0], Draws::new(u), |t, v| {
+                t > 0.0 && v < libm::pow(t * libm::exp(1.0 - t), 1.1)
+            })
         };
         let chi2 = slope_chi2(1.0, 1_000_000, tilted);
         assert!(

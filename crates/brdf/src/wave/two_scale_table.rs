@@ -425,7 +425,7 @@ fn ring_nodes(row: &[f64], tau_a: f64, v_ext: f64, rule: &BinRule) -> Vec<(f64, 
             for (x, w) in rule.x.iter().zip(rule.w) {
                 for f in [lo + width * (0.5 - 0.5 * x), lo + width * (0.5 + 0.5 * x)] {
                     let v = (j as f64 + f) / (nv - 1) as f64;
-                    let (sh, ch) = sinh_cosh(v * v_ext);
+                    let (sh, ch) = crate::numerics::math::sinh_cosh(v * v_ext);
                     let tm = tau_a * sh;
                     let cm = 1.0 / libm::sqrt(1.0 + tm * tm);
                     let sm = tm * cm;
@@ -438,28 +438,6 @@ fn ring_nodes(row: &[f64], tau_a: f64, v_ext: f64, rule: &BinRule) -> Vec<(f64, 
         }
     }
     out
-}
-
-/// (sinh x, cosh x) for x ≥ 0 from one platform exponential (libm's sinh
-/// and cosh are an expm1 and an exp each, and the table build takes both at
-/// every quadrature point of its bin masses and Λ nodes); sinh by its series
-/// below 1/4, where (eˣ − e⁻ˣ)/2 would cancel. Within 2 ulp of libm.
-#[inline]
-fn sinh_cosh(x: f64) -> (f64, f64) {
-    let e = crate::numerics::math::exp(x);
-    let inv = 1.0 / e;
-    let s = if x < 0.25 {
-        // x(1 + x²/3!(1 + x²/(4·5)(1 + …))), to x¹³/13! (below 3e−18·x).
-        let x2 = x * x;
-        let mut t = 1.0;
-        for d in [156.0, 110.0, 72.0, 42.0, 20.0, 6.0] {
-            t = 1.0 + x2 / d * t;
-        }
-        x * t
-    } else {
-        0.5 * (e - inv)
-    };
-    (s, 0.5 * (e + inv))
 }
 
 /// A Gauss–Legendre rule (positive nodes on [−1, 1] and their weights)
@@ -717,7 +695,8 @@ impl EffTable {
             let mut log_d: Vec<f64> = (0..nv)
                 .map(|j| {
                     let v = j as f64 / (nv - 1) as f64;
-                    let theta = libm::atan(tau * SINH_A * sinh_cosh(v * v_ext).0);
+                    let theta =
+                        libm::atan(tau * SINH_A * crate::numerics::math::sinh_cosh(v * v_ext).0);
                     libm::log(conv.d_eff_fast(theta, w).max(1e-300))
                 })
                 .collect();
@@ -726,7 +705,7 @@ impl EffTable {
                 .map(|j| {
                     gl4(0.0, 1.0, |f| {
                         let v = (j as f64 + f) / (nv - 1) as f64;
-                        let (sh, ch) = sinh_cosh(v * v_ext);
+                        let (sh, ch) = crate::numerics::math::sinh_cosh(v * v_ext);
                         let tan_t = tau * SINH_A * sh;
                         let c2 = 1.0 / (1.0 + tan_t * tan_t);
                         // dT/dv = 2 tanθ · τ a V cosh(vV); dv/df = 1/(nv−1).
@@ -760,7 +739,9 @@ impl EffTable {
             let log1p_lambda = (0..LAMBDA_NODES)
                 .map(|l| {
                     let v = l as f64 / (LAMBDA_NODES - 1) as f64;
-                    let q = sums.one_plus_lambda(tau_a * sinh_cosh(v * lambda_v_ext).0);
+                    let q = sums.one_plus_lambda(
+                        tau_a * crate::numerics::math::sinh_cosh(v * lambda_v_ext).0,
+                    );
                     // Λ ≥ 0; quadrature round-off near the pole can dip below.
                     libm::log(q.max(1.0))
                 })
@@ -954,26 +935,6 @@ mod tests {
     use super::*;
     use crate::numerics::quadrature::{GL4_W, GL4_X};
     use crate::wave::two_scale_lambda::one_plus_lambda;
-
-    /// [`sinh_cosh`] against libm's sinh and cosh over 0–40 (the table's
-    /// arguments reach V ≈ 20), through the series' end at 1/4.
-    #[test]
-    fn sinh_cosh_matches_libm() {
-        let mut worst = 0.0f64;
-        for e in 0..=4000 {
-            let x = if e < 2000 {
-                0.25 * e as f64 / 2000.0
-            } else {
-                0.25 + 40.0 * (e - 2000) as f64 / 2000.0
-            };
-            let (s, c) = sinh_cosh(x);
-            if x > 0.0 {
-                worst = worst.max((s / libm::sinh(x) - 1.0).abs());
-            }
-            worst = worst.max((c / libm::cosh(x) - 1.0).abs());
-        }
-        assert!(worst < 5e-16, "{worst:e}");
-    }
 
     /// The shared grid's mixture of two rows with one exponential equals
     /// the mixture of each row's Λ (two exponentials) to a few ulp of 1 + Λ,
