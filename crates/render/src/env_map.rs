@@ -3,11 +3,12 @@
 //! uniformly in solid angle within the texel, so radiance ÷ pdf is constant
 //! over each texel.
 //!
-//! No trigonometric function runs per ray: a direction's texel comes from
-//! monotone "pseudo-angles" (one division, no atan2 or acos) located among
-//! the texel edges' pseudo-angles with guide tables, and a drawn direction
-//! from tables of the edges' sines and cosines, a linear draw in cos θ and a
-//! short series for the azimuth's offset within its column.
+//! No trigonometric function runs per ray: a direction's row comes from
+//! 1 − cos θ and its column from a monotone "pseudo-angle" (one division, no
+//! atan2), each located among the texel edges' keys with a guide table; a
+//! drawn direction from tables of the edges' sines and cosines, a linear
+//! draw in cos θ and a short series for the azimuth's offset within its
+//! column.
 
 use crate::color::{SRGB_TO_XYZ, mul};
 use crate::distribution::Distribution2D;
@@ -37,9 +38,9 @@ struct GuidedEdges {
 }
 
 impl GuidedEdges {
-    /// From non-decreasing `keys` over [0, `range`].
-    fn new(keys: Vec<f64>, range: f64) -> GuidedEdges {
-        let cells = keys.len().max(1);
+    /// From non-decreasing `keys` over [0, `range`], with `cells` guide cells.
+    fn new(keys: Vec<f64>, range: f64, cells: usize) -> GuidedEdges {
+        let cells = cells.max(1);
         let scale = cells as f64 / range;
         let guide = (0..cells)
             .map(|k| keys.partition_point(|&c| c <= k as f64 / scale) as u32)
@@ -118,7 +119,11 @@ pub struct EnvMap {
     col_edges: Vec<[f64; 2]>,
     /// The rotation's (sin, cos): map azimuth = world azimuth + rotation.
     rot: [f64; 2],
-    /// Pseudo-angles of the row edges from +y (over [0, 2]).
+    /// 1 − cos θ at the row edges (over [0, 2]). Rows crowd together in
+    /// cos θ toward the poles (1/sin θ of them per unit), but directions
+    /// thin out there as sin θ: over uniform directions a guide of 2·height
+    /// cells walks ½ a step on average, without the square root and division
+    /// of an angle.
     rows: GuidedEdges,
     /// Pseudo-angles of the column edges in map azimuth (over [0, 4]).
     cols: GuidedEdges,
@@ -249,15 +254,7 @@ impl EnvMap {
                 [s, c]
             })
             .collect();
-        let row_keys = z_edges
-            .iter()
-            .enumerate()
-            .map(|(k, &z)| match k {
-                0 => 0.0,
-                k if k == height => 2.0,
-                _ => pseudo_angle((1.0 - z * z).max(0.0).sqrt(), z),
-            })
-            .collect();
+        let row_keys = z_edges.iter().map(|&z| 1.0 - z).collect();
         let col_keys = (0..=width)
             .map(|k| match k {
                 0 => 0.0,
@@ -277,16 +274,15 @@ impl EnvMap {
             z_edges,
             col_edges,
             rot: [rs, rc],
-            rows: GuidedEdges::new(monotone(row_keys), 2.0),
-            cols: GuidedEdges::new(monotone(col_keys), 4.0),
+            rows: GuidedEdges::new(monotone(row_keys), 2.0, 2 * height),
+            cols: GuidedEdges::new(monotone(col_keys), 4.0, width + 1),
         }
     }
 
     /// The texel index a world direction falls in.
     #[inline]
     fn texel_index(&self, d: DVec3) -> usize {
-        let rho = (d.x * d.x + d.z * d.z).sqrt();
-        let row = self.rows.count_le(pseudo_angle(rho, d.y));
+        let row = self.rows.count_le(1.0 - d.y);
         // Map azimuth φ + rotation, from (sin, cos) of the world azimuth = (x, −z).
         let [rs, rc] = self.rot;
         let (s, c) = (d.x, -d.z);

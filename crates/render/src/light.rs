@@ -71,6 +71,9 @@ impl Emission<'_> {
 }
 
 /// An environment: constant radiance, an equirectangular map or a daylight sky.
+// A scene holds one environment: the map's inline tables cost nothing, and a
+// box would put one more load on every escaping ray's lookup.
+#[allow(clippy::large_enum_variant)]
 pub enum Environment {
     /// The same radiance from every direction.
     Constant(Spectrum),
