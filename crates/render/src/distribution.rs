@@ -172,6 +172,23 @@ impl Distribution2D {
         ([x, v], pv * pu)
     }
 
+    /// The bins a uniform `u` draws, `[row, column]`, and the positions
+    /// within them, `[t_u, t_v]` ∈ [0, 1]² (the inverse-CDF map of
+    /// [`sample`](Self::sample), so strata of `u` stay strata).
+    #[inline]
+    pub fn sample_bins(&self, u: [f64; 2]) -> ([usize; 2], [f64; 2]) {
+        let (row, tv) = self.marginal.sample_bin(u[1]);
+        let (col, tu) = self.rows[row].sample_bin(u[0]);
+        ([row, col], [tu, tv])
+    }
+
+    /// Probability of the bin in `row` and `col` (0 outside the grid).
+    pub fn pmf(&self, row: usize, col: usize) -> f64 {
+        self.rows
+            .get(row)
+            .map_or(0.0, |r| self.marginal.pmf(row) * r.pmf(col))
+    }
+
     /// Density at (u, v).
     pub fn pdf(&self, uv: [f64; 2]) -> f64 {
         let h = self.rows.len();

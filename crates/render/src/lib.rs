@@ -21,6 +21,8 @@ pub mod color;
 pub mod distribution;
 pub mod driver;
 pub mod emitter_edges;
+mod env_lift;
+mod env_map;
 pub mod error;
 pub mod film;
 pub mod geometry;

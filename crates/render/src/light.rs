@@ -1,14 +1,13 @@
 //! Lights: point, sphere and rectangle emitters, constant, EXR and daylight-sky environments.
 
-use crate::color::{SRGB_TO_XYZ, mul};
-use crate::distribution::Distribution2D;
+pub use crate::env_lift::RgbLift;
+pub use crate::env_map::EnvMap;
 use crate::geometry::{Planar, Ray, Sphere};
 use crate::shapes::Surface;
 use crate::sky::Sky;
 use crate::spectrum::{Cie, LAMBDA_MAX, LAMBDA_MIN, Spectrum};
 use glam::DVec3;
 use std::f64::consts::PI;
-use std::path::Path;
 
 /// Spectral radiance (or intensity) of one emission event.
 #[derive(Clone, Copy, Debug)]
@@ -71,79 +70,10 @@ impl Emission<'_> {
     }
 }
 
-/// Lifts linear sRGB to the spectrum `Σ cᵢ·cmfᵢ(λ)` whose XYZ (with the
-/// film's normalisation ∫S·cmf/∫ȳ) is exactly that of the RGB value: the
-/// coefficients solve the 3×3 Gram system of the CIE functions. The lift is
-/// exact in colour and smooth in λ; saturated colours may go negative at some
-/// wavelengths, which a linear estimator handles without bias.
-#[derive(Clone, Debug)]
-pub struct RgbLift {
-    m: [[f64; 3]; 3],
-}
-
-impl RgbLift {
-    /// Builds the lift from the CIE table.
-    pub fn new() -> RgbLift {
-        let cie = Cie::get();
-        let mut g = [[0.0; 3]; 3];
-        for i in 0..=470 {
-            let l = LAMBDA_MIN + i as f64;
-            let w = if i == 0 || i == 470 { 0.5 } else { 1.0 };
-            let c = cie.xyz(l);
-            for a in 0..3 {
-                for b in 0..3 {
-                    g[a][b] += w * c[a] * c[b] / cie.y_integral();
-                }
-            }
-        }
-        let gi = invert3(g);
-        let mut m = [[0.0; 3]; 3];
-        for (a, row) in m.iter_mut().enumerate() {
-            for (b, v) in row.iter_mut().enumerate() {
-                *v = (0..3).map(|k| gi[a][k] * SRGB_TO_XYZ[k][b]).sum();
-            }
-        }
-        RgbLift { m }
-    }
-
-    /// CMF coefficients of a linear sRGB value.
-    pub fn coefficients(&self, rgb: [f64; 3]) -> [f64; 3] {
-        mul(&self.m, rgb)
-    }
-}
-
-impl Default for RgbLift {
-    fn default() -> Self {
-        RgbLift::new()
-    }
-}
-
-fn invert3(m: [[f64; 3]; 3]) -> [[f64; 3]; 3] {
-    let det = m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1])
-        - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0])
-        + m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0]);
-    let c =
-        |r0: usize, c0: usize, r1: usize, c1: usize| m[r0][c0] * m[r1][c1] - m[r0][c1] * m[r1][c0];
-    [
-        [
-            c(1, 1, 2, 2) / det,
-            -c(0, 1, 2, 2) / det,
-            c(0, 1, 1, 2) / det,
-        ],
-        [
-            -c(1, 0, 2, 2) / det,
-            c(0, 0, 2, 2) / det,
-            -c(0, 0, 1, 2) / det,
-        ],
-        [
-            c(1, 0, 2, 1) / det,
-            -c(0, 0, 2, 1) / det,
-            c(0, 0, 1, 1) / det,
-        ],
-    ]
-}
-
 /// An environment: constant radiance, an equirectangular map or a daylight sky.
+// A scene holds one environment: the map's inline tables cost nothing, and a
+// box would put one more load on every escaping ray's lookup.
+#[allow(clippy::large_enum_variant)]
 pub enum Environment {
     /// The same radiance from every direction.
     Constant(Spectrum),
@@ -151,134 +81,6 @@ pub enum Environment {
     Map(EnvMap),
     /// The analytic Preetham sky with its sun disk and ground (`sky.rs`).
     Sky(Box<Sky>),
-}
-
-/// An equirectangular environment map (+y up, u = 0 at −z, increasing toward +x).
-pub struct EnvMap {
-    width: usize,
-    height: usize,
-    coeffs: Vec<[f64; 3]>,
-    dist: Distribution2D,
-    rotation: f64,
-}
-
-impl EnvMap {
-    /// A lat-long EXR from the file's bytes (`path` for messages), scaled by
-    /// `scale` and rotated by `rotate_deg` about +y.
-    pub fn from_exr_bytes(
-        path: &Path,
-        bytes: &[u8],
-        scale: f64,
-        rotate_deg: f64,
-    ) -> Result<EnvMap, String> {
-        use exr::prelude::*;
-        // A header may claim any size: refuse maps beyond 2²⁸ texels
-        // (6 GB of coefficients) before allocating them.
-        const MAX_TEXELS: usize = 1 << 28;
-        let image = read()
-            .no_deep_data()
-            .largest_resolution_level()
-            .rgba_channels(
-                |res, _| {
-                    let n = res.width().saturating_mul(res.height());
-                    let n = if n <= MAX_TEXELS { n } else { 0 };
-                    (res.width(), res.height(), vec![[0.0f64; 3]; n])
-                },
-                |px: &mut (usize, usize, Vec<[f64; 3]>),
-                 pos,
-                 (r, g, b, _a): (f32, f32, f32, f32)| {
-                    let i = pos.y() * px.0 + pos.x();
-                    if let Some(p) = px.2.get_mut(i) {
-                        *p = [r as f64, g as f64, b as f64];
-                    }
-                },
-            )
-            .first_valid_layer()
-            .all_attributes()
-            .from_buffered(std::io::Cursor::new(bytes))
-            .map_err(|e| format!("cannot read environment EXR {}: {e}", path.display()))?;
-        {
-            let (w, h, px) = &image.layer_data.channel_data.pixels;
-            if px.len() != w * h {
-                return Err(format!(
-                    "environment EXR {} is {w}×{h}: more than {MAX_TEXELS} texels",
-                    path.display()
-                ));
-            }
-        }
-        let (width, height, rgb) = image.layer_data.channel_data.pixels;
-        if width == 0 || height == 0 {
-            return Err(format!("environment EXR {} is empty", path.display()));
-        }
-        // A NaN or negative texel has no radiance to stand for: zeroing it made an
-        // all-NaN sky black and negative ones a negative image, without a word.
-        if let Some(i) = rgb
-            .iter()
-            .position(|p| p.iter().any(|v| !v.is_finite() || *v < 0.0))
-        {
-            return Err(format!(
-                "environment EXR {}: pixel ({}, {}) from the top left has RGB ({}, {}, {}); \
-                 radiance must be finite and ≥ 0: repair the map (e.g. clamp it to 0 and \
-                 replace non-finite values in an image editor) or use another one",
-                path.display(),
-                i % width,
-                i / width,
-                rgb[i][0],
-                rgb[i][1],
-                rgb[i][2]
-            ));
-        }
-        let lift = RgbLift::new();
-        let mut coeffs = Vec::with_capacity(rgb.len());
-        let mut weights = Vec::with_capacity(rgb.len());
-        for (i, px) in rgb.iter().enumerate() {
-            let px = px.map(|v| v * scale);
-            coeffs.push(lift.coefficients(px));
-            let y = i / width;
-            let sin_theta = (PI * (y as f64 + 0.5) / height as f64).sin();
-            // |Y| plus a tenth of the channel sum keeps dim-but-coloured texels sampleable.
-            let lum =
-                mul(&SRGB_TO_XYZ, px)[1].abs() + 0.1 * (px[0].abs() + px[1].abs() + px[2].abs());
-            weights.push(lum * sin_theta);
-        }
-        let dist = Distribution2D::new(&weights, width, height);
-        Ok(EnvMap {
-            width,
-            height,
-            coeffs,
-            dist,
-            rotation: rotate_deg.to_radians(),
-        })
-    }
-
-    fn uv(&self, d: DVec3) -> [f64; 2] {
-        let phi = d.x.atan2(-d.z) + self.rotation;
-        let u = (phi / (2.0 * PI)).rem_euclid(1.0);
-        let v = d.y.clamp(-1.0, 1.0).acos() / PI;
-        [u, v.min(1.0 - 1e-12)]
-    }
-
-    fn dir(&self, uv: [f64; 2]) -> DVec3 {
-        let theta = uv[1] * PI;
-        let phi = uv[0] * 2.0 * PI - self.rotation;
-        let st = theta.sin();
-        DVec3::new(st * phi.sin(), theta.cos(), -st * phi.cos())
-    }
-
-    fn lookup(&self, uv: [f64; 2]) -> [f64; 3] {
-        let x = ((uv[0] * self.width as f64) as usize).min(self.width - 1);
-        let y = ((uv[1] * self.height as f64) as usize).min(self.height - 1);
-        self.coeffs[y * self.width + x]
-    }
-
-    fn pdf_dir(&self, uv: [f64; 2]) -> f64 {
-        let st = (uv[1] * PI).sin();
-        if st <= 0.0 {
-            0.0
-        } else {
-            self.dist.pdf(uv) / (2.0 * PI * PI * st)
-        }
-    }
 }
 
 /// What a light is.
@@ -527,9 +329,8 @@ impl Lights {
                         Emission::Spectrum(s, 1.0, idx as u32),
                     ),
                     Environment::Map(m) => {
-                        let (st, _) = m.dist.sample(uv);
-                        let wi = m.dir(st);
-                        (wi, m.pdf_dir(st), Emission::Cmf(m.lookup(st)))
+                        let (wi, pdf, c) = m.sample(uv)?;
+                        (wi, pdf, Emission::Cmf(c))
                     }
                     Environment::Sky(sky) => {
                         let (wi, pdf, c) = sky.sample(uv)?;
@@ -603,8 +404,8 @@ impl Lights {
                 (Emission::Spectrum(s, 1.0, i as u32), pdf)
             }
             LightKind::Environment(Environment::Map(m)) => {
-                let uv = m.uv(dir);
-                (Emission::Cmf(m.lookup(uv)), sel * m.pdf_dir(uv))
+                let (c, pdf) = m.eval(dir);
+                (Emission::Cmf(c), sel * pdf)
             }
             LightKind::Environment(Environment::Sky(sky)) => (
                 Emission::Sky(sky, sky.coefficients(dir)),
@@ -648,6 +449,7 @@ pub fn uniform_sphere(u: [f64; 2]) -> DVec3 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::color::{SRGB_TO_XYZ, mul};
 
     #[test]
     fn eval_many_is_eval_at_each_wavelength_for_every_kind() {
