@@ -31,13 +31,34 @@ pub enum Reflectance {
 #[derive(Clone, Debug, PartialEq)]
 pub struct ReflectanceTable {
     rows: alloc::vec::Vec<[f64; 2]>,
-    /// (rows − 1) / (last λ − first λ): a wavelength's row index if the
+    /// Each pair of neighbouring rows `[λa, ρa, λb, ρb]`: a lookup reads its
+    /// interval from one record.
+    segments: alloc::vec::Vec<[f64; 4]>,
+    /// (rows − 1) / (last λ − first λ): a wavelength's interval if the
     /// rows were evenly spaced, the first guess of [`ReflectanceTable::at`].
     rows_per_nm: f64,
 }
 
 #[cfg(feature = "alloc")]
 impl ReflectanceTable {
+    fn new(rows: alloc::vec::Vec<[f64; 2]>) -> ReflectanceTable {
+        let span = rows[rows.len() - 1][0] - rows[0][0];
+        let rows_per_nm = if span > 0.0 {
+            (rows.len() - 1) as f64 / span
+        } else {
+            0.0
+        };
+        let segments = rows
+            .windows(2)
+            .map(|w| [w[0][0], w[0][1], w[1][0], w[1][1]])
+            .collect();
+        ReflectanceTable {
+            rows,
+            segments,
+            rows_per_nm,
+        }
+    }
+
     /// The rows `[λ nm, ρ]`.
     pub fn rows(&self) -> &[[f64; 2]] {
         &self.rows
@@ -47,32 +68,43 @@ impl ReflectanceTable {
     /// values held outside.
     #[inline]
     pub fn at(&self, lambda_nm: f64) -> f64 {
-        let rows = &self.rows[..];
-        let last = rows.len() - 1;
-        if !(lambda_nm > rows[0][0]) {
-            return rows[0][1];
+        let (Some(first), Some(last)) = (self.segments.first(), self.segments.last()) else {
+            return self.rows[0][1];
+        };
+        if !(lambda_nm > first[0]) {
+            return first[1];
         }
-        if lambda_nm >= rows[last][0] {
-            return rows[last][1];
+        if lambda_nm >= last[2] {
+            return last[3];
         }
-        // The first row above λ (λ strictly inside the table here, so
-        // 1 ≤ j ≤ last), guessed as for evenly spaced rows, one row either
-        // way tried, and searched for only if both miss: measured tables
-        // are mostly evenly spaced, and a search over them cost 80
-        // instructions a lookup, half a rough plastic's evaluation.
-        let x = (lambda_nm - rows[0][0]) * self.rows_per_nm;
-        let mut j = (x as u32 as usize + 1).min(last);
-        if rows[j - 1][0] > lambda_nm {
-            j -= 1;
-        } else if rows[j][0] <= lambda_nm {
-            j += 1;
+        // λ is strictly inside the table. Its interval is guessed as for
+        // evenly spaced rows and searched for only if the guess misses:
+        // measured tables are mostly evenly spaced, and the binary search
+        // alone cost 80 instructions a lookup, half a rough plastic's
+        // evaluation.
+        let k = ((lambda_nm - first[0]) * self.rows_per_nm) as u32 as usize;
+        let s = match self.segments.get(k) {
+            Some(s) if s[0] <= lambda_nm && lambda_nm < s[2] => s,
+            _ => self.search(lambda_nm, k),
+        };
+        let t = (lambda_nm - s[0]) / (s[2] - s[0]);
+        (s[1] + t * (s[3] - s[1])).clamp(0.0, 1.0)
+    }
+
+    /// The interval holding `lambda_nm` (strictly inside the table) when
+    /// the guess `k` missed: a neighbour of it (unevenly spaced rows), else
+    /// by bisection.
+    fn search(&self, lambda_nm: f64, k: usize) -> &[f64; 4] {
+        for j in [k.wrapping_sub(1), k + 1] {
+            if let Some(s) = self.segments.get(j)
+                && s[0] <= lambda_nm
+                && lambda_nm < s[2]
+            {
+                return s;
+            }
         }
-        if !(j >= 1 && j <= last && rows[j - 1][0] <= lambda_nm && lambda_nm < rows[j][0]) {
-            j = rows.partition_point(|r| r[0] <= lambda_nm).clamp(1, last);
-        }
-        let (a, b) = (rows[j - 1], rows[j]);
-        let t = (lambda_nm - a[0]) / (b[0] - a[0]);
-        (a[1] + t * (b[1] - a[1])).clamp(0.0, 1.0)
+        let k = self.segments.partition_point(|s| s[2] <= lambda_nm);
+        &self.segments[k.min(self.segments.len() - 1)]
     }
 }
 
@@ -113,14 +145,8 @@ impl Reflectance {
                 });
             }
         }
-        let span = rows[rows.len() - 1][0] - rows[0][0];
-        let rows_per_nm = if span > 0.0 {
-            (rows.len() - 1) as f64 / span
-        } else {
-            0.0
-        };
         Ok(Reflectance::Table(alloc::sync::Arc::new(
-            ReflectanceTable { rows, rows_per_nm },
+            ReflectanceTable::new(rows),
         )))
     }
 
