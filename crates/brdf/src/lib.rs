@@ -51,6 +51,8 @@ pub mod statistics;
 pub mod testing;
 pub mod wave;
 
+#[cfg(feature = "alloc")]
+pub use diffuse::ReflectanceTable;
 pub use diffuse::{Diffuse, Reflectance};
 pub use error::BrdfError;
 pub use fresnel::Fresnel;

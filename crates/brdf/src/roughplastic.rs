@@ -25,7 +25,7 @@ use glam::DVec3;
 use crate::diffuse::{Reflectance, sample_cosine_hemisphere};
 use crate::error::{BrdfError, check_range};
 use crate::fresnel::dielectric_reflectance;
-use crate::microfacet::Distribution;
+use crate::microfacet::{COS_HORIZON, Distribution};
 use crate::numerics::quadrature::gauss_legendre;
 use crate::{Bxdf, BxdfSample};
 
@@ -59,6 +59,9 @@ pub struct RoughPlastic {
     transmittance: [f64; TRANSMITTANCE_NODES],
     internal_reflectance: f64,
     specular_weight: f64,
+    /// 1 / (π η²), times 1 / (1 − R_i) unless `nonlinear`: the base's
+    /// λ-independent factor.
+    diffuse_scale: f64,
 }
 
 /// n-point Gauss–Legendre on [0, 1] (n = 2H): nodes and weights, made once
@@ -193,6 +196,7 @@ impl RoughPlastic {
             nonlinear: p.nonlinear,
             transmittance: [0.0; TRANSMITTANCE_NODES],
             internal_reflectance: 0.0,
+            diffuse_scale: 0.0,
         };
         for j in 0..TRANSMITTANCE_NODES {
             let mu = (j as f64 / (TRANSMITTANCE_NODES - 1) as f64).max(1e-6);
@@ -212,6 +216,12 @@ impl RoughPlastic {
             }
         }
         m.internal_reflectance = ri.clamp(0.0, 1.0 - 1e-12);
+        let linear = if m.nonlinear {
+            1.0
+        } else {
+            1.0 / (1.0 - m.internal_reflectance)
+        };
+        m.diffuse_scale = FRAC_1_PI / (m.eta * m.eta) * linear;
         Ok(m)
     }
 
@@ -240,7 +250,9 @@ impl RoughPlastic {
     /// t(μ) from the table (linear between [`TRANSMITTANCE_NODES`] nodes).
     pub fn transmittance(&self, mu: f64) -> f64 {
         let x = mu.clamp(0.0, 1.0) * (TRANSMITTANCE_NODES - 1) as f64;
-        let i = (x as usize).min(TRANSMITTANCE_NODES - 2);
+        // Through u32 (x ∈ [0, 63], or NaN → 0): a shorter instruction
+        // sequence than the saturating f64 → usize.
+        let i = (x as u32 as usize).min(TRANSMITTANCE_NODES - 2);
         let (a, b) = (self.transmittance[i], self.transmittance[i + 1]);
         a + (b - a) * (x - i as f64)
     }
@@ -309,51 +321,104 @@ impl RoughPlastic {
     /// (f, pdf) for directions both above the surface.
     #[inline]
     fn eval_pdf_above(&self, wi: DVec3, wo: DVec3, lambda_nm: f64) -> (f64, f64) {
-        self.above(wi, wo).at(self, lambda_nm)
+        self.above(wi, wo).at(self, self.reflectance.at(lambda_nm))
     }
 
     /// What (f, pdf) above the surface shares between wavelengths: only the
     /// base's reflectance depends on λ, so hero wavelengths pay for the coat's
     /// D, G2, Fresnel and the transmittance lookups once.
+    ///
+    /// GGX's D, Λ(wi), Λ(wo) and the Fresnel factor are formed as fractions
+    /// over the unnormalised half vector v = wi + wo (as the conductors form
+    /// them, `microfacet/conductor.rs`), so that f_s takes one division and
+    /// the pdf, lobe choice included, another: the textbook chain (normalise
+    /// h, D, G2 from two Λ, G1, Fresnel, the lobe probability) took eleven.
     #[inline]
     fn above(&self, wi: DVec3, wo: DVec3) -> Above {
-        let h = (wi + wo).normalize();
-        let d = self.dist.d(h);
-        let cos_ih = wi.dot(h).clamp(0.0, 1.0);
-        let f_s = dielectric_reflectance(cos_ih, self.eta).0 * d * self.dist.g2(wi, wo)
-            / (4.0 * wi.z * wo.z);
         let (t_i, t_o) = (self.transmittance(wi.z), self.transmittance(wo.z));
-        let p_s = self.specular_probability(wi.z);
-        // Visible-normal density G1(wi) D(h) (wi·h) / cosθi times the
-        // reflection Jacobian 1 / (4 wo·h), with wo·h = wi·h.
-        let pdf_s = self.dist.g1(wi) * d / (4.0 * wi.z);
-        let pdf = p_s * pdf_s + (1.0 - p_s) * wo.z * FRAC_1_PI;
+        let t_io = t_i * t_o * self.diffuse_scale;
+        // The lobe choice s / (s + d) of `specular_probability`.
+        let s = (1.0 - t_i) * self.specular_weight;
+        let d = t_i * (1.0 - self.specular_weight);
+        let diffuse_pdf = wo.z * FRAC_1_PI;
+        let v = wi + wo;
+        let len2 = v.length_squared();
+        if !(wi.z >= COS_HORIZON && wo.z >= COS_HORIZON && len2 > 0.0 && len2.is_finite()) {
+            // The coat's products of Smith terms underflow here: as for the
+            // conductors, it reflects nothing this close to the horizon.
+            let pdf = if s + d > 0.0 {
+                d / (s + d) * diffuse_pdf
+            } else {
+                0.0
+            };
+            return Above {
+                f_s: 0.0,
+                t_io,
+                pdf: finite_nonneg(pdf),
+            };
+        }
+        let (d_num, d_den) = self.dist.ggx_d_fraction(v, len2);
+        let (ai, di) = self.dist.ggx_lambda_frac(wi);
+        let (ao, do_) = self.dist.ggx_lambda_frac(wo);
+        // wi·h = (1 + wi·wo)/|v| = |v|/2.
+        let (f_num, f_den) = fresnel_fraction((0.5 * libm::sqrt(len2)).min(1.0), self.eta);
+        // F D G2 / (4 cosθi cosθo) with G2 = di do / (di do + ai do + ao di).
+        let f_s = f_num * d_num * (di * do_)
+            / (f_den * d_den * (di * do_ + ai * do_ + ao * di) * (4.0 * wi.z * wo.z));
+        // The coat's visible-normal density G1(wi) D(h) (wi·h) / cosθi times
+        // the reflection Jacobian 1 / (4 wo·h) (wo·h = wi·h), G1 = di/(di + ai),
+        // mixed with the base's cosine density by s : d.
+        let spec_den = d_den * (di + ai) * (4.0 * wi.z);
+        let pdf = (s * d_num * di + d * diffuse_pdf * spec_den) / ((s + d) * spec_den);
+        let pdf = if s + d > 0.0 {
+            pdf
+        } else {
+            d_num * di / spec_den
+        };
         Above {
-            f_s,
-            t_i,
-            t_o,
+            f_s: finite_nonneg(f_s),
+            t_io,
             pdf: finite_nonneg(pdf),
         }
     }
+}
+
+/// The dielectric Fresnel reflectance from outside at incidence cosine `c`
+/// for η > 1 (no total reflection), as a fraction (num, den):
+/// ½ (r_s² + r_p²) with r_s = (c − η c_t)/(c + η c_t), r_p = (η c − c_t)/(η c + c_t)
+/// over their common denominator, so that its division joins f_s's.
+#[inline(always)]
+fn fresnel_fraction(c: f64, eta: f64) -> (f64, f64) {
+    let sin2_t = (1.0 - c * c) / (eta * eta);
+    let ct = libm::sqrt((1.0 - sin2_t).max(0.0));
+    let (rs_n, rs_d) = (c - eta * ct, c + eta * ct);
+    let (rp_n, rp_d) = (eta * c - ct, eta * c + ct);
+    let (rs_d2, rp_d2) = (rs_d * rs_d, rp_d * rp_d);
+    (
+        0.5 * (rs_n * rs_n * rp_d2 + rp_n * rp_n * rs_d2),
+        rs_d2 * rp_d2,
+    )
 }
 
 /// The wavelength-independent part of [`RoughPlastic`]'s (f, pdf) at one
 /// pair of directions above the surface.
 struct Above {
     f_s: f64,
-    t_i: f64,
-    t_o: f64,
+    /// t(cosθi) t(cosθo) / (π η²), times 1 / (1 − R_i) unless `nonlinear`.
+    t_io: f64,
     pdf: f64,
 }
 
 impl Above {
+    /// (f, pdf) for the base's reflectance `rho`.
     #[inline]
-    fn at(&self, m: &RoughPlastic, lambda_nm: f64) -> (f64, f64) {
-        let rho = m.reflectance.at(lambda_nm);
-        let ri = m.internal_reflectance;
-        let inner = if m.nonlinear { rho * ri } else { ri };
-        let f_d = rho / (1.0 - inner) * self.t_i * self.t_o * FRAC_1_PI / (m.eta * m.eta);
-        (finite_nonneg(self.f_s + f_d), self.pdf)
+    fn at(&self, m: &RoughPlastic, rho: f64) -> (f64, f64) {
+        let base = if m.nonlinear {
+            rho / (1.0 - rho * m.internal_reflectance)
+        } else {
+            rho
+        };
+        (finite_nonneg(self.f_s + base * self.t_io), self.pdf)
     }
 }
 
@@ -381,8 +446,20 @@ impl Bxdf for RoughPlastic {
     fn eval_pdf_many(&self, wi: DVec3, wo: DVec3, lambdas: &[f64], out: &mut [(f64, f64)]) {
         if wi.z > 0.0 && wo.z > 0.0 {
             let above = self.above(wi, wo);
-            for (o, &l) in out.iter_mut().zip(lambdas) {
-                *o = above.at(self, l);
+            match &self.reflectance {
+                // One value for every wavelength: no lookup per λ.
+                Reflectance::Constant(rho) => {
+                    let v = above.at(self, *rho);
+                    for o in out.iter_mut().take(lambdas.len()) {
+                        *o = v;
+                    }
+                }
+                #[cfg(feature = "alloc")]
+                Reflectance::Table(t) => {
+                    for (o, &l) in out.iter_mut().zip(lambdas) {
+                        *o = above.at(self, t.at(l));
+                    }
+                }
             }
         } else {
             for o in out.iter_mut().take(lambdas.len()) {
