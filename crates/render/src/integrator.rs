@@ -266,7 +266,7 @@ pub fn camera_sample(scene: &Scene, x: u32, y: u32, sample: u64) -> CameraSample
 /// A camera sample's first draws: its sampler, its camera ray, the
 /// reserved 2-D wavelength draw (the set's position and, jointly stratified
 /// with it, which member is the hero), and the ray's offset in the pixel.
-#[inline]
+#[inline(always)]
 fn camera_draws(
     scene: &Scene,
     x: u32,

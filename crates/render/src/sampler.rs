@@ -199,7 +199,7 @@ impl Sampler {
     }
 
     /// Two uniform numbers in [0, 1)², stratified together.
-    #[inline]
+    #[inline(always)]
     pub fn get_2d(&mut self) -> [f64; 2] {
         match self.kind {
             SamplerKind::Independent => [self.rng.uniform(), self.rng.uniform()],
