@@ -99,14 +99,7 @@ impl Distribution1D {
         } else {
             0
         };
-        let mut p = self.guide[cell] as usize;
-        while p < cdf.len() && cdf[p] <= u {
-            p += 1;
-        }
-        while p > 0 && cdf[p - 1] > u {
-            p -= 1;
-        }
-        p
+        walk_count_le(cdf, self.guide[cell] as usize, u)
     }
 
     /// The bin of a uniform `u` ∈ [0, 1) and the position within it,
@@ -146,6 +139,21 @@ impl Distribution1D {
     pub fn pdf_bin(&self, i: usize) -> f64 {
         self.pmf(i) * self.pmf.len() as f64
     }
+}
+
+/// The number of `keys` (non-decreasing) that are ≤ `x`, walked to from a
+/// guide table's start `p`: exact whatever the guess, a step or two from a
+/// good one.
+#[inline]
+pub(crate) fn walk_count_le(keys: &[f64], mut p: usize, x: f64) -> usize {
+    p = p.min(keys.len());
+    while p < keys.len() && keys[p] <= x {
+        p += 1;
+    }
+    while p > 0 && keys[p - 1] > x {
+        p -= 1;
+    }
+    p
 }
 
 /// A piecewise-constant density on [0, 1)² (rows = v, columns = u).

@@ -11,7 +11,7 @@
 //! column.
 
 use crate::color::{SRGB_TO_XYZ, mul};
-use crate::distribution::Distribution2D;
+use crate::distribution::{Distribution2D, walk_count_le};
 use crate::env_lift::RgbLift;
 use glam::DVec3;
 use std::f64::consts::PI;
@@ -50,17 +50,9 @@ impl GuidedEdges {
 
     #[inline]
     fn count_le(&self, x: f64) -> usize {
-        let keys = &self.keys[..];
         // A NaN or negative key saturates to cell 0 and walks from there.
         let cell = ((x * self.scale) as usize).min(self.guide.len() - 1);
-        let mut p = self.guide[cell] as usize;
-        while p < keys.len() && keys[p] <= x {
-            p += 1;
-        }
-        while p > 0 && keys[p - 1] > x {
-            p -= 1;
-        }
-        p
+        walk_count_le(&self.keys, self.guide[cell] as usize, x)
     }
 }
 

@@ -687,6 +687,20 @@ impl Bxdf for TwoScale {
 mod tests {
     use super::*;
 
+    /// The material with F = 1 and the default table.
+    fn white(beta: f64, sigma_um: f64, lc_um: f64, gamma: f64, coherent: CoherentPart) -> TwoScale {
+        TwoScale::new(TwoScaleParams {
+            beta,
+            sigma_um,
+            lc_um,
+            gamma,
+            fresnel: Fresnel::One,
+            coherent,
+            resolution: TableResolution::default(),
+        })
+        .unwrap()
+    }
+
     /// The cap's ratio C (MacroNdf: no delta, so C = E) from the half-vector
     /// rule the build uses, against the albedo of the same uncapped lobe by
     /// the (cosθo, φo) rule of `albedo_cap::albedo` at a sixteenth of the
@@ -702,16 +716,7 @@ mod tests {
         let mut worst = 0.0f64;
         for (beta, sigma_um, lc_um, gamma) in [(7.2e-4, 0.138, 2.0, 2.0), (4e-4, 0.05, 0.036, 2.0)]
         {
-            let m = TwoScale::new(TwoScaleParams {
-                beta,
-                sigma_um,
-                lc_um,
-                gamma,
-                fresnel: Fresnel::One,
-                coherent: CoherentPart::MacroNdf,
-                resolution: TableResolution::default(),
-            })
-            .unwrap();
+            let m = white(beta, sigma_um, lc_um, gamma, CoherentPart::MacroNdf);
             let ratio = m.cap_ratio();
             let width = beta.clamp(1e-3, 1.0);
             for theta in [84.0f64, 89.5, 89.8] {
@@ -757,16 +762,7 @@ mod tests {
             (7.2e-4, 0.138, 2.0, 2.0, CoherentPart::MacroNdf),
             (5e-3, 0.5, 0.3, 4.0, CoherentPart::Delta),
         ] {
-            let m = TwoScale::new(TwoScaleParams {
-                beta,
-                sigma_um,
-                lc_um,
-                gamma,
-                fresnel: Fresnel::One,
-                coherent,
-                resolution: TableResolution::default(),
-            })
-            .unwrap();
+            let m = white(beta, sigma_um, lc_um, gamma, coherent);
             let cap = m.cap.as_ref().expect("these materials need the cap");
             let ratio = m.cap_ratio();
             for theta in [0.0f64, 80.0, 84.0, 86.0, 89.0, 89.8] {
