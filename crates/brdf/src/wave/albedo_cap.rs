@@ -217,15 +217,48 @@ fn k_cubic_max(c: &[f64; K_NODES]) -> f64 {
 
 /// Weights of the wavenumber nodes in the cubic through them at t ∈ [0, 1]
 /// (the position between the first and the last node): Lagrange's basis on
-/// the uniform nodes 0, 1, 2, 3 at x = 3t.
+/// the uniform nodes 0, 1, 2, 3 at x = 3t, its constant denominators (−6, 2,
+/// −2, 6) folded in, since every two-scale evaluation with the cap asks for
+/// it once per wavelength.
+#[inline]
 fn k_weights(t: f64) -> [f64; K_NODES] {
-    let x = t * (K_NODES - 1) as f64;
-    core::array::from_fn(|j| {
-        (0..K_NODES)
-            .filter(|&m| m != j)
-            .map(|m| (x - m as f64) / (j as f64 - m as f64))
-            .product()
-    })
+    const _: () = assert!(K_NODES == 4, "k_weights is the cubic's basis");
+    let x = 3.0 * t;
+    let (a, b, c, d) = (x, x - 1.0, x - 2.0, x - 3.0);
+    [
+        -(b * c * d) * (1.0 / 6.0),
+        0.5 * (a * c * d),
+        -0.5 * (a * b * d),
+        (a * b * c) * (1.0 / 6.0),
+    ]
+}
+
+#[cfg(test)]
+#[test]
+fn k_weights_are_the_cubic_through_the_nodes() {
+    // The basis reproduces every cubic, so it sums to 1 and interpolates
+    // the nodes.
+    for s in 0..=30 {
+        let t = s as f64 / 30.0;
+        let w = k_weights(t);
+        let x = 3.0 * t;
+        let cubic = |x: f64| 0.7 - 1.3 * x + 0.4 * x * x - 0.05 * x * x * x;
+        let got: f64 = (0..K_NODES).map(|j| w[j] * cubic(j as f64)).sum();
+        assert!(
+            (got - cubic(x)).abs() < 1e-13,
+            "t {t}: {got} vs {}",
+            cubic(x)
+        );
+    }
+    for j in 0..K_NODES {
+        let w = k_weights(j as f64 / 3.0);
+        for (m, &v) in w.iter().enumerate() {
+            assert!(
+                (v - f64::from(u8::from(m == j))).abs() < 1e-15,
+                "node {j}: {w:?}"
+            );
+        }
+    }
 }
 
 /// dC/dμ at every node of a row (μ descending, at least two nodes): the
