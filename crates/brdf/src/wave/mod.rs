@@ -47,6 +47,8 @@ pub mod two_scale;
 #[cfg(feature = "alloc")]
 mod two_scale_lambda;
 #[cfg(feature = "alloc")]
+mod two_scale_lanes;
+#[cfg(feature = "alloc")]
 mod two_scale_narrow;
 #[cfg(feature = "alloc")]
 mod two_scale_table;

@@ -594,58 +594,10 @@ impl SharedLambdaGrid {
 
     /// ln(1 + Λ) of row `r` at a position.
     #[inline]
-    fn log1p_lambda(&self, r: usize, p: &GridPosition) -> f64 {
+    pub(crate) fn log1p_lambda(&self, r: usize, p: &GridPosition) -> f64 {
         let y = &self.rows[r * (self.n + 2) + p.j..][..4];
         p.w[0] * y[0] + p.w[1] * y[1] + p.w[2] * y[2] + p.w[3] * y[3]
     }
-
-    /// (1 − f)·Λ_r + f·Λ_{r+1} at a position, as [`EffTable::mix_nodes`]
-    /// of [`SharedLambdaGrid::lambda`] takes it (a row with zero weight is
-    /// not evaluated), for the rows of a w bracket `(r, f)`: their ln(1 + Λ)
-    /// are close, so e^{y_{r+1}} is e^{y_r} times a short series in
-    /// y_{r+1} − y_r instead of a second exponential.
-    #[inline]
-    pub(crate) fn lambda_mix(&self, (r, f): (usize, f64), p: &GridPosition) -> f64 {
-        if !(f > 0.0 && f < 1.0) {
-            return if f > 0.0 {
-                f * self.lambda(r + 1, p)
-            } else {
-                (1.0 - f) * self.lambda(r, p)
-            };
-        }
-        let (ya, yb) = (self.log1p_lambda(r, p), self.log1p_lambda(r + 1, p));
-        let ea = crate::numerics::math::exp(ya);
-        let d = yb - ya;
-        let eb = if d.abs() <= EXP_SERIES_MAX {
-            ea * exp_series(d)
-        } else {
-            crate::numerics::math::exp(yb)
-        };
-        (1.0 - f) * (ea - 1.0).max(0.0) + f * (eb - 1.0).max(0.0)
-    }
-}
-
-/// Largest |x| of [`exp_series`].
-const EXP_SERIES_MAX: f64 = 0.125;
-
-/// eˣ for |x| ≤ [`EXP_SERIES_MAX`] by its Taylor series to x¹⁰ (the rest is
-/// below 3e−18 there): a few ulp, a third of a library call's instructions.
-#[inline]
-fn exp_series(x: f64) -> f64 {
-    // 1 + x(1 + x/2(1 + x/3(…))), by the reciprocals of 1 … 10.
-    const INV: [f64; 10] = [
-        1.0,
-        0.5,
-        1.0 / 3.0,
-        0.25,
-        0.2,
-        1.0 / 6.0,
-        1.0 / 7.0,
-        0.125,
-        1.0 / 9.0,
-        0.1,
-    ];
-    INV.iter().rev().fold(1.0, |s, &inv| 1.0 + x * inv * s)
 }
 
 /// t = a sinh(vV) is linear near the pole; a fixes where logarithmic
@@ -848,7 +800,13 @@ impl EffTable {
         // ln(1 + w) rather than log1p: only x's absolute error matters (a
         // position on the grid), and rounding 1 + w costs at most 1.1e−16
         // of it; the platform's ln is a third of log1p's instructions.
-        let x = crate::numerics::math::ln(1.0 + w.max(0.0)) / self.dx;
+        self.w_bracket_ln(crate::numerics::math::ln(1.0 + w.max(0.0)))
+    }
+
+    /// [`EffTable::w_bracket`] given ln(1 + max(w, 0)).
+    #[inline]
+    pub(crate) fn w_bracket_ln(&self, ln_1p_w: f64) -> (usize, f64) {
+        let x = ln_1p_w / self.dx;
         if !(x < (self.nw - 1) as f64) {
             return (self.nw - 2, 1.0);
         }
@@ -935,41 +893,6 @@ mod tests {
     use super::*;
     use crate::numerics::quadrature::{GL4_W, GL4_X};
     use crate::wave::two_scale_lambda::one_plus_lambda;
-
-    /// The shared grid's mixture of two rows with one exponential equals
-    /// the mixture of each row's Λ (two exponentials) to a few ulp of 1 + Λ,
-    /// over every w bracket of S138's table and tanθ 1e−4–1e6 (the x²
-    /// coefficient 1e−6 off fails it at 3.5e−9).
-    #[test]
-    fn lambda_mix_matches_two_exponentials() {
-        let ndf = ExponentialNdf::new(7.2e-4).unwrap();
-        let psd = KcPsd::new(0.138, 2.0, 2.0).unwrap();
-        let t = EffTable::build(ndf, &psd, TableResolution::default());
-        let grid = SharedLambdaGrid::new(t.lambda_rows());
-        let (mut worst, mut series) = (0.0f64, 0usize);
-        for e in 0..=400 {
-            let tan_t = if e == 0 {
-                0.0
-            } else {
-                1e-4 * libm::pow(1e10, e as f64 / 400.0)
-            };
-            let p = grid.position(tan_t);
-            for r in 0..t.nw - 1 {
-                let d = grid.log1p_lambda(r + 1, &p) - grid.log1p_lambda(r, &p);
-                series += usize::from(d.abs() <= EXP_SERIES_MAX);
-                for f in [0.0, 0.3, 0.77, 1.0] {
-                    let want = t.mix_nodes((r, f), |i| grid.lambda(i, &p));
-                    let got = grid.lambda_mix((r, f), &p);
-                    worst = worst.max((got - want).abs() / (1.0 + want));
-                }
-            }
-        }
-        assert!(series > 1000, "{series}");
-        assert!(worst < 2e-15, "{worst:e}");
-        for x in [-0.125, -0.05, 1e-9, 0.07, 0.125] {
-            assert!((exp_series(x) / libm::exp(x) - 1.0).abs() < 4e-16, "{x}");
-        }
-    }
 
     /// The table's Smith Λ of every w node (the lobe's own G₂) against the
     /// same integral by 4-point Gauss–Legendre on each quarter of every bin,
