@@ -146,6 +146,19 @@ impl Incidence {
     }
 }
 
+/// Looks D̃_eff up at the aligned block of [`LANES`] w nodes holding node
+/// `i` (at tanθh `tan_h`) into the cap's per-ring cache, and returns node
+/// i's value. Kept out of line: the cache hit it serves is the hot path.
+#[inline(never)]
+fn fill_d_eff_block(table: &EffTable, cache: &[Cell<f64>], i: usize, tan_h: f64) -> f64 {
+    let first = i - i % LANES;
+    let d = table.d_nodes(first, tan_h);
+    for (c, &d) in cache[first..].iter().zip(&d) {
+        c.set(d);
+    }
+    d[i - first]
+}
+
 /// Points of the macro NDF's Λ table.
 const MACRO_LAMBDA_NODES: usize = 128;
 
@@ -276,12 +289,12 @@ impl TwoScale {
             };
             albedo_cap::albedo_many_half(mu, width, out, per_ring, |ring, h, wo, values| {
                 let (tan_h, d_macro) = *ring;
+                // A ring's brackets cover a run of neighbouring nodes, asked
+                // for in no particular order: aligned blocks of four on lanes.
                 let d_eff_node = |i: usize| {
                     let d = d_eff_h[i].get();
                     if d.is_nan() {
-                        let d = self.table.d_node(i, tan_h);
-                        d_eff_h[i].set(d);
-                        d
+                        fill_d_eff_block(&self.table, &d_eff_h, i, tan_h)
                     } else {
                         d
                     }
