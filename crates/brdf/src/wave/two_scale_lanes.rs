@@ -48,7 +48,7 @@ const fn inv_factorials<const N: usize>() -> [f64; N] {
 const EXP_COEF: [f64; 14] = inv_factorials::<14>();
 
 /// e^y − 1 = y Σ yⁿ/(n + 1)! to y¹⁸ for |y| < 1 (the rest below 2e−17 of
-/// it): [`EXPM1_COEF`][n] = 1/(n + 1)!.
+/// it): `EXPM1_COEF[n]` = 1/(n + 1)!.
 const EXPM1_COEF: [f64; 18] = {
     let f = inv_factorials::<19>();
     let mut out = [0.0; 18];
@@ -61,7 +61,7 @@ const EXPM1_COEF: [f64; 18] = {
 };
 
 /// ln m = 2 atanh s = 2s Σ s²ⁿ/(2n + 1), n = 0 … 11, for |s| ≤ 0.1716
-/// (the rest below 2e−19 of ln m): [`LN_COEF`][n] = 1/(2n + 1).
+/// (the rest below 2e−19 of ln m): `LN_COEF[n]` = 1/(2n + 1).
 const LN_COEF: [f64; 12] = {
     let mut out = [0.0; 12];
     let mut n = 0;
