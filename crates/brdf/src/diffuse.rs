@@ -197,7 +197,10 @@ pub fn sample_cosine_hemisphere(u: [f64; 2]) -> DVec3 {
     } else {
         (b, 0.5 * PI - 0.25 * PI * (a / b))
     };
-    let (x, y) = (r * libm::cos(phi), r * libm::sin(phi));
+    // One argument reduction for both: sincos uses sin's and cos's own
+    // kernels and quadrant rule, so the values are theirs bit for bit.
+    let (sin, cos) = libm::sincos(phi);
+    let (x, y) = (r * cos, r * sin);
     let z = libm::sqrt((1.0 - x * x - y * y).max(0.0));
     DVec3::new(x, y, z)
 }
@@ -286,6 +289,57 @@ impl Bxdf for Diffuse {
 #[cfg(all(test, feature = "alloc"))]
 mod tests {
     use super::*;
+
+    /// The concentric map's (cos φ, sin φ) from `sincos` are `cos`'s and
+    /// `sin`'s, bit for bit, over the map's whole range of φ (±π/4 and
+    /// π/4…3π/4), its branch edges and the origin.
+    #[test]
+    fn cosine_hemisphere_sincos_is_sin_and_cos() {
+        let old = |u: [f64; 2]| {
+            let (a, b) = (2.0 * u[0] - 1.0, 2.0 * u[1] - 1.0);
+            let (r, phi) = if a == 0.0 && b == 0.0 {
+                (0.0, 0.0)
+            } else if a.abs() > b.abs() {
+                (a, 0.25 * PI * (b / a))
+            } else {
+                (b, 0.5 * PI - 0.25 * PI * (a / b))
+            };
+            let (x, y) = (r * libm::cos(phi), r * libm::sin(phi));
+            DVec3::new(x, y, libm::sqrt((1.0 - x * x - y * y).max(0.0)))
+        };
+        let mut state = 0x9e37_79b9_7f4a_7c15_u64;
+        let mut next = || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let edges = [
+            0.0,
+            0.5,
+            0.5f64.next_up(),
+            0.5f64.next_down(),
+            1.0f64.next_down(),
+            0.25,
+            0.75,
+        ];
+        let mut us: alloc::vec::Vec<[f64; 2]> = (0..400_000).map(|_| [next(), next()]).collect();
+        for &a in &edges {
+            for &b in &edges {
+                us.push([a, b]);
+            }
+            let t = next();
+            us.extend([[a, t], [t, a], [t, t], [t, 1.0 - t]]);
+        }
+        for u in us {
+            let (n, o) = (sample_cosine_hemisphere(u), old(u));
+            assert_eq!(
+                n.to_array().map(f64::to_bits),
+                o.to_array().map(f64::to_bits),
+                "{u:?}"
+            );
+        }
+    }
 
     #[test]
     fn table_interpolates_and_holds_the_ends() {

@@ -58,7 +58,7 @@ pub use error::BrdfError;
 pub use fresnel::Fresnel;
 pub use ior::{Ior, Metal};
 pub use microfacet::{Distribution, MicrofacetConductor, NdfKind, SmoothConductor};
-pub use model::{Bxdf, BxdfSample, Specular, WAVELENGTH_MAX_NM, WAVELENGTH_MIN_NM};
+pub use model::{Bxdf, BxdfSample, Kept, Specular, WAVELENGTH_MAX_NM, WAVELENGTH_MIN_NM};
 pub use roughplastic::{RoughPlastic, RoughPlasticParams};
 
 /// Used by the `nostd-check` crate so that the linker keeps a whole model

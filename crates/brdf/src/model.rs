@@ -21,6 +21,32 @@ pub struct BxdfSample {
     pub is_delta: bool,
 }
 
+/// What a model's (f, pdf) at one pair of directions shares between
+/// wavelengths, kept from [`Bxdf::sample_kept`] for
+/// [`Bxdf::eval_pdf_many_kept`]: a renderer that samples a direction at one
+/// wavelength and needs f and pdf there at others later need not redo the
+/// λ-free part. Opaque; only the model that made it reads it, and a model
+/// that keeps nothing hands out [`Kept::NOTHING`].
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Kept(Option<[f64; 3]>);
+
+impl Kept {
+    /// Nothing kept: [`Bxdf::eval_pdf_many_kept`] evaluates in full.
+    pub const NOTHING: Kept = Kept(None);
+
+    /// Three numbers of the model's own.
+    #[inline]
+    pub(crate) fn new(parts: [f64; 3]) -> Kept {
+        Kept(Some(parts))
+    }
+
+    /// The numbers, if a model kept any.
+    #[inline]
+    pub(crate) fn parts(&self) -> Option<[f64; 3]> {
+        self.0
+    }
+}
+
 /// The specular (delta) lobe of a model at one incident direction.
 ///
 /// Its BRDF is `weight · δ_ω(o − s) / cosθo` with `s` the mirror direction of
@@ -90,6 +116,29 @@ pub trait Bxdf {
     /// Returns `None` when the sample carries no energy (below the horizon,
     /// evanescent, or zero weight).
     fn sample(&self, wi: DVec3, lambda_nm: f64, u: [f64; 3]) -> Option<BxdfSample>;
+
+    /// [`Bxdf::sample`], and what its evaluation at the sampled direction
+    /// shares between wavelengths ([`Kept`]). The default keeps nothing.
+    #[inline]
+    fn sample_kept(&self, wi: DVec3, lambda_nm: f64, u: [f64; 3]) -> Option<(BxdfSample, Kept)> {
+        self.sample(wi, lambda_nm, u).map(|s| (s, Kept::NOTHING))
+    }
+
+    /// [`Bxdf::eval_pdf_many`] at a direction `wo` that [`Bxdf::sample_kept`]
+    /// of this model returned for this `wi` together with `kept`; the same
+    /// values, bit for bit. The default ignores `kept`.
+    #[inline]
+    fn eval_pdf_many_kept(
+        &self,
+        wi: DVec3,
+        wo: DVec3,
+        kept: &Kept,
+        lambdas: &[f64],
+        out: &mut [(f64, f64)],
+    ) {
+        let _ = kept;
+        self.eval_pdf_many(wi, wo, lambdas, out);
+    }
 
     /// The specular delta lobe at `wi`; zero for models without one.
     fn specular(&self, wi: DVec3, lambda_nm: f64) -> Specular {
@@ -167,6 +216,19 @@ macro_rules! forward_bxdf {
             }
             fn sample(&self, wi: DVec3, lambda_nm: f64, u: [f64; 3]) -> Option<BxdfSample> {
                 (**self).sample(wi, lambda_nm, u)
+            }
+            fn sample_kept(&self, wi: DVec3, lambda_nm: f64, u: [f64; 3]) -> Option<(BxdfSample, Kept)> {
+                (**self).sample_kept(wi, lambda_nm, u)
+            }
+            fn eval_pdf_many_kept(
+                &self,
+                wi: DVec3,
+                wo: DVec3,
+                kept: &Kept,
+                lambdas: &[f64],
+                out: &mut [(f64, f64)],
+            ) {
+                (**self).eval_pdf_many_kept(wi, wo, kept, lambdas, out)
             }
             fn specular(&self, wi: DVec3, lambda_nm: f64) -> Specular {
                 (**self).specular(wi, lambda_nm)

@@ -27,7 +27,7 @@ use crate::error::{BrdfError, check_range};
 use crate::fresnel::dielectric_reflectance;
 use crate::microfacet::{COS_HORIZON, Distribution};
 use crate::numerics::quadrature::gauss_legendre;
-use crate::{Bxdf, BxdfSample};
+use crate::{Bxdf, BxdfSample, Kept};
 
 /// Nodes of the transmittance table t(μ): μ_j = j / (N − 1), j < N (μ_0 taken
 /// as 10⁻⁶), linear between them, as Mitsuba's `roughplastic` tabulates it.
@@ -324,6 +324,26 @@ impl RoughPlastic {
         self.above(wi, wo).at(self, self.reflectance.at(lambda_nm))
     }
 
+    /// `out[j]` = (f, pdf) at `lambdas[j]` from the λ-free part `above`.
+    #[inline]
+    fn fill(&self, above: &Above, lambdas: &[f64], out: &mut [(f64, f64)]) {
+        match &self.reflectance {
+            // One value for every wavelength: no lookup per λ.
+            Reflectance::Constant(rho) => {
+                let v = above.at(self, *rho);
+                for o in out.iter_mut().take(lambdas.len()) {
+                    *o = v;
+                }
+            }
+            #[cfg(feature = "alloc")]
+            Reflectance::Table(t) => {
+                for (o, &l) in out.iter_mut().zip(lambdas) {
+                    *o = above.at(self, t.at(l));
+                }
+            }
+        }
+    }
+
     /// What (f, pdf) above the surface shares between wavelengths: only the
     /// base's reflectance depends on λ, so hero wavelengths pay for the coat's
     /// D, G2, Fresnel and the transmittance lookups once.
@@ -445,22 +465,7 @@ impl Bxdf for RoughPlastic {
 
     fn eval_pdf_many(&self, wi: DVec3, wo: DVec3, lambdas: &[f64], out: &mut [(f64, f64)]) {
         if wi.z > 0.0 && wo.z > 0.0 {
-            let above = self.above(wi, wo);
-            match &self.reflectance {
-                // One value for every wavelength: no lookup per λ.
-                Reflectance::Constant(rho) => {
-                    let v = above.at(self, *rho);
-                    for o in out.iter_mut().take(lambdas.len()) {
-                        *o = v;
-                    }
-                }
-                #[cfg(feature = "alloc")]
-                Reflectance::Table(t) => {
-                    for (o, &l) in out.iter_mut().zip(lambdas) {
-                        *o = above.at(self, t.at(l));
-                    }
-                }
-            }
+            self.fill(&self.above(wi, wo), lambdas, out);
         } else {
             for o in out.iter_mut().take(lambdas.len()) {
                 *o = (0.0, 0.0);
@@ -468,9 +473,31 @@ impl Bxdf for RoughPlastic {
         }
     }
 
+    /// `kept` is the sampled direction's [`Above`]: only the base's
+    /// reflectance is looked up per λ.
+    fn eval_pdf_many_kept(
+        &self,
+        wi: DVec3,
+        wo: DVec3,
+        kept: &Kept,
+        lambdas: &[f64],
+        out: &mut [(f64, f64)],
+    ) {
+        match kept.parts() {
+            Some([f_s, t_io, pdf]) => self.fill(&Above { f_s, t_io, pdf }, lambdas, out),
+            None => self.eval_pdf_many(wi, wo, lambdas, out),
+        }
+    }
+
     /// `u[0]` picks the coat (visible-normal sampling from `u[1]`, `u[2]`)
     /// with [`RoughPlastic::specular_probability`], else the base (cosine).
+    #[inline]
     fn sample(&self, wi: DVec3, lambda_nm: f64, u: [f64; 3]) -> Option<BxdfSample> {
+        self.sample_kept(wi, lambda_nm, u).map(|(s, _)| s)
+    }
+
+    /// [`Bxdf::sample`], keeping the sampled direction's λ-free [`Above`].
+    fn sample_kept(&self, wi: DVec3, lambda_nm: f64, u: [f64; 3]) -> Option<(BxdfSample, Kept)> {
         if !(wi.z > 0.0) {
             return None;
         }
@@ -484,12 +511,16 @@ impl Bxdf for RoughPlastic {
             return None;
         }
         let wo = wo.normalize();
-        let (f, pdf) = self.eval_pdf_above(wi, wo, lambda_nm);
-        (f > 0.0 && pdf > 0.0).then(|| BxdfSample {
-            wo,
-            weight: f * wo.z / pdf,
-            pdf,
-            is_delta: false,
+        let above = self.above(wi, wo);
+        let (f, pdf) = above.at(self, self.reflectance.at(lambda_nm));
+        (f > 0.0 && pdf > 0.0).then(|| {
+            let s = BxdfSample {
+                wo,
+                weight: f * wo.z / pdf,
+                pdf,
+                is_delta: false,
+            };
+            (s, Kept::new([above.f_s, above.t_io, above.pdf]))
         })
     }
 

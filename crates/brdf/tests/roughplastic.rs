@@ -436,3 +436,68 @@ fn fused_evaluation_agrees_with_the_textbook_chain() {
         worst[0], worst[1]
     );
 }
+
+/// `sample_kept` is `sample` plus the sampled direction's λ-free part, and
+/// `eval_pdf_many_kept` at that direction gives `eval_pdf_many`'s values bit
+/// for bit (the renderer's hero-wavelength paths read it instead of
+/// evaluating the coat again); through a `Box<dyn Bxdf>` as the renderer
+/// holds models, with a tabulated and a constant base.
+#[test]
+fn kept_sample_evaluates_as_the_full_chain() {
+    let table = Reflectance::table(vec![[360.0, 0.1], [500.0, 0.7], [640.0, 0.3], [830.0, 0.9]]);
+    let mut models: Vec<Box<dyn Bxdf>> = CASES
+        .iter()
+        .map(|&(a, eta, rho, nl)| Box::new(plastic(a, eta, rho, nl)) as Box<dyn Bxdf>)
+        .collect();
+    for (a, nl) in [(0.05, false), (0.4, true)] {
+        let m = RoughPlastic::new(RoughPlasticParams {
+            alpha: a,
+            int_ior: 1.5,
+            ext_ior: 1.0,
+            reflectance: table.clone().unwrap(),
+            nonlinear: nl,
+        });
+        models.push(Box::new(m.unwrap()));
+    }
+    let lambdas = [412.5, 361.0, 555.5, 829.0];
+    let mut rng = 0x2545_f491_4f6c_dd1d_u64;
+    let mut next = || {
+        rng ^= rng << 13;
+        rng ^= rng >> 7;
+        rng ^= rng << 17;
+        (rng >> 11) as f64 / (1u64 << 53) as f64
+    };
+    let mut kept_count = 0;
+    for m in &models {
+        for _ in 0..3000 {
+            let wi = spherical((next() * 89.9).to_radians(), next() * TAU);
+            let u = [next(), next(), next()];
+            let plain = m.sample(wi, lambdas[0], u);
+            let kept = m.sample_kept(wi, lambdas[0], u);
+            assert_eq!(plain, kept.map(|(s, _)| s));
+            let Some((s, k)) = kept else { continue };
+            assert_ne!(k, brdf::Kept::NOTHING);
+            kept_count += 1;
+            let (mut full, mut fast, mut none) =
+                ([(0.0, 0.0); 4], [(0.0, 0.0); 4], [(1.0, 1.0); 4]);
+            m.eval_pdf_many(wi, s.wo, &lambdas, &mut full);
+            m.eval_pdf_many_kept(wi, s.wo, &k, &lambdas, &mut fast);
+            m.eval_pdf_many_kept(wi, s.wo, &brdf::Kept::NOTHING, &lambdas, &mut none);
+            for j in 0..4 {
+                let bits = |v: (f64, f64)| (v.0.to_bits(), v.1.to_bits());
+                assert_eq!(
+                    bits(fast[j]),
+                    bits(full[j]),
+                    "wi {wi} wo {} λ {}",
+                    s.wo,
+                    lambdas[j]
+                );
+                assert_eq!(bits(none[j]), bits(full[j]));
+                assert_eq!(bits(full[j]), bits(m.eval_pdf(wi, s.wo, lambdas[j])));
+            }
+            // The hero's own value is the one the sample's weight came from.
+            assert_eq!(s.pdf.to_bits(), full[0].1.to_bits());
+        }
+    }
+    assert!(kept_count > 20_000, "{kept_count}");
+}

@@ -240,6 +240,8 @@ struct Pending {
     /// (1 − c, c·p_cones(wo)) of a vertex that aimed a share c of its samples
     /// at casters ([`crate::guide`]); (1, 0) where it did not.
     guide: (f64, f64),
+    /// What the material's evaluation at `wo` shares between wavelengths.
+    kept: brdf::Kept,
 }
 
 /// Traces camera sample `sample` of pixel (`x`, `y`).
@@ -824,7 +826,7 @@ impl Throughput {
         if let Some(p) = self.pending.take() {
             let bxdf = &scene.materials[p.material as usize].bxdf;
             let mut fp = [(0.0, 0.0); N];
-            bxdf.eval_pdf_many(p.wi, p.wo, &lambdas[1..n], &mut fp[1..n]);
+            bxdf.eval_pdf_many_kept(p.wi, p.wo, &p.kept, &lambdas[1..n], &mut fp[1..n]);
             let pairs = self.t[1..n].iter_mut().zip(&mut self.q[1..n]);
             let (keep, g) = p.guide;
             for ((t, q), &(f, pdf)) in pairs.zip(&fp[1..n]) {
@@ -1464,7 +1466,7 @@ fn exact_delta(
 }
 
 /// Spectral radiance estimates (wavelength pdf included) along `ray` at each
-/// λ_j from scattering event `depth0` on, with the path's state `start`
+/// λ_j from scattering event `depth0` on, with the path's state `th`
 /// (for `depth0` = 0, [`Throughput::camera`]); `first` is `ray`'s hit,
 /// already found.
 fn trace(
@@ -1473,13 +1475,13 @@ fn trace(
     first: Option<Hit>,
     wavelengths: &SampledWavelengths,
     sampler: &mut Sampler,
-    start: Throughput,
+    // Updated in place: a local copy was a 496-byte memcpy per path.
+    mut th: Throughput,
     depth0: u32,
 ) -> [f64; N] {
     let (lambdas, n) = (&wavelengths.lambda, wavelengths.n);
     let lights = &scene.lights;
     let settings = &scene.settings;
-    let mut th = start;
     let m0 = roulette_scale(wavelengths);
     let mut out = [0.0; N];
 
@@ -1561,7 +1563,7 @@ fn trace(
                 );
 
         // BSDF sampling at the hero wavelength.
-        let Some(s) = bxdf.sample(wi, lambdas[0], u_bsdf) else {
+        let Some((s, kept)) = bxdf.sample_kept(wi, lambdas[0], u_bsdf) else {
             break;
         };
         if s.pdf.is_nan() || s.pdf <= 0.0 || s.wo.z <= 0.0 {
@@ -1590,6 +1592,7 @@ fn trace(
                     let (share, g) = c.weighted_pdf(s.wo);
                     (1.0 - share, g)
                 }),
+                kept,
             });
         }
 

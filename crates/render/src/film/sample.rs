@@ -65,9 +65,11 @@ pub enum SampleRadiance {
 /// taken in a sound render).
 #[inline]
 pub fn sample_xyz(radiance: SampleRadiance, signed: bool) -> Result<[f64; 3], BadSample> {
-    let cs = match radiance {
+    // Read in place: moving the 416-byte sample out of the enum took two
+    // memcpy calls per spectral sample.
+    let cs = match &radiance {
         SampleRadiance::Zero => return Ok([0.0; 3]),
-        SampleRadiance::Xyz(xyz) => {
+        &SampleRadiance::Xyz(xyz) => {
             // The checks below with no sampled wavelength, returned from
             // here so that the caller need not keep the whole value alive.
             // See below for why Y decides the sign.
