@@ -349,6 +349,31 @@ impl Lights {
         }
     }
 
+    /// The density with which [`Lights::sample`] from `p` gives a typical
+    /// direction toward its light, for a caller deciding whether a lobe is
+    /// narrow against the light (resampling the light sample pays only
+    /// then): the uniform cone density of a sphere, the centre's density of
+    /// a rectangle, infinity for a point light (every draw is the same
+    /// direction), and 0 for an environment or a choice among several
+    /// lights, whose draws spread over the sphere or over the lights.
+    pub fn typical_density(&self, p: DVec3) -> f64 {
+        if self.nee_len() != 1 {
+            return 0.0;
+        }
+        let idx = usize::from(self.skipped() == Some(0));
+        match &self.lights[idx] {
+            LightKind::Point { .. } => f64::INFINITY,
+            LightKind::Sphere { sphere, .. } => sphere_cone_pdf(sphere, p),
+            LightKind::Rectangle { shape, .. } => {
+                let d = shape.center - p;
+                let cos_l = d.normalize_or_zero().dot(shape.n).abs();
+                let pdf = d.length_squared() / (shape.area() * cos_l);
+                if pdf.is_nan() { f64::INFINITY } else { pdf }
+            }
+            LightKind::Environment(_) => 0.0,
+        }
+    }
+
     /// Radiance leaving emitter `idx` toward `-dir` at a hit with geometric normal `n`,
     /// and the pdf with which [`Lights::sample`] from `from` would have chosen that point.
     pub fn emitted(
