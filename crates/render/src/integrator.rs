@@ -29,6 +29,7 @@ use crate::geometry::Ray;
 use crate::glossy_lambda_table::GlossyTable;
 use crate::guide::{Cones, Guided};
 use crate::light::{Emission, LightSample, Lights};
+use crate::light_resample;
 use crate::sampler::{Reserved2d, Sampler};
 use crate::scene::desc::MisHeuristic;
 use crate::scene::{Scene, Settings};
@@ -182,15 +183,22 @@ struct VertexMis {
     heuristic: MisHeuristic,
     fixed: Option<f64>,
     peak: Option<f64>,
+    /// The light sample's candidate count: a sample resampled from m has up
+    /// to m times the density its light gives it, and both strategies count
+    /// the light's density that many times more. Any count both compute
+    /// alike for a direction keeps their weights summing to one, so the
+    /// estimate unbiased, whatever the resampled sample's true density.
+    ris: f64,
 }
 
 impl VertexMis {
     #[inline]
-    fn new(settings: &Settings, peak: Option<f64>) -> VertexMis {
+    fn new(settings: &Settings, peak: Option<f64>, ris: u32) -> VertexMis {
         VertexMis {
             heuristic: settings.mis,
             fixed: settings.mis_light_weight,
             peak,
+            ris: f64::from(ris),
         }
     }
 
@@ -216,7 +224,7 @@ impl VertexMis {
     /// `p_bsdf` toward it.
     #[inline]
     fn light(&self, p_light: f64, q_sum: f64, p_bsdf: f64) -> f64 {
-        let c = light_weight(self.fixed, self.peak, p_light);
+        let c = light_weight(self.fixed, self.peak, p_light) * self.ris;
         light_weight_over_pdf(self.heuristic, c, q_sum * p_light, p_bsdf)
     }
 
@@ -225,7 +233,7 @@ impl VertexMis {
     /// `l_sum · p_light` (`l_sum` the sum of the edge's `L_k`).
     #[inline]
     fn bsdf(&self, p_light: f64, own: f64, l_sum: f64) -> f64 {
-        let c = light_weight(self.fixed, self.peak, p_light);
+        let c = light_weight(self.fixed, self.peak, p_light) * self.ris;
         bsdf_weight_over_pdf(self.heuristic, c, own, l_sum * p_light)
     }
 }
@@ -733,6 +741,60 @@ fn nee_bsdf(
     Some((q_sum, p_bsdf, fp))
 }
 
+/// Added to the RIS proxy (a BSDF density, sr⁻¹) so that it is positive
+/// wherever the BSDF may be, as `light_resample`'s unbiasedness needs.
+const RIS_FLOOR: f64 = 1e-3;
+
+/// Candidates per resampled light sample, and the factor by which the MIS
+/// heuristics count the light's density at such a vertex. hdri_spheres and
+/// softbox_object, 64 spp, 4 seeds (relRMSE, CPU s): none 0.1443, 0.89 and
+/// 0.1197, 1.15; 4 candidates counted once 0.1261 / –; 4 counted 4× 0.1115,
+/// 1.21 / 0.0943, 1.44; 8 counted 8× 0.0881, 1.51 / 0.0821, 1.70; 16
+/// counted 16× 0.0824, 2.22 / –; 8 counted 16× 0.0902 / –. Counted once,
+/// the resampled sample's weight follows its original density, and at a
+/// narrow lobe BSDF sampling keeps most of the weight the resampling won;
+/// a sample picked among m has up to m times its density.
+const RIS_CANDIDATES: u32 = 8;
+
+/// Resampling only where the lobe's peak density exceeds this (sr⁻¹): a
+/// diffuse vertex (1/π) and wide glossy ones gain too little for m samples
+/// and evaluations (with the diffuse floor of hdri_spheres included, 8
+/// candidates took 2.8 CPU s for relRMSE 0.092 against 1.3 s for 0.094).
+const RIS_MIN_PEAK: f64 = 5.0;
+
+/// …and exceeds this many times the light's density at the vertex
+/// ([`Lights::typical_density`]): candidates on a light that the lobe
+/// covers differ little in the proxy, so picking among them gains nothing.
+const RIS_SPREAD: f64 = 2.0;
+
+/// Whether and how a vertex resamples its light sample (`light_resample`).
+#[derive(Clone, Copy)]
+struct Resampling {
+    /// Candidates (1: the plain light sample).
+    m: u32,
+    /// The uniform number that picks among them.
+    u_pick: f64,
+}
+
+/// The resampling of a vertex at `p` whose lobe has peak density `peak`
+/// (`None` where the scene fixes the MIS weight: it then keeps the plain
+/// light sample, so both strategies' weights stay the ones it asked for).
+/// Draws the pick's number only where it resamples.
+#[inline]
+fn resampling(sampler: &mut Sampler, lights: &Lights, p: DVec3, peak: Option<f64>) -> Resampling {
+    let on = peak.is_some_and(|k| {
+        k > RIS_MIN_PEAK && lights.nee_len() > 0 && k > RIS_SPREAD * lights.typical_density(p)
+    });
+    if on {
+        Resampling {
+            m: RIS_CANDIDATES,
+            u_pick: sampler.get_1d(),
+        }
+    } else {
+        Resampling { m: 1, u_pick: 0.0 }
+    }
+}
+
 /// Next-event estimation at vertex `v`: one light sample drawn with
 /// `u_light`, weighted against BSDF sampling by `mis`. `bsdf(wo, is_delta)`
 /// evaluates the BSDF toward the sampled point: `None` where it is zero at
@@ -742,16 +804,34 @@ fn nee_bsdf(
 /// wo, weight / density, evaluation)` counts the contribution of a light
 /// that nothing blocks.
 #[inline(always)]
+#[allow(clippy::too_many_arguments)]
 fn next_event<'s, E>(
     scene: &'s Scene,
     v: &Vertex,
     u_light: [f64; 3],
     mis: VertexMis,
+    ris: Resampling,
+    proxy: impl Fn(DVec3) -> f64,
     bsdf: impl FnOnce(DVec3, bool) -> Option<(f64, f64, E)>,
     add: impl FnOnce(&LightSample<'s>, DVec3, f64, E),
 ) {
-    let Some(ls) = scene.lights.sample(v.p, u_light) else {
-        return;
+    let (ls, ratio) = if ris.m > 1 {
+        let h = |ls: &LightSample| {
+            let Some(wo) = v.light_direction(ls) else {
+                return 0.0;
+            };
+            proxy(wo) + RIS_FLOOR
+        };
+        let Some(x) = light_resample::resample(&scene.lights, v.p, u_light, ris.m, ris.u_pick, h)
+        else {
+            return;
+        };
+        x
+    } else {
+        let Some(ls) = scene.lights.sample(v.p, u_light) else {
+            return;
+        };
+        (ls, 1.0)
     };
     let Some(wo) = v.light_direction(&ls) else {
         return;
@@ -762,9 +842,10 @@ fn next_event<'s, E>(
     if !unoccluded(scene, v.p, &ls) {
         return;
     }
-    let w = mis
-        .at_infinity(ls.dist.is_infinite())
-        .light(ls.pdf, q_sum, p_bsdf);
+    let w = ratio
+        * mis
+            .at_infinity(ls.dist.is_infinite())
+            .light(ls.pdf, q_sum, p_bsdf);
     if w > 0.0 {
         add(&ls, wo, w, eval);
     }
@@ -791,6 +872,8 @@ struct Throughput {
     l_mis: [f64; N],
     /// The last vertex's lobe size ([`light_weight`]).
     peak: Option<f64>,
+    /// The last vertex's light-sample candidates ([`VertexMis::ris`]).
+    ris: u32,
     /// The glossy sample of the last vertex, until its other wavelengths'
     /// BSDF value and pdf are applied ([`Throughput::resolve`]).
     pending: Option<Pending>,
@@ -811,6 +894,7 @@ impl Throughput {
             q: [1.0; N],
             l_mis: [0.0; N],
             peak: None,
+            ris: 1,
             pending: None,
             delta_counted: false,
         }
@@ -1017,6 +1101,8 @@ struct FlatPath<'a> {
     l_mis: f64,
     /// The last vertex's lobe size ([`light_weight`]).
     peak: Option<f64>,
+    /// The last vertex's light-sample candidates ([`VertexMis::ris`]).
+    ris: u32,
     /// What the path has counted.
     xyz: [f64; 3],
 }
@@ -1050,7 +1136,7 @@ impl<'a> FlatPath<'a> {
         let w = if depth == 0 {
             1.0
         } else {
-            VertexMis::new(&scene.settings, self.peak)
+            VertexMis::new(&scene.settings, self.peak, self.ris)
                 .at_infinity(hit.is_none())
                 .bsdf(pdf_l, 1.0, self.l_mis)
         };
@@ -1080,8 +1166,10 @@ impl<'a> FlatPath<'a> {
         let settings = &scene.settings;
         let wi = v.wi;
         self.peak = lobe_peak(settings.mis_light_weight, bx, wi);
-        let mis = VertexMis::new(settings, self.peak);
         let (u_light, u_bsdf) = vertex_draws(sampler, &scene.lights, bx);
+        let ris = resampling(sampler, &scene.lights, v.p, self.peak);
+        self.ris = ris.m;
+        let mis = VertexMis::new(settings, self.peak, ris.m);
         // This vertex's Fresnel factor at cos²θd = |wi + wo|²/4, or the one
         // the path carries.
         let at = |num: f64, den: f64, held: Option<Conductor<'a>>| match own {
@@ -1100,6 +1188,8 @@ impl<'a> FlatPath<'a> {
             v,
             u_light,
             mis,
+            ris,
+            |wo| bx.pdf(wi, wo, UNIT_LAMBDA),
             |wo, is_delta| {
                 let (f, pdf) = bx.eval_pdf(wi, wo, UNIT_LAMBDA);
                 (f > 0.0).then_some((1.0, if is_delta { 0.0 } else { pdf }, f))
@@ -1171,6 +1261,7 @@ impl<'a> FlatPath<'a> {
             *l = self.l_mis;
         }
         th.peak = self.peak;
+        th.ris = self.ris;
         let radiance = trace(scene, ray, Some(hit), &wavelengths, sampler, th, depth);
         SampleRadiance::Spectral(CameraSample {
             wavelengths,
@@ -1198,6 +1289,7 @@ fn trace_flat(
         conductor: None,
         l_mis: 0.0,
         peak: None,
+        ris: 1,
         xyz: [0.0; 3],
     };
     let mut hit = Some(first);
@@ -1301,8 +1393,10 @@ fn first_vertex_cv(
     };
     let wi = v.wi;
     th.peak = lobe_peak(settings.mis_light_weight, bxdf, wi);
-    let mis = VertexMis::new(settings, th.peak);
     let (u_light, u_bsdf) = vertex_draws(sampler, lights, bxdf);
+    let ris = resampling(sampler, lights, v.p, th.peak);
+    th.ris = ris.m;
+    let mis = VertexMis::new(settings, th.peak, ris.m);
     // Every Q_k is 1 at the camera.
     let q_sum = n as f64;
     let t = th.t;
@@ -1327,6 +1421,8 @@ fn first_vertex_cv(
         &v,
         u_light,
         mis,
+        ris,
+        |wo| bxdf.pdf(wi, wo, lambdas[0]),
         |wo, is_delta| nee_bsdf(&**bxdf, wi, wo, is_delta, &lambdas[..n], &th.q[..n]),
         |ls, wo, w, fp| glossy(&mut xyz, wo, &fp, &ls.emission, w),
     );
@@ -1518,7 +1614,10 @@ fn trace(
         let bxdf = Guided::over(&mut guided, &*scene.materials[m as usize].bxdf, cones);
         th.resolve(scene, lambdas, n);
         th.peak = lobe_peak(settings.mis_light_weight, bxdf, wi);
-        let mis = VertexMis::new(settings, th.peak);
+        let (u_light, u_bsdf) = vertex_draws(sampler, lights, bxdf);
+        let ris = resampling(sampler, lights, v.p, th.peak);
+        th.ris = ris.m;
+        let mis = VertexMis::new(settings, th.peak, ris.m);
         let Throughput {
             t,
             q,
@@ -1527,13 +1626,14 @@ fn trace(
             delta_counted,
             ..
         } = &mut th;
-        let (u_light, u_bsdf) = vertex_draws(sampler, lights, bxdf);
 
         next_event(
             scene,
             &v,
             u_light,
             mis,
+            ris,
+            |wo| bxdf.pdf(wi, wo, lambdas[0]),
             |wo, is_delta| nee_bsdf(bxdf, wi, wo, is_delta, &lambdas[..n], &q[..n]),
             |ls, wo, w, fp| {
                 let mut e = [0.0; N];
@@ -1630,7 +1730,7 @@ fn reached_emission(
     th.resolve(scene, lambdas, n);
     let own: f64 = th.q[..n].iter().sum();
     let l_sum: f64 = th.l_mis[..n].iter().sum();
-    let w = VertexMis::new(&scene.settings, th.peak)
+    let w = VertexMis::new(&scene.settings, th.peak, th.ris)
         .at_infinity(hit.is_none())
         .bsdf(pdf_l, own, l_sum);
     if w > 0.0 {
@@ -1673,6 +1773,37 @@ mod tests {
                     }
                 }
             }
+        }
+    }
+
+    #[test]
+    fn a_resampling_vertex_weighs_both_strategies_with_one_count() {
+        // Both strategies read the candidate count from `VertexMis`: for a
+        // light sample of density p_l and a one-wavelength BSDF sample of
+        // density p_b toward the same direction the weights sum to one
+        // (counted on one side only, they would not), and resampling from
+        // 8 candidates hands the light strategy the larger share.
+        let mut rng = Rng::for_sample(4, 5, 6);
+        for _ in 0..20_000 {
+            let mut log = || 10f64.powf(8.0 * rng.uniform() - 4.0);
+            let (p_l, p_b, peak) = (log(), log(), log());
+            let mut shares = [0.0; 2];
+            for (share, m) in shares.iter_mut().zip([1, RIS_CANDIDATES]) {
+                for far in [false, true] {
+                    let mis = VertexMis {
+                        heuristic: MisHeuristic::Power,
+                        fixed: None,
+                        peak: Some(peak),
+                        ris: f64::from(m),
+                    }
+                    .at_infinity(far);
+                    let wl = mis.light(p_l, 1.0, p_b) * p_l;
+                    let wb = mis.bsdf(p_l, 1.0, 1.0 / p_b);
+                    assert!((wl + wb - 1.0).abs() < 1e-12, "m {m}: {wl} + {wb}");
+                    *share = wl;
+                }
+            }
+            assert!(shares[1] >= shares[0], "{shares:?}");
         }
     }
 

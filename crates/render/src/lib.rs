@@ -32,6 +32,7 @@ pub mod inputs;
 pub mod integrator;
 pub mod interrupt;
 pub mod light;
+mod light_resample;
 pub mod material;
 pub mod memory;
 pub mod mesh;

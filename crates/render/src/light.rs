@@ -349,6 +349,37 @@ impl Lights {
         }
     }
 
+    /// The density with which [`Lights::sample`] from `p` gives a typical
+    /// direction toward its light, for a caller deciding whether a lobe is
+    /// narrow against the light (resampling the light sample pays only
+    /// then): the centre's density of a rectangle, infinity for a point
+    /// light (every draw is the same direction) and for a sphere, and 0 for
+    /// an environment or a choice among several lights, whose draws spread
+    /// over the sphere or over the lights.
+    ///
+    /// A sphere counts as a point: its draws are already uniform in the cone
+    /// it subtends, and resampling them measured a loss (GGX α 0.05 gold
+    /// under a sphere 23° wide, `ggx_au_30deg_wide_light`, 64 spp: relRMSE
+    /// 0.0341 → 0.0299 for 3.3× the CPU, 0.0344 for 1.7× with resampling
+    /// only where the lobe's peak is ≤ 4× the light's density, a band that
+    /// took `softbox_object` from 0.087 back to 0.096–0.099).
+    pub fn typical_density(&self, p: DVec3) -> f64 {
+        if self.nee_len() != 1 {
+            return 0.0;
+        }
+        let idx = usize::from(self.skipped() == Some(0));
+        match &self.lights[idx] {
+            LightKind::Point { .. } | LightKind::Sphere { .. } => f64::INFINITY,
+            LightKind::Rectangle { shape, .. } => {
+                let d = shape.center - p;
+                let cos_l = d.normalize_or_zero().dot(shape.n).abs();
+                let pdf = d.length_squared() / (shape.area() * cos_l);
+                if pdf.is_nan() { f64::INFINITY } else { pdf }
+            }
+            LightKind::Environment(_) => 0.0,
+        }
+    }
+
     /// Radiance leaving emitter `idx` toward `-dir` at a hit with geometric normal `n`,
     /// and the pdf with which [`Lights::sample`] from `from` would have chosen that point.
     pub fn emitted(
