@@ -149,6 +149,8 @@ pub fn sqrt_lanes(x: [f64; 4]) -> [f64; 4] {
 /// and cosh are an expm1 and an exp each, and the table build takes both at
 /// every quadrature point of its bin masses and Λ nodes); sinh by its series
 /// below 1/4, where (eˣ − e⁻ˣ)/2 would cancel. Within 2 ulp of libm.
+/// Only the (alloc) two-scale table calls it.
+#[cfg(feature = "alloc")]
 #[inline]
 pub(crate) fn sinh_cosh(x: f64) -> (f64, f64) {
     let e = exp(x);
