@@ -78,22 +78,7 @@ const LN_COEF: [f64; 12] = {
 /// unspecified value.
 #[inline(always)]
 pub(crate) fn ln(x: Lanes) -> Lanes {
-    #[cfg(all(
-        target_arch = "x86_64",
-        target_feature = "avx2",
-        target_feature = "fma"
-    ))]
-    {
-        avx::ln(x)
-    }
-    #[cfg(not(all(
-        target_arch = "x86_64",
-        target_feature = "avx2",
-        target_feature = "fma"
-    )))]
-    {
-        x.map(scalar::ln)
-    }
+    lanes::ln(x)
 }
 
 /// eˣ for every lane: x = n ln 2 + r with |r| ≤ ½ ln 2, eʳ by its Taylor
@@ -102,22 +87,7 @@ pub(crate) fn ln(x: Lanes) -> Lanes {
 /// which is what A and Λ need), above 709 it is +∞, NaN stays NaN.
 #[inline(always)]
 pub(crate) fn exp(x: Lanes) -> Lanes {
-    #[cfg(all(
-        target_arch = "x86_64",
-        target_feature = "avx2",
-        target_feature = "fma"
-    ))]
-    {
-        avx::exp(x)
-    }
-    #[cfg(not(all(
-        target_arch = "x86_64",
-        target_feature = "avx2",
-        target_feature = "fma"
-    )))]
-    {
-        x.map(scalar::exp)
-    }
+    lanes::exp(x)
 }
 
 /// The coherent fraction A = e^{−g} and 1 − A for every lane (g ≥ 0), each
@@ -127,20 +97,35 @@ pub(crate) fn exp(x: Lanes) -> Lanes {
 /// libm's expm1 or exp per value.
 #[inline(always)]
 pub(crate) fn coherent(g: Lanes) -> (Lanes, Lanes) {
-    #[cfg(all(
-        target_arch = "x86_64",
-        target_feature = "avx2",
-        target_feature = "fma"
-    ))]
-    {
-        avx::coherent(g)
+    lanes::coherent(g)
+}
+
+/// The vector registers where the build has them.
+#[cfg(all(
+    target_arch = "x86_64",
+    target_feature = "avx2",
+    target_feature = "fma"
+))]
+use avx as lanes;
+
+/// Elsewhere the lane-by-lane versions, four at a time.
+#[cfg(not(all(
+    target_arch = "x86_64",
+    target_feature = "avx2",
+    target_feature = "fma"
+)))]
+mod lanes {
+    use super::{LANES, Lanes, scalar};
+
+    pub(super) fn ln(x: Lanes) -> Lanes {
+        x.map(scalar::ln)
     }
-    #[cfg(not(all(
-        target_arch = "x86_64",
-        target_feature = "avx2",
-        target_feature = "fma"
-    )))]
-    {
+
+    pub(super) fn exp(x: Lanes) -> Lanes {
+        x.map(scalar::exp)
+    }
+
+    pub(super) fn coherent(g: Lanes) -> (Lanes, Lanes) {
         let mut a = [0.0; LANES];
         let mut one_minus_a = [0.0; LANES];
         for l in 0..LANES {
