@@ -818,7 +818,12 @@ impl EffTable {
     /// Fractional v position (bin, fraction) of tanθ at node i, or None past the top.
     #[inline]
     fn v_position(&self, i: usize, tan_t: f64) -> Option<(usize, f64)> {
-        let x = crate::numerics::math::asinh_nonneg(tan_t * self.inv_tau_a[i]) * self.v_scale[i];
+        self.v_bin(crate::numerics::math::asinh_nonneg(tan_t * self.inv_tau_a[i]) * self.v_scale[i])
+    }
+
+    /// (bin, fraction) of a scaled v position `x`, or None past the top.
+    #[inline]
+    fn v_bin(&self, x: f64) -> Option<(usize, f64)> {
         if !(x >= 0.0) {
             return Some((0, 0.0));
         }
@@ -832,10 +837,16 @@ impl EffTable {
     /// D̃_eff at node i (tanθ, clamped to the top node beyond it).
     #[inline]
     pub(crate) fn d_node(&self, i: usize, tan_t: f64) -> f64 {
+        crate::numerics::math::exp(self.log_d_at(i, self.v_position(i, tan_t)))
+    }
+
+    /// ln D̃_eff at node i and v position `pos` ([`EffTable::v_bin`]).
+    #[inline]
+    fn log_d_at(&self, i: usize, pos: Option<(usize, f64)>) -> f64 {
         let row = &self.log_d[i * self.nv..(i + 1) * self.nv];
-        match self.v_position(i, tan_t) {
-            Some((j, f)) => crate::numerics::math::exp(catmull_rom(row, j, f)),
-            None => crate::numerics::math::exp(row[self.nv - 1]),
+        match pos {
+            Some((j, f)) => catmull_rom(row, j, f),
+            None => row[self.nv - 1],
         }
     }
 
@@ -857,18 +868,10 @@ impl EffTable {
             *a = x + libm::sqrt(x * x + 1.0);
         }
         let asinh = two_scale_lanes::ln(arg);
-        let mut log_d = [0.0; LANES];
-        for l in 0..LANES {
+        let log_d = core::array::from_fn(|l| {
             let n = node(l);
-            let row = &self.log_d[n * self.nv..(n + 1) * self.nv];
-            let x = asinh[l] * self.v_scale[n];
-            log_d[l] = if x >= (self.nv - 1) as f64 {
-                row[self.nv - 1]
-            } else {
-                let j = x as usize;
-                catmull_rom(row, j, x - j as f64)
-            };
-        }
+            self.log_d_at(n, self.v_bin(asinh[l] * self.v_scale[n]))
+        });
         two_scale_lanes::exp(log_d)
     }
 
