@@ -42,6 +42,8 @@ use glam::DVec3;
 
 const N: usize = MAX_WAVELENGTHS;
 
+mod split;
+
 /// Shading frame at a hit: tangent `t`, bitangent `b`, normal `n` (facing the viewer).
 struct Frame {
     t: DVec3,
@@ -239,6 +241,7 @@ impl VertexMis {
 }
 
 /// A glossy BSDF sample whose other-wavelength factors are not yet applied.
+#[derive(Clone)]
 struct Pending {
     material: u32,
     wi: DVec3,
@@ -866,6 +869,7 @@ fn unoccluded(scene: &Scene, p: DVec3, ls: &LightSample) -> bool {
 /// The per-wavelength state of a path (see the module documentation):
 /// `T_j`, `Q_k`, and the BSDF-sampling densities `L_k` of the last edge
 /// for the MIS of an emitter it reaches.
+#[derive(Clone)]
 struct Throughput {
     t: [f64; N],
     q: [f64; N],
@@ -1062,6 +1066,31 @@ enum FlatVertex<'a> {
     Fresnel(&'a dyn Bxdf, u32, &'a brdf::Fresnel),
 }
 
+impl<'a> FlatVertex<'a> {
+    /// The model's λ-free part.
+    #[inline]
+    fn unit(self) -> &'a dyn Bxdf {
+        match self {
+            FlatVertex::Free(b) | FlatVertex::Fresnel(b, ..) => b,
+        }
+    }
+
+    /// The Fresnel factor a path carries past this vertex, left at
+    /// cos²θd = `num`/`den`: this vertex's own, or the one it held (`held`).
+    #[inline]
+    fn conductor(self, num: f64, den: f64, held: Option<Conductor<'a>>) -> Option<Conductor<'a>> {
+        match self {
+            FlatVertex::Fresnel(_, table, fresnel) => Some(Conductor {
+                table,
+                fresnel,
+                num,
+                den,
+            }),
+            FlatVertex::Free(_) => held,
+        }
+    }
+}
+
 /// How material `m` enters a λ-exact path at a vertex seen from `wi`
 /// that carries a conductor's factor already (`held`), or `None` where the
 /// path must sample λ.
@@ -1091,6 +1120,7 @@ fn flat_vertex<'a>(
 }
 
 /// The state of a λ-exact path.
+#[derive(Clone)]
 struct FlatPath<'a> {
     /// The path's throughput, the same at every λ but for `conductor`.
     tau: f64,
@@ -1157,12 +1187,24 @@ impl<'a> FlatPath<'a> {
         cones: Option<Cones>,
         sampler: &mut Sampler,
     ) -> Option<Ray> {
-        let (bx, own) = match vertex {
-            FlatVertex::Free(b) => (b, None),
-            FlatVertex::Fresnel(b, table, fresnel) => (b, Some((table, fresnel))),
-        };
         let mut guided = None;
-        let bx = Guided::over(&mut guided, bx, cones);
+        let bx = Guided::over(&mut guided, vertex.unit(), cones);
+        let u_bsdf = self.light(scene, tables, vertex, bx, v, sampler);
+        self.sample(vertex, bx, v, u_bsdf)
+    }
+
+    /// Next-event estimation at vertex `v` of material `vertex` (whose
+    /// λ-free part, guided where the vertex has cones, is `bx`); returns
+    /// the BSDF sample's numbers, drawn with the light's.
+    fn light(
+        &mut self,
+        scene: &Scene,
+        tables: &SpectralTables,
+        vertex: FlatVertex<'a>,
+        bx: &dyn Bxdf,
+        v: &Vertex,
+        sampler: &mut Sampler,
+    ) -> [f64; 3] {
         let settings = &scene.settings;
         let wi = v.wi;
         self.peak = lobe_peak(settings.mis_light_weight, bx, wi);
@@ -1170,17 +1212,6 @@ impl<'a> FlatPath<'a> {
         let ris = resampling(sampler, &scene.lights, v.p, self.peak);
         self.ris = ris.m;
         let mis = VertexMis::new(settings, self.peak, ris.m);
-        // This vertex's Fresnel factor at cos²θd = |wi + wo|²/4, or the one
-        // the path carries.
-        let at = |num: f64, den: f64, held: Option<Conductor<'a>>| match own {
-            Some((table, fresnel)) => Some(Conductor {
-                table,
-                fresnel,
-                num,
-                den,
-            }),
-            None => held,
-        };
         let (tau, held) = (self.tau, self.conductor);
         let xyz = &mut self.xyz;
         next_event(
@@ -1195,12 +1226,25 @@ impl<'a> FlatPath<'a> {
                 (f > 0.0).then_some((1.0, if is_delta { 0.0 } else { pdf }, f))
             },
             |ls, wo, w, f| {
-                let c = at((wi + wo).length_squared(), 4.0, held);
+                let c = vertex.conductor((wi + wo).length_squared(), 4.0, held);
                 let e = Self::integral(tables, &ls.emission, c);
                 add_scaled(xyz, e, tau * f * wo.z * w);
             },
         );
+        u_bsdf
+    }
 
+    /// The BSDF sample at vertex `v` (see [`FlatPath::light`]) drawn with
+    /// `u_bsdf`: the ray the path goes on along, if it does.
+    #[inline]
+    fn sample(
+        &mut self,
+        vertex: FlatVertex<'a>,
+        bx: &dyn Bxdf,
+        v: &Vertex,
+        u_bsdf: [f64; 3],
+    ) -> Option<Ray> {
+        let wi = v.wi;
         let s = bx.sample(wi, UNIT_LAMBDA, u_bsdf)?;
         if s.pdf.is_nan() || s.pdf <= 0.0 || s.wo.z <= 0.0 {
             return None;
@@ -1211,7 +1255,7 @@ impl<'a> FlatPath<'a> {
         } else {
             ((wi + s.wo).length_squared(), 4.0)
         };
-        self.conductor = at(num, den, held);
+        self.conductor = vertex.conductor(num, den, self.conductor);
         self.tau *= s.weight;
         self.l_mis = if s.is_delta { 0.0 } else { 1.0 / s.pdf };
         v.ray(s.wo)
@@ -1278,13 +1322,12 @@ impl<'a> FlatPath<'a> {
 fn trace_flat(
     scene: &Scene,
     tables: &SpectralTables,
-    mut ray: Ray,
+    ray: Ray,
     first: Hit,
     sampler: &mut Sampler,
     u_lambda: Reserved2d,
 ) -> SampleRadiance {
-    let settings = &scene.settings;
-    let mut path = FlatPath {
+    let path = FlatPath {
         tau: 1.0,
         conductor: None,
         l_mis: 0.0,
@@ -1292,8 +1335,25 @@ fn trace_flat(
         ris: 1,
         xyz: [0.0; 3],
     };
-    let mut hit = Some(first);
-    for depth in 0..=settings.max_depth {
+    flat_walk(scene, tables, path, ray, Some(first), sampler, u_lambda, 0)
+}
+
+/// A λ-exact path `path` from scattering event `depth0` on, whose ray
+/// `ray` reached `hit`; at its first vertex it may split into branches
+/// ([`split::branches`]).
+#[allow(clippy::too_many_arguments)]
+fn flat_walk<'a>(
+    scene: &'a Scene,
+    tables: &SpectralTables,
+    mut path: FlatPath<'a>,
+    mut ray: Ray,
+    mut hit: Option<Hit>,
+    sampler: &mut Sampler,
+    u_lambda: Reserved2d,
+    depth0: u32,
+) -> SampleRadiance {
+    let settings = &scene.settings;
+    for depth in depth0..=settings.max_depth {
         let Some(
             h @ Hit {
                 surface: Surface::Material(m),
@@ -1314,6 +1374,20 @@ fn trace_flat(
             return path.hand_over(scene, ray, h, sampler, u_lambda, depth);
         };
         let cones = scene.casters.cones(m, v.p, |d| v.frame.to_local(d));
+        if depth == 0 {
+            let k = split::branches(scene, vertex.unit(), v.wi, h.mesh);
+            if k > 1 {
+                let at = FlatSplit {
+                    tables,
+                    vertex,
+                    v: &v,
+                    cones,
+                    u_lambda,
+                    k,
+                };
+                return flat_split(scene, path, at, sampler);
+            }
+        }
         let Some(next) = path.scatter(scene, tables, vertex, &v, cones, sampler) else {
             break;
         };
@@ -1621,8 +1695,6 @@ fn trace(
         let Throughput {
             t,
             q,
-            l_mis,
-            pending,
             delta_counted,
             ..
         } = &mut th;
@@ -1662,52 +1734,220 @@ fn trace(
                     bsdf_weight_over_pdf(mis.heuristic, 1.0, q[..n].iter().sum(), 0.0),
                 );
 
-        // BSDF sampling at the hero wavelength.
-        let Some((s, kept)) = bxdf.sample_kept(wi, lambdas[0], u_bsdf) else {
+        if depth == 0 {
+            let k = split::branches(scene, bxdf, wi, hit.mesh);
+            if k > 1 {
+                let at = SampledSplit {
+                    v: &v,
+                    m,
+                    bxdf,
+                    cones,
+                    delta_traced,
+                    k,
+                };
+                sampled_split(scene, at, &th, wavelengths, sampler, &mut out);
+                break;
+            }
+        }
+        let Some((wo, is_delta)) = bsdf_step(&mut th, bxdf, m, wi, cones, lambdas, n, u_bsdf)
+        else {
             break;
         };
-        if s.pdf.is_nan() || s.pdf <= 0.0 || s.wo.z <= 0.0 {
-            break;
-        }
-        emission_counted = s.is_delta && delta_traced;
-        if s.is_delta {
-            t[0] *= s.weight;
-            for j in 1..n {
-                let sp = bxdf.specular(wi, lambdas[j]);
-                t[j] *= sp.weight / s.pdf;
-                q[j] *= sp.probability / s.pdf;
-            }
-            *l_mis = [0.0; N];
-        } else {
-            t[0] *= s.weight;
-            for k in 0..n {
-                l_mis[k] = q[k] / s.pdf;
-            }
-            *pending = Some(Pending {
-                material: m,
-                wi,
-                wo: s.wo,
-                pdf: s.pdf,
-                guide: cones.map_or((1.0, 0.0), |c| {
-                    let (share, g) = c.weighted_pdf(s.wo);
-                    (1.0 - share, g)
-                }),
-                kept,
-            });
-        }
-
+        emission_counted = is_delta && delta_traced;
         if depth + 1 >= settings.rr_depth {
             th.resolve(scene, lambdas, n);
             if !survives(&mut th, n, m0, sampler) {
                 break;
             }
         }
-        let Some(next) = v.ray(s.wo) else {
+        let Some(next) = v.ray(wo) else {
             break;
         };
         ray = next;
     }
     out
+}
+
+/// BSDF sampling at the hero wavelength at vertex `v` of material `m`
+/// (`bxdf`, guided by `cones` where it is), drawn with `u_bsdf`: updates
+/// the path's state `th` and returns the direction and whether it is a
+/// delta one, or `None` where the path ends.
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+fn bsdf_step(
+    th: &mut Throughput,
+    bxdf: &dyn Bxdf,
+    m: u32,
+    wi: DVec3,
+    cones: Option<Cones>,
+    lambdas: &[f64; N],
+    n: usize,
+    u_bsdf: [f64; 3],
+) -> Option<(DVec3, bool)> {
+    let (s, kept) = bxdf.sample_kept(wi, lambdas[0], u_bsdf)?;
+    if s.pdf.is_nan() || s.pdf <= 0.0 || s.wo.z <= 0.0 {
+        return None;
+    }
+    let Throughput {
+        t,
+        q,
+        l_mis,
+        pending,
+        ..
+    } = th;
+    if s.is_delta {
+        t[0] *= s.weight;
+        for j in 1..n {
+            let sp = bxdf.specular(wi, lambdas[j]);
+            t[j] *= sp.weight / s.pdf;
+            q[j] *= sp.probability / s.pdf;
+        }
+        *l_mis = [0.0; N];
+    } else {
+        t[0] *= s.weight;
+        for k in 0..n {
+            l_mis[k] = q[k] / s.pdf;
+        }
+        *pending = Some(Pending {
+            material: m,
+            wi,
+            wo: s.wo,
+            pdf: s.pdf,
+            guide: cones.map_or((1.0, 0.0), |c| {
+                let (share, g) = c.weighted_pdf(s.wo);
+                (1.0 - share, g)
+            }),
+            kept,
+        });
+    }
+    Some((s.wo, s.is_delta))
+}
+
+/// Where a λ-exact path splits.
+struct FlatSplit<'a, 'v> {
+    tables: &'v SpectralTables,
+    vertex: FlatVertex<'a>,
+    v: &'v Vertex,
+    cones: Option<Cones>,
+    /// The camera sample's reserved wavelength draw.
+    u_lambda: Reserved2d,
+    k: u32,
+}
+
+/// A λ-exact path `path` split at its first vertex `at`.
+fn flat_split<'a>(
+    scene: &'a Scene,
+    mut path: FlatPath<'a>,
+    at: FlatSplit<'a, '_>,
+    sampler: &mut Sampler,
+) -> SampleRadiance {
+    let FlatSplit {
+        tables,
+        vertex,
+        v,
+        cones,
+        u_lambda,
+        k,
+    } = at;
+    let mut guided = None;
+    let bx = Guided::over(&mut guided, vertex.unit(), cones);
+    // The light sample's draws are the camera sample's; its BSDF draw is
+    // left unused (each branch draws its own).
+    path.light(scene, tables, vertex, bx, v, sampler);
+    // Resolved by the camera sample's own sampler, so that every branch
+    // that needs wavelengths has the same ones.
+    let u_lambda = Reserved2d::Drawn(sampler.reserved_2d(u_lambda));
+    let mut total = SampleRadiance::Xyz(path.xyz);
+    let share = FlatPath {
+        tau: path.tau / f64::from(k),
+        xyz: [0.0; 3],
+        ..path
+    };
+    for b in 0..k {
+        let mut sb = sampler.branch(b, k);
+        let mut p = share.clone();
+        let u_bsdf = sb.get_1d_2d_if(bx.uses_lobe_choice());
+        let Some(ray) = p.sample(vertex, bx, v, u_bsdf) else {
+            continue;
+        };
+        if 1 >= scene.settings.rr_depth && !p.survives(&mut sb) {
+            continue;
+        }
+        let hit = scene.shapes.intersect(&ray, f64::INFINITY);
+        let r = flat_walk(scene, tables, p, ray, hit, &mut sb, u_lambda, 1);
+        total = split::sum(total, r);
+    }
+    total
+}
+
+/// Where a path with sampled wavelengths splits: its first vertex `v` of
+/// material `m` (`bxdf`, guided by `cones` where it is), whether its delta
+/// lobe's emission is counted already, and the branch count.
+struct SampledSplit<'v> {
+    v: &'v Vertex,
+    m: u32,
+    bxdf: &'v dyn Bxdf,
+    cones: Option<Cones>,
+    delta_traced: bool,
+    k: u32,
+}
+
+/// The k BSDF continuations of a path with sampled wavelengths, whose
+/// state after its first vertex's light sample is `th`, added to `out`.
+fn sampled_split(
+    scene: &Scene,
+    at: SampledSplit,
+    th: &Throughput,
+    wavelengths: &SampledWavelengths,
+    sampler: &Sampler,
+    out: &mut [f64; N],
+) {
+    let (lambdas, n) = (&wavelengths.lambda, wavelengths.n);
+    let k = at.k;
+    let mut share = th.clone();
+    for t in &mut share.t[..n] {
+        *t /= f64::from(k);
+    }
+    let m0 = roulette_scale(wavelengths);
+    for b in 0..k {
+        let mut sb = sampler.branch(b, k);
+        let mut tb = share.clone();
+        let u_bsdf = sb.get_1d_2d_if(at.bxdf.uses_lobe_choice());
+        let step = bsdf_step(
+            &mut tb, at.bxdf, at.m, at.v.wi, at.cones, lambdas, n, u_bsdf,
+        );
+        let Some((wo, is_delta)) = step else {
+            continue;
+        };
+        if 1 >= scene.settings.rr_depth {
+            tb.resolve(scene, lambdas, n);
+            if !survives(&mut tb, n, m0, &mut sb) {
+                continue;
+            }
+        }
+        let Some(ray) = at.v.ray(wo) else {
+            continue;
+        };
+        match scene.shapes.intersect(&ray, f64::INFINITY) {
+            Some(
+                h @ Hit {
+                    surface: Surface::Material(_),
+                    ..
+                },
+            ) => {
+                let r = trace(scene, ray, Some(h), wavelengths, &mut sb, tb, 1);
+                for j in 0..n {
+                    out[j] += r[j];
+                }
+            }
+            // The emission a delta direction reaches is counted already
+            // where its lobe's was traced.
+            hit if !(is_delta && at.delta_traced) => {
+                reached_emission(scene, &ray, hit.as_ref(), &mut tb, lambdas, n, out);
+            }
+            _ => {}
+        }
+    }
 }
 
 /// Adds the emission a BSDF-sampled edge of a path reaches along `ray` (at

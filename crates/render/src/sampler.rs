@@ -241,6 +241,42 @@ impl Sampler {
         [a, b, c]
     }
 
+    /// The sampler of branch `b` of `k` that a camera sample splits into
+    /// from here on (`integrator`'s first-vertex splitting): it goes on with
+    /// the same draw numbers, so its values are independent of the draws
+    /// taken so far. Sobol: branch b of sample i takes point i·k + b of each
+    /// later draw, so the k branches of a sample are a stratified set of
+    /// their own (a net when k is a power of two) and the branches of the
+    /// first N samples are the first N·k points; indices past 2³² get a
+    /// scramble of their own, as [`Sampler::new`]'s blocks do. Independent:
+    /// a stream seeded from the sample's next number and `b`.
+    pub fn branch(&self, b: u32, k: u32) -> Sampler {
+        match self.kind {
+            SamplerKind::Independent => {
+                let seed = self.rng.clone().next_u64();
+                Sampler {
+                    rng: Rng::for_sample(seed, 0, u64::from(b)),
+                    ..self.clone()
+                }
+            }
+            SamplerKind::Sobol => {
+                let j = u64::from(self.index_rev.reverse_bits()) * u64::from(k) + u64::from(b);
+                let high = j >> 32;
+                let pixel_seed = if high == 0 {
+                    self.pixel_seed
+                } else {
+                    mix(self.pixel_seed ^ mix(high ^ 0xa409_3822_299f_31d0))
+                };
+                Sampler {
+                    // Truncation on purpose: the index within its block.
+                    index_rev: (j as u32).reverse_bits(),
+                    pixel_seed,
+                    ..self.clone()
+                }
+            }
+        }
+    }
+
     /// [`get_1d_2d`](Self::get_1d_2d) for a caller that reads the 1D value
     /// only if `first` (a light choice among one light, the lobe choice of a
     /// single-lobe model): otherwise the Sobol sampler takes its place in
@@ -361,6 +397,40 @@ mod tests {
                 "2^{k} points are not a (0,{k},2)-net for intervals {nx}×{ny}"
             );
         }
+    }
+
+    #[test]
+    fn branches_are_nets_per_sample_and_together() {
+        for pixel in [0u64, 77] {
+            let (k, n) = (4u32, 8u64);
+            let mut all = Vec::new();
+            for s in 0..n {
+                let mut sm = Sampler::new(SamplerKind::Sobol, 5, pixel, s);
+                let before = sm.get_1d_2d();
+                let mut own = Vec::new();
+                for b in 0..k {
+                    let mut br = sm.branch(b, k);
+                    own.push(br.get_2d());
+                }
+                // The draws before the split are the sample's own.
+                assert_eq!(
+                    before,
+                    Sampler::new(SamplerKind::Sobol, 5, pixel, s).get_1d_2d()
+                );
+                check_net(&own, 2);
+                all.extend(own);
+            }
+            check_net(&all, 5);
+        }
+        // Branch indices past 2³² are new points (not those of the index
+        // with the same low 32 bits), and the independent sampler's
+        // branches differ from each other.
+        let far = Sampler::new(SamplerKind::Sobol, 5, 3, (1 << 32) - 1).branch(1, 4);
+        let near = Sampler::new(SamplerKind::Sobol, 5, 3, (1 << 30) - 1).branch(1, 4);
+        assert_eq!(far.index_rev, near.index_rev);
+        assert_ne!(far.clone().get_2d(), near.clone().get_2d());
+        let i = Sampler::new(SamplerKind::Independent, 5, 3, 9);
+        assert_ne!(i.branch(0, 2).get_2d(), i.branch(1, 2).get_2d());
     }
 
     #[test]

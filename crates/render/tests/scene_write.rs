@@ -176,9 +176,10 @@ fn integrator() -> impl Strategy<Value = IntegratorDesc> {
         proptest::option::of(any::<u32>()),
         proptest::option::of(finite()),
         proptest::option::of(any::<u32>()),
+        proptest::option::of(any::<u32>()),
     )
         .prop_map(
-            |(depth, single, hero, rr, indep, balance, w, sampled, dps, guide, eps)| {
+            |(depth, single, hero, rr, indep, balance, w, sampled, dps, guide, eps, br)| {
                 IntegratorDesc {
                     max_depth: spanless(depth),
                     wavelengths: if single {
@@ -207,6 +208,7 @@ fn integrator() -> impl Strategy<Value = IntegratorDesc> {
                     delta_pixel_samples: dps.map(spanless),
                     emitter_pixel_samples: eps.map(spanless),
                     caustic_guiding: guide.map(spanless),
+                    branches: br.map(spanless),
                 }
             },
         )

@@ -512,6 +512,16 @@ impl<'a> Builder<'a> {
             Some(c) => *c.get_ref(),
             None => super::DEFAULT_CAUSTIC_GUIDING,
         };
+        let branches = match &integrator.branches {
+            Some(_) => Some(self.pixel_samples(
+                "branches",
+                &integrator.branches,
+                super::MAX_BRANCHES,
+                1,
+                " (BSDF continuations at a camera sample's first vertex; 1 turns it off)",
+            )? as u32),
+            None => None,
+        };
         let spectral_bands = match &film.spectral_bands {
             Some(n) if *n.get_ref() as usize > crate::film::MAX_BANDS => {
                 return Err(self.at(
@@ -542,6 +552,7 @@ impl<'a> Builder<'a> {
             delta_pixel_samples,
             emitter_pixel_samples,
             caustic_guiding,
+            branches,
             exr: film.exr.clone(),
             png: film.png.clone(),
             exposure,

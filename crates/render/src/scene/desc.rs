@@ -248,6 +248,11 @@ pub struct IntegratorDesc {
     /// ([`Settings::caustic_guiding`](super::Settings::caustic_guiding)).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub caustic_guiding: Option<Spanned<f64>>,
+    /// BSDF continuations per camera sample at its first vertex, 1–64
+    /// (default: chosen per vertex; 1: off)
+    /// ([`Settings::branches`](super::Settings::branches)).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub branches: Option<Spanned<u32>>,
 }
 
 /// How the integral over λ is estimated.
@@ -300,6 +305,7 @@ impl Default for IntegratorDesc {
             delta_pixel_samples: None,
             emitter_pixel_samples: None,
             caustic_guiding: None,
+            branches: None,
         }
     }
 }

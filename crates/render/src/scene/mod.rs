@@ -42,6 +42,9 @@ pub const ESTIMATOR: &str = "lustre estimator 14";
 /// moment of a colour estimate grows by at most 1/(1 − ⅕).
 pub const BAND_UNIFORM_SHARE: f64 = 0.2;
 
+/// Most BSDF continuations `[integrator] branches` may ask for.
+pub const MAX_BRANCHES: u32 = 64;
+
 /// Default `[integrator] caustic_guiding`.
 pub const DEFAULT_CAUSTIC_GUIDING: f64 = 0.0;
 
@@ -92,6 +95,10 @@ pub struct Settings {
     /// drawn toward glossy objects instead of from the BSDF, weighted by the
     /// mixture's density ([`crate::guide`]). 0 turns it off.
     pub caustic_guiding: f64,
+    /// `[integrator] branches`: the BSDF continuations a camera sample
+    /// splits into at its first vertex (`integrator::branches`), or `None`
+    /// for the default rule there.
+    pub branches: Option<u32>,
     /// EXR output path.
     pub exr: Option<PathBuf>,
     /// PNG output path.
