@@ -1375,7 +1375,7 @@ fn flat_walk<'a>(
         };
         let cones = scene.casters.cones(m, v.p, |d| v.frame.to_local(d));
         if depth == 0 {
-            let k = split::branches(scene, vertex.unit(), v.wi, h.mesh);
+            let k = split::branches(scene, vertex.unit(), v.wi);
             if k > 1 {
                 let at = FlatSplit {
                     tables,
@@ -1735,7 +1735,7 @@ fn trace(
                 );
 
         if depth == 0 {
-            let k = split::branches(scene, bxdf, wi, hit.mesh);
+            let k = split::branches(scene, bxdf, wi);
             if k > 1 {
                 let at = SampledSplit {
                     v: &v,

@@ -21,42 +21,30 @@ use crate::scene::Scene;
 use brdf::Bxdf;
 use glam::DVec3;
 
-/// Branches at a first vertex on a mesh, unless the scene sets `branches`.
-pub const MESH_BRANCHES: u32 = 4;
-
 /// The branches a camera sample splits into at its first vertex, of model
-/// `bxdf` seen from `wi`, on a mesh triangle if `mesh`: the scene's
-/// `branches` where it sets them, and none where the path ends there
-/// (direct light only).
+/// `bxdf` seen from `wi`: the scene's `branches` where it sets them and the
+/// model says how wide its lobe is (not a delta lobe, whose branches would
+/// all follow one direction, nor a model that does not say); one where the
+/// path ends there (direct light only) and, unset, everywhere.
 ///
-/// By default [`MESH_BRANCHES`] on a mesh whose model says how wide its
-/// lobe is (not a delta lobe, whose branches would all follow one
-/// direction, nor a model that does not say), none elsewhere. Splitting
-/// pays where a camera sample's prefix (camera ray, light sample and its
-/// shadow ray) is dear against a continuation and most of the variance
-/// comes after the first vertex. Measured at 64 spp, 4 seeds against
-/// 4096-spp references (relRMSE, CPU s; crates/render/README.md): the
-/// preview object on a meshed floor under a sun, 0.0744, 1.22 → 0.0399,
-/// 2.97 with 4 branches everywhere; the copper object on an analytic floor
-/// under a softbox, 0.0867, 1.40 → 0.0640, 2.06 with 4 at the object's
-/// (mesh) vertices, 0.0555, 3.30 with 4 everywhere. On scenes of analytic
-/// shapes the continuations cost as much as or more than the prefix and
-/// splitting lost: hdri_spheres 0.0935, 1.25 → 0.0779, 3.26 (4 everywhere)
-/// or 0.0888, 1.88 (4 at glossy vertices only); cornell_box_metals 0.0624,
-/// 1.80 → 0.0488, 5.52 or 0.0621, 2.20.
+/// Off unless asked for: no static rule paid on every scene. Splitting pays
+/// where a camera sample's prefix (camera ray, light sample and its shadow
+/// ray) is dear against a continuation and most of the variance comes
+/// after the first vertex. Measured at 64 spp, 4 seeds against 4096-spp
+/// references (relRMSE, CPU s; crates/render/README.md): the preview
+/// object on a meshed floor under a sun, 0.0744, 1.22 → 0.0399, 2.97 with
+/// 4 branches; but scenes whose continuations are long lose: a Cornell
+/// box with metal spheres, 0.0624, 1.80 → 0.0488, 5.52 with 4 (analytic
+/// walls) and 0.0627, 1.84 → 0.0527, 5.23 (walls as a mesh), half the
+/// efficiency. The principled choice, k from pilot statistics (the
+/// branches' within-sample variance against the between-sample variance,
+/// and the two parts' costs), is not built.
 #[inline]
-pub(super) fn branches(scene: &Scene, bxdf: &dyn Bxdf, wi: DVec3, mesh: bool) -> u32 {
+pub(super) fn branches(scene: &Scene, bxdf: &dyn Bxdf, wi: DVec3) -> u32 {
     let s = &scene.settings;
-    if s.max_depth <= 1 {
-        return 1;
-    }
-    if let Some(k) = s.branches {
-        return k;
-    }
-    if mesh && bxdf.lobe_peak_pdf(wi).is_some_and(f64::is_finite) {
-        MESH_BRANCHES
-    } else {
-        1
+    match s.branches {
+        Some(k) if s.max_depth > 1 && bxdf.lobe_peak_pdf(wi).is_some_and(f64::is_finite) => k,
+        _ => 1,
     }
 }
 

@@ -249,7 +249,7 @@ pub struct IntegratorDesc {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub caustic_guiding: Option<Spanned<f64>>,
     /// BSDF continuations per camera sample at its first vertex, 1–64
-    /// (default: chosen per vertex; 1: off)
+    /// (default 1: off)
     /// ([`Settings::branches`](super::Settings::branches)).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub branches: Option<Spanned<u32>>,

@@ -97,7 +97,7 @@ pub struct Settings {
     pub caustic_guiding: f64,
     /// `[integrator] branches`: the BSDF continuations a camera sample
     /// splits into at its first vertex (`integrator::branches`), or `None`
-    /// for the default rule there.
+    /// for one (no split).
     pub branches: Option<u32>,
     /// EXR output path.
     pub exr: Option<PathBuf>,
