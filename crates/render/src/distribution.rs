@@ -233,6 +233,15 @@ mod tests {
         }
         let sum: f64 = (0..d.len()).map(|i| d.pmf(i)).sum();
         assert!((sum - 1.0).abs() < 1e-12);
+        // Out-of-range and NaN `u` (the guide cell's cast saturates): a bin
+        // in range, without panicking.
+        for u in [-0.5, -0.0, f64::NAN, 1.0, 7.0, f64::INFINITY] {
+            let (i, t) = d.sample_bin(u);
+            assert!(
+                i < d.len() && (t.is_nan() || (0.0..=1.0).contains(&t)),
+                "u = {u}: {i}, {t}"
+            );
+        }
         // All-zero weights: uniform.
         let z = Distribution1D::new(&[0.0, 0.0, f64::INFINITY]);
         assert_eq!(z.pdf_bin(2), 1.0);
