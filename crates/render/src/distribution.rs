@@ -17,6 +17,8 @@ pub struct Distribution1D {
     integral: f64,
     /// `guide[k]` = number of CDF entries ≤ k/guide.len().
     guide: Vec<u32>,
+    /// `guide.len()` as a float: the cell of `u` is ⌊u · cells⌋.
+    cells: f64,
 }
 
 impl Distribution1D {
@@ -65,6 +67,7 @@ impl Distribution1D {
             pmf,
             integral,
             guide,
+            cells: cells as f64,
         }
     }
 
@@ -88,31 +91,24 @@ impl Distribution1D {
         &self.cdf
     }
 
-    /// The number of CDF entries ≤ `u` (`partition_point(|c| c <= u)`),
-    /// started from the guide's cell and walked to the exact answer, so the
-    /// result does not depend on how `u · n` rounds.
-    #[inline]
-    fn cdf_count_le(&self, u: f64) -> usize {
-        let cdf = &self.cdf[..];
-        let cell = if u > 0.0 {
-            ((u * self.guide.len() as f64) as usize).min(self.guide.len() - 1)
-        } else {
-            0
-        };
-        walk_count_le(cdf, self.guide[cell] as usize, u)
-    }
-
     /// The bin of a uniform `u` ∈ [0, 1) and the position within it,
     /// `t` ∈ [0, 1] (½ for a bin of probability 0).
-    #[inline]
+    ///
+    /// The bin is the number of CDF entries ≤ `u` less one
+    /// (`partition_point(|c| c <= u) − 1`), walked to from the guide's cell,
+    /// so it does not depend on how `u · cells` rounds.
+    #[inline(always)]
     pub fn sample_bin(&self, u: f64) -> (usize, f64) {
-        let i = self
-            .cdf_count_le(u)
-            .saturating_sub(1)
-            .min(self.pmf.len() - 1);
-        let span = self.cdf[i + 1] - self.cdf[i];
+        let cdf = &self.cdf[..];
+        // `as u32` saturates: NaN and negative `u` give cell 0. (A cast to
+        // usize costs a dozen instructions more: it runs twice per map sample.)
+        let cell = ((u * self.cells) as u32 as usize).min(self.guide.len() - 1);
+        let count = walk_count_le(cdf, self.guide[cell] as usize, u);
+        let i = count.saturating_sub(1).min(cdf.len() - 2);
+        let (lo, hi) = (cdf[i], cdf[i + 1]);
+        let span = hi - lo;
         let t = if span > 0.0 {
-            ((u - self.cdf[i]) / span).clamp(0.0, 1.0)
+            ((u - lo) / span).clamp(0.0, 1.0)
         } else {
             0.5
         };
@@ -237,6 +233,15 @@ mod tests {
         }
         let sum: f64 = (0..d.len()).map(|i| d.pmf(i)).sum();
         assert!((sum - 1.0).abs() < 1e-12);
+        // Out-of-range and NaN `u` (the guide cell's cast saturates): a bin
+        // in range, without panicking.
+        for u in [-0.5, -0.0, f64::NAN, 1.0, 7.0, f64::INFINITY] {
+            let (i, t) = d.sample_bin(u);
+            assert!(
+                i < d.len() && (t.is_nan() || (0.0..=1.0).contains(&t)),
+                "u = {u}: {i}, {t}"
+            );
+        }
         // All-zero weights: uniform.
         let z = Distribution1D::new(&[0.0, 0.0, f64::INFINITY]);
         assert_eq!(z.pdf_bin(2), 1.0);

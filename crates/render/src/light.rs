@@ -236,6 +236,7 @@ impl Lights {
 
     /// Samples a light and a direction toward it from `p`: `u[0]` chooses
     /// the light (and is not read when there is one), `u[1..]` the point.
+    #[inline]
     pub fn sample(&self, p: DVec3, u: [f64; 3]) -> Option<LightSample<'_>> {
         let n = self.nee_len();
         if n == 0 {
@@ -424,6 +425,7 @@ impl Lights {
     }
 
     /// Environment radiance along `dir` (escaping rays) and its sampling pdf.
+    #[inline]
     pub fn environment(&self, dir: DVec3) -> (Emission<'_>, f64) {
         let Some(i) = self.environment else {
             return (Emission::None, 0.0);
