@@ -620,8 +620,14 @@ impl Vertex {
     /// both horizons.
     #[inline]
     fn light_direction(&self, ls: &LightSample) -> Option<DVec3> {
-        let wo = self.frame.to_local(ls.wi);
-        (wo.z > 0.0 && ls.pdf > 0.0 && (!self.smooth || ls.wi.dot(self.ng) > 0.0)).then_some(wo)
+        self.toward(ls.wi, ls.pdf)
+    }
+
+    /// [`Vertex::light_direction`] of world direction `wi` of density `pdf`.
+    #[inline]
+    fn toward(&self, wi: DVec3, pdf: f64) -> Option<DVec3> {
+        let wo = self.frame.to_local(wi);
+        (wo.z > 0.0 && pdf > 0.0 && (!self.smooth || wi.dot(self.ng) > 0.0)).then_some(wo)
     }
 
     /// The ray along local direction `wo`, if it leaves on the geometric side.
@@ -816,12 +822,7 @@ fn next_event<'s, E>(
     add: impl FnOnce(&LightSample<'s>, DVec3, f64, E),
 ) {
     let (ls, ratio) = if ris.m > 1 {
-        let h = |ls: &LightSample| {
-            let Some(wo) = v.light_direction(ls) else {
-                return 0.0;
-            };
-            proxy(wo) + RIS_FLOOR
-        };
+        let h = |wi, pdf| v.toward(wi, pdf).map_or(0.0, |wo| proxy(wo) + RIS_FLOOR);
         let Some(x) = light_resample::resample(&scene.lights, v.p, u_light, ris.m, ris.u_pick, h)
         else {
             return;
