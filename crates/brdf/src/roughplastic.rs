@@ -366,15 +366,10 @@ impl RoughPlastic {
         if !(wi.z >= COS_HORIZON && wo.z >= COS_HORIZON && len2 > 0.0 && len2.is_finite()) {
             // The coat's products of Smith terms underflow here: as for the
             // conductors, it reflects nothing this close to the horizon.
-            let pdf = if s + d > 0.0 {
-                d / (s + d) * diffuse_pdf
-            } else {
-                0.0
-            };
             return Above {
                 f_s: 0.0,
                 t_io,
-                pdf: finite_nonneg(pdf),
+                pdf: base_only_pdf(s, d, diffuse_pdf),
             };
         }
         let (d_num, d_den) = self.dist.ggx_d_fraction(v, len2);
@@ -385,22 +380,64 @@ impl RoughPlastic {
         // F D G2 / (4 cosθi cosθo) with G2 = di do / (di do + ai do + ao di).
         let f_s = f_num * d_num * (di * do_)
             / (f_den * d_den * (di * do_ + ai * do_ + ao * di) * (4.0 * wi.z * wo.z));
-        // The coat's visible-normal density G1(wi) D(h) (wi·h) / cosθi times
-        // the reflection Jacobian 1 / (4 wo·h) (wo·h = wi·h), G1 = di/(di + ai),
-        // mixed with the base's cosine density by s : d.
-        let spec_den = d_den * (di + ai) * (4.0 * wi.z);
-        let pdf = (s * d_num * di + d * diffuse_pdf * spec_den) / ((s + d) * spec_den);
-        let pdf = if s + d > 0.0 {
-            pdf
-        } else {
-            d_num * di / spec_den
-        };
         Above {
             f_s: finite_nonneg(f_s),
             t_io,
-            pdf: finite_nonneg(pdf),
+            pdf: mixed_pdf([s, d], diffuse_pdf, (d_num, d_den), (ai, di), wi.z),
         }
     }
+
+    /// `above(wi, wo).pdf`, bit for bit, without what only f needs (the
+    /// transmittance at wo, Λ(wo), Fresnel): a caller that wants the
+    /// density alone (a resampled light sample's proxy) pays for it alone.
+    #[inline]
+    fn pdf_above(&self, wi: DVec3, wo: DVec3) -> f64 {
+        let t_i = self.transmittance(wi.z);
+        let s = (1.0 - t_i) * self.specular_weight;
+        let d = t_i * (1.0 - self.specular_weight);
+        let diffuse_pdf = wo.z * FRAC_1_PI;
+        let v = wi + wo;
+        let len2 = v.length_squared();
+        if !(wi.z >= COS_HORIZON && wo.z >= COS_HORIZON && len2 > 0.0 && len2.is_finite()) {
+            return base_only_pdf(s, d, diffuse_pdf);
+        }
+        let dh = self.dist.ggx_d_fraction(v, len2);
+        let lambda_i = self.dist.ggx_lambda_frac(wi);
+        mixed_pdf([s, d], diffuse_pdf, dh, lambda_i, wi.z)
+    }
+}
+
+/// The density where the coat reflects nothing: the base's share `d` of the
+/// lobe choice `s : d` times its cosine density.
+#[inline(always)]
+fn base_only_pdf(s: f64, d: f64, diffuse_pdf: f64) -> f64 {
+    let pdf = if s + d > 0.0 {
+        d / (s + d) * diffuse_pdf
+    } else {
+        0.0
+    };
+    finite_nonneg(pdf)
+}
+
+/// The coat's visible-normal density G1(wi) D(h) (wi·h) / cosθi times the
+/// reflection Jacobian 1 / (4 wo·h) (wo·h = wi·h), G1 = di/(di + ai), mixed
+/// with the base's cosine density by s : d; D and Λ(wi) as the fractions
+/// (d_num, d_den) and (ai, di).
+#[inline(always)]
+fn mixed_pdf(
+    [s, d]: [f64; 2],
+    diffuse_pdf: f64,
+    (d_num, d_den): (f64, f64),
+    (ai, di): (f64, f64),
+    cos_i: f64,
+) -> f64 {
+    let spec_den = d_den * (di + ai) * (4.0 * cos_i);
+    let pdf = if s + d > 0.0 {
+        (s * d_num * di + d * diffuse_pdf * spec_den) / ((s + d) * spec_den)
+    } else {
+        d_num * di / spec_den
+    };
+    finite_nonneg(pdf)
 }
 
 /// The dielectric Fresnel reflectance from outside at incidence cosine `c`
@@ -451,8 +488,12 @@ impl Bxdf for RoughPlastic {
         self.eval_pdf(wi, wo, lambda_nm).0
     }
 
-    fn pdf(&self, wi: DVec3, wo: DVec3, lambda_nm: f64) -> f64 {
-        self.eval_pdf(wi, wo, lambda_nm).1
+    fn pdf(&self, wi: DVec3, wo: DVec3, _lambda_nm: f64) -> f64 {
+        if wi.z > 0.0 && wo.z > 0.0 {
+            self.pdf_above(wi, wo)
+        } else {
+            0.0
+        }
     }
 
     fn eval_pdf(&self, wi: DVec3, wo: DVec3, lambda_nm: f64) -> (f64, f64) {

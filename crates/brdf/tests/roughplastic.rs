@@ -340,7 +340,8 @@ proptest! {
     #![proptest_config(ProptestConfig { cases: 64, ..ProptestConfig::default() })]
     /// The hero-wavelength path shares the coat's geometry between wavelengths:
     /// it must give eval_pdf's bits at each, above and below the horizon, with
-    /// a tabulated base (the λ-dependent part) and the nonlinear option.
+    /// a tabulated base (the λ-dependent part) and the nonlinear option; and
+    /// `pdf` must give eval_pdf's pdf bits.
     #[test]
     fn eval_pdf_many_equals_eval_pdf_per_wavelength_bit_for_bit(
         (alpha, int_ior, _rho, _theta, nonlinear) in model_strategy(),
@@ -364,6 +365,8 @@ proptest! {
             let (f, p) = m.eval_pdf(wi, wo, l);
             prop_assert_eq!(out[j].0.to_bits(), f.to_bits(), "f at λ {}", l);
             prop_assert_eq!(out[j].1.to_bits(), p.to_bits(), "pdf at λ {}", l);
+            // `pdf` alone skips what only f needs, but not a bit of the pdf.
+            prop_assert_eq!(boxed.pdf(wi, wo, l).to_bits(), p.to_bits(), "pdf() at λ {}", l);
         }
         prop_assert_eq!(out[5], (-1.0, -1.0));
     }

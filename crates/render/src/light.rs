@@ -129,6 +129,19 @@ pub struct LightSample<'a> {
     pub shape: Option<Surface>,
 }
 
+/// A light sample's direction, distance and density without its emission:
+/// a resampling candidate ([`Lights::direction`]).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Direction {
+    /// Unit direction toward the light.
+    pub wi: DVec3,
+    /// Distance to the emitting point.
+    pub dist: f64,
+    /// Solid-angle pdf including light selection (a point light's: its
+    /// selection probability).
+    pub pdf: f64,
+}
+
 /// The scene's lights with uniform light selection.
 pub struct Lights {
     /// All lights; emitting shapes refer to them by index.
@@ -238,34 +251,52 @@ impl Lights {
     /// the light (and is not read when there is one), `u[1..]` the point.
     #[inline]
     pub fn sample(&self, p: DVec3, u: [f64; 3]) -> Option<LightSample<'_>> {
+        let idx = self.choose(u[0])?;
+        self.sample_from(idx, p, [u[1], u[2]])
+    }
+
+    /// The light next-event estimation's number `u0` chooses: its index.
+    #[inline]
+    pub(crate) fn choose(&self, u0: f64) -> Option<usize> {
         let n = self.nee_len();
         if n == 0 {
             return None;
         }
-        let mut idx = ((u[0] * n as f64) as usize).min(n - 1);
+        let mut idx = ((u0 * n as f64) as usize).min(n - 1);
         if self.skipped().is_some_and(|e| idx >= e) {
             idx += 1;
         }
+        Some(idx)
+    }
+
+    /// Whether [`Lights::direction`] draws from light `idx`: every emitter
+    /// at a finite distance, not an environment.
+    #[inline]
+    pub(crate) fn has_direction(&self, idx: usize) -> bool {
+        !matches!(self.lights[idx], LightKind::Environment(_))
+    }
+
+    /// The direction part of [`Lights::sample_from`] for a light at a finite
+    /// distance (`None` for an environment): what a resampling candidate
+    /// reads, its emission left to [`Lights::finish`] for the one picked.
+    #[inline]
+    pub(crate) fn direction(&self, idx: usize, p: DVec3, uv: [f64; 2]) -> Option<Direction> {
         let sel = self.select_pdf();
-        let uv = [u[1], u[2]];
         match &self.lights[idx] {
-            LightKind::Point { position, spectrum } => {
+            LightKind::Point { position, .. } => {
                 let d = *position - p;
                 let dist2 = d.length_squared();
                 if dist2 <= 0.0 {
                     return None;
                 }
                 let dist = dist2.sqrt();
-                Some(LightSample {
+                Some(Direction {
                     wi: d / dist,
                     dist,
                     pdf: sel,
-                    is_delta: true,
-                    emission: Emission::Spectrum(spectrum, 1.0 / dist2, idx as u32),
-                    shape: None,
                 })
             }
-            LightKind::Sphere { sphere, spectrum } => {
+            LightKind::Sphere { sphere, .. } => {
                 let to_c = sphere.center - p;
                 let d2 = to_c.length_squared();
                 let r2 = sphere.radius * sphere.radius;
@@ -287,19 +318,14 @@ impl Lights {
                     let dist = sphere.hit_distance(&ray, 0.0, f64::INFINITY).unwrap_or(0.0);
                     (wi, dist)
                 };
-                Some(LightSample {
+                Some(Direction {
                     wi,
                     dist,
                     pdf: sel * cone_pdf(cone),
-                    is_delta: false,
-                    emission: Emission::Spectrum(spectrum, 1.0, idx as u32),
-                    shape: Some(Surface::Emitter(idx as u32)),
                 })
             }
             LightKind::Rectangle {
-                shape,
-                spectrum,
-                two_sided,
+                shape, two_sided, ..
             } => {
                 let q = shape.sample_point(uv);
                 let d = q - p;
@@ -313,14 +339,54 @@ impl Lights {
                 if cos_l <= 0.0 && !two_sided {
                     return None;
                 }
-                Some(LightSample {
+                Some(Direction {
                     wi,
                     dist,
                     pdf: sel * dist2 / (shape.area() * cos_l.abs()),
-                    is_delta: false,
-                    emission: Emission::Spectrum(spectrum, 1.0, idx as u32),
-                    shape: Some(Surface::Emitter(idx as u32)),
                 })
+            }
+            LightKind::Environment(_) => None,
+        }
+    }
+
+    /// The light sample of direction `d` drawn from light `idx` by
+    /// [`Lights::direction`]: its emission and shape added.
+    #[inline]
+    pub(crate) fn finish(&self, idx: usize, d: Direction) -> LightSample<'_> {
+        let (is_delta, emission, shape) = match &self.lights[idx] {
+            LightKind::Point { spectrum, .. } => (
+                true,
+                Emission::Spectrum(spectrum, 1.0 / (d.dist * d.dist), idx as u32),
+                None,
+            ),
+            LightKind::Sphere { spectrum, .. } | LightKind::Rectangle { spectrum, .. } => (
+                false,
+                Emission::Spectrum(spectrum, 1.0, idx as u32),
+                Some(Surface::Emitter(idx as u32)),
+            ),
+            LightKind::Environment(_) => (false, Emission::None, None),
+        };
+        LightSample {
+            wi: d.wi,
+            dist: d.dist,
+            pdf: d.pdf,
+            is_delta,
+            emission,
+            shape,
+        }
+    }
+
+    /// [`Lights::sample`] from light `idx` with the point's numbers `uv`.
+    pub(crate) fn sample_from(
+        &self,
+        idx: usize,
+        p: DVec3,
+        uv: [f64; 2],
+    ) -> Option<LightSample<'_>> {
+        let sel = self.select_pdf();
+        match &self.lights[idx] {
+            LightKind::Point { .. } | LightKind::Sphere { .. } | LightKind::Rectangle { .. } => {
+                Some(self.finish(idx, self.direction(idx, p, uv)?))
             }
             LightKind::Environment(env) => {
                 let (wi, pdf, emission) = match env {

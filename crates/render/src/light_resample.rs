@@ -42,30 +42,60 @@ fn candidate(u: [f64; 3], i: u32) -> [f64; 3] {
 
 /// Draws `m` light samples from point `p` with the uniform numbers `u`
 /// (candidate 0 is the plain sample of `u`), picks one in proportion to
-/// `h(sample)` with `u_pick`, and returns it with mean(h)/h(pick): the
-/// factor that turns the light strategy's 1/p(y) into RIS's contribution
-/// weight. `None` when every candidate has h = 0 (a candidate the light
-/// cannot give still counts in the mean). A non-finite or negative h counts
-/// as 0.
+/// `h(direction, density)` with `u_pick`, and returns it with
+/// mean(h)/h(pick): the factor that turns the light strategy's 1/p(y) into
+/// RIS's contribution weight. `None` when every candidate has h = 0 (a
+/// candidate the light cannot give still counts in the mean). A non-finite
+/// or negative h counts as 0.
+///
+/// `u[0]` chooses one light for all candidates: each candidate is still
+/// distributed as the light sampler's p on its own, which is all the
+/// estimate needs. From a light at a finite distance a candidate is only a
+/// direction, distance and density ([`Lights::direction`]); the pick alone
+/// gets its emission and shape.
 pub(crate) fn resample<'a>(
     lights: &'a Lights,
     p: DVec3,
     u: [f64; 3],
     m: u32,
     u_pick: f64,
-    mut h: impl FnMut(&LightSample<'a>) -> f64,
+    mut h: impl FnMut(DVec3, f64) -> f64,
 ) -> Option<(LightSample<'a>, f64)> {
-    let mut chosen: Option<(LightSample<'a>, f64)> = None;
+    let idx = lights.choose(u[0])?;
+    let uv = |i| {
+        let c = candidate(u, i);
+        [c[1], c[2]]
+    };
+    if lights.has_direction(idx) {
+        let draw = |i| lights.direction(idx, p, uv(i));
+        let (d, ratio) = pick(m, u_pick, draw, |d| h(d.wi, d.pdf))?;
+        Some((lights.finish(idx, d), ratio))
+    } else {
+        let draw = |i| lights.sample_from(idx, p, uv(i));
+        pick(m, u_pick, draw, |ls| h(ls.wi, ls.pdf))
+    }
+}
+
+/// Streams candidates `draw(0..m)` and keeps one in proportion to `h`,
+/// with mean(h)/h(kept) (see [`resample`]).
+#[inline(always)]
+fn pick<T>(
+    m: u32,
+    u_pick: f64,
+    mut draw: impl FnMut(u32) -> Option<T>,
+    mut h: impl FnMut(&T) -> f64,
+) -> Option<(T, f64)> {
+    let mut chosen: Option<(T, f64)> = None;
     let mut sum = 0.0;
     // One uniform number picks among a stream: candidate i replaces the
     // pick with probability hᵢ/Σ_{j≤i} h_j, and the number is rescaled to
     // stay uniform on whichever side of that threshold it fell.
     let mut r = u_pick;
     for i in 0..m {
-        let Some(ls) = lights.sample(p, candidate(u, i)) else {
+        let Some(x) = draw(i) else {
             continue;
         };
-        let w = h(&ls);
+        let w = h(&x);
         if !(w > 0.0 && w.is_finite()) {
             continue;
         }
@@ -73,15 +103,15 @@ pub(crate) fn resample<'a>(
         let a = w / sum;
         if r < a {
             r /= a;
-            chosen = Some((ls, w));
+            chosen = Some((x, w));
         } else {
             r = (r - a) / (1.0 - a);
         }
         r = r.min(1.0 - f64::EPSILON);
     }
-    let (ls, w) = chosen?;
+    let (x, w) = chosen?;
     let ratio = sum / (f64::from(m) * w);
-    ratio.is_finite().then_some((ls, ratio))
+    ratio.is_finite().then_some((x, ratio))
 }
 
 #[cfg(test)]
@@ -116,7 +146,7 @@ mod tests {
         for _ in 0..n {
             let u = rng.uniform3();
             let u_pick = rng.uniform();
-            let x = resample(lights, p, u, m, u_pick, |ls| h(ls.wi));
+            let x = resample(lights, p, u, m, u_pick, |wi, _| h(wi));
             let [right, broken] = match x {
                 Some((ls, ratio)) => {
                     let v = g(ls.wi) / ls.pdf;
@@ -167,25 +197,15 @@ mod tests {
         assert!((broken - 1.0).abs() > 50.0 * se, "{broken}");
     }
 
-    #[test]
-    fn resampling_a_rectangle_light_matches_quadrature_at_a_glossy_lobe() {
-        // A 2 × 1 rectangle 1.5 above the point, tilted 30° about x; a
-        // lobe (κ 30) aimed at one of its corners, so it covers part of it.
+    /// A 2 × 1 rectangle 1.5 above the origin, tilted 30° about x, and a
+    /// lobe (κ 30) aimed at one of its corners, so it covers part of it;
+    /// with ∫ lobe dω over the rectangle by a midpoint rule on 800 × 400
+    /// cells (as ∫ lobe cosθ_l / d² dA).
+    fn tilted_rectangle() -> (LightKind, DVec3, f64) {
         let xf = Transform::new([210.0, 0.0, 0.0], 1.0, [0.2, 0.1, 1.5]);
         let shape = Planar::rectangle([2.0, 1.0], &xf);
-        let lights = Lights {
-            lights: vec![LightKind::Rectangle {
-                shape,
-                spectrum: Spectrum::Constant(1.0),
-                two_sided: false,
-            }],
-            environment: None,
-            bsdf_only_environment: false,
-        };
         let corner = shape.center + shape.u * shape.half.0 * 0.8 + shape.v * shape.half.1 * 0.7;
         let mu = corner.normalize();
-        let g = |w: DVec3| vmf(mu, 30.0, w);
-        // ∫ g dω as ∫ g cosθ_l / d² dA, midpoint rule on 800 × 400 cells.
         let (na, nb) = (800, 400);
         let da = 4.0 * shape.half.0 * shape.half.1 / f64::from(na * nb);
         let mut exact = 0.0;
@@ -198,11 +218,28 @@ mod tests {
                 let w = q / d2.sqrt();
                 let cos_l = -w.dot(shape.n);
                 if cos_l > 0.0 {
-                    exact += g(w) * cos_l / d2 * da;
+                    exact += vmf(mu, 30.0, w) * cos_l / d2 * da;
                 }
             }
         }
         assert!(exact > 0.1, "{exact}");
+        let light = LightKind::Rectangle {
+            shape,
+            spectrum: Spectrum::Constant(1.0),
+            two_sided: false,
+        };
+        (light, mu, exact)
+    }
+
+    #[test]
+    fn resampling_a_rectangle_light_matches_quadrature_at_a_glossy_lobe() {
+        let (light, mu, exact) = tilted_rectangle();
+        let lights = Lights {
+            lights: vec![light],
+            environment: None,
+            bsdf_only_environment: false,
+        };
+        let g = |w: DVec3| vmf(mu, 30.0, w);
         let [(right, se), (broken, _)] =
             estimates(&lights, DVec3::ZERO, g, |w| g(w) + 1e-3, 100_000);
         assert!(
@@ -210,6 +247,31 @@ mod tests {
             "{right} ± {se} vs {exact}"
         );
         assert!((broken - exact).abs() > 50.0 * se, "{broken}");
+    }
+
+    #[test]
+    fn resampling_a_rectangle_beside_an_environment_counts_both() {
+        // One light chosen per vertex for all its candidates: the rectangle
+        // (candidates are directions, the pick finished) or the constant
+        // environment (candidates are whole samples); ∫ g·L dω is the
+        // rectangle's quadrature plus the lobe's unit integral, and every
+        // selection density must come out right for the sum to.
+        let (light, mu, exact) = tilted_rectangle();
+        let lights = Lights {
+            lights: vec![
+                light,
+                LightKind::Environment(Environment::Constant(Spectrum::Constant(1.0))),
+            ],
+            environment: Some(1),
+            bsdf_only_environment: false,
+        };
+        let g = |w: DVec3| vmf(mu, 30.0, w);
+        let [(right, se), _] = estimates(&lights, DVec3::ZERO, g, |w| g(w) + 1e-3, 200_000);
+        let want = exact + 1.0;
+        assert!(
+            (right - want).abs() < 4.0 * se && se < 0.01 * want,
+            "{right} ± {se} vs {want}"
+        );
     }
 
     #[test]
@@ -223,11 +285,11 @@ mod tests {
         };
         let u = [0.3, 0.6, 0.2];
         let plain = lights.sample(DVec3::ZERO, u).unwrap();
-        let (ls, ratio) = resample(&lights, DVec3::ZERO, u, 1, 0.9, |_| 2.0).unwrap();
+        let (ls, ratio) = resample(&lights, DVec3::ZERO, u, 1, 0.9, |_, _| 2.0).unwrap();
         assert_eq!((ls.wi, ls.pdf, ratio), (plain.wi, plain.pdf, 1.0));
         // No candidate with a positive proxy: no sample.
-        assert!(resample(&lights, DVec3::ZERO, u, 8, 0.5, |_| 0.0).is_none());
-        assert!(resample(&lights, DVec3::ZERO, u, 8, 0.5, |_| f64::NAN).is_none());
+        assert!(resample(&lights, DVec3::ZERO, u, 8, 0.5, |_, _| 0.0).is_none());
+        assert!(resample(&lights, DVec3::ZERO, u, 8, 0.5, |_, _| f64::NAN).is_none());
     }
 
     #[test]
@@ -247,7 +309,7 @@ mod tests {
         let n = 36_000;
         for k in 0..n {
             let u_pick = (f64::from(k) + 0.5) / f64::from(n);
-            let (_, ratio) = resample(&lights, DVec3::ZERO, u, 8, u_pick, |_| {
+            let (_, ratio) = resample(&lights, DVec3::ZERO, u, 8, u_pick, |_, _| {
                 seen += 1;
                 f64::from((seen - 1) % 8 + 1)
             })
