@@ -791,8 +791,9 @@ struct Resampling {
 /// light sample, so both strategies' weights stay the ones it asked for).
 /// Draws the pick's number only where it resamples.
 ///
-/// Not where a point or sphere light is among the lights (an infinite
-/// [`Lights::typical_density`]), but wherever else the lobe is narrow, also
+/// Not where every light is a point or sphere (an infinite
+/// [`Lights::typical_density`], the least of the lights'), but wherever else
+/// the lobe is narrow, also
 /// where it is wider than a rectangle light: requiring the peak to exceed
 /// 2× the light's density (a lobe that covers the light, whose candidates
 /// differ little in the proxy, was thought to gain nothing) lost on both
@@ -1999,7 +2000,7 @@ mod tests {
     use crate::rng::Rng;
 
     #[test]
-    fn narrow_lobes_resample_unless_a_point_or_sphere_light_is_there() {
+    fn narrow_lobes_resample_unless_every_light_is_a_point_or_sphere() {
         use crate::geometry::{Planar, Sphere, Transform};
         use crate::light::LightKind;
         use crate::scene::desc::SamplerKind;
