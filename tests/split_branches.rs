@@ -9,85 +9,30 @@
 
 #[path = "support/paired.rs"]
 mod paired;
+#[path = "support/scene_fixtures.rs"]
+mod scene_fixtures;
 
 use paired::paired;
 use render::Scene;
 use render::integrator::sample_pixel;
+use scene_fixtures::{BALL_CAMERA as CAMERA, ball_and_mirror};
 use std::path::Path;
 
-const CAMERA: &str = r#"
-[camera]
-look_from = [0.0, 1.4, 1.4]
-look_at = [0.0, 0.0, 0.0]
-up = [0.0, 1.0, 0.0]
-fov_deg = 60.0
-resolution = [6, 5]
-
-[film]
-spp = 1
-"#;
-
-/// A grey floor, a plastic patch, a copper ball (λ-exact paths hand over
-/// to sampled wavelengths at a second conductor vertex) and a mirror
-/// beside it, under a small light and a dim environment.
-const BALL: &str = r#"
-[materials.floor]
-model = "diffuse"
-reflectance = 0.8
-
-[materials.patch]
-model = "roughplastic"
-alpha = 0.3
-reflectance = 0.4
-
-[materials.ball]
-model = "ggx"
-metal = "cu"
-alpha = 0.2
-
-[materials.mirror]
-model = "smooth"
-metal = "ag"
-
-[[shapes]]
-type = "rectangle"
-size = [4.0, 4.0]
-material = "floor"
-transform = { rotate_deg = [-90.0, 0.0, 0.0] }
-
-[[shapes]]
-type = "disk"
-radius = 0.3
-material = "patch"
-transform = { translate = [0.5, 0.001, 0.3], rotate_deg = [-90.0, 0.0, 0.0] }
-
-[[shapes]]
-type = "sphere"
-center = [-0.2, 0.3, -0.2]
-radius = 0.3
-material = "ball"
-
-[[shapes]]
-type = "rectangle"
-size = [0.5, 0.5]
-material = "mirror"
-transform = { translate = [0.5, 0.3, -0.6], rotate_deg = [-20.0, 0.0, 0.0] }
-
-[[lights]]
-type = "sphere"
-center = [-1.5, 2.0, -1.0]
-radius = 0.25
-radiance = 50.0
-spectrum = "d65"
-
-[[lights]]
-type = "environment"
-radiance = 0.2
-spectrum = "a"
-"#;
+/// [`ball_and_mirror`] (a copper ball, where λ-exact paths hand over to
+/// sampled wavelengths at a second conductor vertex, and a mirror beside
+/// it) under a dim environment besides its small light.
+fn ball() -> String {
+    format!(
+        "{}\n[[lights]]\ntype = \"environment\"\nradiance = 0.2\nspectrum = \"a\"\n",
+        ball_and_mirror()
+    )
+}
 
 fn scene(settings: &str, k: u32) -> Scene {
-    let text = format!("{CAMERA}\n[integrator]\nbranches = {k}\n{settings}\n{BALL}");
+    let text = format!(
+        "{CAMERA}\n[integrator]\nbranches = {k}\n{settings}\n{}",
+        ball()
+    );
     render::load_str(Path::new("split_branches.toml"), &text).unwrap()
 }
 
@@ -151,7 +96,8 @@ fn branches_lower_the_error_of_light_that_bounced_twice() {
         let text = format!(
             "[camera]\nlook_from = [0.7, 1.5, 0.1]\nlook_at = [0.7, 0.0, 0.1]\nup = [0.0, 0.0, -1.0]\n\
              fov_deg = 30.0\nresolution = [6, 5]\n[film]\nspp = 1\n\
-             [integrator]\nmax_depth = 3\nbranches = {k}\n{BALL}"
+             [integrator]\nmax_depth = 3\nbranches = {k}\n{}",
+            ball()
         );
         render::load_str(Path::new("split_branches.toml"), &text).unwrap()
     };
@@ -183,7 +129,7 @@ fn branches_lower_the_error_of_light_that_bounced_twice() {
 #[test]
 fn out_of_range_branch_counts_are_refused() {
     for bad in ["0", "65"] {
-        let text = format!("{CAMERA}\n[integrator]\nbranches = {bad}\n{BALL}");
+        let text = format!("{CAMERA}\n[integrator]\nbranches = {bad}\n{}", ball());
         let e = render::load_str(Path::new("bad.toml"), &text)
             .err()
             .unwrap_or_else(|| panic!("{bad} accepted"))

@@ -86,3 +86,72 @@ transform = {{ rotate_deg = [-90.0, 0.0, 0.0] }}
 "#
     )
 }
+
+/// A 6 × 5 camera over the glossy-ball scene, one sample per pixel.
+pub const BALL_CAMERA: &str = r#"
+[camera]
+look_from = [0.0, 1.4, 1.4]
+look_at = [0.0, 0.0, 0.0]
+up = [0.0, 1.0, 0.0]
+fov_deg = 60.0
+resolution = [6, 5]
+
+[film]
+spp = 1
+"#;
+
+/// A grey diffuse floor, a rough-plastic patch and a GGX copper ball on it
+/// under a small D65 sphere light: light reaches the floor off the ball.
+pub const BALL: &str = r#"
+[materials.floor]
+model = "diffuse"
+reflectance = 0.8
+
+[materials.patch]
+model = "roughplastic"
+alpha = 0.3
+reflectance = 0.4
+
+[materials.ball]
+model = "ggx"
+metal = "cu"
+alpha = 0.2
+
+[[shapes]]
+type = "rectangle"
+size = [4.0, 4.0]
+material = "floor"
+transform = { rotate_deg = [-90.0, 0.0, 0.0] }
+
+[[shapes]]
+type = "disk"
+radius = 0.3
+material = "patch"
+transform = { translate = [0.5, 0.001, 0.3], rotate_deg = [-90.0, 0.0, 0.0] }
+
+[[shapes]]
+type = "sphere"
+center = [-0.2, 0.3, -0.2]
+radius = 0.3
+material = "ball"
+
+[[lights]]
+type = "sphere"
+center = [-1.5, 2.0, -1.0]
+radius = 0.25
+radiance = 50.0
+spectrum = "d65"
+"#;
+
+/// [`BALL`] with a silver mirror beside it: a delta caster.
+pub fn ball_and_mirror() -> String {
+    format!(
+        "{BALL}\n[materials.mirror]\nmodel = \"smooth\"\nmetal = \"ag\"\n
+[[shapes]]
+type = \"rectangle\"
+size = [0.5, 0.5]
+material = \"mirror\"
+transform = {{ translate = [0.5, 0.3, -0.6], rotate_deg = [-20.0, 0.0, 0.0] }}
+"
+    )
+}
