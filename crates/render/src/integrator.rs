@@ -786,25 +786,22 @@ struct Resampling {
     u_pick: f64,
 }
 
-/// The resampling of a vertex at `p` whose lobe has peak density `peak`
+/// The resampling of a vertex whose lobe has peak density `peak`
 /// (`None` where the scene fixes the MIS weight: it then keeps the plain
 /// light sample, so both strategies' weights stay the ones it asked for).
 /// Draws the pick's number only where it resamples.
 ///
-/// Not where every light is a point or sphere (an infinite
-/// [`Lights::typical_density`], the least of the lights'), but wherever else
-/// the lobe is narrow, also
-/// where it is wider than a rectangle light: requiring the peak to exceed
+/// Not where every light is a point or sphere ([`Lights::resamples`]), but
+/// wherever else the lobe is narrow, also where it is wider than a
+/// rectangle light: requiring the peak to exceed
 /// 2× the light's density (a lobe that covers the light, whose candidates
 /// differ little in the proxy, was thought to gain nothing) lost on both
 /// rectangle-lit scenes, 64 spp, 4 seeds, relRMSE at 2×, ½×, 0×:
 /// softbox_object 0.0867, 0.0820, 0.0819 and cornell_box_metals 0.0624,
 /// 0.0582, 0.0578, CPU within the noise and +3 %.
 #[inline]
-fn resampling(sampler: &mut Sampler, lights: &Lights, p: DVec3, peak: Option<f64>) -> Resampling {
-    let on = peak.is_some_and(|k| {
-        k > RIS_MIN_PEAK && lights.nee_len() > 0 && lights.typical_density(p) < f64::INFINITY
-    });
+fn resampling(sampler: &mut Sampler, lights: &Lights, peak: Option<f64>) -> Resampling {
+    let on = peak.is_some_and(|k| k > RIS_MIN_PEAK && lights.resamples());
     if on {
         Resampling {
             m: RIS_CANDIDATES,
@@ -1221,7 +1218,7 @@ impl<'a> FlatPath<'a> {
         let wi = v.wi;
         self.peak = lobe_peak(settings.mis_light_weight, bx, wi);
         let (u_light, u_bsdf) = vertex_draws(sampler, &scene.lights, bx);
-        let ris = resampling(sampler, &scene.lights, v.p, self.peak);
+        let ris = resampling(sampler, &scene.lights, self.peak);
         self.ris = ris.m;
         let mis = VertexMis::new(settings, self.peak, ris.m);
         let (tau, held) = (self.tau, self.conductor);
@@ -1480,7 +1477,7 @@ fn first_vertex_cv(
     let wi = v.wi;
     th.peak = lobe_peak(settings.mis_light_weight, bxdf, wi);
     let (u_light, u_bsdf) = vertex_draws(sampler, lights, bxdf);
-    let ris = resampling(sampler, lights, v.p, th.peak);
+    let ris = resampling(sampler, lights, th.peak);
     th.ris = ris.m;
     let mis = VertexMis::new(settings, th.peak, ris.m);
     // Every Q_k is 1 at the camera.
@@ -1701,7 +1698,7 @@ fn trace(
         th.resolve(scene, lambdas, n);
         th.peak = lobe_peak(settings.mis_light_weight, bxdf, wi);
         let (u_light, u_bsdf) = vertex_draws(sampler, lights, bxdf);
-        let ris = resampling(sampler, lights, v.p, th.peak);
+        let ris = resampling(sampler, lights, th.peak);
         th.ris = ris.m;
         let mis = VertexMis::new(settings, th.peak, ris.m);
         let Throughput {
@@ -2029,7 +2026,7 @@ mod tests {
                 bsdf_only_environment: false,
             };
             let mut sampler = Sampler::new(SamplerKind::Sobol, 1, 2, 3);
-            resampling(&mut sampler, &lights, DVec3::ZERO, peak).m
+            resampling(&mut sampler, &lights, peak).m
         };
         let rect_only = || vec![rect()];
         assert_eq!(m(rect_only(), Some(RIS_MIN_PEAK * 1.01)), RIS_CANDIDATES);

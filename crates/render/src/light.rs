@@ -416,40 +416,30 @@ impl Lights {
         }
     }
 
-    /// The density with which [`Lights::sample`] from `p` gives a typical
-    /// direction toward its lights, for a caller deciding whether a lobe is
-    /// narrow against them (resampling the light sample pays only then): the
-    /// centre's density of a rectangle, infinity for a point light (every
-    /// draw is the same direction) and for a sphere, 0 for an environment,
-    /// whose draws spread over the sphere; with several lights the least of
-    /// theirs (infinity with none).
+    /// Whether a narrow lobe may resample its light sample: some light that
+    /// next-event estimation draws from is a rectangle or an environment.
+    /// Points and spheres never resample (a point's draws are one
+    /// direction), and with them a scene whose lights are all points and
+    /// spheres; a property of the scene, not of the vertex.
     ///
     /// A sphere counts as a point: its draws are already uniform in the cone
     /// it subtends, and resampling them measured a loss (GGX α 0.05 gold
     /// under a sphere 23° wide, `ggx_au_30deg_wide_light`, 64 spp: relRMSE
     /// 0.0341 → 0.0299 for 3.3× the CPU, 0.0344 for 1.7× with resampling
     /// only where the lobe's peak is ≤ 4× the light's density, a band that
-    /// took `softbox_object` from 0.087 back to 0.096–0.099). Several lights
-    /// take the least rather than 0: with a dim point light beside that
-    /// sphere, 0 had every vertex of the gold resample, for 2.7× the CPU at
-    /// the same error (relRMSE 0.111 at 64 spp either way).
-    pub fn typical_density(&self, p: DVec3) -> f64 {
+    /// took `softbox_object` from 0.087 back to 0.096–0.099). A rectangle or
+    /// environment among other lights is enough: the light choice is shared
+    /// by all candidates, so the candidates of a point or sphere chosen there
+    /// cost their draws and nothing else.
+    pub fn resamples(&self) -> bool {
         let skipped = self.skipped();
-        self.lights
-            .iter()
-            .enumerate()
-            .filter(|&(i, _)| Some(i) != skipped)
-            .map(|(_, light)| match light {
-                LightKind::Point { .. } | LightKind::Sphere { .. } => f64::INFINITY,
-                LightKind::Rectangle { shape, .. } => {
-                    let d = shape.center - p;
-                    let cos_l = d.normalize_or_zero().dot(shape.n).abs();
-                    let pdf = d.length_squared() / (shape.area() * cos_l);
-                    if pdf.is_nan() { f64::INFINITY } else { pdf }
-                }
-                LightKind::Environment(_) => 0.0,
-            })
-            .fold(f64::INFINITY, f64::min)
+        self.lights.iter().enumerate().any(|(i, light)| {
+            Some(i) != skipped
+                && matches!(
+                    light,
+                    LightKind::Rectangle { .. } | LightKind::Environment(_)
+                )
+        })
     }
 
     /// Radiance leaving emitter `idx` toward `-dir` at a hit with geometric normal `n`,
@@ -745,10 +735,10 @@ mod tests {
     }
 
     #[test]
-    fn several_lights_are_as_narrow_as_their_narrowest() {
-        // Resampling reads this: 0 (always) for an environment among the
-        // lights, never for points and spheres alone, a rectangle's own
-        // density beside them, and a BSDF-only environment not at all.
+    fn lights_resample_unless_all_points_and_spheres() {
+        // An environment among the lights resamples, points and spheres
+        // alone never, a rectangle beside them does, and a BSDF-only
+        // environment counts not at all.
         let sphere = || LightKind::Sphere {
             sphere: Sphere {
                 center: DVec3::new(0.0, 0.0, 5.0),
@@ -773,16 +763,15 @@ mod tests {
                 environment,
                 bsdf_only_environment: bsdf_only,
             }
-            .typical_density(DVec3::ZERO)
+            .resamples()
         };
-        assert_eq!(of(vec![sphere(), point()], None, false), f64::INFINITY);
-        assert_eq!(of(vec![sphere(), env()], Some(1), false), 0.0);
-        assert_eq!(of(vec![sphere(), env()], Some(1), true), f64::INFINITY);
-        // The rectangle 2 below-facing at distance 2: d²/(A cos) = 4/0.5.
-        let r = of(vec![point(), rect()], None, false);
-        assert!((r - 8.0).abs() < 1e-12, "{r}");
-        assert_eq!(of(vec![rect(), env()], Some(1), false), 0.0);
-        assert_eq!(of(vec![], None, false), f64::INFINITY);
+        assert!(!of(vec![sphere(), point()], None, false));
+        assert!(of(vec![sphere(), env()], Some(1), false));
+        assert!(!of(vec![sphere(), env()], Some(1), true));
+        assert!(of(vec![point(), rect()], None, false));
+        assert!(of(vec![rect(), env()], Some(1), false));
+        assert!(of(vec![rect(), env()], Some(1), true));
+        assert!(!of(vec![], None, false));
     }
 
     #[test]
