@@ -13,9 +13,8 @@ mod paired;
 #[path = "support/scene_fixtures.rs"]
 mod scene_fixtures;
 
-use paired::paired;
+use paired::{batch_variance, paired};
 use render::Scene;
-use render::integrator::sample_pixel;
 use scene_fixtures::{BALL, BALL_CAMERA as CAMERA, ball_and_mirror};
 use std::path::Path;
 
@@ -177,26 +176,7 @@ fn aimed_samples_lower_the_caustics_error() {
         render::load_str(Path::new("caustic_guiding.toml"), &text).unwrap()
     };
     let (off, on) = (load(0.0), load(0.5));
-    let error = |s: &Scene| {
-        let (w, h) = (s.camera.width, s.camera.height);
-        let (batches, spp) = (400u64, 16u64);
-        let mut mse = 0.0;
-        for y in 0..h {
-            for x in 0..w {
-                let est: Vec<f64> = (0..batches)
-                    .map(|b| {
-                        (0..spp)
-                            .map(|k| sample_pixel(s, x, y, b * spp + k)[1])
-                            .sum::<f64>()
-                            / spp as f64
-                    })
-                    .collect();
-                let mean = est.iter().sum::<f64>() / batches as f64;
-                mse += est.iter().map(|e| (e - mean).powi(2)).sum::<f64>() / (batches - 1) as f64;
-            }
-        }
-        mse / (w * h) as f64
-    };
+    let error = |s: &Scene| batch_variance(s, 400, 16);
     let (e_off, e_on) = (error(&off), error(&on));
     eprintln!("variance of a 16-spp pixel (Y): unguided {e_off:.4e}, guided {e_on:.4e}");
     assert!(e_on < 0.7 * e_off, "{e_on} vs {e_off}");

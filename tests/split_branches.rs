@@ -12,9 +12,8 @@ mod paired;
 #[path = "support/scene_fixtures.rs"]
 mod scene_fixtures;
 
-use paired::paired;
+use paired::{batch_variance, paired};
 use render::Scene;
-use render::integrator::sample_pixel;
 use scene_fixtures::{BALL_CAMERA as CAMERA, ball_and_mirror};
 use std::path::Path;
 
@@ -101,26 +100,7 @@ fn branches_lower_the_error_of_light_that_bounced_twice() {
         );
         render::load_str(Path::new("split_branches.toml"), &text).unwrap()
     };
-    let variance = |s: &Scene| {
-        let (w, h) = (s.camera.width, s.camera.height);
-        let (batches, spp) = (200u64, 8u64);
-        let mut v = 0.0;
-        for y in 0..h {
-            for x in 0..w {
-                let est: Vec<f64> = (0..batches)
-                    .map(|b| {
-                        (0..spp)
-                            .map(|i| sample_pixel(s, x, y, b * spp + i)[1])
-                            .sum::<f64>()
-                            / spp as f64
-                    })
-                    .collect();
-                let mean = est.iter().sum::<f64>() / batches as f64;
-                v += est.iter().map(|e| (e - mean).powi(2)).sum::<f64>() / (batches - 1) as f64;
-            }
-        }
-        v / (w * h) as f64
-    };
+    let variance = |s: &Scene| batch_variance(s, 200, 8);
     let (v1, v4) = (variance(&load(1)), variance(&load(4)));
     eprintln!("variance of an 8-spp pixel (Y): one branch {v1:.4e}, four {v4:.4e}");
     assert!(v4 < 0.5 * v1, "{v4} vs {v1}");

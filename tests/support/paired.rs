@@ -43,3 +43,27 @@ pub fn paired(a: &Scene, b: &Scene, spp: u64) -> [(f64, f64, f64, f64); 3] {
     }
     out.map(|(ma, mb, d, v)| (ma, mb, d, v.sqrt()))
 }
+
+/// The variance of a pixel's `spp`-sample estimate of the green channel,
+/// from `batches` consecutive batches of samples, averaged over the image:
+/// what a change that lowers the error must lower.
+#[allow(dead_code)] // Not every test crate that includes this module uses it.
+pub fn batch_variance(s: &Scene, batches: u64, spp: u64) -> f64 {
+    let (w, h) = (s.camera.width, s.camera.height);
+    let mut v = 0.0;
+    for y in 0..h {
+        for x in 0..w {
+            let est: Vec<f64> = (0..batches)
+                .map(|b| {
+                    (0..spp)
+                        .map(|i| sample_pixel(s, x, y, b * spp + i)[1])
+                        .sum::<f64>()
+                        / spp as f64
+                })
+                .collect();
+            let mean = est.iter().sum::<f64>() / batches as f64;
+            v += est.iter().map(|e| (e - mean).powi(2)).sum::<f64>() / (batches - 1) as f64;
+        }
+    }
+    v / (w * h) as f64
+}
