@@ -357,21 +357,14 @@ impl RoughPlastic {
     fn above(&self, wi: DVec3, wo: DVec3) -> Above {
         let (t_i, t_o) = (self.transmittance(wi.z), self.transmittance(wo.z));
         let t_io = t_i * t_o * self.diffuse_scale;
-        // The lobe choice s / (s + d) of `specular_probability`.
-        let s = (1.0 - t_i) * self.specular_weight;
-        let d = t_i * (1.0 - self.specular_weight);
-        let diffuse_pdf = wo.z * FRAC_1_PI;
-        let v = wi + wo;
-        let len2 = v.length_squared();
-        if !(wi.z >= COS_HORIZON && wo.z >= COS_HORIZON && len2 > 0.0 && len2.is_finite()) {
-            // The coat's products of Smith terms underflow here: as for the
-            // conductors, it reflects nothing this close to the horizon.
+        let c = self.choice(wi, wo, t_i);
+        let Some((v, len2)) = c.coat else {
             return Above {
                 f_s: 0.0,
                 t_io,
-                pdf: base_only_pdf(s, d, diffuse_pdf),
+                pdf: base_only_pdf(c.s, c.d, c.diffuse_pdf),
             };
-        }
+        };
         let (d_num, d_den) = self.dist.ggx_d_fraction(v, len2);
         let (ai, di) = self.dist.ggx_lambda_frac(wi);
         let (ao, do_) = self.dist.ggx_lambda_frac(wo);
@@ -383,7 +376,7 @@ impl RoughPlastic {
         Above {
             f_s: finite_nonneg(f_s),
             t_io,
-            pdf: mixed_pdf([s, d], diffuse_pdf, (d_num, d_den), (ai, di), wi.z),
+            pdf: mixed_pdf([c.s, c.d], c.diffuse_pdf, (d_num, d_den), (ai, di), wi.z),
         }
     }
 
@@ -392,19 +385,42 @@ impl RoughPlastic {
     /// density alone (a resampled light sample's proxy) pays for it alone.
     #[inline]
     fn pdf_above(&self, wi: DVec3, wo: DVec3) -> f64 {
-        let t_i = self.transmittance(wi.z);
-        let s = (1.0 - t_i) * self.specular_weight;
-        let d = t_i * (1.0 - self.specular_weight);
-        let diffuse_pdf = wo.z * FRAC_1_PI;
-        let v = wi + wo;
-        let len2 = v.length_squared();
-        if !(wi.z >= COS_HORIZON && wo.z >= COS_HORIZON && len2 > 0.0 && len2.is_finite()) {
-            return base_only_pdf(s, d, diffuse_pdf);
-        }
+        let c = self.choice(wi, wo, self.transmittance(wi.z));
+        let Some((v, len2)) = c.coat else {
+            return base_only_pdf(c.s, c.d, c.diffuse_pdf);
+        };
         let dh = self.dist.ggx_d_fraction(v, len2);
         let lambda_i = self.dist.ggx_lambda_frac(wi);
-        mixed_pdf([s, d], diffuse_pdf, dh, lambda_i, wi.z)
+        mixed_pdf([c.s, c.d], c.diffuse_pdf, dh, lambda_i, wi.z)
     }
+
+    /// What `above` and `pdf_above` both start from, given the
+    /// transmittance `t_i` at wi.
+    #[inline(always)]
+    fn choice(&self, wi: DVec3, wo: DVec3, t_i: f64) -> Choice {
+        let v = wi + wo;
+        let len2 = v.length_squared();
+        // The coat's products of Smith terms underflow near the horizon: as
+        // for the conductors, it reflects nothing there.
+        let coat = (wi.z >= COS_HORIZON && wo.z >= COS_HORIZON && len2 > 0.0 && len2.is_finite())
+            .then_some((v, len2));
+        Choice {
+            s: (1.0 - t_i) * self.specular_weight,
+            d: t_i * (1.0 - self.specular_weight),
+            diffuse_pdf: wo.z * FRAC_1_PI,
+            coat,
+        }
+    }
+}
+
+/// The lobe choice s : d of `specular_probability` at wi, the base's cosine
+/// density at wo, and the unnormalised half vector v = wi + wo with |v|²
+/// where the coat reflects (`None` this close to the horizon).
+struct Choice {
+    s: f64,
+    d: f64,
+    diffuse_pdf: f64,
+    coat: Option<(DVec3, f64)>,
 }
 
 /// The density where the coat reflects nothing: the base's share `d` of the
