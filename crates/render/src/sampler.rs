@@ -433,6 +433,38 @@ mod tests {
         assert_ne!(i.branch(0, 2).get_2d(), i.branch(1, 2).get_2d());
     }
 
+    proptest::proptest! {
+        /// Every branch count the scene accepts (1–64), at any sample index
+        /// (past 2³² too) and pixel: a branch's draws are uniform numbers in
+        /// [0, 1), one branch of one continues the sample's own draws, and
+        /// the branches of a sample differ from each other.
+        #[test]
+        fn branches_of_any_count_and_sample_draw_in_range(
+            k in 1u32..=64,
+            b_frac in 0.0f64..1.0,
+            sample in proptest::prelude::any::<u64>(),
+            pixel in 0u64..1 << 40,
+            sobol in proptest::prelude::any::<bool>(),
+        ) {
+            let kind = if sobol { SamplerKind::Sobol } else { SamplerKind::Independent };
+            let mut sm = Sampler::new(kind, 7, pixel, sample);
+            sm.get_1d_2d();
+            let b = ((b_frac * f64::from(k)) as u32).min(k - 1);
+            let draws = |mut s: Sampler| [s.get_1d(), s.get_1d(), s.get_1d()];
+            let mine = draws(sm.branch(b, k));
+            for u in mine {
+                proptest::prop_assert!((0.0..1.0).contains(&u), "{u}");
+            }
+            if sobol && k == 1 {
+                proptest::prop_assert_eq!(mine, draws(sm.clone()));
+            }
+            if k > 1 {
+                let other = draws(sm.branch((b + 1) % k, k));
+                proptest::prop_assert_ne!(mine, other);
+            }
+        }
+    }
+
     #[test]
     fn every_draw_of_the_first_power_of_two_samples_is_a_net() {
         for pixel in [0u64, 5, 123_456] {
