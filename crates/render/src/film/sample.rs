@@ -249,21 +249,20 @@ impl TileSums {
             },
             "pixels are added in row-major order"
         );
-        let mut acc = [0i128; 3];
+        let mut acc = [FixedSum::default(); 3];
         for (s, value) in samples {
             match value {
                 Ok(xyz) => {
-                    let f = to_fixed(xyz);
-                    // Saturating: past a million samples at the film's
-                    // per-sample limit an i128 sum would wrap.
                     for k in 0..3 {
-                        acc[k] = acc[k].saturating_add(f[k]);
+                        acc[k].add(xyz[k]);
                     }
                 }
                 Err(why) => self.dropped.record(why, x, y, s),
             }
         }
-        self.sums.push(acc);
+        // Not `acc.map`: it compiled to a drain loop of ≈ 160 instructions.
+        self.sums
+            .push([acc[0].total(), acc[1].total(), acc[2].total()]);
     }
 
     /// The pixels' sums so far, row-major.
@@ -303,19 +302,75 @@ pub fn to_fixed(xyz: [f64; 3]) -> [i128; 3] {
 /// exactly. Larger values take the general i128 path.
 #[inline]
 pub(super) fn fixed_one(v: f64) -> i128 {
+    // The step as arithmetic on the comparisons (`fixed_small`), not as
+    // branches: the fraction of a Monte Carlo sample is random, and the
+    // branches were mispredicted about once per sample.
+    match fixed_small(v) {
+        Some(t) => i128::from(t),
+        None if v.is_finite() => (v * SCALE).round() as i128,
+        None => 0,
+    }
+}
+
+/// A pixel channel's sum of [`fixed_one`] values, kept as an i64 part and an
+/// i128 rest: the same integer as a sum of i128 saturating adds whenever
+/// that sum does not saturate (past a million samples at
+/// [`MAX_SAMPLE_XYZ`]; both are then clamped, this one possibly at another
+/// sample). Why: three i128 saturating adds per camera sample; with an
+/// i64 add and its overflow test instead, the 16-spp checker scene's render
+/// loop takes 39 instructions fewer per camera sample (−1.7 %).
+#[derive(Clone, Copy, Debug, Default)]
+struct FixedSum {
+    /// What did not fit `part`: values beyond i64 and overflowed parts.
+    wide: i128,
+    part: i64,
+}
+
+impl FixedSum {
+    /// Adds `fixed_one(v)`.
+    #[inline(always)]
+    fn add(&mut self, v: f64) {
+        if let Some(f) = fixed_small(v) {
+            let (p, over) = self.part.overflowing_add(f);
+            if !over {
+                self.part = p;
+                return;
+            }
+        }
+        self.add_wide(v);
+    }
+
+    /// [`FixedSum::add`] of a value beyond i64 or one that overflows the
+    /// part: out of line, so that the per-sample path stays two
+    /// instructions.
+    #[cold]
+    #[inline(never)]
+    fn add_wide(&mut self, v: f64) {
+        let all = i128::from(self.part).saturating_add(fixed_one(v));
+        self.wide = self.wide.saturating_add(all);
+        self.part = 0;
+    }
+
+    /// The sum.
+    #[inline]
+    fn total(self) -> i128 {
+        self.wide.saturating_add(i128::from(self.part))
+    }
+}
+
+/// [`fixed_one`] of `v` where |v·2⁴⁰| < 2⁶³ (its i64 path); `None` elsewhere.
+#[inline(always)]
+fn fixed_small(v: f64) -> Option<i64> {
     const I64_RANGE: f64 = 9_223_372_036_854_775_808.0; // 2⁶³
     let w = v * SCALE;
     if w.abs() < I64_RANGE {
         let t = w as i64;
         let frac = w - t as f64;
-        // The step as arithmetic on the comparisons, not as branches: the
-        // fraction of a Monte Carlo sample is random, and the branches
-        // were mispredicted about once per sample.
-        (t + i64::from(frac >= 0.5) - i64::from(frac <= -0.5)) as i128
-    } else if v.is_finite() {
-        w.round() as i128
+        // See `fixed_one`; at |w| ≥ 2⁵² the fraction is 0, so t ± 1 stays
+        // within i64.
+        Some(t + i64::from(frac >= 0.5) - i64::from(frac <= -0.5))
     } else {
-        0
+        None
     }
 }
 
@@ -408,6 +463,45 @@ impl fmt::Display for Dropped {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn fixed_sums_are_the_i128_saturating_sums() {
+        // Sequences of small values, values whose fixed point nearly fills
+        // an i64 (two overflow the part), values beyond i64 and non-finite
+        // ones, of both signs: the same integer as i128 saturating adds.
+        let mut x = 0x2545_f491_4f6c_dd1du64;
+        let mut next = || {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            x
+        };
+        let (mut overflows, mut wide) = (0, 0);
+        for _ in 0..2_000 {
+            let mut sum = FixedSum::default();
+            let mut want = 0i128;
+            let mut part = 0i64;
+            for _ in 0..(next() % 300) {
+                let u = (next() >> 11) as f64 / (1u64 << 53) as f64;
+                let mag = match next() % 8 {
+                    0..=3 => u * 1e3,
+                    4 | 5 => 8.0e6 + u * 0.38e6,
+                    6 => 8.4e6 + u * 1e20,
+                    _ => [f64::NAN, f64::INFINITY, 0.0, 1e-300][(next() % 4) as usize],
+                };
+                let v = if next() % 2 == 0 { mag } else { -mag };
+                match fixed_small(v).map(|f| part.checked_add(f)) {
+                    Some(Some(p)) => part = p,
+                    Some(None) => (overflows, part) = (overflows + 1, 0),
+                    None => wide += 1,
+                }
+                sum.add(v);
+                want = want.saturating_add(fixed_one(v));
+            }
+            assert_eq!(sum.total(), want);
+        }
+        assert!(overflows > 1_000 && wide > 10_000, "{overflows} {wide}");
+    }
 
     #[test]
     fn fast_fixed_point_matches_round_as_i128_bit_for_bit() {
