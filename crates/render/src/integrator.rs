@@ -1486,15 +1486,15 @@ fn first_vertex_cv(
     // n ∫ Le f̃ cmf dλ + Σ_j T_j (f cosθo − f̃)(λ_j) Le(λ_j) cmf(λ_j), times
     // `scale` (the table holds f cosθo).
     let glossy = |xyz: &mut [f64; 3], wo: DVec3, f: &[(f64, f64); N], em: &Emission, scale: f64| {
-        let c = crate::glossy_lambda_table::corners(wi, wo);
-        let exact = first.tables.glossy_exact(g, &**bxdf, &c, em);
+        let rows = g.rows(&**bxdf, &crate::glossy_lambda_table::corners(wi, wo));
+        let exact = first.tables.glossy_exact_rows(&rows, em);
         for k in 0..3 {
             xyz[k] += scale * q_sum * exact[k];
         }
         let mut e = [0.0; N];
         em.eval_many(&lambdas[..n], &mut e[..n]);
         for j in 0..n {
-            e[j] *= scale * t[j] * (f[j].0 * wo.z - g.interpolant(&**bxdf, &c, lambdas[j]));
+            e[j] *= scale * t[j] * (f[j].0 * wo.z - rows.interpolant(lambdas[j]));
         }
         add_spectral(xyz, &lambdas[..n], &e[..n]);
     };
