@@ -33,7 +33,7 @@ use std::path::PathBuf;
 /// random-number sampling, other weights, other inputs hashed), so that
 /// films of an earlier estimator refuse to merge with or resume into new
 /// ones.
-pub const ESTIMATOR: &str = "lustre estimator 15";
+pub const ESTIMATOR: &str = "lustre estimator 16";
 
 /// The share of a scene-with-bands' wavelength density spread uniformly
 /// over its emission range ([`Scene::set_spectral_bands`]): with 256 bands a
