@@ -233,34 +233,30 @@ impl GlossyTable {
         self.cells.iter().filter(|c| c.get().is_some()).count() * per_cell + self.hats.len() * 24
     }
 
-    /// The rows of corner `s` of `c`: its cell's f and integrals, offset
-    /// to its ρ node.
+    /// The rows of the corners of `c`, each cell found once (the two ρ
+    /// corners of a (cosθi, cosθo) pair share it).
     #[inline]
-    fn corner<'t>(&'t self, bxdf: &dyn Bxdf, c: &Corners, s: usize) -> (&'t [f32], &'t [[f64; 3]]) {
-        let g = c.node[s] as usize;
-        let i_rho = g % RHO_NODES;
-        let cell = self.cell(
-            bxdf,
-            g / (RHO_NODES * COS_NODES),
-            (g / RHO_NODES) % COS_NODES,
-        );
-        (
-            &cell.f[i_rho * LAMBDA_NODES..(i_rho + 1) * LAMBDA_NODES],
-            &cell.integrals[i_rho * self.bases..(i_rho + 1) * self.bases],
-        )
-    }
-
-    /// The per-basis λ integrals of the corners of `c`, with their weights,
-    /// to `each(weight, integrals)`.
-    #[inline]
-    pub(crate) fn for_corners(
-        &self,
-        bxdf: &dyn Bxdf,
-        c: &Corners,
-        mut each: impl FnMut(f64, &[[f64; 3]]),
-    ) {
-        for s in 0..8 {
-            each(c.w[s], self.corner(bxdf, c, s).1);
+    pub fn rows<'t>(&'t self, bxdf: &dyn Bxdf, c: &Corners) -> Rows<'t> {
+        let mut f: [&[f32]; 8] = [&[]; 8];
+        let mut integrals: [&[[f64; 3]]; 8] = [&[]; 8];
+        for s in (0..8).step_by(2) {
+            let g = c.node[s] as usize;
+            let i_rho = g % RHO_NODES;
+            let cell = self.cell(
+                bxdf,
+                g / (RHO_NODES * COS_NODES),
+                (g / RHO_NODES) % COS_NODES,
+            );
+            // Corner s + 1 is the next ρ node of the same cell.
+            for (d, r) in [(0, i_rho), (1, i_rho + 1)] {
+                f[s + d] = &cell.f[r * LAMBDA_NODES..(r + 1) * LAMBDA_NODES];
+                integrals[s + d] = &cell.integrals[r * self.bases..(r + 1) * self.bases];
+            }
+        }
+        Rows {
+            w: c.w,
+            f,
+            integrals,
         }
     }
 
@@ -268,14 +264,7 @@ impl GlossyTable {
     /// wavelength `lambda` nm.
     #[inline]
     pub fn interpolant(&self, bxdf: &dyn Bxdf, c: &Corners, lambda: f64) -> f64 {
-        let x = (lambda - LAMBDA_MIN) / (LAMBDA_MAX - LAMBDA_MIN) * (LAMBDA_NODES - 1) as f64;
-        let (k, t) = cell(x, LAMBDA_NODES);
-        let mut v = 0.0;
-        for s in 0..8 {
-            let row = self.corner(bxdf, c, s).0;
-            v += c.w[s] * ((1.0 - t) * row[k] as f64 + t * row[k + 1] as f64);
-        }
-        v
+        self.rows(bxdf, c).interpolant(lambda)
     }
 
     /// f̃ of `bxdf`'s lobe at geometric node `g` and λ node `k`.
@@ -286,5 +275,39 @@ impl GlossyTable {
             g % RHO_NODES,
         );
         self.cell(bxdf, i_ci, i_co).f[i_rho * LAMBDA_NODES + k] as f64
+    }
+}
+
+/// The table's rows at the eight corners of one geometry, found once for
+/// its exact part and every wavelength's interpolant: the lookups were a
+/// tenth of a full-GHS plate's instructions when each of them searched
+/// its cells again.
+pub struct Rows<'t> {
+    w: [f64; 8],
+    f: [&'t [f32]; 8],
+    integrals: [&'t [[f64; 3]]; 8],
+}
+
+impl Rows<'_> {
+    /// The per-basis λ integrals of the corners, with their weights, to
+    /// `each(weight, integrals)`.
+    #[inline]
+    pub(crate) fn for_corners(&self, mut each: impl FnMut(f64, &[[f64; 3]])) {
+        for s in 0..8 {
+            each(self.w[s], self.integrals[s]);
+        }
+    }
+
+    /// The interpolant f̃ at wavelength `lambda` nm.
+    #[inline]
+    pub fn interpolant(&self, lambda: f64) -> f64 {
+        let x = (lambda - LAMBDA_MIN) / (LAMBDA_MAX - LAMBDA_MIN) * (LAMBDA_NODES - 1) as f64;
+        let (k, t) = cell(x, LAMBDA_NODES);
+        let mut v = 0.0;
+        for s in 0..8 {
+            let row = self.f[s];
+            v += self.w[s] * ((1.0 - t) * row[k] as f64 + t * row[k + 1] as f64);
+        }
+        v
     }
 }

@@ -42,6 +42,7 @@ use glam::DVec3;
 
 const N: usize = MAX_WAVELENGTHS;
 
+mod glossy_cv;
 mod split;
 
 /// Shading frame at a hit: tangent `t`, bitangent `b`, normal `n` (facing the viewer).
@@ -1448,7 +1449,9 @@ fn add_spectral(xyz: &mut [f64; 3], lambdas: &[f64], r: &[f64]) {
 /// the radiance at each wavelength stays the non-negative rest. The
 /// estimate itself can be negative where f̃ exceeds f; such scenes are
 /// [`Scene::signed_radiance`], so the film keeps those samples. A path that
-/// goes on continues in [`trace`] from depth 1.
+/// goes on continues in [`trace`] from depth 1. The light sample's
+/// residual is evaluated with probability `glossy_residual`
+/// ([`glossy_cv`]; the BSDF sample's always, its f being the throughput).
 // The loops index several per-wavelength arrays at once.
 #[allow(clippy::needless_range_loop)]
 fn first_vertex_cv(
@@ -1480,24 +1483,29 @@ fn first_vertex_cv(
     let ris = resampling(sampler, lights, th.peak);
     th.ris = ris.m;
     let mis = VertexMis::new(settings, th.peak, ris.m);
+    let residual = glossy_cv::Residual::draw(settings.glossy_residual, sampler);
     // Every Q_k is 1 at the camera.
     let q_sum = n as f64;
     let t = th.t;
-    // n ∫ Le f̃ cmf dλ + Σ_j T_j (f cosθo − f̃)(λ_j) Le(λ_j) cmf(λ_j), times
-    // `scale` (the table holds f cosθo).
-    let glossy = |xyz: &mut [f64; 3], wo: DVec3, f: &[(f64, f64); N], em: &Emission, scale: f64| {
-        let c = crate::glossy_lambda_table::corners(wi, wo);
-        let exact = first.tables.glossy_exact(g, &**bxdf, &c, em);
-        for k in 0..3 {
-            xyz[k] += scale * q_sum * exact[k];
-        }
-        let mut e = [0.0; N];
-        em.eval_many(&lambdas[..n], &mut e[..n]);
-        for j in 0..n {
-            e[j] *= scale * t[j] * (f[j].0 * wo.z - g.interpolant(&**bxdf, &c, lambdas[j]));
-        }
-        add_spectral(xyz, &lambdas[..n], &e[..n]);
-    };
+    // n ∫ Le f̃ cmf dλ + r Σ_j T_j (f cosθo − f̃)(λ_j) Le(λ_j) cmf(λ_j), times
+    // `scale` (the table holds f cosθo); no residual where r is 0.
+    let glossy =
+        |xyz: &mut [f64; 3], wo: DVec3, f: &[(f64, f64); N], em: &Emission, scale: f64, r: f64| {
+            let rows = g.rows(&**bxdf, &crate::glossy_lambda_table::corners(wi, wo));
+            let exact = first.tables.glossy_exact_rows(&rows, em);
+            for k in 0..3 {
+                xyz[k] += scale * q_sum * exact[k];
+            }
+            if r == 0.0 {
+                return;
+            }
+            let mut e = [0.0; N];
+            em.eval_many(&lambdas[..n], &mut e[..n]);
+            for j in 0..n {
+                e[j] *= r * scale * t[j] * (f[j].0 * wo.z - rows.interpolant(lambdas[j]));
+            }
+            add_spectral(xyz, &lambdas[..n], &e[..n]);
+        };
 
     next_event(
         scene,
@@ -1506,8 +1514,18 @@ fn first_vertex_cv(
         mis,
         ris,
         |wo| bxdf.pdf(wi, wo, lambdas[0]),
-        |wo, is_delta| nee_bsdf(&**bxdf, wi, wo, is_delta, &lambdas[..n], &th.q[..n]),
-        |ls, wo, w, fp| glossy(&mut xyz, wo, &fp, &ls.emission, w),
+        |wo, is_delta| {
+            glossy_cv::nee_bsdf(
+                &**bxdf,
+                wi,
+                wo,
+                is_delta,
+                &lambdas[..n],
+                &th.q[..n],
+                residual,
+            )
+        },
+        |ls, wo, w, fp| glossy(&mut xyz, wo, &fp, &ls.emission, w, residual.weight),
     );
 
     // The delta lobe's emission, as in `trace`.
@@ -1569,7 +1587,7 @@ fn first_vertex_cv(
                 .at_infinity(next.is_none())
                 .bsdf(pdf_l, own, q_sum / s.pdf);
             if w > 0.0 {
-                glossy(&mut xyz, s.wo, &fp, &em, w / s.pdf);
+                glossy(&mut xyz, s.wo, &fp, &em, w / s.pdf, 1.0);
             }
         }
         for j in 0..n {

@@ -25,7 +25,7 @@
 //! per distinct spectrum), the three colour-matching functions of an
 //! RGB-lifted environment map, the four daylight-sky functions.
 
-use crate::glossy_lambda_table::{Corners, GlossyTable};
+use crate::glossy_lambda_table::{Corners, GlossyTable, Rows};
 use crate::light::{Emission, Environment, LightKind, Lights};
 use crate::spectrum::{Cie, LAMBDA_MAX, LAMBDA_MIN, Spectrum};
 use brdf::Fresnel;
@@ -370,11 +370,16 @@ impl SpectralTables {
         corners: &Corners,
         em: &Emission,
     ) -> [f64; 3] {
+        self.glossy_exact_rows(&table.rows(bxdf, corners), em)
+    }
+
+    /// [`glossy_exact`](Self::glossy_exact) from the corners' rows, found
+    /// once for this and the residual's interpolants.
+    #[inline]
+    pub fn glossy_exact_rows(&self, rows: &Rows, em: &Emission) -> [f64; 3] {
         let (b, c) = self.basis(em);
         let mut out = [0.0; 3];
-        table.for_corners(bxdf, corners, |w, rows| {
-            c.accumulate(&rows[b..], w, &mut out)
-        });
+        rows.for_corners(|w, rows| c.accumulate(&rows[b..], w, &mut out));
         out
     }
 

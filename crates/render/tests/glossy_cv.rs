@@ -352,3 +352,56 @@ fn the_default_builds_no_glossy_table() {
     let g = plate(ghs, "", 0.03, "d65", "");
     assert!(g.spectral.as_ref().and_then(|t| t.glossy(0)).is_some() && g.signed_radiance);
 }
+
+/// The residual roulette (`glossy_residual = p`: a light sample evaluates
+/// f − f̃ with probability p and weight 1/p) keeps the mean: paired sample
+/// by sample with p = 1 on a plate under a light wide enough for the
+/// residual to matter away from the mirror direction. Seen to fail with
+/// the weight 1 in place of 1/p.
+#[test]
+fn the_rouletted_residual_keeps_the_mean() {
+    for (name, body) in models() {
+        let lit = |p: f64| {
+            plate_lit(
+                &body,
+                &format!("max_depth = 1\nglossy_residual = {p}\n"),
+                0.25,
+                "blackbody(3200)",
+                "",
+                "0.45, 0.55, -0.7",
+            )
+        };
+        let (rouletted, full) = (lit(0.25), lit(1.0));
+        for (c, (ma, mb, d, e)) in paired(&rouletted, &full, 2000).into_iter().enumerate() {
+            let z = d / e;
+            eprintln!(
+                "{name} channel {c}: rouletted {ma:.6}, full {mb:.6}, difference {d:+.2e} ± {e:.2e} (z = {z:+.2})"
+            );
+            assert!(e < 1e-2 * mb.abs(), "{name}: too noisy to compare");
+            assert!(z.abs() < 4.5, "{name} channel {c}: z = {z}");
+        }
+    }
+}
+
+/// A residual probability outside (0.001, 1] is an error naming the key
+/// and its range, not a panic or a silent 1/0 weight.
+#[test]
+fn out_of_range_residual_probabilities_are_refused() {
+    for bad in ["0", "-0.5", "1.5", "0.0001", "nan", "inf"] {
+        let text = format!(
+            "[film]\nspp = 1\n[camera]\nlook_from = [0.0, 1.0, 1.0]\nlook_at = [0.0, 0.0, 0.0]\nfov_deg = 30.0\nresolution = [4, 4]\n\
+             [integrator]\nglossy_residual = {bad}\n[materials.m]\nmodel = \"ggx\"\n\
+             metal = \"cu\"\nalpha = 0.2\n[[shapes]]\ntype = \"sphere\"\ncenter = [0.0, 0.0, 0.0]\nradius = 0.1\n\
+             material = \"m\"\n[[lights]]\ntype = \"point\"\nposition = [0.0, 1.0, 0.0]\n\
+             intensity = 1.0\n"
+        );
+        let e = render::load_str(&root().join("bad.toml"), &text)
+            .err()
+            .unwrap_or_else(|| panic!("{bad} accepted"))
+            .to_string();
+        assert!(
+            e.contains("glossy_residual") && e.contains("0.001"),
+            "{bad}: {e}"
+        );
+    }
+}

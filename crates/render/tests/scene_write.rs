@@ -174,12 +174,15 @@ fn integrator() -> impl Strategy<Value = IntegratorDesc> {
         proptest::option::of(finite()),
         any::<bool>(),
         proptest::option::of(any::<u32>()),
-        proptest::option::of(finite()),
+        (
+            proptest::option::of(finite()),
+            proptest::option::of(finite()),
+        ),
         proptest::option::of(any::<u32>()),
         proptest::option::of(any::<u32>()),
     )
         .prop_map(
-            |(depth, single, hero, rr, indep, balance, w, sampled, dps, guide, eps, br)| {
+            |(depth, single, hero, rr, indep, balance, w, sampled, dps, (guide, res), eps, br)| {
                 IntegratorDesc {
                     max_depth: spanless(depth),
                     wavelengths: if single {
@@ -206,6 +209,7 @@ fn integrator() -> impl Strategy<Value = IntegratorDesc> {
                         SpectralIntegration::Auto
                     },
                     delta_pixel_samples: dps.map(spanless),
+                    glossy_residual: res.map(spanless),
                     emitter_pixel_samples: eps.map(spanless),
                     caustic_guiding: guide.map(spanless),
                     branches: br.map(spanless),

@@ -490,6 +490,21 @@ impl<'a> Builder<'a> {
             1,
             "",
         )?;
+        let glossy_residual = match &integrator.glossy_residual {
+            Some(p) if !(super::MIN_GLOSSY_RESIDUAL..=1.0).contains(p.get_ref()) => {
+                return Err(self.at(
+                    p.span(),
+                    format!(
+                        "glossy_residual = {} is invalid: expected {} to 1 (the probability \
+                         that a light sample evaluates the glossy control variate's residual)",
+                        p.get_ref(),
+                        super::MIN_GLOSSY_RESIDUAL
+                    ),
+                ));
+            }
+            Some(p) => *p.get_ref(),
+            None => super::DEFAULT_GLOSSY_RESIDUAL,
+        };
         let emitter_pixel_samples = self.pixel_samples(
             "emitter_pixel_samples",
             &integrator.emitter_pixel_samples,
@@ -550,6 +565,7 @@ impl<'a> Builder<'a> {
             mis_light_weight,
             spectral_integration: integrator.spectral_integration,
             delta_pixel_samples,
+            glossy_residual,
             emitter_pixel_samples,
             caustic_guiding,
             branches,

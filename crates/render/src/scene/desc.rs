@@ -238,6 +238,12 @@ pub struct IntegratorDesc {
     /// ([`Settings::delta_pixel_samples`](super::Settings::delta_pixel_samples)).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub delta_pixel_samples: Option<Spanned<u32>>,
+    /// Probability, 0.001–1, with which a first vertex's light sample
+    /// evaluates the glossy control variate's residual (default
+    /// [`DEFAULT_GLOSSY_RESIDUAL`](super::DEFAULT_GLOSSY_RESIDUAL))
+    /// ([`Settings::glossy_residual`](super::Settings::glossy_residual)).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub glossy_residual: Option<Spanned<f64>>,
     /// Positions per camera sample at which the emission seen directly is
     /// evaluated on a light's outline, 1–64 (default 16; 1: off)
     /// ([`Settings::emitter_pixel_samples`](super::Settings::emitter_pixel_samples)).
@@ -303,6 +309,7 @@ impl Default for IntegratorDesc {
             mis_light_weight: None,
             spectral_integration: SpectralIntegration::Auto,
             delta_pixel_samples: None,
+            glossy_residual: None,
             emitter_pixel_samples: None,
             caustic_guiding: None,
             branches: None,

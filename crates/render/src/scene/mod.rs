@@ -33,7 +33,7 @@ use std::path::PathBuf;
 /// random-number sampling, other weights, other inputs hashed), so that
 /// films of an earlier estimator refuse to merge with or resume into new
 /// ones.
-pub const ESTIMATOR: &str = "lustre estimator 15";
+pub const ESTIMATOR: &str = "lustre estimator 16";
 
 /// The share of a scene-with-bands' wavelength density spread uniformly
 /// over its emission range ([`Scene::set_spectral_bands`]): with 256 bands a
@@ -47,6 +47,13 @@ pub const MAX_BRANCHES: u32 = 64;
 
 /// Default `[integrator] caustic_guiding`.
 pub const DEFAULT_CAUSTIC_GUIDING: f64 = 0.0;
+
+/// Default `[integrator] glossy_residual`.
+pub const DEFAULT_GLOSSY_RESIDUAL: f64 = 1.0;
+
+/// Smallest `[integrator] glossy_residual`: below it the residual's 1/p
+/// weight would make rare samples fireflies.
+pub const MIN_GLOSSY_RESIDUAL: f64 = 1e-3;
 
 /// Render settings from `[film]` and `[integrator]`.
 #[derive(Clone, Debug)]
@@ -84,6 +91,11 @@ pub struct Settings {
     /// sample (a camera ray and a mirror ray each), for the sharp edge of a
     /// small light's mirror image (`integrator::delta_over_pixel`).
     pub delta_pixel_samples: usize,
+    /// `[integrator] glossy_residual` (default [`DEFAULT_GLOSSY_RESIDUAL`]):
+    /// the probability with which a first vertex's light sample evaluates
+    /// the glossy control variate's residual f − f̃ (weighted by its
+    /// inverse), instead of only the exact part (`integrator::glossy_cv`).
+    pub glossy_residual: f64,
     /// `[integrator] emitter_pixel_samples` (default
     /// [`crate::emitter_edges::DEFAULT_SAMPLES`]; 1 turns it off): on the
     /// pixels a directly seen light's outline may cross, the emission seen

@@ -1,0 +1,95 @@
+//! Residual roulette for the glossy control variate at a first vertex
+//! (`first_vertex_cv`): the light sample's estimate is the exact
+//! n·∫ Le f̃ cmf dλ plus the sampled residual Σ_j T_j (f − f̃)(λ_j) Le cmf,
+//! and the residual is evaluated only with probability p, weighted 1/p.
+//!
+//! Why: with the continued table the residual is ≈ 0.4 % of f near the
+//! mirror direction (`tests/glossy_cv.rs`), yet it costs the model's full
+//! evaluation at every wavelength for every light sample (19 % of a
+//! full-GHS plate's instructions). Skipped, the light sample needs only
+//! the model's densities (for the MIS weights), which the wave-optical
+//! models compute without the lobe itself. Measured, it does not pay on
+//! the s138 plates (the residual still holds 18 % of full GHS's variance
+//! at 256 spp and half of two-scale's), so the default p is 1
+//! (`crates/render/README.md`, `glossy_residual`).
+//!
+//! Unbiased for any p > 0: the residual's term has its expectation over
+//! the roulette's draw, and nothing else depends on f (the weights use the
+//! densities, and whether a light sample is counted no longer asks whether
+//! f is zero at the path's wavelengths). The variance added is
+//! (1/p − 1)·E[residual²], small where the table resolves the lobe.
+
+use crate::sampler::Sampler;
+use crate::wavelength::MAX_WAVELENGTHS as N;
+
+/// (f, pdf) at each of a path's wavelengths (the integrator's type of the
+/// same name; not imported from it, which would make the modules a cycle).
+type FPerLambda = [(f64, f64); N];
+use brdf::Bxdf;
+use glam::DVec3;
+
+/// Whether this light sample evaluates the residual, and the weight its
+/// residual term then carries (1/p; 0 where it is skipped).
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Residual {
+    /// 1/p where the residual is evaluated, 0 where it is not.
+    pub weight: f64,
+}
+
+impl Residual {
+    /// The roulette with probability `p` of evaluating: draws its own
+    /// number from `sampler` only where p < 1, so p = 1 draws the same
+    /// numbers as before it existed.
+    #[inline]
+    pub fn draw(p: f64, sampler: &mut Sampler) -> Residual {
+        if p >= 1.0 {
+            return Residual { weight: 1.0 };
+        }
+        let u = sampler.get_1d();
+        Residual {
+            weight: if u < p { 1.0 / p } else { 0.0 },
+        }
+    }
+
+    /// Whether the residual is evaluated.
+    #[inline]
+    pub fn evaluated(self) -> bool {
+        self.weight > 0.0
+    }
+}
+
+/// The BSDF side of a first vertex's light sample at `wo`: the density at
+/// each wavelength (none toward a delta light), and f as well where the
+/// residual is evaluated; with Σ Q_k and the density Σ Q_k p_k of the
+/// path's wavelengths' sampling, as `nee_bsdf` returns them.
+///
+/// Never `None`: the exact part n·∫ Le f̃ cmf dλ is the residual's
+/// expectation over all λ, not only over those where f is positive, so a
+/// light sample is counted whatever f is at the path's wavelengths.
+pub(super) fn nee_bsdf(
+    bxdf: &dyn Bxdf,
+    wi: DVec3,
+    wo: DVec3,
+    is_delta: bool,
+    lambdas: &[f64],
+    q: &[f64],
+    residual: Residual,
+) -> Option<(f64, f64, FPerLambda)> {
+    let n = lambdas.len();
+    let mut fp = [(0.0, 0.0); N];
+    if residual.evaluated() {
+        bxdf.eval_pdf_many(wi, wo, lambdas, &mut fp[..n]);
+    } else if !is_delta {
+        for (v, &l) in fp.iter_mut().zip(lambdas) {
+            v.1 = bxdf.pdf(wi, wo, l);
+        }
+    }
+    if is_delta {
+        for v in &mut fp[..n] {
+            v.1 = 0.0;
+        }
+    }
+    let q_sum: f64 = q.iter().sum();
+    let p_bsdf: f64 = (0..n).map(|k| q[k] * fp[k].1).sum();
+    Some((q_sum, p_bsdf, fp))
+}
