@@ -84,12 +84,6 @@ pub(super) fn nee_bsdf(
             v.1 = bxdf.pdf(wi, wo, l);
         }
     }
-    if is_delta {
-        for v in &mut fp[..n] {
-            v.1 = 0.0;
-        }
-    }
-    let q_sum: f64 = q.iter().sum();
-    let p_bsdf: f64 = (0..n).map(|k| q[k] * fp[k].1).sum();
+    let (q_sum, p_bsdf) = super::nee_sums(&mut fp[..n], is_delta, q);
     Some((q_sum, p_bsdf, fp))
 }
