@@ -43,6 +43,7 @@ use glam::DVec3;
 const N: usize = MAX_WAVELENGTHS;
 
 mod glossy_cv;
+mod nee_density;
 mod split;
 
 /// Shading frame at a hit: tangent `t`, bitangent `b`, normal `n` (facing the viewer).
@@ -741,23 +742,8 @@ fn nee_bsdf(
     if !fp[..n].iter().any(|v| v.0 > 0.0) {
         return None;
     }
-    let (q_sum, p_bsdf) = nee_sums(&mut fp[..n], is_delta, q);
+    let (q_sum, p_bsdf) = nee_density::sums(&mut fp[..n], is_delta, q);
     Some((q_sum, p_bsdf, fp))
-}
-
-/// Σ Q_k and the density Σ Q_k p_k of the path's wavelengths' sampling
-/// toward a light sample whose (f, pdf) per wavelength are `fp`; toward a
-/// delta light no density (BSDF sampling cannot reach it), set to 0 in `fp`.
-#[inline]
-fn nee_sums(fp: &mut [(f64, f64)], is_delta: bool, q: &[f64]) -> (f64, f64) {
-    if is_delta {
-        for v in fp.iter_mut() {
-            v.1 = 0.0;
-        }
-    }
-    let q_sum: f64 = q.iter().sum();
-    let p_bsdf: f64 = q.iter().zip(fp.iter()).map(|(q, v)| q * v.1).sum();
-    (q_sum, p_bsdf)
 }
 
 /// Added to the RIS proxy (a BSDF density, sr⁻¹) so that it is positive

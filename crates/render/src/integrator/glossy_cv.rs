@@ -84,6 +84,6 @@ pub(super) fn nee_bsdf(
             v.1 = bxdf.pdf(wi, wo, l);
         }
     }
-    let (q_sum, p_bsdf) = super::nee_sums(&mut fp[..n], is_delta, q);
+    let (q_sum, p_bsdf) = super::nee_density::sums(&mut fp[..n], is_delta, q);
     Some((q_sum, p_bsdf, fp))
 }
