@@ -366,6 +366,31 @@ impl<'a> Builder<'a> {
         }
     }
 
+    /// An `[integrator]` real number (`key`): `default` when unset, else in
+    /// `range` (NaN is not), or an error at the value ending with `why`.
+    fn real_in(
+        &self,
+        key: &str,
+        value: &Option<toml::Spanned<f64>>,
+        range: std::ops::RangeInclusive<f64>,
+        default: f64,
+        why: &str,
+    ) -> Result<f64, SceneError> {
+        match value {
+            Some(v) if !range.contains(v.get_ref()) => Err(self.at(
+                v.span(),
+                format!(
+                    "{key} = {} is invalid: expected {} to {}{why}",
+                    v.get_ref(),
+                    range.start(),
+                    range.end()
+                ),
+            )),
+            Some(v) => Ok(*v.get_ref()),
+            None => Ok(default),
+        }
+    }
+
     /// Stage 1: the camera, with its resolution checked against the film's limits.
     fn camera(&self) -> Result<Camera, SceneError> {
         let cam = &self.desc.camera;
@@ -490,21 +515,14 @@ impl<'a> Builder<'a> {
             1,
             "",
         )?;
-        let glossy_residual = match &integrator.glossy_residual {
-            Some(p) if !(super::MIN_GLOSSY_RESIDUAL..=1.0).contains(p.get_ref()) => {
-                return Err(self.at(
-                    p.span(),
-                    format!(
-                        "glossy_residual = {} is invalid: expected {} to 1 (the probability \
-                         that a light sample evaluates the glossy control variate's residual)",
-                        p.get_ref(),
-                        super::MIN_GLOSSY_RESIDUAL
-                    ),
-                ));
-            }
-            Some(p) => *p.get_ref(),
-            None => super::DEFAULT_GLOSSY_RESIDUAL,
-        };
+        let glossy_residual = self.real_in(
+            "glossy_residual",
+            &integrator.glossy_residual,
+            super::MIN_GLOSSY_RESIDUAL..=1.0,
+            super::DEFAULT_GLOSSY_RESIDUAL,
+            " (the probability that a light sample evaluates the glossy control variate's \
+             residual)",
+        )?;
         let emitter_pixel_samples = self.pixel_samples(
             "emitter_pixel_samples",
             &integrator.emitter_pixel_samples,
@@ -512,21 +530,13 @@ impl<'a> Builder<'a> {
             crate::emitter_edges::DEFAULT_SAMPLES,
             " (positions per camera sample on a light's outline; 1 turns it off)",
         )?;
-        let caustic_guiding = match &integrator.caustic_guiding {
-            Some(c) if !(0.0..=crate::guide::MAX_SHARE).contains(c.get_ref()) => {
-                return Err(self.at(
-                    c.span(),
-                    format!(
-                        "caustic_guiding = {} is invalid: expected 0 to {} (the share of a \
-                         diffuse surface's samples aimed at glossy objects; 0 turns it off)",
-                        c.get_ref(),
-                        crate::guide::MAX_SHARE
-                    ),
-                ));
-            }
-            Some(c) => *c.get_ref(),
-            None => super::DEFAULT_CAUSTIC_GUIDING,
-        };
+        let caustic_guiding = self.real_in(
+            "caustic_guiding",
+            &integrator.caustic_guiding,
+            0.0..=crate::guide::MAX_SHARE,
+            super::DEFAULT_CAUSTIC_GUIDING,
+            " (the share of a diffuse surface's samples aimed at glossy objects; 0 turns it off)",
+        )?;
         let branches = match &integrator.branches {
             Some(_) => Some(self.pixel_samples(
                 "branches",
