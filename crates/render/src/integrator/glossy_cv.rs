@@ -87,3 +87,42 @@ pub(super) fn nee_bsdf(
     let (q_sum, p_bsdf) = super::nee_density::sums(&mut fp[..n], is_delta, q);
     Some((q_sum, p_bsdf, fp))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::Residual;
+    use crate::sampler::Sampler;
+    use crate::scene::MIN_GLOSSY_RESIDUAL;
+    use crate::scene::desc::SamplerKind;
+
+    proptest::proptest! {
+        /// Over every accepted p, the roulette's weight is 1/p or 0 and its
+        /// mean over a pixel's first 2¹² Sobol samples is 1 within the
+        /// strata's bound (its draw is each sample's first, a net: the
+        /// evaluated count is ⌊pN⌋ or ⌈pN⌉), so the residual's expectation
+        /// is kept; and p = 1 draws nothing.
+        #[test]
+        fn the_roulette_keeps_the_residuals_mean(
+            p in MIN_GLOSSY_RESIDUAL..=1.0f64,
+            seed in proptest::prelude::any::<u64>(),
+            pixel in 0u64..1 << 20,
+        ) {
+            const N: u64 = 1 << 12;
+            let mut sum = 0.0;
+            for s in 0..N {
+                let mut sampler = Sampler::new(SamplerKind::Sobol, seed, pixel, s);
+                let r = Residual::draw(p, &mut sampler);
+                proptest::prop_assert!(r.weight == 0.0 || r.weight == 1.0 / p, "{}", r.weight);
+                proptest::prop_assert_eq!(r.evaluated(), r.weight > 0.0);
+                sum += r.weight;
+            }
+            let mean = sum / N as f64;
+            // ±1 evaluated sample of weight 1/p among N.
+            proptest::prop_assert!((mean - 1.0).abs() <= 1.0 / (p * N as f64) + 1e-12, "p {p}: mean {mean}");
+            let mut untouched = Sampler::new(SamplerKind::Sobol, seed, pixel, 3);
+            let mut fresh = untouched.clone();
+            Residual::draw(1.0, &mut untouched);
+            proptest::prop_assert_eq!(untouched.get_1d(), fresh.get_1d());
+        }
+    }
+}
